@@ -1,0 +1,14 @@
+//! Shared core of convshadow: the scene model, parameters, tables, hashing, noise, rasterizer
+//! set-up and image I/O. Everything here is used by both the CPU oracle and the GPU port.
+
+pub mod camera;
+pub mod geometry;
+pub mod hash;
+pub mod image_io;
+pub mod kernel;
+pub mod mesh;
+pub mod noise;
+pub mod plan;
+pub mod raster;
+pub mod scene;
+pub mod texture3d;

@@ -1,0 +1,342 @@
+//! The render plan: every table the sweep reads, computed once on the host (DESIGN §3) and
+//! shared by the scalar path, the SIMD path and the GPU port.
+//!
+//! Nothing per pixel calls a transcendental: kernel taps, slab hashes, the slab-thickness opacity
+//! correction `α_slab = 1 − (1 − α)^(e/e_ref)`, attenuation factors and specular half vectors are
+//! all here.
+
+use std::sync::Arc;
+
+use glam::{DAffine3, DVec3};
+
+use crate::geometry::SceneGeometry;
+use crate::hash::{JITTER_STREAM, slab_hash};
+use crate::kernel::{KernelMoments, KernelTable, build_table};
+use crate::noise::Detail;
+use crate::scene::{MaterialSpec, Scene};
+use crate::texture3d::{Texture3d, TextureError};
+
+/// Entries of a material's transfer-function table over detail values [0, 1].
+pub const TF_SIZE: usize = 256;
+/// Light values below this are flushed to zero after attenuation (no subnormals, same zeros on
+/// CPU and GPU); products with tap weights (≥ 2^-24) then stay far above f32's normal range.
+pub const FLUSH_BELOW: f32 = 1.0e-20;
+
+/// One transfer-function entry: colour, slab opacity, and per-channel attenuation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TfEntry {
+    /// Linear RGB colour.
+    pub color: [f32; 3],
+    /// Opacity of one slab, `1 − (1 − α)^(e/e_ref)`.
+    pub alpha: f32,
+    /// Light attenuation per channel, `1 − α_slab·(1 − τ)`.
+    pub attenuation: [f32; 3],
+}
+
+/// A material's per-render tables.
+#[derive(Clone, Debug)]
+pub struct MaterialPlan {
+    /// Transfer function: `TF_SIZE` entries for detail materials, 1 for constant ones.
+    pub tf: Vec<TfEntry>,
+    /// Procedural detail, if any.
+    pub detail: Option<Detail>,
+    /// 3D texture, if any (sampled at normalised object coordinates).
+    pub texture: Option<Arc<Texture3d>>,
+    /// Specular strength and exponent.
+    pub specular: Option<(f32, u32)>,
+}
+
+/// A light's per-render tables.
+#[derive(Clone, Debug)]
+pub struct LightPlan {
+    /// Linear RGB colour.
+    pub color: [f32; 3],
+    /// Kernel moments per slab (pixels).
+    pub moments: KernelMoments,
+    /// The tap table.
+    pub table: KernelTable,
+    /// Per slab: hash of (seed, light, slab), the prefix of every per-pixel phase hash.
+    pub slab_hash: Vec<u32>,
+    /// Blinn–Phong half vector in camera space (towards light + towards viewer, normalised).
+    pub half_vector: [f32; 3],
+}
+
+/// Errors while planning (a texture file that cannot be read).
+#[derive(Debug, thiserror::Error)]
+#[error("{scene}: material `{material}`: {source}")]
+pub struct PlanError {
+    /// Scene file.
+    pub scene: String,
+    /// Material name.
+    pub material: String,
+    /// The texture loader's error.
+    pub source: TextureError,
+}
+
+/// Everything the sweep needs besides the LDI.
+#[derive(Clone, Debug)]
+pub struct RenderPlan {
+    /// Grid width (image + 2·guard).
+    pub grid_width: u32,
+    /// Grid height.
+    pub grid_height: u32,
+    /// Guard band (pixels on each side).
+    pub guard: u32,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Slab count.
+    pub slabs: u32,
+    /// Slab thickness (world units) as f32.
+    pub slab_distance: f32,
+    /// Front face of each slab (depth relative to the first slab's front).
+    pub slab_front: Vec<f32>,
+    /// Back face of each slab.
+    pub slab_back: Vec<f32>,
+    /// Light-buffer channels: 1 when every transport colour is grey, else 3.
+    pub channels: u32,
+    /// Lights.
+    pub lights: Vec<LightPlan>,
+    /// Materials.
+    pub materials: Vec<MaterialPlan>,
+    /// Material of each mesh.
+    pub mesh_material: Vec<u32>,
+    /// Per mesh: (grid pixel x, grid pixel y, relative depth) → detail coordinates, row-major 3×4.
+    pub mesh_to_detail: Vec<[f32; 12]>,
+    /// Jitter the shading point inside the slab.
+    pub jitter: bool,
+    /// Per slab: hash of (seed, jitter stream, slab).
+    pub jitter_slab_hash: Vec<u32>,
+    /// Background colour.
+    pub background: [f32; 3],
+}
+
+impl RenderPlan {
+    /// Builds all tables for a scene whose geometry is already set up.
+    pub fn new(scene: &Scene, geometry: &SceneGeometry) -> Result<RenderPlan, PlanError> {
+        let slabs = geometry.slabs;
+        let e = geometry.slab_distance;
+        let px = geometry.camera.pixel_size;
+        let seed = scene.sweep.seed;
+        let lights = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(l, spec)| {
+                let moments = KernelMoments::for_light(
+                    spec.tilt_deg,
+                    spec.variance,
+                    spec.rotation_deg,
+                    e,
+                    scene.sweep.optimal_distance,
+                    px,
+                );
+                let table = build_table(
+                    scene.sweep.kernel,
+                    &moments,
+                    slabs,
+                    scene.sweep.variance_compensation,
+                );
+                let mu = spec.tilt_deg.map(|t| t.to_radians().tan());
+                let to_light = DVec3::new(mu[0], mu[1], -1.0).normalize();
+                let h = (to_light + DVec3::new(0.0, 0.0, -1.0)).normalize();
+                LightPlan {
+                    color: spec.color.map(flush_tiny),
+                    moments,
+                    table,
+                    slab_hash: (0..slabs).map(|k| slab_hash(seed, l as u32, k)).collect(),
+                    half_vector: [h.x as f32, h.y as f32, h.z as f32],
+                }
+            })
+            .collect();
+        let materials = scene
+            .materials
+            .iter()
+            .map(|m| material_plan(m, e))
+            .collect::<Result<Vec<_>, TextureError>>()
+            .map_err(|source| PlanError {
+                scene: scene.source.clone(),
+                material: String::new(),
+                source,
+            });
+        let materials = match materials {
+            Ok(m) => m,
+            Err(mut err) => {
+                // Name the material whose texture failed.
+                if let Some(m) = scene.materials.iter().find(|m| {
+                    m.texture.as_ref().is_some_and(|t| {
+                        err.source
+                            .to_string()
+                            .contains(&t.path.display().to_string())
+                    })
+                }) {
+                    err.material = m.name.clone();
+                }
+                return Err(err);
+            }
+        };
+        let guard = f64::from(scene.sweep.guard_band);
+        let mesh_to_detail = scene
+            .meshes
+            .iter()
+            .zip(&geometry.meshes)
+            .map(|(spec, wm)| {
+                // Grid pixel coordinates → image pixel coordinates → world → object (→ texture).
+                let cam = &geometry.camera;
+                let origin = cam.pixel_to_world(-guard, -guard, geometry.z_origin);
+                let dx = cam.right * cam.pixel_size;
+                let dy = cam.down * cam.pixel_size;
+                let pixel_to_world = DAffine3::from_cols(dx, dy, cam.forward, origin);
+                let mut m = wm.world_to_object * pixel_to_world;
+                if scene.materials[spec.material].texture.is_some() {
+                    let (lo, hi) = wm.object_bounds;
+                    let size = (hi - lo).max(DVec3::splat(1e-30));
+                    let to_unit = DAffine3::from_scale_rotation_translation(
+                        size.recip(),
+                        glam::DQuat::IDENTITY,
+                        -lo / size,
+                    );
+                    m = to_unit * m;
+                }
+                let c = m.matrix3;
+                let t = m.translation;
+                [
+                    c.x_axis.x, c.y_axis.x, c.z_axis.x, t.x, c.x_axis.y, c.y_axis.y, c.z_axis.y,
+                    t.y, c.x_axis.z, c.y_axis.z, c.z_axis.z, t.z,
+                ]
+                .map(|v| v as f32)
+            })
+            .collect();
+        Ok(RenderPlan {
+            grid_width: geometry.raster.width,
+            grid_height: geometry.raster.height,
+            guard: scene.sweep.guard_band,
+            width: scene.image.width,
+            height: scene.image.height,
+            slabs,
+            slab_distance: e as f32,
+            slab_front: (0..slabs).map(|k| (f64::from(k) * e) as f32).collect(),
+            slab_back: geometry.slab_back_faces(),
+            channels: if scene.is_monochrome() { 1 } else { 3 },
+            lights,
+            materials,
+            mesh_material: scene.meshes.iter().map(|m| m.material as u32).collect(),
+            mesh_to_detail,
+            jitter: scene.sweep.jitter,
+            jitter_slab_hash: (0..slabs)
+                .map(|k| slab_hash(seed, JITTER_STREAM, k))
+                .collect(),
+            background: scene.image.background,
+        })
+    }
+
+    /// Floats per light-buffer row: lights × channels × grid width.
+    pub fn light_row_len(&self) -> usize {
+        self.lights.len() * self.channels as usize * self.grid_width as usize
+    }
+}
+
+/// Colours below 2^-24 become 0, so products in shading never approach the subnormal range.
+fn flush_tiny(c: f32) -> f32 {
+    if c < 1.0 / 16_777_216.0 { 0.0 } else { c }
+}
+
+/// The transfer-function entry for colour `c`, opacity `a`, transport `tau`, thickness ratio.
+fn tf_entry(c: [f64; 3], a: f64, tau: [f64; 3], ratio: f64) -> TfEntry {
+    let alpha = 1.0 - (1.0 - a).powf(ratio);
+    let alpha = if alpha < 1.0 / 16_777_216.0 {
+        0.0
+    } else {
+        alpha.min(1.0)
+    };
+    TfEntry {
+        color: c.map(|v| flush_tiny(v as f32)),
+        alpha: alpha as f32,
+        attenuation: tau.map(|t| (1.0 - alpha * (1.0 - t)) as f32),
+    }
+}
+
+/// Builds a material's tables for slab thickness `e`.
+fn material_plan(m: &MaterialSpec, e: f64) -> Result<MaterialPlan, TextureError> {
+    let ratio = e / m.reference_length.unwrap_or(e);
+    let tf = if m.gradient.is_empty() {
+        vec![tf_entry(m.color, m.opacity, m.transport, ratio)]
+    } else {
+        (0..TF_SIZE)
+            .map(|i| {
+                let v = i as f64 / (TF_SIZE - 1) as f64;
+                let (c, a) = gradient_at(m, v);
+                tf_entry(c, a, m.transport, ratio)
+            })
+            .collect()
+    };
+    let detail = m.detail.as_ref().map(|d| {
+        Detail::new(
+            d.kind,
+            d.frequency as f32,
+            d.octaves,
+            d.lacunarity as f32,
+            d.gain as f32,
+            d.time.map(|t| t as f32),
+        )
+    });
+    let texture = match &m.texture {
+        Some(t) => Some(Arc::new(Texture3d::load_raw(&t.path, t.dims, t.voxel)?)),
+        None => None,
+    };
+    Ok(MaterialPlan {
+        tf,
+        detail,
+        texture,
+        specular: m.specular.as_ref().map(|s| (s.strength, s.exponent)),
+    })
+}
+
+/// The gradient's colour and opacity at value `v` (piecewise linear, constant beyond the ends).
+fn gradient_at(m: &MaterialSpec, v: f64) -> ([f64; 3], f64) {
+    let g = &m.gradient;
+    if v <= g[0].value {
+        return (g[0].color, g[0].opacity);
+    }
+    for w in g.windows(2) {
+        if v <= w[1].value {
+            let span = w[1].value - w[0].value;
+            let t = if span > 0.0 {
+                (v - w[0].value) / span
+            } else {
+                1.0
+            };
+            let lerp = |a: f64, b: f64| a + t * (b - a);
+            return (
+                [
+                    lerp(w[0].color[0], w[1].color[0]),
+                    lerp(w[0].color[1], w[1].color[1]),
+                    lerp(w[0].color[2], w[1].color[2]),
+                ],
+                lerp(w[0].opacity, w[1].opacity),
+            );
+        }
+    }
+    let last = g[g.len() - 1];
+    (last.color, last.opacity)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slab_opacity_correction_composes() {
+        // Two slabs of half the reference length let through what one reference slab does.
+        let half = tf_entry([1.0; 3], 0.6, [0.0; 3], 0.5);
+        let full = tf_entry([1.0; 3], 0.6, [0.0; 3], 1.0);
+        let through_two = (1.0 - f64::from(half.alpha)).powi(2);
+        assert!((through_two - (1.0 - f64::from(full.alpha))).abs() < 1e-6);
+        // Transport 1 lets the light through untouched.
+        let clear = tf_entry([1.0; 3], 0.9, [1.0, 0.0, 0.5], 1.0);
+        assert_eq!(clear.attenuation[0], 1.0);
+        assert!((clear.attenuation[1] - 0.1).abs() < 1e-6);
+        assert!((clear.attenuation[2] - 0.55).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,1103 @@
+//! Scene files (TOML) parsed into a typed, validated model.
+//!
+//! The schema is documented in `docs/scene-format.md`. Parsing is strict: unknown keys, wrong
+//! types, missing required keys and invalid values are errors naming the file, the key and what
+//! was expected.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::kernel::KernelSpec;
+use crate::noise::DetailKind;
+use crate::texture3d::VoxelType;
+
+/// Largest accepted image width or height in pixels.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+/// Largest accepted slab count.
+pub const MAX_SLABS: u32 = 65536;
+/// Largest accepted number of lights.
+pub const MAX_LIGHTS: usize = 16;
+/// Largest accepted number of meshes (the parity cursor keeps one inside bit per mesh in a u32).
+pub const MAX_MESHES: usize = 32;
+/// Largest icosphere subdivision level and torus segment count accepted.
+pub const MAX_SPHERE_SUBDIVISIONS: u32 = 7;
+/// Largest torus segment count accepted.
+pub const MAX_TORUS_SEGMENTS: u32 = 1024;
+/// Largest guard band in pixels.
+pub const MAX_GUARD_BAND: u32 = 4096;
+
+/// The embedded default scene (procedural meshes only, so it needs no file).
+pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/default.toml");
+/// The name used for the embedded default scene in messages.
+pub const DEFAULT_SCENE_NAME: &str = "<embedded default scene>";
+
+/// A scene error: names the file, the key and what was expected.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SceneError {
+    /// The scene file (or `<embedded default scene>`).
+    pub file: String,
+    /// The key path, e.g. `light[1].tilt_deg`, or empty for a syntax error.
+    pub key: String,
+    /// What was wrong and what was expected.
+    pub message: String,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.key.is_empty() {
+            write!(f, "{}: {}", self.file, self.message)
+        } else {
+            write!(f, "{}: key `{}`: {}", self.file, self.key, self.message)
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+// ---------------------------------------------------------------------------------------------
+// Raw (serde) form: exactly the file's keys, strictly typed.
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    image: RawImage,
+    camera: RawCamera,
+    sweep: RawSweep,
+    #[serde(default)]
+    light: Vec<RawLight>,
+    #[serde(default)]
+    mesh: Vec<RawMesh>,
+    #[serde(default)]
+    material: BTreeMap<String, RawMaterial>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawImage {
+    width: u32,
+    height: u32,
+    background: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawCamera {
+    direction: Option<[f64; 3]>,
+    up: Option<[f64; 3]>,
+    center: Option<[f64; 3]>,
+    view_width: f64,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawSweep {
+    slabs: Option<u32>,
+    slab_distance: Option<f64>,
+    optimal_distance: f64,
+    kernel: Option<String>,
+    jitter: Option<bool>,
+    seed: Option<u32>,
+    variance_compensation: Option<bool>,
+    guard_band: Option<u32>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawLight {
+    color: Option<[f64; 3]>,
+    tilt_deg: Option<[f64; 2]>,
+    variance: Option<[f64; 2]>,
+    rotation_deg: Option<f64>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawMesh {
+    shape: String,
+    size: Option<Vec<f64>>,
+    path: Option<String>,
+    translate: Option<[f64; 3]>,
+    rotate_deg: Option<[f64; 3]>,
+    scale: Option<f64>,
+    material: String,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawMaterial {
+    color: Option<[f64; 3]>,
+    opacity: Option<f64>,
+    transport: Option<[f64; 3]>,
+    reference_length: Option<f64>,
+    detail: Option<RawDetail>,
+    texture: Option<RawTexture>,
+    gradient: Option<Vec<[f64; 5]>>,
+    specular: Option<RawSpecular>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawDetail {
+    kind: DetailKind,
+    frequency: Option<f64>,
+    octaves: Option<u32>,
+    lacunarity: Option<f64>,
+    gain: Option<f64>,
+    time: Option<f64>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawTexture {
+    path: String,
+    dims: [u32; 3],
+    #[serde(rename = "type")]
+    voxel: VoxelType,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawSpecular {
+    strength: f64,
+    exponent: u32,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validated model.
+
+/// A validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Where the scene came from (file path or the embedded name), for messages.
+    pub source: String,
+    /// Folder that relative paths (OBJ, textures) are resolved against.
+    pub base_dir: PathBuf,
+    /// Output image.
+    pub image: ImageSpec,
+    /// Orthographic camera.
+    pub camera: CameraSpec,
+    /// Slab sweep parameters.
+    pub sweep: SweepSpec,
+    /// Distant Gaussian lights (at least one; a scene without `[[light]]` gets one white light).
+    pub lights: Vec<LightSpec>,
+    /// Meshes in scene order (which also resolves overlapping materials: first wins).
+    pub meshes: Vec<MeshSpec>,
+    /// Materials, indexed by `MeshSpec::material`.
+    pub materials: Vec<MaterialSpec>,
+}
+
+/// Output image size and background.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageSpec {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Linear RGB composited behind everything.
+    pub background: [f32; 3],
+}
+
+/// Orthographic camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraSpec {
+    /// View direction (normalized).
+    pub direction: [f64; 3],
+    /// World direction shown at the top of the image.
+    pub up: [f64; 3],
+    /// Centre of the view.
+    pub center: [f64; 3],
+    /// World units across the image.
+    pub view_width: f64,
+}
+
+/// How the slab thickness is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SlabSpec {
+    /// A slab count over the scene's depth range.
+    Count(u32),
+    /// A slab thickness in world units.
+    Distance(f64),
+}
+
+/// Slab sweep parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepSpec {
+    /// Slab count or thickness.
+    pub slabs: SlabSpec,
+    /// The optimal shadow distance d1 (world units).
+    pub optimal_distance: f64,
+    /// Convolution kernel.
+    pub kernel: KernelSpec,
+    /// Jitter the shading point inside each slab.
+    pub jitter: bool,
+    /// Seed of every hash-derived random number.
+    pub seed: u32,
+    /// Compensate the variance that bilinear reads add (see docs/accuracy.md).
+    pub variance_compensation: bool,
+    /// Extra pixels of light buffer and LDI around the image, so objects just outside cast shadows.
+    pub guard_band: u32,
+}
+
+/// A distant Gaussian light behind the viewer.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightSpec {
+    /// Linear RGB colour.
+    pub color: [f32; 3],
+    /// Tilt angles (ωx, ωy) in degrees, each |ω| < 90.
+    pub tilt_deg: [f64; 2],
+    /// Variances (σx², σy²) on the virtual light plane at unit distance.
+    pub variance: [f64; 2],
+    /// Rotation α of the principal axes, degrees.
+    pub rotation_deg: f64,
+}
+
+/// The shape of a mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ShapeSpec {
+    /// Axis-aligned box with full extents.
+    Box {
+        /// Full extents.
+        size: [f64; 3],
+    },
+    /// Icosphere.
+    Sphere {
+        /// Radius.
+        radius: f64,
+        /// Subdivision level (0 = icosahedron).
+        subdivisions: u32,
+    },
+    /// Torus around the z axis.
+    Torus {
+        /// Radius of the centre circle.
+        major: f64,
+        /// Radius of the tube.
+        minor: f64,
+        /// Segments around the major circle.
+        segments: u32,
+    },
+    /// A Wavefront OBJ file.
+    Obj {
+        /// Resolved path.
+        path: PathBuf,
+    },
+}
+
+/// A mesh instance.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshSpec {
+    /// Shape.
+    pub shape: ShapeSpec,
+    /// Translation (applied last).
+    pub translate: [f64; 3],
+    /// Rotation in degrees about x, then y, then z.
+    pub rotate_deg: [f64; 3],
+    /// Uniform scale (applied first).
+    pub scale: f64,
+    /// Index into `Scene::materials`.
+    pub material: usize,
+}
+
+/// A volumetric detail function.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DetailSpec {
+    /// Which function.
+    pub kind: DetailKind,
+    /// Base frequency (per object-space unit).
+    pub frequency: f64,
+    /// Octave count.
+    pub octaves: u32,
+    /// Frequency ratio between octaves.
+    pub lacunarity: f64,
+    /// Amplitude ratio between octaves.
+    pub gain: f64,
+    /// Time for 4D animation; `None` means 3D noise.
+    pub time: Option<f64>,
+}
+
+/// A raw 3D texture, mapped onto the mesh's object-space bounding box.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureSpec {
+    /// Resolved path.
+    pub path: PathBuf,
+    /// Voxel counts in x, y, z.
+    pub dims: [u32; 3],
+    /// Voxel type.
+    pub voxel: VoxelType,
+}
+
+/// A specular highlight at crossed surfaces.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpecularSpec {
+    /// Multiplier of the highlight.
+    pub strength: f32,
+    /// Blinn–Phong exponent (evaluated by repeated squaring).
+    pub exponent: u32,
+}
+
+/// One gradient stop: detail value and (r, g, b, opacity).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GradientStop {
+    /// Detail value in [0, 1].
+    pub value: f64,
+    /// Linear RGB.
+    pub color: [f64; 3],
+    /// Opacity per reference length, in [0, 1].
+    pub opacity: f64,
+}
+
+/// A material: constant, or volumetric detail through a colour/opacity gradient.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialSpec {
+    /// Name in the scene file.
+    pub name: String,
+    /// Colour of a constant material.
+    pub color: [f64; 3],
+    /// Opacity per reference length of a constant material.
+    pub opacity: f64,
+    /// Transport colour τ (chromatic attenuation: 1 lets that channel through).
+    pub transport: [f64; 3],
+    /// Length the opacities are given for; `None` = the slab distance.
+    pub reference_length: Option<f64>,
+    /// Procedural detail.
+    pub detail: Option<DetailSpec>,
+    /// 3D texture detail.
+    pub texture: Option<TextureSpec>,
+    /// Transfer function for detail values (sorted by value).
+    pub gradient: Vec<GradientStop>,
+    /// Optional specular highlight.
+    pub specular: Option<SpecularSpec>,
+}
+
+impl Scene {
+    /// Parses and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let source = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: source.clone(),
+            key: String::new(),
+            message: format!("cannot read scene file: {e}"),
+        })?;
+        let base = path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| PathBuf::from("."));
+        Scene::parse(&text, &source, &base)
+    }
+
+    /// The embedded default scene.
+    pub fn default_scene() -> Scene {
+        Scene::parse(DEFAULT_SCENE_TOML, DEFAULT_SCENE_NAME, Path::new("."))
+            .expect("the embedded default scene is valid (tested)")
+    }
+
+    /// Parses and validates scene text; `source` names it in messages, `base_dir` resolves paths.
+    pub fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+        let raw: RawScene = toml::from_str(text).map_err(|e| toml_error(source, text, &e))?;
+        Validator { file: source }.scene(raw, base_dir)
+    }
+
+    /// Whether every material's transport is grey, so one light-buffer channel suffices.
+    pub fn is_monochrome(&self) -> bool {
+        self.materials
+            .iter()
+            .all(|m| m.transport[0] == m.transport[1] && m.transport[1] == m.transport[2])
+    }
+
+    /// Re-checks the values that command-line overrides may have changed.
+    pub fn revalidate(&self) -> Result<(), SceneError> {
+        let v = Validator { file: &self.source };
+        v.image_size(self.image.width, self.image.height)?;
+        match self.sweep.slabs {
+            SlabSpec::Count(n) => v.slab_count(n)?,
+            SlabSpec::Distance(d) => {
+                v.positive("sweep.slab_distance", d)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+fn toml_error(source: &str, text: &str, e: &toml::de::Error) -> SceneError {
+    let (line, col) = e.span().map(|s| line_col(text, s.start)).unwrap_or((0, 0));
+    let line_text = text
+        .lines()
+        .nth(line.saturating_sub(1))
+        .unwrap_or("")
+        .trim();
+    let key = line_text
+        .split('=')
+        .next()
+        .filter(|_| line_text.contains('='))
+        .map(|k| k.trim().to_string())
+        .unwrap_or_default();
+    let mut message = e.message().to_string();
+    if line > 0 {
+        message = format!("line {line}, column {col}: {message} (in `{line_text}`)");
+    }
+    SceneError {
+        file: source.to_string(),
+        key,
+        message,
+    }
+}
+
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+struct Validator<'a> {
+    file: &'a str,
+}
+
+impl Validator<'_> {
+    fn err(&self, key: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError {
+            file: self.file.to_string(),
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+
+    fn finite(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("expected a finite number, got {v}")))
+        }
+    }
+
+    fn finite3(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
+        for (i, c) in v.iter().enumerate() {
+            self.finite(&format!("{key}[{i}]"), *c)?;
+        }
+        Ok(v)
+    }
+
+    fn positive(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        self.finite(key, v)?;
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("expected a number > 0, got {v}")))
+        }
+    }
+
+    fn unit_interval(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        self.finite(key, v)?;
+        if (0.0..=1.0).contains(&v) {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("expected a number in [0, 1], got {v}")))
+        }
+    }
+
+    fn color(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
+        self.finite3(key, v)?;
+        for (i, c) in v.iter().enumerate() {
+            if *c < 0.0 {
+                return Err(self.err(
+                    format!("{key}[{i}]"),
+                    format!("expected a colour component >= 0, got {c}"),
+                ));
+            }
+        }
+        Ok(v)
+    }
+
+    fn unit_vector(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
+        self.finite3(key, v)?;
+        let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if len.is_nan() || len <= 1e-12 || !len.is_finite() {
+            return Err(self.err(key, "expected a non-zero direction vector"));
+        }
+        Ok([v[0] / len, v[1] / len, v[2] / len])
+    }
+
+    fn image_size(&self, width: u32, height: u32) -> Result<(), SceneError> {
+        for (key, v) in [("image.width", width), ("image.height", height)] {
+            if v == 0 || v > MAX_IMAGE_SIDE {
+                return Err(self.err(
+                    key,
+                    format!("expected an integer from 1 to {MAX_IMAGE_SIDE}, got {v}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn slab_count(&self, n: u32) -> Result<(), SceneError> {
+        if n == 0 || n > MAX_SLABS {
+            return Err(self.err(
+                "sweep.slabs",
+                format!("expected an integer from 1 to {MAX_SLABS}, got {n}"),
+            ));
+        }
+        Ok(())
+    }
+
+    fn scene(&self, raw: RawScene, base_dir: &Path) -> Result<Scene, SceneError> {
+        self.image_size(raw.image.width, raw.image.height)?;
+        let background =
+            self.color("image.background", raw.image.background.unwrap_or([0.0; 3]))?;
+        let image = ImageSpec {
+            width: raw.image.width,
+            height: raw.image.height,
+            background: background.map(|c| c as f32),
+        };
+
+        let direction = self.unit_vector(
+            "camera.direction",
+            raw.camera.direction.unwrap_or([0.0, 0.0, 1.0]),
+        )?;
+        let up = self.unit_vector("camera.up", raw.camera.up.unwrap_or([0.0, 1.0, 0.0]))?;
+        let cross = [
+            direction[1] * up[2] - direction[2] * up[1],
+            direction[2] * up[0] - direction[0] * up[2],
+            direction[0] * up[1] - direction[1] * up[0],
+        ];
+        if (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt() < 1e-6 {
+            return Err(self.err(
+                "camera.up",
+                "expected a direction not parallel to camera.direction",
+            ));
+        }
+        let camera = CameraSpec {
+            direction,
+            up,
+            center: self.finite3("camera.center", raw.camera.center.unwrap_or([0.0; 3]))?,
+            view_width: self.positive("camera.view_width", raw.camera.view_width)?,
+        };
+
+        let sweep = self.sweep(raw.sweep)?;
+
+        if raw.light.len() > MAX_LIGHTS {
+            return Err(self.err(
+                "light",
+                format!(
+                    "expected at most {MAX_LIGHTS} lights, got {}",
+                    raw.light.len()
+                ),
+            ));
+        }
+        let mut lights = Vec::new();
+        for (i, l) in raw.light.into_iter().enumerate() {
+            lights.push(self.light(i, l)?);
+        }
+        if lights.is_empty() {
+            lights.push(LightSpec {
+                color: [1.0; 3],
+                tilt_deg: [0.0; 2],
+                variance: [0.0; 2],
+                rotation_deg: 0.0,
+            });
+        }
+
+        let names: Vec<String> = raw.material.keys().cloned().collect();
+        let mut materials = Vec::new();
+        for (name, m) in raw.material {
+            materials.push(self.material(&name, m, base_dir)?);
+        }
+
+        if raw.mesh.is_empty() {
+            return Err(self.err("mesh", "expected at least one [[mesh]]"));
+        }
+        if raw.mesh.len() > MAX_MESHES {
+            return Err(self.err(
+                "mesh",
+                format!(
+                    "expected at most {MAX_MESHES} meshes, got {}",
+                    raw.mesh.len()
+                ),
+            ));
+        }
+        let mut meshes = Vec::new();
+        for (i, m) in raw.mesh.into_iter().enumerate() {
+            meshes.push(self.mesh(i, m, &names, base_dir)?);
+        }
+
+        Ok(Scene {
+            source: self.file.to_string(),
+            base_dir: base_dir.to_path_buf(),
+            image,
+            camera,
+            sweep,
+            lights,
+            meshes,
+            materials,
+        })
+    }
+
+    fn sweep(&self, raw: RawSweep) -> Result<SweepSpec, SceneError> {
+        let slabs = match (raw.slabs, raw.slab_distance) {
+            (Some(_), Some(_)) => {
+                return Err(self.err(
+                    "sweep.slabs",
+                    "expected only one of `slabs` and `slab_distance`, got both",
+                ));
+            }
+            (None, None) => {
+                return Err(self.err(
+                    "sweep.slabs",
+                    "expected one of `slabs` (a count) or `slab_distance` (world units)",
+                ));
+            }
+            (Some(n), None) => {
+                self.slab_count(n)?;
+                SlabSpec::Count(n)
+            }
+            (None, Some(d)) => SlabSpec::Distance(self.positive("sweep.slab_distance", d)?),
+        };
+        let kernel_text = raw.kernel.unwrap_or_else(|| "ellipse2".to_string());
+        let kernel = kernel_text
+            .parse::<KernelSpec>()
+            .map_err(|e| self.err("sweep.kernel", e))?;
+        let guard_band = raw.guard_band.unwrap_or(0);
+        if guard_band > MAX_GUARD_BAND {
+            return Err(self.err(
+                "sweep.guard_band",
+                format!("expected at most {MAX_GUARD_BAND} pixels, got {guard_band}"),
+            ));
+        }
+        Ok(SweepSpec {
+            slabs,
+            optimal_distance: self.positive("sweep.optimal_distance", raw.optimal_distance)?,
+            kernel,
+            jitter: raw.jitter.unwrap_or(true),
+            seed: raw.seed.unwrap_or(0),
+            variance_compensation: raw.variance_compensation.unwrap_or(true),
+            guard_band,
+        })
+    }
+
+    fn light(&self, i: usize, raw: RawLight) -> Result<LightSpec, SceneError> {
+        let key = |k: &str| format!("light[{i}].{k}");
+        let color = self.color(&key("color"), raw.color.unwrap_or([1.0; 3]))?;
+        let tilt = raw.tilt_deg.unwrap_or([0.0; 2]);
+        for (j, t) in tilt.iter().enumerate() {
+            let k = format!("light[{i}].tilt_deg[{j}]");
+            self.finite(&k, *t)?;
+            if t.abs() >= 90.0 {
+                return Err(self.err(k, format!("expected |angle| < 90 degrees, got {t}")));
+            }
+        }
+        let variance = raw.variance.unwrap_or([0.0; 2]);
+        for (j, v) in variance.iter().enumerate() {
+            let k = format!("light[{i}].variance[{j}]");
+            self.finite(&k, *v)?;
+            if *v < 0.0 {
+                return Err(self.err(k, format!("expected a variance >= 0, got {v}")));
+            }
+        }
+        Ok(LightSpec {
+            color: color.map(|c| c as f32),
+            tilt_deg: tilt,
+            variance,
+            rotation_deg: self.finite(&key("rotation_deg"), raw.rotation_deg.unwrap_or(0.0))?,
+        })
+    }
+
+    fn mesh(
+        &self,
+        i: usize,
+        raw: RawMesh,
+        materials: &[String],
+        base_dir: &Path,
+    ) -> Result<MeshSpec, SceneError> {
+        let key = |k: &str| format!("mesh[{i}].{k}");
+        let size = |n: usize, what: &str| -> Result<Vec<f64>, SceneError> {
+            let s = raw.size.clone().ok_or_else(|| {
+                self.err(
+                    key("size"),
+                    format!("expected `size` = {what} for this shape"),
+                )
+            })?;
+            if s.len() != n {
+                return Err(self.err(
+                    key("size"),
+                    format!("expected {n} numbers ({what}), got {}", s.len()),
+                ));
+            }
+            for (j, v) in s.iter().enumerate() {
+                self.finite(&format!("mesh[{i}].size[{j}]"), *v)?;
+            }
+            Ok(s)
+        };
+        let whole = |v: f64, k: &str, max: u32| -> Result<u32, SceneError> {
+            if v.fract() != 0.0 || v < 0.0 || v > f64::from(max) {
+                return Err(self.err(
+                    key(k),
+                    format!("expected a whole number from 0 to {max}, got {v}"),
+                ));
+            }
+            Ok(v as u32)
+        };
+        if raw.path.is_some() && raw.shape != "obj" {
+            return Err(self.err(key("path"), "`path` is only for shape = \"obj\""));
+        }
+        let shape = match raw.shape.as_str() {
+            "box" => {
+                let s = size(3, "[x, y, z] full extents")?;
+                for (j, v) in s.iter().enumerate() {
+                    self.positive(&format!("mesh[{i}].size[{j}]"), *v)?;
+                }
+                ShapeSpec::Box {
+                    size: [s[0], s[1], s[2]],
+                }
+            }
+            "sphere" => {
+                let s = size(2, "[radius, subdivisions]")?;
+                self.positive(&format!("mesh[{i}].size[0]"), s[0])?;
+                ShapeSpec::Sphere {
+                    radius: s[0],
+                    subdivisions: whole(s[1], "size[1]", MAX_SPHERE_SUBDIVISIONS)?,
+                }
+            }
+            "torus" => {
+                let s = size(3, "[major radius, minor radius, segments]")?;
+                self.positive(&format!("mesh[{i}].size[0]"), s[0])?;
+                self.positive(&format!("mesh[{i}].size[1]"), s[1])?;
+                if s[1] >= s[0] {
+                    return Err(self.err(
+                        key("size"),
+                        format!(
+                            "expected minor radius < major radius, got {} >= {}",
+                            s[1], s[0]
+                        ),
+                    ));
+                }
+                let segments = whole(s[2], "size[2]", MAX_TORUS_SEGMENTS)?;
+                if segments < 3 {
+                    return Err(self.err(key("size[2]"), "expected at least 3 segments"));
+                }
+                ShapeSpec::Torus {
+                    major: s[0],
+                    minor: s[1],
+                    segments,
+                }
+            }
+            "obj" => {
+                if raw.size.is_some() {
+                    return Err(self.err(key("size"), "an obj mesh takes `path`, not `size`"));
+                }
+                let p = raw.path.as_ref().ok_or_else(|| {
+                    self.err(
+                        key("path"),
+                        "expected `path` = the OBJ file, relative to the scene",
+                    )
+                })?;
+                ShapeSpec::Obj {
+                    path: base_dir.join(p),
+                }
+            }
+            other => {
+                return Err(self.err(
+                    key("shape"),
+                    format!("expected one of box, sphere, torus, obj; got {other:?}"),
+                ));
+            }
+        };
+        let material = materials
+            .iter()
+            .position(|n| *n == raw.material)
+            .ok_or_else(|| {
+                self.err(
+                    key("material"),
+                    format!(
+                        "no material named {:?}; expected one of [{}]",
+                        raw.material,
+                        materials.join(", ")
+                    ),
+                )
+            })?;
+        let scale = self.finite(&key("scale"), raw.scale.unwrap_or(1.0))?;
+        if scale == 0.0 {
+            return Err(self.err(key("scale"), "expected a non-zero scale"));
+        }
+        Ok(MeshSpec {
+            shape,
+            translate: self.finite3(&key("translate"), raw.translate.unwrap_or([0.0; 3]))?,
+            rotate_deg: self.finite3(&key("rotate_deg"), raw.rotate_deg.unwrap_or([0.0; 3]))?,
+            scale,
+            material,
+        })
+    }
+
+    fn material(
+        &self,
+        name: &str,
+        raw: RawMaterial,
+        base_dir: &Path,
+    ) -> Result<MaterialSpec, SceneError> {
+        let key = |k: &str| format!("material.{name}.{k}");
+        let color = self.color(&key("color"), raw.color.unwrap_or([1.0; 3]))?;
+        let opacity = self.unit_interval(&key("opacity"), raw.opacity.unwrap_or(1.0))?;
+        let transport = raw.transport.unwrap_or([0.0; 3]);
+        for (j, t) in transport.iter().enumerate() {
+            self.unit_interval(&format!("material.{name}.transport[{j}]"), *t)?;
+        }
+        let reference_length = raw
+            .reference_length
+            .map(|r| self.positive(&key("reference_length"), r))
+            .transpose()?;
+        let detail = match raw.detail {
+            None => None,
+            Some(d) => {
+                let octaves = d.octaves.unwrap_or(4);
+                if octaves == 0 || octaves > 16 {
+                    return Err(self.err(
+                        key("detail.octaves"),
+                        format!("expected 1 to 16 octaves, got {octaves}"),
+                    ));
+                }
+                Some(DetailSpec {
+                    kind: d.kind,
+                    frequency: self
+                        .positive(&key("detail.frequency"), d.frequency.unwrap_or(1.0))?,
+                    octaves,
+                    lacunarity: self
+                        .positive(&key("detail.lacunarity"), d.lacunarity.unwrap_or(2.0))?,
+                    gain: self.positive(&key("detail.gain"), d.gain.unwrap_or(0.5))?,
+                    time: d
+                        .time
+                        .map(|t| self.finite(&key("detail.time"), t))
+                        .transpose()?,
+                })
+            }
+        };
+        let texture = match raw.texture {
+            None => None,
+            Some(t) => {
+                if t.dims.contains(&0) {
+                    return Err(self.err(key("texture.dims"), "expected three dimensions >= 1"));
+                }
+                Some(TextureSpec {
+                    path: base_dir.join(&t.path),
+                    dims: t.dims,
+                    voxel: t.voxel,
+                })
+            }
+        };
+        if detail.is_some() && texture.is_some() {
+            return Err(self.err(
+                key("texture"),
+                "expected either `detail` or `texture`, not both",
+            ));
+        }
+        let mut gradient = Vec::new();
+        if let Some(g) = raw.gradient {
+            if g.is_empty() {
+                return Err(self.err(key("gradient"), "expected at least one stop"));
+            }
+            for (j, s) in g.iter().enumerate() {
+                let k = format!("material.{name}.gradient[{j}]");
+                for v in s {
+                    self.finite(&k, *v)?;
+                }
+                self.unit_interval(&format!("{k}[0]"), s[0])?;
+                self.color(&k, [s[1], s[2], s[3]])?;
+                self.unit_interval(&format!("{k}[4]"), s[4])?;
+                if let Some(prev) = gradient.last().map(|p: &GradientStop| p.value)
+                    && s[0] < prev
+                {
+                    return Err(self.err(k, "expected stops sorted by value"));
+                }
+                gradient.push(GradientStop {
+                    value: s[0],
+                    color: [s[1], s[2], s[3]],
+                    opacity: s[4],
+                });
+            }
+        } else if detail.is_some() || texture.is_some() {
+            return Err(self.err(
+                key("gradient"),
+                "a material with detail or texture needs `gradient` = [[value, r, g, b, opacity], ...]",
+            ));
+        }
+        if raw.opacity.is_some() && !gradient.is_empty() {
+            return Err(self.err(
+                key("opacity"),
+                "a gradient material takes its opacity from the gradient; remove `opacity`",
+            ));
+        }
+        let specular = raw
+            .specular
+            .map(|s| -> Result<SpecularSpec, SceneError> {
+                self.finite(&key("specular.strength"), s.strength)?;
+                if s.strength < 0.0 {
+                    return Err(self.err(key("specular.strength"), "expected a strength >= 0"));
+                }
+                if s.exponent == 0 || s.exponent > 4096 {
+                    return Err(self.err(key("specular.exponent"), "expected 1 to 4096"));
+                }
+                Ok(SpecularSpec {
+                    strength: s.strength as f32,
+                    exponent: s.exponent,
+                })
+            })
+            .transpose()?;
+        Ok(MaterialSpec {
+            name: name.to_string(),
+            color,
+            opacity,
+            transport,
+            reference_length,
+            detail,
+            texture,
+            gradient,
+            specular,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+[image]
+width = 64
+height = 32
+[camera]
+view_width = 2.0
+[sweep]
+slabs = 16
+optimal_distance = 0.5
+[[mesh]]
+shape = "box"
+size = [1.0, 1.0, 1.0]
+material = "m"
+[material.m]
+"#;
+
+    fn parse(text: &str) -> Result<Scene, SceneError> {
+        Scene::parse(text, "test.toml", Path::new("."))
+    }
+
+    #[test]
+    fn defaults_are_the_documented_ones() {
+        let s = parse(MINIMAL).unwrap();
+        assert_eq!(s.camera.direction, [0.0, 0.0, 1.0]);
+        assert_eq!(s.camera.up, [0.0, 1.0, 0.0]);
+        assert_eq!(s.camera.center, [0.0; 3]);
+        assert_eq!(s.image.background, [0.0; 3]);
+        assert_eq!(s.sweep.kernel, KernelSpec::default());
+        assert!(s.sweep.jitter);
+        assert_eq!(s.sweep.seed, 0);
+        assert_eq!(s.lights.len(), 1);
+        assert_eq!(s.lights[0].color, [1.0; 3]);
+        assert_eq!(s.meshes[0].scale, 1.0);
+        assert_eq!(s.materials[0].transport, [0.0; 3]);
+        assert_eq!(s.materials[0].reference_length, None);
+        assert!(s.is_monochrome());
+    }
+
+    #[test]
+    fn the_embedded_default_scene_parses() {
+        let s = Scene::default_scene();
+        assert!(s.lights.len() >= 2);
+        assert!(
+            s.meshes
+                .iter()
+                .all(|m| !matches!(m.shape, ShapeSpec::Obj { .. }))
+        );
+    }
+
+    fn expect_err(text: &str, key: &str, words: &str) {
+        let e = parse(text).expect_err("must be rejected");
+        let msg = e.to_string();
+        assert!(msg.contains("test.toml"), "{msg}");
+        assert!(msg.contains(key), "message should name key {key}: {msg}");
+        assert!(msg.contains(words), "message should say {words}: {msg}");
+    }
+
+    #[test]
+    fn invalid_values_name_file_key_and_expectation() {
+        expect_err(
+            &MINIMAL.replace("width = 64", "width = 0"),
+            "image.width",
+            "1 to 16384",
+        );
+        expect_err(
+            &MINIMAL.replace("width = 64", "width = 100000"),
+            "image.width",
+            "16384",
+        );
+        expect_err(
+            &MINIMAL.replace("slabs = 16", "slabs = 0"),
+            "sweep.slabs",
+            "1 to",
+        );
+        expect_err(
+            &MINIMAL.replace("slabs = 16", "slab_distance = 0.0"),
+            "sweep.slab_distance",
+            "> 0",
+        );
+        expect_err(
+            &MINIMAL.replace("slabs = 16", ""),
+            "sweep.slabs",
+            "expected one of",
+        );
+        expect_err(
+            &format!("{MINIMAL}\n[[light]]\ntilt_deg = [90.0, 0.0]\n"),
+            "light[0].tilt_deg[0]",
+            "< 90",
+        );
+        expect_err(
+            &format!("{MINIMAL}\n[[light]]\nvariance = [-1.0, 0.0]\n"),
+            "light[0].variance[0]",
+            ">= 0",
+        );
+        expect_err(
+            &MINIMAL.replace("size = [1.0, 1.0, 1.0]", "size = [1.0, 0.0, 1.0]"),
+            "mesh[0].size[1]",
+            "> 0",
+        );
+        expect_err(
+            &MINIMAL.replace("material = \"m\"", "material = \"x\""),
+            "mesh[0].material",
+            "no material named",
+        );
+        expect_err(
+            &MINIMAL.replace("view_width = 2.0", "view_width = nan"),
+            "camera.view_width",
+            "finite",
+        );
+        expect_err(
+            &MINIMAL.replace("view_width = 2.0", "view_width = inf"),
+            "camera.view_width",
+            "finite",
+        );
+        expect_err(
+            &MINIMAL.replace("shape = \"box\"", "shape = \"cone\""),
+            "mesh[0].shape",
+            "expected one of",
+        );
+        expect_err(
+            &MINIMAL.replace("slabs = 16", "slabs = 16\nkernel = \"blur\""),
+            "sweep.kernel",
+            "ellipse",
+        );
+    }
+
+    #[test]
+    fn syntax_unknown_keys_and_wrong_types_are_errors() {
+        expect_err(
+            &MINIMAL.replace("height = 32", "height = 32\ncolour = 3"),
+            "",
+            "unknown field `colour`",
+        );
+        expect_err(
+            &MINIMAL.replace("height = 32", "height = \"tall\""),
+            "height",
+            "line 4",
+        );
+        let e = parse(&MINIMAL.replace("[camera]\n", "")).unwrap_err();
+        assert!(e.to_string().contains("camera"), "{e}");
+    }
+}
