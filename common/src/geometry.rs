@@ -96,6 +96,11 @@ pub fn object_mesh(spec: &MeshSpec) -> Result<TriMesh, MeshError> {
             minor,
             segments,
         } => TriMesh::torus(*major, *minor, *segments),
+        ShapeSpec::Cylinder {
+            radius,
+            height,
+            segments,
+        } => TriMesh::cylinder(*radius, *height, *segments),
         ShapeSpec::Obj { path } => crate::mesh::load_obj(path)?,
     })
 }

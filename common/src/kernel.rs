@@ -25,6 +25,8 @@ pub const MAX_ELLIPSE_SAMPLES: u32 = 64;
 pub const MAX_GAUSSIAN_WIDTH: u32 = 63;
 /// Largest number of taps a single phase may have (bounds per-pixel work).
 pub const MAX_TAPS_PER_PHASE: usize = 4096;
+/// Tap weights below this (2^-56) are dropped (see `discretise`).
+const MIN_WEIGHT: f64 = 1.0 / 72_057_594_037_927_936.0;
 
 /// Which kernel family.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -427,38 +429,45 @@ fn discretise(
     let mut taps = Vec::with_capacity(pattern.len() * taps_per_phase);
     for phase in pattern {
         let start = taps.len();
-        for (o, wt) in phase {
-            let rx = -(mean[0] + o[0]);
-            let ry = -(mean[1] + o[1]);
-            let (fx0, fy0) = (rx.floor(), ry.floor());
-            let (fx, fy) = (rx - fx0, ry - fy0);
-            let w = [
-                (1.0 - fx) * (1.0 - fy) * wt,
-                fx * (1.0 - fy) * wt,
-                (1.0 - fx) * fy * wt,
-                fx * fy * wt,
-            ];
-            taps.push(Tap {
-                dx: fx0 as i32,
-                dy: fy0 as i32,
-                // Weights below 2^-24 are dropped so products with buffer values never go subnormal.
-                w: w.map(|x| {
-                    if x < 1.0 / 16_777_216.0 {
-                        0.0
-                    } else {
-                        x as f32
-                    }
-                }),
-            });
-        }
+        let mut phase_taps: Vec<(f64, Tap)> = phase
+            .iter()
+            .map(|(o, wt)| {
+                let rx = -(mean[0] + o[0]);
+                let ry = -(mean[1] + o[1]);
+                let (fx0, fy0) = (rx.floor(), ry.floor());
+                let (fx, fy) = (rx - fx0, ry - fy0);
+                let w = [
+                    (1.0 - fx) * (1.0 - fy) * wt,
+                    fx * (1.0 - fy) * wt,
+                    (1.0 - fx) * fy * wt,
+                    fx * fy * wt,
+                ];
+                let tap = Tap {
+                    dx: fx0 as i32,
+                    dy: fy0 as i32,
+                    // Weights below 2^-56 are dropped: with light values ≥ FLUSH_BELOW (1e-20)
+                    // every product stays above f32's smallest normal (1.2e-38).
+                    w: w.map(|x| if x < MIN_WEIGHT { 0.0 } else { x as f32 }),
+                };
+                (o[0] * o[0] + o[1] * o[1], tap)
+            })
+            .collect();
+        // The tap nearest the pattern's centre goes last: it absorbs the rounding of the weight
+        // sum (see `normalise_exactly`), which then moves the mean least.
+        let central = (0..phase_taps.len())
+            .min_by(|&a, &b| phase_taps[a].0.total_cmp(&phase_taps[b].0))
+            .unwrap_or(0);
+        let last = phase_taps.remove(central);
+        taps.extend(phase_taps.into_iter().map(|(_, t)| t));
         // Pad short phases with zero-weight taps (adding 0·v leaves the sum unchanged).
-        while taps.len() - start < taps_per_phase {
+        while taps.len() - start < taps_per_phase - 1 {
             taps.push(Tap {
                 dx: 0,
                 dy: 0,
                 w: [0.0; 4],
             });
         }
+        taps.push(last.1);
         normalise_exactly(&mut taps[start..]);
     }
     KernelTable {
@@ -482,27 +491,32 @@ pub fn sequential_weight_sum(taps: &[Tap]) -> f32 {
     acc
 }
 
-/// Adjusts the largest weight by whole ulps until the sequential f32 sum is exactly 1.
+/// Sets the last weight in the sweep's summation order so that the sequential f32 sum is exactly
+/// 1: with S the sum of all earlier terms, S + w steps by at most one ulp of w ≤ ulp(1) as w walks,
+/// so some w rounds the sum to exactly 1.0.
 fn normalise_exactly(taps: &mut [Tap]) {
-    let (mut bi, mut bc, mut best) = (0, 0, -1.0f32);
-    for (i, t) in taps.iter().enumerate() {
-        for (c, w) in t.w.iter().enumerate() {
-            if *w > best {
-                (bi, bc, best) = (i, c, *w);
+    let last = taps.len() - 1;
+    let before = {
+        let mut acc = 0.0f32;
+        for (i, t) in taps.iter().enumerate() {
+            for (c, w) in t.w.iter().enumerate() {
+                if i == last && c == 3 {
+                    break;
+                }
+                acc += *w;
             }
         }
-    }
-    // First a coarse correction in f64, then walk ulp by ulp.
-    let s = sequential_weight_sum(taps);
-    taps[bi].w[bc] = (f64::from(taps[bi].w[bc]) + (1.0 - f64::from(s))) as f32;
-    for _ in 0..64 {
-        let s = sequential_weight_sum(taps);
+        acc
+    };
+    let mut w = (1.0 - f64::from(before)) as f32;
+    for _ in 0..256 {
+        let s = before + w;
         if s == 1.0 {
-            return;
+            break;
         }
-        let w = taps[bi].w[bc];
-        taps[bi].w[bc] = if s > 1.0 { w.next_down() } else { w.next_up() };
+        w = if s > 1.0 { w.next_down() } else { w.next_up() };
     }
+    taps[last].w[3] = w;
 }
 
 /// Arc-length statistics of an ellipse with semi-axes (1, r): (∮x² ds, ∮y² ds, L), by the
@@ -712,6 +726,10 @@ fn gaussian_taps(k: u32, l1: f64, l2: f64, e1: [f64; 2]) -> Vec<([f64; 2], f64)>
             .zip(&ws)
             .map(|(i, w)| f64::from(i * i) * w / sum)
             .sum();
+        if got.is_nan() || got <= 0.0 {
+            // A variance far below one pixel²: every weight but the centre's underflowed.
+            return vec![(0.0, 1.0)];
+        }
         let stretch = (var / got).sqrt();
         (-h..=h)
             .zip(ws)

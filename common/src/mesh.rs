@@ -305,6 +305,37 @@ impl TriMesh {
         }
     }
 
+    /// A closed cylinder around the z axis, centred at the origin: `radius`, full `height`,
+    /// `segments` around (at least 3); caps are fans around a centre vertex; outward winding.
+    pub fn cylinder(radius: f64, height: f64, segments: u32) -> TriMesh {
+        let n = segments.max(3);
+        let h = 0.5 * height;
+        let mut positions = Vec::with_capacity(2 * n as usize + 2);
+        for z in [-h, h] {
+            for i in 0..n {
+                let (s, c) = (2.0 * PI * f64::from(i) / f64::from(n)).sin_cos();
+                positions.push(DVec3::new(radius * c, radius * s, z));
+            }
+        }
+        let (bottom, top) = (2 * n, 2 * n + 1);
+        positions.push(DVec3::new(0.0, 0.0, -h));
+        positions.push(DVec3::new(0.0, 0.0, h));
+        let mut triangles = Vec::with_capacity(4 * n as usize);
+        for i in 0..n {
+            let j = (i + 1) % n;
+            // Side quad: counter-clockwise seen from outside.
+            triangles.push([i, j, n + j]);
+            triangles.push([i, n + j, n + i]);
+            // Caps: the bottom faces −z, the top +z.
+            triangles.push([bottom, j, i]);
+            triangles.push([top, n + i, n + j]);
+        }
+        TriMesh {
+            positions,
+            triangles,
+        }
+    }
+
     /// Returns `p' = R·(scale·p) + t` with `R = Rz·Ry·Rx` (degrees, x applied first); winding is flipped when `scale < 0`.
     pub fn transformed(&self, scale: f64, rotate_deg: DVec3, translate: DVec3) -> TriMesh {
         let r = DMat3::from_rotation_z(rotate_deg.z.to_radians())
@@ -864,6 +895,22 @@ pub fn load_obj(path: &Path) -> Result<TriMesh, MeshError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cylinder_is_closed_outward_with_the_prism_volume() {
+        let c = TriMesh::cylinder(0.5, 0.2, 32);
+        let (_, r) = c.analyze();
+        assert!(r.is_closed(), "{r:?}");
+        assert_eq!(c.triangles.len(), 4 * 32);
+        // A regular 32-gon prism: area n/2·r²·sin(2π/n) times the height.
+        let v = 16.0 * 0.25 * (2.0 * PI / 32.0).sin() * 0.2;
+        assert!(
+            (c.signed_volume() - v).abs() < 1e-12,
+            "{}",
+            c.signed_volume()
+        );
+        assert_eq!(c.euler_characteristic(), 2);
+    }
 
     fn all_meshes() -> Vec<(&'static str, TriMesh)> {
         let mut v = vec![("box", TriMesh::unit_box(DVec3::new(1.0, 2.0, 3.0)))];

@@ -278,6 +278,15 @@ pub enum ShapeSpec {
         /// Segments around the major circle.
         segments: u32,
     },
+    /// Closed cylinder around the z axis.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Full height.
+        height: f64,
+        /// Segments around.
+        segments: u32,
+    },
     /// A Wavefront OBJ file.
     Obj {
         /// Resolved path.
@@ -781,6 +790,20 @@ impl Validator<'_> {
                     segments,
                 }
             }
+            "cylinder" => {
+                let s = size(3, "[radius, height, segments]")?;
+                self.positive(&format!("mesh[{i}].size[0]"), s[0])?;
+                self.positive(&format!("mesh[{i}].size[1]"), s[1])?;
+                let segments = whole(s[2], "size[2]", MAX_TORUS_SEGMENTS)?;
+                if segments < 3 {
+                    return Err(self.err(key("size[2]"), "expected at least 3 segments"));
+                }
+                ShapeSpec::Cylinder {
+                    radius: s[0],
+                    height: s[1],
+                    segments,
+                }
+            }
             "obj" => {
                 if raw.size.is_some() {
                     return Err(self.err(key("size"), "an obj mesh takes `path`, not `size`"));
@@ -798,7 +821,7 @@ impl Validator<'_> {
             other => {
                 return Err(self.err(
                     key("shape"),
-                    format!("expected one of box, sphere, torus, obj; got {other:?}"),
+                    format!("expected one of box, sphere, torus, cylinder, obj; got {other:?}"),
                 ));
             }
         };

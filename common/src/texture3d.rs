@@ -113,7 +113,7 @@ pub enum TextureError {
     },
 }
 
-/// A 3D texture normalised to f32 in [0,1] (u8/255, u16/65535; f32 as stored, must be finite).
+/// A 3D texture normalised to f32 in [0, 1] (u8/255, u16/65535; f32 as stored, must be finite).
 ///
 /// `voxels.len()` must equal the product of `dims` (the constructors guarantee it; sampling a
 /// hand-built inconsistent texture panics on the bounds check).
@@ -249,7 +249,7 @@ impl Texture3d {
         Ok(Texture3d { dims, voxels })
     }
 
-    /// Trilinear sample at normalised coordinates u in [0,1]^3 (voxel centres at (i+0.5)/dim),
+    /// Trilinear sample at normalised coordinates u in [0, 1]³ (voxel centres at (i+0.5)/dim),
     /// clamp-to-edge (NaN coordinates read the first voxel). Interpolation written as
     /// a + t*(b - a) in a fixed order.
     pub fn sample(&self, u: [f32; 3]) -> f32 {
