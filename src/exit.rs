@@ -1,4 +1,6 @@
-//! Exit codes of the `convshadow` binary (documented in docs/errors.md).
+//! Exit codes of the `convshadow` binary (documented in docs/errors.md) and the interrupt flag.
+
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Success.
 pub const OK: i32 = 0;
@@ -18,6 +20,34 @@ pub const MESH_DEFECT: i32 = 6;
 pub const OUTPUT_FAILED: i32 = 7;
 /// Interrupted by SIGINT or SIGTERM (no output was written).
 pub const INTERRUPTED: i32 = 130;
+
+/// Raised by SIGINT/SIGTERM/SIGHUP once [`install_interrupt_handler`] has run.
+pub static INTERRUPT: AtomicBool = AtomicBool::new(false);
+
+/// Installs the SIGINT/SIGTERM/SIGHUP handler (once) and returns the flag it raises. The first
+/// signal only raises the flag: the sweep stops before its next slab, nothing is written and the
+/// process exits with [`INTERRUPTED`]. A second signal exits with [`INTERRUPTED`] at once.
+pub fn install_interrupt_handler() -> &'static AtomicBool {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // If a handler cannot be installed, signals keep their default action (terminate):
+        // still no partial output, as files are only ever renamed into place complete.
+        let _ = ctrlc::set_handler(|| {
+            if INTERRUPT.swap(true, Ordering::SeqCst) {
+                std::process::exit(INTERRUPTED);
+            }
+        });
+    });
+    &INTERRUPT
+}
+
+/// The interrupted failure (exit code 130) if a signal has raised [`INTERRUPT`].
+pub fn check_interrupt() -> Result<(), Failure> {
+    if INTERRUPT.load(Ordering::SeqCst) {
+        return Err(Failure::new(INTERRUPTED, "interrupted; no output written"));
+    }
+    Ok(())
+}
 
 /// An error with the exit code it maps to.
 #[derive(Debug)]
@@ -70,5 +100,19 @@ impl From<convshadow_cpu::ldi::LdiError> for Failure {
 impl From<convshadow_common::image_io::OutputError> for Failure {
     fn from(e: convshadow_common::image_io::OutputError) -> Self {
         Failure::new(OUTPUT_FAILED, e.to_string())
+    }
+}
+
+impl From<convshadow_gpu::GpuError> for Failure {
+    fn from(e: convshadow_gpu::GpuError) -> Self {
+        use convshadow_gpu::GpuError as G;
+        let code = match e {
+            G::TooLarge { .. } | G::Ldi(_) => RESOURCE_LIMIT,
+            G::Interrupted => INTERRUPTED,
+            G::NoAdapter { .. } | G::Device { .. } | G::Unsupported(_) | G::ReadBack(_) => {
+                GPU_UNAVAILABLE
+            }
+        };
+        Failure::new(code, e.to_string())
     }
 }

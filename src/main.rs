@@ -14,6 +14,9 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Compare two images (EXR or PNG; A is the reference): errors, PSNR, FLIP, 8-bit sRGB
+    /// differences, optional JSON and heat-map.
+    Diff(commands::diff::DiffArgs),
     /// Build the layered depth image and report fragments, layers and mesh defects.
     Ldi(commands::ldi::LdiArgs),
     /// Render a scene (the embedded default scene without SCENE) to PNG and/or EXR.
@@ -34,6 +37,7 @@ fn main() {
         }
     };
     let result = match &cli.command {
+        Command::Diff(a) => commands::diff::run(a),
         Command::Ldi(a) => commands::ldi::run(a),
         Command::Render(a) => commands::render::run(a),
     };

@@ -11,6 +11,7 @@ use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::Scene;
 use convshadow_cpu::ldi::{Ldi, LdiStats};
 use convshadow_cpu::sweep::{SweepError, SweepOptions, sweep};
+use convshadow_gpu::GpuContext;
 
 use crate::exit::{self, Failure};
 
@@ -30,13 +31,71 @@ impl CpuPath {
     }
 }
 
+/// Which device renders (`--backend`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Backend {
+    /// The CPU oracle.
+    #[default]
+    Cpu,
+    /// The wgpu port (Vulkan: a hardware adapter, else Mesa lavapipe); exit code 5 without one.
+    Gpu,
+    /// The GPU when an adapter exists, else the CPU (and says so).
+    Auto,
+}
+
+/// The device chosen for a request.
+pub struct BackendChoice {
+    /// The GPU context, or `None` for the CPU.
+    pub gpu: Option<GpuContext>,
+    /// Why `auto` fell back to the CPU, if it did.
+    pub note: Option<String>,
+}
+
+impl BackendChoice {
+    /// Opens the backend: `gpu` fails without an adapter, `auto` falls back to the CPU.
+    pub fn open(backend: Backend) -> Result<BackendChoice, Failure> {
+        match backend {
+            Backend::Cpu => Ok(BackendChoice {
+                gpu: None,
+                note: None,
+            }),
+            Backend::Gpu => Ok(BackendChoice {
+                gpu: Some(GpuContext::new()?),
+                note: None,
+            }),
+            Backend::Auto => Ok(match GpuContext::new() {
+                Ok(ctx) => BackendChoice {
+                    gpu: Some(ctx),
+                    note: None,
+                },
+                Err(e) => BackendChoice {
+                    gpu: None,
+                    note: Some(format!("--backend auto: {e}; rendering on the CPU")),
+                },
+            }),
+        }
+    }
+
+    /// `"gpu"` or `"cpu"`, as in stats.
+    pub fn name(&self) -> &'static str {
+        if self.gpu.is_some() { "gpu" } else { "cpu" }
+    }
+
+    /// The adapter's name on the GPU backend.
+    pub fn adapter(&self) -> Option<String> {
+        self.gpu.as_ref().map(GpuContext::adapter_name)
+    }
+}
+
 /// How to render.
 pub struct RenderRequest<'a> {
+    /// Which device renders.
+    pub backend: Backend,
     /// Worker threads (0 = one per core).
     pub threads: usize,
     /// CPU code path.
     pub path: CpuPath,
-    /// Memory budget in bytes for the LDI.
+    /// Memory budget in bytes for the LDI and the sweep's buffers.
     pub memory_budget: u64,
     /// Render even if meshes are open (the odd pixels are reported).
     pub allow_open: bool,
@@ -49,6 +108,7 @@ pub struct RenderRequest<'a> {
 impl Default for RenderRequest<'_> {
     fn default() -> Self {
         RenderRequest {
+            backend: Backend::Cpu,
             threads: 0,
             path: CpuPath::Scalar,
             memory_budget: convshadow_cpu::default_memory_budget(),
@@ -81,6 +141,12 @@ pub struct Rendered {
     pub seconds_sweep: f64,
     /// Seconds in all.
     pub seconds_total: f64,
+    /// `"cpu"` or `"gpu"`: the backend that rendered.
+    pub backend: &'static str,
+    /// The GPU adapter's name on the GPU backend.
+    pub adapter: Option<String>,
+    /// Why `--backend auto` fell back to the CPU, if it did.
+    pub backend_note: Option<String>,
 }
 
 /// Fingerprint of a float image's bits.
@@ -90,12 +156,111 @@ pub fn image_fingerprint(data: &[f32]) -> u64 {
     f.finish()
 }
 
-/// Renders a scene on the CPU.
+/// Bytes per grid pixel the LDI builder needs before any fragment (counts, CSR offsets, cursors).
+pub const LDI_BYTES_PER_PIXEL: u64 = 4 + 4 + 4;
+
+/// The memory a render needs before any fragment, from the scene alone (checked before
+/// anything large is allocated; the LDI then gets the rest of the budget for its fragments).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemoryNeed {
+    /// Grid pixels (image plus guard band on every side).
+    pub grid_pixels: u64,
+    /// The LDI's per-pixel arrays.
+    pub ldi_pixels: u64,
+    /// The sweep's two light buffers per light and channel (ping-pong), f32.
+    pub light_buffers: u64,
+    /// The sweep's per-pixel state: layer cursor, inside bits, colour and alpha.
+    pub sweep_state: u64,
+    /// The output image as floats, its 8-bit encoding and the encoded file (estimate).
+    pub output: u64,
+}
+
+impl MemoryNeed {
+    /// The need of rendering `scene` (with `sweep = false`: of building its LDI only).
+    pub fn of(scene: &Scene, sweep: bool) -> MemoryNeed {
+        let g = u64::from(scene.sweep.guard_band);
+        let grid_pixels =
+            (u64::from(scene.image.width) + 2 * g) * (u64::from(scene.image.height) + 2 * g);
+        let image_pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
+        let channels: u64 = if scene.is_monochrome() { 1 } else { 3 };
+        let lights = scene.lights.len() as u64;
+        let (light_buffers, sweep_state, output) = if sweep {
+            (
+                2 * lights * channels * 4 * grid_pixels,
+                (4 + 4 + 12 + 4) * grid_pixels,
+                (12 + 3 + 3) * image_pixels,
+            )
+        } else {
+            (0, 0, image_pixels)
+        };
+        MemoryNeed {
+            grid_pixels,
+            ldi_pixels: LDI_BYTES_PER_PIXEL * grid_pixels,
+            light_buffers,
+            sweep_state,
+            output,
+        }
+    }
+
+    /// Everything but the fragments.
+    pub fn total(&self) -> u64 {
+        self.ldi_pixels + self.light_buffers + self.sweep_state + self.output
+    }
+
+    /// Refuses (exit code 4, with the numbers) when the need exceeds `budget`; else returns what
+    /// is left of the budget for the LDI's fragments.
+    pub fn check(&self, scene: &Scene, budget: u64) -> Result<u64, Failure> {
+        let need = self.total();
+        if need <= budget {
+            return Ok(budget - need);
+        }
+        let mib = |b: u64| b.div_ceil(1 << 20);
+        Err(Failure::new(
+            exit::RESOURCE_LIMIT,
+            format!(
+                "{}: the render needs {} MiB before any fragment ({} grid pixels: LDI arrays {} \
+                 MiB, light buffers {} MiB for {} lights, sweep state {} MiB, output {} MiB), \
+                 more than the memory budget of {} MiB; lower image.width/image.height, \
+                 sweep.guard_band or the light count, or raise --max-memory",
+                scene.source,
+                mib(need),
+                self.grid_pixels,
+                mib(self.ldi_pixels),
+                mib(self.light_buffers),
+                scene.lights.len(),
+                mib(self.sweep_state),
+                mib(self.output),
+                budget >> 20
+            ),
+        ))
+    }
+}
+
+/// Stops with the interrupted failure (exit code 130) when the cancel flag is raised.
+fn check_cancel(cancel: Option<&AtomicBool>) -> Result<(), Failure> {
+    if cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+        return Err(Failure::new(
+            exit::INTERRUPTED,
+            "interrupted; no output written",
+        ));
+    }
+    Ok(())
+}
+
+/// Renders a scene on the CPU or, with `req.backend`, on the GPU.
 pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Failure> {
     let start = Instant::now();
+    // Refuse before allocating: the per-pixel buffers first, the fragments in `Ldi::build`.
+    let fragment_budget = MemoryNeed::of(scene, true).check(scene, req.memory_budget)?;
     let pool = crate::commands::thread_pool(req.threads)?;
+    let choice = BackendChoice::open(req.backend)?;
     let geometry = SceneGeometry::build(scene)?;
-    let ldi = pool.install(|| Ldi::build(&geometry.raster, req.memory_budget))?;
+    check_cancel(req.cancel)?;
+    let ldi = match &choice.gpu {
+        Some(ctx) => convshadow_gpu::ldi::build_ldi(ctx, &geometry.raster, fragment_budget)?,
+        None => pool.install(|| Ldi::build(&geometry.raster, fragment_budget))?,
+    };
+    check_cancel(req.cancel)?;
     let stats = pool.install(|| ldi.stats());
     if !req.allow_open && (geometry.defect_edges() > 0 || stats.odd_pixels > 0) {
         let names: Vec<String> = geometry
@@ -135,15 +300,18 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Failur
         cancel: req.cancel,
         initial_light: None,
     };
-    let out = pool
-        .install(|| match req.path {
-            CpuPath::Scalar => sweep(&plan, &geometry.raster, &ldi, &options),
-        })
-        .map_err(|e| match e {
-            SweepError::Interrupted => {
-                Failure::new(exit::INTERRUPTED, "interrupted; no output written")
-            }
-        })?;
+    let out = match &choice.gpu {
+        Some(ctx) => convshadow_gpu::sweep::sweep(ctx, &plan, &geometry.raster, &ldi, &options)?,
+        None => pool
+            .install(|| match req.path {
+                CpuPath::Scalar => sweep(&plan, &geometry.raster, &ldi, &options),
+            })
+            .map_err(|e| match e {
+                SweepError::Interrupted => {
+                    Failure::new(exit::INTERRUPTED, "interrupted; no output written")
+                }
+            })?,
+    };
     let seconds_sweep = t_sweep.elapsed().as_secs_f64();
     let image_hash = image_fingerprint(&out.image);
     Ok(Rendered {
@@ -161,5 +329,8 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Failur
         seconds_ldi,
         seconds_sweep,
         seconds_total: start.elapsed().as_secs_f64(),
+        backend: choice.name(),
+        adapter: choice.adapter(),
+        backend_note: choice.note,
     })
 }

@@ -201,5 +201,5 @@ fn a_too_small_memory_budget_is_refused_with_the_need() {
         &dir,
     );
     assert_eq!(code, 4, "{err}");
-    assert!(err.contains("MiB") && err.contains("fragments"), "{err}");
+    assert!(err.contains("MiB") && err.contains("memory budget"), "{err}");
 }

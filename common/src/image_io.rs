@@ -30,7 +30,9 @@ pub fn temp_path_for(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.partial", std::process::id()))
 }
 
-/// Checks that `path` can be written: not a folder, and its folder exists.
+/// Checks that `path` can be written: not a folder, its folder exists and is a folder, and a
+/// file can be created there (probed by creating and removing the temporary file, so a render is
+/// refused before it starts, not after).
 pub fn check_writable(path: &Path) -> Result<(), OutputError> {
     if path.is_dir() {
         return Err(out_err(path, "is a folder; expected a file path"));
@@ -40,10 +42,30 @@ pub fn check_writable(path: &Path) -> Result<(), OutputError> {
         _ => Path::new("."),
     };
     if !dir.is_dir() {
-        return Err(out_err(
-            path,
-            format!("folder {} does not exist", dir.display()),
-        ));
+        let why = if dir.exists() {
+            "is not a folder"
+        } else {
+            "does not exist"
+        };
+        return Err(out_err(path, format!("folder {} {why}", dir.display())));
+    }
+    let tmp = temp_path_for(path);
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        // Left by an earlier write of this process: creatable, then.
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+        Err(e) => {
+            return Err(out_err(
+                path,
+                format!("cannot create a file in folder {}: {e}", dir.display()),
+            ));
+        }
     }
     Ok(())
 }

@@ -7,6 +7,7 @@ pub mod hash;
 pub mod image_io;
 pub mod kernel;
 pub mod mesh;
+pub mod metrics;
 pub mod noise;
 pub mod plan;
 pub mod raster;

@@ -26,6 +26,10 @@ pub struct LdiArgs {
     /// Write the numbers as JSON.
     #[arg(long)]
     pub stats_json: Option<PathBuf>,
+    /// Backend: the CPU oracle, the GPU (wgpu/Vulkan; exit code 5 without an adapter), or auto
+    /// (the GPU when an adapter exists, else the CPU with a message).
+    #[arg(long, value_enum, default_value_t = crate::pipeline::Backend::Cpu)]
+    pub backend: crate::pipeline::Backend,
     /// Write the layer count per pixel as a grey PNG (white = the most layers).
     #[arg(long)]
     pub layers_png: Option<PathBuf>,
@@ -43,13 +47,24 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
     }
     let budget = args
         .max_memory
-        .map_or_else(convshadow_cpu::default_memory_budget, |m| m << 20);
+        .map_or_else(convshadow_cpu::default_memory_budget, |m| {
+            m.saturating_mul(1 << 20)
+        });
+    // Refuse before allocating: the per-pixel arrays here, the fragments in `Ldi::build`.
+    let budget = crate::pipeline::MemoryNeed::of(&scene, false).check(&scene, budget)?;
     let pool = super::thread_pool(args.threads)?;
+    let choice = crate::pipeline::BackendChoice::open(args.backend)?;
+    if let Some(note) = &choice.note {
+        eprintln!("note: {note}");
+    }
 
     let start = Instant::now();
     let geometry = SceneGeometry::build(&scene)?;
     let t_ldi = Instant::now();
-    let ldi = pool.install(|| Ldi::build(&geometry.raster, budget))?;
+    let ldi = match &choice.gpu {
+        Some(ctx) => convshadow_gpu::ldi::build_ldi(ctx, &geometry.raster, budget)?,
+        None => pool.install(|| Ldi::build(&geometry.raster, budget))?,
+    };
     let seconds_ldi = t_ldi.elapsed().as_secs_f64();
     let stats = pool.install(|| ldi.stats());
     let hash = ldi.fingerprint();
@@ -103,6 +118,9 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         );
     }
     println!("  ldi_hash {hash:016x}");
+    if let Some(a) = choice.adapter() {
+        println!("  backend gpu: {a}");
+    }
 
     if let Some(path) = &args.layers_png {
         let max = stats.max_layers.max(1);
@@ -125,7 +143,8 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
             "nonmanifold_edges": nonmanifold,
             "flipped_edges": flipped,
             "threads": pool.current_num_threads(),
-            "backend": "cpu",
+            "backend": choice.name(),
+            "adapter": choice.adapter(),
             "seconds_ldi": seconds_ldi,
             "seconds_total": seconds_total,
             "ldi_hash": format!("{hash:016x}"),

@@ -1,5 +1,6 @@
 //! The `convshadow` subcommands.
 
+pub mod diff;
 pub mod ldi;
 pub mod render;
 

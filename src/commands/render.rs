@@ -8,7 +8,7 @@ use convshadow_common::scene::SlabSpec;
 use serde_json::json;
 
 use crate::exit::{self, Failure};
-use crate::pipeline::{CpuPath, RenderRequest, render};
+use crate::pipeline::{Backend, CpuPath, RenderRequest, render};
 
 /// Arguments of `convshadow render`.
 #[derive(clap::Args, Debug)]
@@ -40,13 +40,18 @@ pub struct RenderArgs {
     /// CPU code path.
     #[arg(long, value_enum, default_value_t = CpuPath::Scalar)]
     pub path: CpuPath,
+    /// Backend: the CPU oracle, the GPU (wgpu/Vulkan; exit code 5 without an adapter), or auto
+    /// (the GPU when an adapter exists, else the CPU with a message).
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    pub backend: Backend,
     /// Turn the bilinear-variance compensation on or off (overrides the scene).
     #[arg(long)]
     pub variance_compensation: Option<bool>,
     /// Render even if meshes are open (reports the pixels with odd fragment counts).
     #[arg(long)]
     pub allow_open: bool,
-    /// Memory budget in MiB for the LDI (default: half the machine's memory).
+    /// Memory budget in MiB for the LDI and the sweep's buffers (default: half the machine's
+    /// memory); a scene that needs more is refused before allocating (exit code 4).
     #[arg(long)]
     pub max_memory: Option<u64>,
     /// Write the numbers as JSON.
@@ -121,19 +126,27 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         }
     }
     let request = RenderRequest {
+        backend: args.backend,
         threads: args.threads,
         path: args.path,
         memory_budget: args
             .max_memory
-            .map_or_else(convshadow_cpu::default_memory_budget, |m| m << 20),
+            .map_or_else(convshadow_cpu::default_memory_budget, |m| {
+                m.saturating_mul(1 << 20)
+            }),
         allow_open: args.allow_open,
         progress: &progress,
-        cancel: None,
+        // SIGINT/SIGTERM raise it: the sweep stops and nothing is written (exit code 130).
+        cancel: Some(exit::install_interrupt_handler()),
     };
     let r = render(&scene, &request)?;
+    if let Some(note) = &r.backend_note {
+        eprintln!("note: {note}");
+    }
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    exit::check_interrupt()?;
     for p in &outputs {
         r.image.save(p)?;
     }
@@ -156,7 +169,8 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             "odd_pixels": r.ldi.odd_pixels,
             "threads": r.threads,
             "path": args.path.name(),
-            "backend": "cpu",
+            "backend": r.backend,
+            "adapter": r.adapter,
             "seconds_ldi": r.seconds_ldi,
             "seconds_sweep": r.seconds_sweep,
             "seconds_total": r.seconds_total,
@@ -176,7 +190,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     if !args.quiet {
         println!(
             "rendered {}x{} px, {} slabs, {} lights, {}, {} fragments: {:.2} s (LDI {:.2} s, sweep \
-             {:.2} s, {:.1} M pixel·slab·light/s, {} threads, {} path) → {}",
+             {:.2} s, {:.1} M pixel·slab·light/s, {}) → {}",
             scene.image.width,
             scene.image.height,
             r.plan.slabs,
@@ -187,8 +201,10 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             r.seconds_ldi,
             r.seconds_sweep,
             throughput / 1e6,
-            r.threads,
-            args.path.name(),
+            match &r.adapter {
+                Some(a) => format!("GPU: {a}"),
+                None => format!("CPU: {} threads, {} path", r.threads, args.path.name()),
+            },
             outputs
                 .iter()
                 .map(|p| p.display().to_string())

@@ -1,0 +1,211 @@
+//! The layered depth image on the GPU (`shaders/ldi.wgsl`), mirroring `convshadow_cpu::ldi`.
+//!
+//! The triangles are the same [`RasterSetup`] the CPU rasterizes (fixed-point vertices, boxes and
+//! depth planes computed once on the host) and are uploaded as they are. Passes:
+//! 1. `count`: one invocation per (triangle, row) work item; covered pixels are counted with
+//!    atomics (integer coverage, exact 64-bit edge functions emulated with 32-bit pairs).
+//! 2. prefix sum **on the host** (the counts are read back, summed in u64 and checked against the
+//!    memory budget and the adapter's limits before any fragment buffer is allocated).
+//! 3. `fill`: the same coverage; each fragment claims a slot with an atomic cursor and stores its
+//!    sort key (depth as sortable u32, triangle index).
+//! 4. `sort`: per-pixel sort by (depth key, triangle index): one invocation per fragment finds
+//!    its pixel (binary search of the offsets) and its rank among the pixel's fragments.
+//!
+//! The result is read back into the CPU's [`Ldi`] type, so `ldi_hash`, statistics and the sweep
+//! input are the same code on both backends.
+
+use convshadow_common::raster::RasterSetup;
+use convshadow_cpu::ldi::{BYTES_PER_FRAGMENT, Ldi, LdiError, from_sortable_bits};
+
+use crate::buffers::{bind, check_size, groups_1d, pipeline, read_back, uniform, upload, zeroed};
+use crate::device::{GpuContext, GpuError};
+
+/// The WGSL source of the LDI passes.
+pub const LDI_WGSL: &str = include_str!("shaders/ldi.wgsl");
+/// Words per uploaded triangle.
+const TRI_WORDS: usize = 16;
+/// Invocations per workgroup (`@workgroup_size(64)` in the shader).
+const WORKGROUP: u32 = 64;
+
+/// The triangles as the shader reads them (see the layout comment in `ldi.wgsl`).
+fn triangle_words(setup: &RasterSetup) -> Vec<u32> {
+    let mut words = Vec::with_capacity(setup.triangles.len() * TRI_WORDS);
+    for t in &setup.triangles {
+        for v in t.v {
+            words.push(v[0] as u32);
+            words.push(v[1] as u32);
+        }
+        words.extend(t.bbox.map(|b| b as u32));
+        words.push(t.depth_ref.to_bits());
+        words.push(t.depth_dx.to_bits());
+        words.push(t.depth_dy.to_bits());
+        words.push(t.mesh);
+        words.push(0);
+        words.push(0);
+    }
+    words
+}
+
+/// One (triangle, row) work item per covered row of each triangle's box.
+fn work_items(setup: &RasterSetup) -> Vec<u32> {
+    let mut items = Vec::new();
+    for (t, tri) in setup.triangles.iter().enumerate() {
+        for y in tri.bbox[1]..=tri.bbox[3] {
+            items.push(t as u32);
+            items.push(y as u32);
+        }
+    }
+    items
+}
+
+/// Runs a 1D pass of `pipeline` over `n` invocations.
+fn dispatch(
+    encoder: &mut wgpu::CommandEncoder,
+    pipeline: &wgpu::ComputePipeline,
+    group: &wgpu::BindGroup,
+    n: u32,
+) {
+    let (x, y) = groups_1d(n.div_ceil(WORKGROUP));
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some("ldi pass"),
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, group, &[]);
+    pass.dispatch_workgroups(x, y, 1);
+}
+
+/// The uniform parameters of one pass.
+fn params(ctx: &GpuContext, items: u32, setup: &RasterSetup) -> wgpu::Buffer {
+    let n = items.div_ceil(WORKGROUP);
+    let (x, _) = groups_1d(n);
+    uniform(
+        ctx,
+        "ldi params",
+        &[
+            items,
+            setup.width,
+            setup.height,
+            setup.width * setup.height,
+            x * WORKGROUP,
+            0,
+            0,
+            0,
+        ],
+    )
+}
+
+/// Builds the LDI on the GPU; refuses before allocating fragments if they exceed `budget_bytes`
+/// (the CPU builder's rule) or a buffer would exceed the adapter's per-binding limit.
+pub fn build_ldi(
+    ctx: &GpuContext,
+    setup: &RasterSetup,
+    budget_bytes: u64,
+) -> Result<Ldi, GpuError> {
+    let pixels = u64::from(setup.width) * u64::from(setup.height);
+    if pixels >= u64::from(u32::MAX) {
+        return Err(GpuError::Unsupported(format!(
+            "a {}x{} grid has more pixels than 32-bit indices address",
+            setup.width, setup.height
+        )));
+    }
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("ldi.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(LDI_WGSL.into()),
+        });
+    let tris = upload(ctx, "LDI triangle", &triangle_words(setup), false)?;
+    let item_words = work_items(setup);
+    let n_items = (item_words.len() / 2) as u32;
+    let items = upload(ctx, "LDI work item", &item_words, false)?;
+    drop(item_words);
+    let counts = zeroed(ctx, "LDI count", pixels)?;
+
+    // 1. Counts.
+    let count = pipeline(ctx, &module, "count");
+    let item_params = params(ctx, n_items, setup);
+    let group = bind(
+        ctx,
+        &count,
+        &[(0, &item_params), (1, &tris), (2, &items), (3, &counts)],
+    );
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    dispatch(&mut encoder, &count, &group, n_items);
+    ctx.queue.submit([encoder.finish()]);
+    let counts_host = read_back(ctx, &counts, pixels)?;
+    drop(counts);
+
+    // 2. Prefix sum on the host, with the CPU builder's budget check.
+    let mut offsets = Vec::with_capacity(pixels as usize + 1);
+    let mut total: u64 = 0;
+    offsets.push(0u32);
+    for &c in &counts_host {
+        total += u64::from(c);
+        offsets.push(total.min(u64::from(u32::MAX)) as u32);
+    }
+    let need = total * BYTES_PER_FRAGMENT;
+    if need > budget_bytes || total > u64::from(u32::MAX) {
+        return Err(GpuError::Ldi(LdiError::OverBudget {
+            fragments: total,
+            need_mib: need.div_ceil(1 << 20),
+            budget_mib: budget_bytes >> 20,
+        }));
+    }
+    check_size(ctx, "LDI fragment key", total * 4)?;
+
+    // 3. Fill and 4. sort.
+    let offsets_buf = upload(ctx, "LDI offset", &offsets, false)?;
+    let cursor = upload(ctx, "LDI cursor", &offsets[..pixels as usize], false)?;
+    let key_depth = zeroed(ctx, "LDI fragment key", total)?;
+    let key_tri = zeroed(ctx, "LDI fragment key", total)?;
+    let fill = pipeline(ctx, &module, "fill");
+    let sort = pipeline(ctx, &module, "sort");
+    let fill_group = bind(
+        ctx,
+        &fill,
+        &[
+            (0, &item_params),
+            (1, &tris),
+            (2, &items),
+            (4, &cursor),
+            (5, &key_depth),
+            (6, &key_tri),
+        ],
+    );
+    let sorted_depth = zeroed(ctx, "LDI fragment key", total)?;
+    let sorted_tri = zeroed(ctx, "LDI fragment key", total)?;
+    let fragment_params = params(ctx, total as u32, setup);
+    let sort_group = bind(
+        ctx,
+        &sort,
+        &[
+            (0, &fragment_params),
+            (5, &key_depth),
+            (6, &key_tri),
+            (7, &offsets_buf),
+            (8, &sorted_depth),
+            (9, &sorted_tri),
+        ],
+    );
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    dispatch(&mut encoder, &fill, &fill_group, n_items);
+    dispatch(&mut encoder, &sort, &sort_group, total as u32);
+    ctx.queue.submit([encoder.finish()]);
+    let depth_keys = read_back(ctx, &sorted_depth, total)?;
+    let triangle = read_back(ctx, &sorted_tri, total)?;
+
+    let depth = depth_keys.iter().map(|&k| from_sortable_bits(k)).collect();
+    let mesh = triangle
+        .iter()
+        .map(|&t| setup.triangles[t as usize].mesh as u8)
+        .collect();
+    Ok(Ldi {
+        width: setup.width,
+        height: setup.height,
+        offsets,
+        depth,
+        triangle,
+        mesh,
+    })
+}

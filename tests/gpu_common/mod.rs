@@ -1,0 +1,54 @@
+//! Shared helpers of the GPU tests: the adapter (required under CI, a loud skip otherwise) and
+//! small scenes.
+#![allow(dead_code)]
+
+use std::path::Path;
+
+use convshadow::common::scene::{Scene, SlabSpec};
+use convshadow_gpu::GpuContext;
+
+/// A GPU context, or `None` with a loud `SKIP` message. Under CI (env `CI` set) a missing
+/// adapter is a failure: the GPU tests are required there.
+pub fn gpu() -> Option<GpuContext> {
+    match GpuContext::new() {
+        Ok(ctx) => {
+            eprintln!("GPU tests on adapter {}", ctx.adapter_name());
+            Some(ctx)
+        }
+        Err(e) if std::env::var_os("CI").is_some() => {
+            panic!("GPU tests are required in CI but there is no adapter: {e}")
+        }
+        Err(e) => {
+            eprintln!("SKIP: no Vulkan adapter ({e}); GPU test skipped");
+            None
+        }
+    }
+}
+
+/// Every example scene in `scenes/`, sorted by name.
+pub fn example_scenes() -> Vec<std::path::PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut v: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    v.sort();
+    assert!(!v.is_empty(), "no example scene in {}", dir.display());
+    v
+}
+
+/// Loads a scene and makes it small: `size`×`size` pixels and `slabs` slabs.
+pub fn small(path: &Path, size: u32, slabs: u32) -> Scene {
+    let mut scene = Scene::load(path).unwrap_or_else(|e| panic!("{e}"));
+    shrink(&mut scene, size, slabs);
+    scene
+}
+
+/// Sets the size and slab count (and re-validates).
+pub fn shrink(scene: &mut Scene, size: u32, slabs: u32) {
+    scene.image.width = size;
+    scene.image.height = size;
+    scene.sweep.slabs = SlabSpec::Count(slabs);
+    scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+}

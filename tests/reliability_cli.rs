@@ -1,0 +1,505 @@
+//! Reliability of the `convshadow` binary (issue 7): every bad input is refused with a message
+//! naming the problem and a documented exit code (docs/errors.md), nothing panics, no output or
+//! temporary file is left behind, memory limits are enforced before allocating, and SIGINT/SIGTERM
+//! stop a render cleanly with exit code 130.
+
+mod support;
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+/// Exit codes (docs/errors.md).
+const BAD_INPUT: i32 = 3;
+const RESOURCE_LIMIT: i32 = 4;
+const MESH_DEFECT: i32 = 6;
+const OUTPUT_FAILED: i32 = 7;
+const INTERRUPTED: i32 = 130;
+
+/// The valid scene every file of tests/data/bad/ is derived from (one change each).
+const BASE_SCENE: &str = r#"
+[image]
+width = 32
+height = 32
+[camera]
+direction = [0.3, -0.2, 1.0]
+view_width = 3.0
+[sweep]
+slabs = 16
+optimal_distance = 0.5
+[[light]]
+tilt_deg = [20.0, 10.0]
+variance = [0.01, 0.02]
+[[mesh]]
+shape = "box"
+size = [1.0, 1.0, 1.0]
+material = "m"
+[material.m]
+opacity = 0.5
+"#;
+
+fn bad_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad")
+}
+
+/// The names of the files in `dir` (outputs, temporary `.partial` files, anything).
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// Asserts a refused run: the exit code, no panic, the message names `what`.
+fn assert_refused(name: &str, code: i32, expected_code: i32, err: &str, what: &[&str]) {
+    assert!(!err.contains("panicked"), "{name}: must not panic:\n{err}");
+    assert_eq!(code, expected_code, "{name}: exit code; stderr:\n{err}");
+    assert!(err.starts_with("error: "), "{name}: one error line: {err}");
+    assert!(
+        !err.contains("  "),
+        "{name}: a broken line continuation: {err}"
+    );
+    for w in what {
+        assert!(err.contains(w), "{name}: message must name {w:?}: {err}");
+    }
+}
+
+#[test]
+fn the_base_scene_of_the_bad_files_renders() {
+    // The control: without its one change, every bad scene would render.
+    let dir = support::temp_dir("rel-base");
+    std::fs::write(dir.join("base.toml"), BASE_SCENE).unwrap();
+    let (code, out, err) = support::run_cli(
+        &[
+            "render",
+            "base.toml",
+            "-o",
+            "out.png",
+            "--stats-json",
+            "s.json",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(files_in(&dir), ["base.toml", "out.png", "s.json"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn every_bad_scene_file_is_refused_naming_file_and_key_and_writes_nothing() {
+    let out_dir = support::temp_dir("rel-bad-scenes");
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(bad_dir()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let text = std::fs::read_to_string(&path).unwrap();
+        // Each file says what it breaks and what the message must name.
+        let expect = text
+            .lines()
+            .find_map(|l| l.strip_prefix("# expect: "))
+            .unwrap_or_else(|| panic!("{name}: no `# expect:` line"));
+        let out = out_dir.join("out.png");
+        let json = out_dir.join("stats.json");
+        for cmd in ["render", "ldi"] {
+            let mut args = vec![cmd, path.to_str().unwrap(), "--stats-json"];
+            args.push(json.to_str().unwrap());
+            if cmd == "render" {
+                args.extend(["-o", out.to_str().unwrap()]);
+            }
+            let (code, _, err) = support::run_cli(&args, &out_dir);
+            assert_refused(
+                &format!("{cmd} {name}"),
+                code,
+                BAD_INPUT,
+                &err,
+                &[&name, expect],
+            );
+            assert!(
+                files_in(&out_dir).is_empty(),
+                "{cmd} {name}: left {:?}",
+                files_in(&out_dir)
+            );
+        }
+        names.push(name);
+    }
+    // The issue's list, each present.
+    for required in [
+        "unknown_key.toml",
+        "wrong_type.toml",
+        "tilt_90.toml",
+        "tilt_minus_90.toml",
+        "negative_variance.toml",
+        "zero_slabs.toml",
+        "huge_width.toml",
+        "missing_obj_file.toml",
+        "obj_without_path.toml",
+    ] {
+        assert!(names.iter().any(|n| n == required), "missing {required}");
+    }
+    std::fs::remove_dir_all(&out_dir).unwrap();
+}
+
+/// A scene framing an OBJ file (a fixed view when it does not load).
+fn obj_scene_file(dir: &Path, obj: &Path) -> PathBuf {
+    let scene = dir.join(format!(
+        "{}.toml",
+        obj.file_stem().unwrap().to_string_lossy()
+    ));
+    let text = match convshadow::common::mesh::load_obj(obj) {
+        Ok(m) => {
+            let (lo, hi) = m.bounds();
+            let c = (lo + hi) * 0.5;
+            support::obj_scene(obj, 32, (hi - lo).max_element() * 1.5).replace(
+                "direction = [0.3, -0.2, 1.0]",
+                &format!(
+                    "direction = [0.3, -0.2, 1.0]\ncenter = [{}, {}, {}]",
+                    c.x, c.y, c.z
+                ),
+            )
+        }
+        Err(_) => support::obj_scene(obj, 32, 4.0),
+    }
+    .replace("slabs = 64", "slabs = 8");
+    std::fs::write(&scene, text).unwrap();
+    scene
+}
+
+#[test]
+fn render_refuses_every_bad_model_and_an_open_mesh_and_writes_nothing() {
+    let Some(models) = support::models_dir() else {
+        return;
+    };
+    let scenes = support::temp_dir("rel-bad-models-scenes");
+    let out_dir = support::temp_dir("rel-bad-models-out");
+    let mut refused = 0;
+    let mut files: Vec<PathBuf> = std::fs::read_dir(models.join("bad"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.push(models.join("cube_no_bottom.obj")); // an open mesh
+    for path in files {
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let scene = obj_scene_file(&scenes, &path);
+        let out = out_dir.join("out.png");
+        let (code, _, err) = support::run_cli(
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "-q",
+            ],
+            &out_dir,
+        );
+        if name == "tetra_ok.obj" {
+            // The control of models/bad renders.
+            assert_eq!(code, 0, "{name}: {err}");
+            assert!(out.is_file());
+            std::fs::remove_file(&out).unwrap();
+            continue;
+        }
+        assert!(!err.contains("panicked"), "{name}: {err}");
+        match code {
+            // A parse error names the OBJ file and its line (`file.obj:LINE:`).
+            BAD_INPUT => assert!(err.contains(&format!("{name}:")), "{name}: {err}"),
+            // An open or defective mesh names the mesh and its edges.
+            MESH_DEFECT => assert!(
+                err.contains("mesh[0] has") && err.contains("edges"),
+                "{name}: {err}"
+            ),
+            _ => panic!("{name}: exit code {code}, expected {BAD_INPUT} or {MESH_DEFECT}: {err}"),
+        }
+        if name == "cube_no_bottom.obj" {
+            assert_eq!(code, MESH_DEFECT, "{err}");
+            assert!(err.contains("boundary"), "{err}");
+        }
+        assert!(
+            files_in(&out_dir).is_empty(),
+            "{name}: left {:?}",
+            files_in(&out_dir)
+        );
+        refused += 1;
+    }
+    assert!(
+        refused >= 9,
+        "eight bad models and the open cube: {refused}"
+    );
+}
+
+#[test]
+fn bad_output_paths_are_refused_before_rendering_and_leave_nothing() {
+    let dir = support::temp_dir("rel-outputs");
+    std::fs::write(dir.join("scene.toml"), BASE_SCENE).unwrap();
+    std::fs::create_dir(dir.join("a_folder")).unwrap();
+    std::fs::write(dir.join("some_file.txt"), "not a folder").unwrap();
+    // Tests run as root here, so a folder without write permission would still be writable.
+    // Unwritable for root too: a path under a regular file (ENOTDIR), and /proc (no regular files
+    // can be created there).
+    let cases: [(&str, &[&str]); 5] = [
+        ("a_folder", &["a_folder", "is a folder"]),
+        (
+            "some_file.txt/out.png",
+            &["some_file.txt", "is not a folder"],
+        ),
+        ("missing/out.png", &["missing", "does not exist"]),
+        ("/proc/convshadow-out.png", &["/proc", "cannot create"]),
+        ("out.tiff", &["out.tiff", "expected .png or .exr"]),
+    ];
+    for (target, what) in cases {
+        let (code, _, err) = support::run_cli(&["render", "scene.toml", "-o", target], &dir);
+        let expected = if target.ends_with(".tiff") {
+            2
+        } else {
+            OUTPUT_FAILED
+        };
+        assert_refused(target, code, expected, &err, what);
+        assert_eq!(
+            files_in(&dir),
+            ["a_folder", "scene.toml", "some_file.txt"],
+            "{target}"
+        );
+        assert!(files_in(&dir.join("a_folder")).is_empty());
+        // Refused up front: no render ran (the summary line never printed).
+    }
+    // The stats JSON goes through the same checks.
+    let (code, _, err) = support::run_cli(
+        &[
+            "render",
+            "scene.toml",
+            "-o",
+            "ok.png",
+            "--stats-json",
+            "some_file.txt/s.json",
+        ],
+        &dir,
+    );
+    assert_refused("stats json", code, OUTPUT_FAILED, &err, &["some_file.txt"]);
+    assert_eq!(files_in(&dir), ["a_folder", "scene.toml", "some_file.txt"]);
+    assert_eq!(
+        std::fs::read_to_string(dir.join("some_file.txt")).unwrap(),
+        "not a folder"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Runs the binary and reaps it with `wait4`: (exit code, stderr, peak RSS in KiB of that child
+/// alone; `getrusage(RUSAGE_CHILDREN)` would mix in the children of tests running in parallel).
+#[allow(clippy::zombie_processes)] // reaped by `wait4`, which `Child::wait` cannot replace
+fn run_measured(args: &[&str], cwd: &Path) -> (i32, String, u64) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_convshadow"))
+        .args(args)
+        .current_dir(cwd)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    let mut status = 0;
+    // SAFETY: an all-zero rusage is a valid value to be overwritten.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: the pid is our own unreaped child; both pointers are valid for the call.
+    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
+    assert_eq!(pid, child.id() as libc::pid_t, "wait4");
+    assert!(libc::WIFEXITED(status), "the child was killed: {status}");
+    (libc::WEXITSTATUS(status), err, usage.ru_maxrss as u64)
+}
+
+/// The first number after `word` in `text`.
+fn number_after(text: &str, word: &str) -> u64 {
+    let rest = &text[text
+        .find(word)
+        .unwrap_or_else(|| panic!("{word:?} in {text}"))
+        + word.len()..];
+    rest.trim_start()
+        .split(|c: char| !c.is_ascii_digit())
+        .next()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("a number after {word:?} in {text}"))
+}
+
+#[test]
+fn a_scene_over_the_memory_budget_is_refused_before_allocating() {
+    let dir = support::temp_dir("rel-budget");
+    // A baseline: the same binary refusing a scene file that does not exist (its own footprint).
+    let (code, _, base_kib) = run_measured(&["render", "missing.toml", "-o", "x.png"], &dir);
+    assert_eq!(code, BAD_INPUT);
+
+    // 1. The per-pixel buffers: 16384² pixels of the default scene need many GiB (light buffers,
+    //    sweep state, LDI arrays); a 256 MiB budget refuses it before any of them exists.
+    let (code, err, kib) = run_measured(
+        &[
+            "render",
+            "--width",
+            "16384",
+            "--height",
+            "16384",
+            "--max-memory",
+            "256",
+            "-o",
+            "big.png",
+        ],
+        &dir,
+    );
+    assert_refused(
+        "16384²",
+        code,
+        RESOURCE_LIMIT,
+        &err,
+        &["needs", "MiB", "256 MiB"],
+    );
+    let need_mib = number_after(&err, "needs");
+    assert!(need_mib > 8 * 1024, "{err}");
+    let peak_mib = kib / 1024;
+    assert!(
+        peak_mib * 100 < need_mib && peak_mib < 256,
+        "peak RSS {peak_mib} MiB (baseline {} MiB) must stay far below the need {need_mib} MiB",
+        base_kib / 1024
+    );
+
+    // 2. The fragments: 32 nested boxes at 2048² put 64 layers on most pixels: ~250 M fragments
+    //    (over 4 GiB). The per-pixel arrays fit in 512 MiB; the fragment arrays are refused after
+    //    the counting pass, before they are allocated.
+    let mut text = String::from(
+        "[image]\nwidth = 2048\nheight = 2048\n[camera]\nview_width = 2.0\n[sweep]\nslabs = 8\n\
+         optimal_distance = 0.5\n[material.m]\n",
+    );
+    for i in 0..32 {
+        let s = 4.0 - 0.1 * f64::from(i);
+        text += &format!("[[mesh]]\nshape = \"box\"\nsize = [{s}, {s}, {s}]\nmaterial = \"m\"\n");
+    }
+    std::fs::write(dir.join("layers.toml"), text).unwrap();
+    for cmd in ["render", "ldi"] {
+        let (code, err, kib) = run_measured(
+            &[
+                cmd,
+                "layers.toml",
+                "--max-memory",
+                "512",
+                "--stats-json",
+                "s.json",
+            ],
+            &dir,
+        );
+        assert_refused(cmd, code, RESOURCE_LIMIT, &err, &["fragments", "MiB"]);
+        let fragments = number_after(&err, "needs");
+        assert!(fragments > 200_000_000, "{err}");
+        let need_mib = (fragments * convshadow::cpu::ldi::BYTES_PER_FRAGMENT) >> 20;
+        let peak_mib = kib / 1024;
+        assert!(
+            peak_mib * 10 < need_mib && peak_mib < 512,
+            "{cmd}: peak RSS {peak_mib} MiB must stay far below the fragments' {need_mib} MiB"
+        );
+    }
+    assert_eq!(files_in(&dir), ["layers.toml"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A slow scene: 1024² px, 16 coloured lights (3 channels), 2048 slabs. Its first light buffer
+/// alone is 16·3·1024²·4 B = 192 MiB, the second as much once the first slab has written it.
+const SLOW_SCENE: &str = r#"
+[image]
+width = 1024
+height = 1024
+[camera]
+view_width = 3.0
+[sweep]
+slabs = 2048
+optimal_distance = 0.5
+[[mesh]]
+shape = "box"
+size = [1.0, 1.0, 1.0]
+material = "m"
+[material.m]
+opacity = 0.2
+transport = [0.9, 0.5, 0.1]
+"#;
+
+/// Resident set size of a running process in KiB, or `None` once it has exited.
+fn rss_kib(pid: u32) -> Option<u64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// Starts the slow render, waits until it is in the sweep, sends `signal`, and checks the exit
+/// code, the message, and that neither the output nor a temporary file exists.
+fn interrupt_mid_sweep(signal: libc::c_int, name: &str) {
+    let dir = support::temp_dir(name);
+    let lights = "[[light]]\ntilt_deg = [30.0, 10.0]\nvariance = [0.02, 0.01]\n".repeat(16);
+    std::fs::write(dir.join("slow.toml"), format!("{SLOW_SCENE}{lights}")).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_convshadow"))
+        .args([
+            "render",
+            "slow.toml",
+            "-o",
+            "out.png",
+            "-o",
+            "out.exr",
+            "--stats-json",
+            "s.json",
+        ])
+        .current_dir(&dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    // In the sweep: both light buffers are resident (the second is written by the first slab).
+    // Geometry and LDI of one box take a few MiB, so 300 MiB is only reached inside the sweep.
+    loop {
+        let rss = rss_kib(pid);
+        if rss.is_some_and(|k| k > 300 * 1024) {
+            break;
+        }
+        assert!(
+            rss.is_some() && child.try_wait().unwrap().is_none(),
+            "{name}: the render ended before its sweep was interrupted"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // SAFETY: sending a signal to our own child.
+    assert_eq!(unsafe { libc::kill(pid as libc::pid_t, signal) }, 0);
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(
+        status.code(),
+        Some(INTERRUPTED),
+        "{name}: {status:?}: {err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    let left = files_in(&dir);
+    assert_eq!(
+        left,
+        ["slow.toml"],
+        "{name}: no output and no .partial file"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn sigterm_mid_sweep_exits_130_and_leaves_no_file() {
+    interrupt_mid_sweep(libc::SIGTERM, "rel-sigterm");
+}
+
+#[test]
+fn sigint_mid_sweep_exits_130_and_leaves_no_file() {
+    interrupt_mid_sweep(libc::SIGINT, "rel-sigint");
+}
