@@ -15,20 +15,7 @@ fn write_obj_scene(dir: &Path, obj: &Path, width: u32) -> std::path::PathBuf {
         "{}.toml",
         obj.file_stem().unwrap().to_string_lossy()
     ));
-    let text = match convshadow::common::mesh::load_obj(obj) {
-        Ok(m) => {
-            let (lo, hi) = m.bounds();
-            let c = (lo + hi) * 0.5;
-            support::obj_scene(obj, width, (hi - lo).max_element() * 1.2).replace(
-                "direction = [0.3, -0.2, 1.0]",
-                &format!(
-                    "direction = [0.3, -0.2, 1.0]\ncenter = [{}, {}, {}]",
-                    c.x, c.y, c.z
-                ),
-            )
-        }
-        Err(_) => support::obj_scene(obj, width, 4.0),
-    };
+    let text = support::framed_obj_scene(obj, width, 1.2);
     std::fs::write(&scene, text).unwrap();
     scene
 }
@@ -201,5 +188,8 @@ fn a_too_small_memory_budget_is_refused_with_the_need() {
         &dir,
     );
     assert_eq!(code, 4, "{err}");
-    assert!(err.contains("MiB") && err.contains("memory budget"), "{err}");
+    assert!(
+        err.contains("MiB") && err.contains("memory budget"),
+        "{err}"
+    );
 }

@@ -150,21 +150,7 @@ fn obj_scene_file(dir: &Path, obj: &Path) -> PathBuf {
         "{}.toml",
         obj.file_stem().unwrap().to_string_lossy()
     ));
-    let text = match convshadow::common::mesh::load_obj(obj) {
-        Ok(m) => {
-            let (lo, hi) = m.bounds();
-            let c = (lo + hi) * 0.5;
-            support::obj_scene(obj, 32, (hi - lo).max_element() * 1.5).replace(
-                "direction = [0.3, -0.2, 1.0]",
-                &format!(
-                    "direction = [0.3, -0.2, 1.0]\ncenter = [{}, {}, {}]",
-                    c.x, c.y, c.z
-                ),
-            )
-        }
-        Err(_) => support::obj_scene(obj, 32, 4.0),
-    }
-    .replace("slabs = 64", "slabs = 8");
+    let text = support::framed_obj_scene(obj, 32, 1.5).replace("slabs = 64", "slabs = 8");
     std::fs::write(&scene, text).unwrap();
     scene
 }

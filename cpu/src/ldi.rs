@@ -197,18 +197,29 @@ impl Ldi {
             .map(|k| from_sortable_bits((k >> 32) as u32))
             .collect();
         let triangle: Vec<u32> = keys.par_iter().map(|k| *k as u32).collect();
+        Ok(Ldi::from_sorted(setup, offsets, depth, triangle))
+    }
+
+    /// Assembles an LDI from CSR offsets and per-pixel sorted fragments (depth, triangle); the
+    /// mesh ids come from the set-up. Shared by the CPU build and the GPU read-back.
+    pub fn from_sorted(
+        setup: &RasterSetup,
+        offsets: Vec<u32>,
+        depth: Vec<f32>,
+        triangle: Vec<u32>,
+    ) -> Ldi {
         let mesh = triangle
             .par_iter()
             .map(|&t| setup.triangles[t as usize].mesh as u8)
             .collect();
-        Ok(Ldi {
+        Ldi {
             width: setup.width,
             height: setup.height,
             offsets,
             depth,
             triangle,
             mesh,
-        })
+        }
     }
 
     /// The fragment index range of grid pixel (i, j).

@@ -196,16 +196,5 @@ pub fn build_ldi(
     let triangle = read_back(ctx, &sorted_tri, total)?;
 
     let depth = depth_keys.iter().map(|&k| from_sortable_bits(k)).collect();
-    let mesh = triangle
-        .iter()
-        .map(|&t| setup.triangles[t as usize].mesh as u8)
-        .collect();
-    Ok(Ldi {
-        width: setup.width,
-        height: setup.height,
-        offsets,
-        depth,
-        triangle,
-        mesh,
-    })
+    Ok(Ldi::from_sorted(setup, offsets, depth, triangle))
 }

@@ -68,3 +68,22 @@ material = "m"
         path.display()
     )
 }
+
+/// The text of a scene framing an OBJ file (centred on its bounds, `margin` × its largest
+/// extent across); a fixed 4-unit view when the file does not load.
+pub fn framed_obj_scene(obj: &Path, width: u32, margin: f64) -> String {
+    match convshadow::common::mesh::load_obj(obj) {
+        Ok(m) => {
+            let (lo, hi) = m.bounds();
+            let c = (lo + hi) * 0.5;
+            obj_scene(obj, width, (hi - lo).max_element() * margin).replace(
+                "direction = [0.3, -0.2, 1.0]",
+                &format!(
+                    "direction = [0.3, -0.2, 1.0]\ncenter = [{}, {}, {}]",
+                    c.x, c.y, c.z
+                ),
+            )
+        }
+        Err(_) => obj_scene(obj, width, 4.0),
+    }
+}
