@@ -1120,7 +1120,11 @@ material = "m"
             "height",
             "line 4",
         );
+        // Without the [camera] header its key lands in [image]: an unknown field there.
         let e = parse(&MINIMAL.replace("[camera]\n", "")).unwrap_err();
-        assert!(e.to_string().contains("camera"), "{e}");
+        assert!(e.to_string().contains("unknown field `view_width`"), "{e}");
+        // Without the whole table: a missing required table.
+        let e = parse(&MINIMAL.replace("[camera]\nview_width = 2.0\n", "")).unwrap_err();
+        assert!(e.to_string().contains("missing field `camera`"), "{e}");
     }
 }
