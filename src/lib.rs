@@ -10,3 +10,4 @@ pub use convshadow_cpu as cpu;
 pub mod commands;
 pub mod exit;
 pub mod pipeline;
+pub mod report;

@@ -21,6 +21,9 @@ enum Command {
     Ldi(commands::ldi::LdiArgs),
     /// Render a scene (the embedded default scene without SCENE) to PNG and/or EXR.
     Render(commands::render::RenderArgs),
+    /// Speed against error: render a grid of cases (kernels × slab counts × lights) and write
+    /// report.csv, report.md and speed_vs_error.png.
+    Report(commands::report::ReportArgs),
 }
 
 fn main() {
@@ -40,6 +43,7 @@ fn main() {
         Command::Diff(a) => commands::diff::run(a),
         Command::Ldi(a) => commands::ldi::run(a),
         Command::Render(a) => commands::render::run(a),
+        Command::Report(a) => commands::report::run(a),
     };
     match result {
         Ok(code) => std::process::exit(code),

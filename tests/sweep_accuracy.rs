@@ -5,11 +5,11 @@ mod support;
 
 use std::path::Path;
 
-use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::Scene;
-use convshadow::cpu::ldi::Ldi;
-use convshadow::cpu::sweep::{SweepOptions, SweepOutput, sweep};
+use convshadow::cpu::sweep::SweepOutput;
+use convshadow::report::edge::{self, EdgeSetup, InitialLight, phi, run_light};
+use convshadow::report::impulse::{self, moments};
 
 const KERNELS: [&str; 8] = [
     "ellipse2",
@@ -23,29 +23,12 @@ const KERNELS: [&str; 8] = [
 ];
 
 /// Runs the sweep of a scene, optionally from a given initial light buffer.
-fn run(
-    scene: &Scene,
-    initial: Option<&dyn Fn(&RenderPlan) -> Vec<f32>>,
-) -> (RenderPlan, SweepOutput) {
-    let g = SceneGeometry::build(scene).unwrap_or_else(|e| panic!("{e}"));
-    let ldi = Ldi::build(&g.raster, 8 << 30).unwrap();
-    let plan = RenderPlan::new(scene, &g).unwrap();
-    let init = initial.map(|f| f(&plan));
-    let options = SweepOptions {
-        initial_light: init.as_deref(),
-        ..SweepOptions::default()
-    };
-    let out = sweep(&plan, &g.raster, &ldi, &options).unwrap();
+fn run(scene: &Scene, initial: Option<InitialLight<'_>>) -> (RenderPlan, SweepOutput) {
+    let (plan, out, _) = run_light(scene, initial);
     (plan, out)
 }
 
-/// Light channel 0 of light 0 at grid pixel (x, y).
-fn light_at(plan: &RenderPlan, out: &SweepOutput, x: usize, y: usize) -> f64 {
-    f64::from(out.light[y * plan.light_row_len() + x])
-}
-
-/// An "empty" scene: a marker box far outside the view only sets the depth range
-/// (`n` slabs of thickness exactly 1), so every pixel of the grid sees pure convolution.
+/// The shared pure-convolution scene (`convshadow::report::impulse::empty_scene`).
 fn empty_scene(
     n: u32,
     grid: u32,
@@ -55,69 +38,8 @@ fn empty_scene(
     kernel: &str,
     compensate: bool,
 ) -> Scene {
-    support::scene(
-        &format!(
-            r#"
-[image]
-width = {grid}
-height = {grid}
-[camera]
-view_width = {grid}.0
-[sweep]
-slab_distance = 1.0
-optimal_distance = 1.0
-kernel = "{kernel}"
-variance_compensation = {compensate}
-[[light]]
-tilt_deg = [{}, {}]
-variance = [{:e}, {:e}]
-rotation_deg = {rotation}
-[[mesh]]
-shape = "box"
-size = [1.0, 1.0, {}]
-translate = [100000.0, 0.0, 0.0]
-material = "m"
-[material.m]
-"#,
-            tilt[0],
-            tilt[1],
-            variance[0],
-            variance[1],
-            f64::from(n) - 0.5
-        ),
-        Path::new("."),
-    )
-}
-
-/// Weighted mean and covariance of the light buffer inside a window.
-fn moments(
-    plan: &RenderPlan,
-    out: &SweepOutput,
-    center: [f64; 2],
-    radius: f64,
-) -> (f64, [f64; 2], [[f64; 2]; 2]) {
-    let (mut m0, mut mx, mut my, mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for y in 0..plan.grid_height as usize {
-        for x in 0..plan.grid_width as usize {
-            let (fx, fy) = (x as f64, y as f64);
-            if (fx - center[0]).abs() > radius || (fy - center[1]).abs() > radius {
-                continue;
-            }
-            let w = light_at(plan, out, x, y);
-            m0 += w;
-            mx += w * fx;
-            my += w * fy;
-            sxx += w * fx * fx;
-            sxy += w * fx * fy;
-            syy += w * fy * fy;
-        }
-    }
-    let (ux, uy) = (mx / m0, my / m0);
-    let cov = [
-        [sxx / m0 - ux * ux, sxy / m0 - ux * uy],
-        [sxy / m0 - ux * uy, syy / m0 - uy * uy],
-    ];
-    (m0, [ux, uy], cov)
+    impulse::empty_scene(n, grid, tilt, variance, rotation, kernel, compensate)
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// DESIGN §2 in pixel units with e = d1 = pixel size = 1: μκ = −tan ω, Σκ = R diag(σ²) Rᵀ.
@@ -257,98 +179,16 @@ fn impulse_response_has_the_kernel_moments_for_every_kernel() {
     }
 }
 
-/// Standard normal CDF (Abramowitz–Stegun 7.1.26 erf, |error| < 1.5e-7).
-fn phi(x: f64) -> f64 {
-    let z = x / std::f64::consts::SQRT_2;
-    let t = 1.0 / (1.0 + 0.327_591_1 * z.abs());
-    let poly = t
-        * (0.254_829_592
-            + t * (-0.284_496_736
-                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
-    let erf = 1.0 - poly * (-z * z).exp();
-    0.5 * (1.0 + if z >= 0.0 { erf } else { -erf })
-}
-
-const EDGE_E: f64 = 0.01;
-const EDGE_D1: f64 = 0.16;
-const EDGE_PX: f64 = 0.01;
-const EDGE_W: u32 = 512;
-const EDGE_H: u32 = 96;
-
-/// An opaque half-plane occluder (world x ≥ 0, i.e. image columns left of the centre) in slab 0,
-/// and a receiver with transport 1 in slab m: the light buffer after the last slab is exactly what
-/// the receiver receives, m convolutions behind the occluder.
-fn edge_scene(m: u32, tilt: f64, variance: f64, kernel: &str) -> Scene {
-    let e = EDGE_E;
-    support::scene(
-        &format!(
-            r#"
-[image]
-width = {EDGE_W}
-height = {EDGE_H}
-[camera]
-view_width = {}
-[sweep]
-slab_distance = {e}
-optimal_distance = {EDGE_D1}
-kernel = "{kernel}"
-[[light]]
-tilt_deg = [{tilt}, 0.0]
-variance = [{variance:e}, {variance:e}]
-[[mesh]]
-shape = "box"
-size = [20.0, 20.0, {}]
-translate = [10.0, 0.0, {}]
-material = "occluder"
-[[mesh]]
-shape = "box"
-size = [20.0, 20.0, {}]
-translate = [0.0, 0.0, {}]
-material = "receiver"
-[material.occluder]
-[material.receiver]
-transport = [1.0, 1.0, 1.0]
-"#,
-            f64::from(EDGE_W) * EDGE_PX,
-            0.4 * e,
-            0.2 * e,
-            0.4 * e,
-            (f64::from(m) + 0.4) * e
-        ),
-        Path::new("."),
-    )
-}
-
-/// The light profile across the edge, averaged over the middle rows (away from the top and
-/// bottom borders, where reads outside the buffer see unoccluded light).
+/// The light profile across the edge of `tests/sweep_accuracy.rs`'s set-up
+/// ([`EdgeSetup::classic`]: e = 0.01, d1 = 0.16, 512 × 96 pixels of 0.01).
 fn edge_profile(m: u32, tilt: f64, variance: f64, kernel: &str) -> Vec<f64> {
-    let (plan, out) = run(&edge_scene(m, tilt, variance, kernel), None);
-    assert_eq!(
-        plan.slabs,
-        m + 1,
-        "the receiver must be crossed in the last slab"
-    );
-    let rows = 40..56;
-    (0..EDGE_W as usize)
-        .map(|x| {
-            rows.clone()
-                .map(|y| light_at(&plan, &out, x, y))
-                .sum::<f64>()
-                / rows.len() as f64
-        })
-        .collect()
+    EdgeSetup::classic(m, tilt, variance, kernel).profile().0
 }
 
-/// Where the averaged profile first rises through 0.5 (pixel coordinates: column x has its centre
-/// at x + 0.5), searching from column 64 (the left border reads unoccluded light outside the grid).
+/// Where the profile first rises through 0.5, from column 64 (the left border reads unoccluded
+/// light outside the grid).
 fn half_crossing(profile: &[f64]) -> f64 {
-    for x in 65..profile.len() {
-        if profile[x - 1] < 0.5 && profile[x] >= 0.5 {
-            let t = (0.5 - profile[x - 1]) / (profile[x] - profile[x - 1]);
-            return x as f64 - 0.5 + t;
-        }
-    }
-    panic!("profile never crosses 0.5");
+    edge::half_crossing(profile, 64).expect("profile never crosses 0.5")
 }
 
 #[test]
@@ -356,9 +196,10 @@ fn half_shadow_isoline_follows_the_light_at_every_distance() {
     let variance = 0.05;
     for tilt in [0.0f64, 30.0, 60.0] {
         for m in [4u32, 16, 64] {
-            let d = f64::from(m) * EDGE_E;
+            let s = EdgeSetup::classic(m, tilt, variance, "ellipse2");
+            let d = f64::from(m) * s.slab_distance;
             // The edge projects to the image centre; the isoline moves by −d·tan ω (DESIGN §2).
-            let expected = f64::from(EDGE_W) / 2.0 - d * tilt.to_radians().tan() / EDGE_PX;
+            let expected = f64::from(s.width) / 2.0 - d * tilt.to_radians().tan() / s.pixel_size;
             let got = half_crossing(&edge_profile(m, tilt, variance, "ellipse2"));
             assert!(
                 (got - expected).abs() <= 0.5,
@@ -373,11 +214,12 @@ fn penumbra_matches_the_correct_shadow_at_d1_and_the_iterated_model_elsewhere() 
     let variance = 0.05f64;
     let sigma = variance.sqrt();
     for (m, tilt) in [(16u32, 30.0f64), (4, 0.0), (64, 30.0)] {
-        let d = f64::from(m) * EDGE_E;
+        let s = EdgeSetup::classic(m, tilt, variance, "ellipse2");
+        let d = f64::from(m) * s.slab_distance;
         // Correct shadow: std d·σ; iterated model (paper eq. 8): std √(d·d1)·σ. Equal at d = d1.
-        let s_iter = (d * EDGE_D1).sqrt() * sigma / EDGE_PX;
+        let s_iter = (d * s.optimal_distance).sqrt() * sigma / s.pixel_size;
         let profile = edge_profile(m, tilt, variance, "ellipse2");
-        let center = f64::from(EDGE_W) / 2.0 - d * tilt.to_radians().tan() / EDGE_PX;
+        let center = f64::from(s.width) / 2.0 - d * tilt.to_radians().tan() / s.pixel_size;
         let (mut se, mut count) = (0.0, 0);
         for (x, v) in profile.iter().enumerate() {
             let u = x as f64 + 0.5 - center;
@@ -500,7 +342,7 @@ transport = [0.3, 0.3, 0.3]
     let (_, out) = run(&support::scene(text, Path::new(".")), None);
     // 400 slabs of attenuation 1 − 0.5·0.7 = 0.65 would reach 1e-75: far below f32's range.
     assert!(
-        out.light.iter().any(|&v| v == 0.0),
+        out.light.contains(&0.0),
         "the light should have been flushed to zero"
     );
     assert!(

@@ -224,19 +224,24 @@ impl KernelTable {
         self.phase_count.trailing_zeros()
     }
 
-    /// Mean and covariance (pixels) of the gather's impulse response per slab, averaged over the
-    /// phases and slabs, including the variance the bilinear reads add. Used by tests and reports.
+    /// Mean and covariance (pixels) of the gather's impulse response per slab, including the
+    /// variance the bilinear reads add and the slab's whole-pixel shift, averaged over the slabs.
+    /// A slab's response is its phases' mixture (the expected kernel of a randomized one); the
+    /// slabs' responses are convolved, so after n slabs the iterated kernel has n times these
+    /// moments. Used by tests and reports.
     pub fn response_moments(&self) -> KernelMoments {
         let slabs = self.slab_shift.len().max(1);
-        let mut m = [0.0f64; 2];
-        let mut s = [[0.0f64; 2]; 2];
-        let mut total = 0.0;
+        let mut mean = [0.0f64; 2];
+        let mut cov = [[0.0f64; 2]; 2];
         for k in 0..slabs {
             let shift = self.slab_shift.get(k).copied().unwrap_or([0, 0]);
             let phases: Vec<u32> = match self.phase_mode {
-                PhaseMode::Schedule => vec![self.slab_phase[k]],
+                PhaseMode::Schedule => vec![self.slab_phase.get(k).copied().unwrap_or(0)],
                 _ => (0..self.phase_count).collect(),
             };
+            let mut m = [0.0f64; 2];
+            let mut s = [[0.0f64; 2]; 2];
+            let mut total = 0.0;
             for &p in &phases {
                 for t in self.phase(p) {
                     for (c, w) in t.w.iter().enumerate() {
@@ -253,14 +258,20 @@ impl KernelTable {
                     }
                 }
             }
+            let (mx, my) = (m[0] / total, m[1] / total);
+            mean[0] += mx;
+            mean[1] += my;
+            cov[0][0] += s[0][0] / total - mx * mx;
+            cov[0][1] += s[0][1] / total - mx * my;
+            cov[1][1] += s[1][1] / total - my * my;
         }
-        let (mx, my) = (m[0] / total, m[1] / total);
-        let cxx = s[0][0] / total - mx * mx;
-        let cxy = s[0][1] / total - mx * my;
-        let cyy = s[1][1] / total - my * my;
+        let n = slabs as f64;
         KernelMoments {
-            mean: [mx, my],
-            cov: [[cxx, cxy], [cxy, cyy]],
+            mean: [mean[0] / n, mean[1] / n],
+            cov: [
+                [cov[0][0] / n, cov[0][1] / n],
+                [cov[0][1] / n, cov[1][1] / n],
+            ],
         }
     }
 }
@@ -336,10 +347,12 @@ pub fn build_table(
             KernelKind::Box => unreachable!("handled above"),
         }
     };
-    let cov = if compensate && !carry {
-        compensated_cov(&make, pattern_mean, moments.cov)
+    // With the mean carried in whole pixels the pattern is read around 0, and its own taps still
+    // fall between pixels: compensate around mean 0 in that case too.
+    let pattern = if compensate {
+        compensated_pattern(&make, pattern_mean, moments.cov)
     } else {
-        moments.cov
+        make(moments.cov)
     };
     let (mode, sched) = match spec.kind {
         KernelKind::Ellipse(_) if spec.per_slab_phase => (PhaseMode::PerSlab, Vec::new()),
@@ -347,7 +360,7 @@ pub fn build_table(
         KernelKind::Dirac => (PhaseMode::Schedule, (0..slabs).map(|k| k & 1).collect()),
         _ => (PhaseMode::Schedule, vec![0; slabs_us]),
     };
-    discretise(&make(cov), pattern_mean, mode, sched, slab_shift)
+    discretise(&pattern, pattern_mean, mode, sched, slab_shift)
 }
 
 /// Whether the light is narrow enough that its mean is carried in whole pixels: when Σκ is
@@ -360,60 +373,108 @@ fn carry_mean(m: &KernelMoments) -> bool {
     m.cov[0][0] < bilinear(m.mean[0]) || m.cov[1][1] < bilinear(m.mean[1])
 }
 
-/// The pattern covariance P such that P + bilinear covariance(P) = Σκ (as far as P stays
-/// positive semi-definite), by damped fixed-point iteration.
-fn compensated_cov(
+/// Outer iterations of [`compensated_pattern`] (each builds one pattern).
+const MAX_SHAPE_ITERATIONS: usize = 12;
+
+/// A pattern whose taps, read bilinearly around `mean`, give the response covariance `target`:
+/// pattern covariance plus the variance f(1−f) per axis that the reads add (DESIGN §2).
+///
+/// A bilinear read spreads a tap along the two pixel axes independently, so the response's x
+/// variance depends only on the taps' x offsets. The pattern built for a shape covariance C (with
+/// C's diagonal = Σκ's) is therefore scaled along x by s_x and along y by s_y, each found by
+/// bisection on [0, 1]. Along one axis the response variance is T(s) = Σ w·L(r) − m² with
+/// r = m + s·o the read positions and L the piecewise-linear interpolant of r² at the integers
+/// (a read at r puts weights 1 − f and f on ⌊r⌋ and ⌊r⌋ + 1: second moment r² + f(1 − f)). L is
+/// convex, so T is convex in s, and its slope at s = 0 is ≥ 0 because the union of a pattern's
+/// phases is zero-mean: T is non-decreasing on [0, 1], from T(0) = f(1 − f) of the mean's
+/// fraction (≤ Σκ, else `build_table` carries the mean and m = 0, T(0) = 0) to
+/// T(1) = C + bilinear ≥ Σκ. Bisection converges for every Σκ (the damped fixed point this
+/// replaces diverged below Σκ ≈ 0.05 px² per slab).
+///
+/// Scaling multiplies the correlation by s_x·s_y, so C's off-diagonal is set to Σκ_xy/(s_x·s_y)
+/// and the pattern rebuilt; the scales depend only weakly on C's correlation and this settles in a
+/// few rounds. Bilinear reads add no correlation: where the compensated pattern is too narrow to
+/// carry Σκ_xy (C would stop being positive semi-definite; only when Σκ's smaller eigenvalue is
+/// below 1/4 px²), C is capped at correlation ±1 and the response keeps less than Σκ_xy.
+fn compensated_pattern(
     make: &dyn Fn([[f64; 2]; 2]) -> Pattern,
     mean: [f64; 2],
     target: [[f64; 2]; 2],
-) -> [[f64; 2]; 2] {
-    let mut cov = target;
-    for _ in 0..40 {
-        let b = bilinear_cov(&make(cov), mean);
-        let want = [
-            [target[0][0] - b[0], target[0][1]],
-            [target[1][0], target[1][1] - b[1]],
-        ];
-        let (l1, l2, e) = eigen2(want);
-        let (l1, l2) = (l1.max(0.0), l2.max(0.0));
-        let clamped = [
-            [l1 * e[0] * e[0] + l2 * e[1] * e[1], (l1 - l2) * e[0] * e[1]],
-            [(l1 - l2) * e[0] * e[1], l1 * e[1] * e[1] + l2 * e[0] * e[0]],
-        ];
-        let next = [
-            [
-                0.5 * (cov[0][0] + clamped[0][0]),
-                0.5 * (cov[0][1] + clamped[0][1]),
-            ],
-            [
-                0.5 * (cov[1][0] + clamped[1][0]),
-                0.5 * (cov[1][1] + clamped[1][1]),
-            ],
-        ];
-        let delta = (next[0][0] - cov[0][0]).abs() + (next[1][1] - cov[1][1]).abs();
-        cov = next;
-        if delta < 1e-10 {
+) -> Pattern {
+    let scales = |pattern: &Pattern| {
+        [
+            axis_scale(pattern, mean[0], 0, target[0][0]),
+            axis_scale(pattern, mean[1], 1, target[1][1]),
+        ]
+    };
+    let mut shape = target;
+    let mut pattern = make(shape);
+    let mut scale = scales(&pattern);
+    for _ in 1..MAX_SHAPE_ITERATIONS {
+        let both = scale[0] * scale[1];
+        if target[0][1] == 0.0 || both <= 0.0 {
             break;
         }
+        let limit = (shape[0][0] * shape[1][1]).sqrt();
+        let want = (target[0][1] / both).clamp(-limit, limit);
+        if (want - shape[0][1]).abs() <= 1e-12 * limit {
+            break;
+        }
+        shape[0][1] = want;
+        shape[1][0] = want;
+        pattern = make(shape);
+        scale = scales(&pattern);
     }
-    cov
+    pattern
+        .into_iter()
+        .map(|phase| {
+            phase
+                .into_iter()
+                .map(|(o, w)| ([o[0] * scale[0], o[1] * scale[1]], w))
+                .collect()
+        })
+        .collect()
 }
 
-/// Mean per-axis variance that bilinear reads add, over a pattern's taps: E[f(1−f)] in x and y.
-fn bilinear_cov(pattern: &Pattern, mean: [f64; 2]) -> [f64; 2] {
-    let mut s = [0.0; 2];
-    let mut w = 0.0;
-    for phase in pattern {
-        for (o, wt) in phase {
-            for axis in 0..2 {
-                let r = -(mean[axis] + o[axis]);
-                let f = r - r.floor();
-                s[axis] += wt * f * (1.0 - f);
-            }
-            w += wt;
+/// The scale s ∈ [0, 1] of the pattern's offsets along `axis` at which the response variance
+/// along that axis equals `target` (see [`compensated_pattern`]: non-decreasing in s), by
+/// bisection; 0 or 1 where `target` is out of reach.
+fn axis_scale(pattern: &Pattern, mean: f64, axis: usize, target: f64) -> f64 {
+    let variance = |s: f64| response_variance(pattern, mean, axis, s);
+    if variance(1.0) <= target {
+        return 1.0;
+    }
+    if variance(0.0) >= target {
+        return 0.0;
+    }
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    // 60 halvings: an interval of 2^-60, below f64's resolution of s near 1.
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if variance(mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
         }
     }
-    [s[0] / w, s[1] / w]
+    0.5 * (lo + hi)
+}
+
+/// Variance along `axis` of the response of a pattern (offsets scaled by `s`) read bilinearly
+/// around `mean`: a read at r = −(mean + s·o) has second moment r² + f(1 − f), f = r − ⌊r⌋.
+fn response_variance(pattern: &Pattern, mean: f64, axis: usize, s: f64) -> f64 {
+    let (mut total, mut first, mut second) = (0.0, 0.0, 0.0);
+    for phase in pattern {
+        for (o, w) in phase {
+            let r = -(mean + s * o[axis]);
+            let f = r - r.floor();
+            total += w;
+            first += w * r;
+            second += w * (r * r + f * (1.0 - f));
+        }
+    }
+    let m = first / total;
+    second / total - m * m
 }
 
 /// Turns sample offsets into bilinear taps; rounds weights to f32 so that, summed in the
@@ -558,7 +619,14 @@ pub fn ellipse_ratio_for_variance_ratio(ratio: f64) -> f64 {
 
 /// Points equally spaced in arc length on an ellipse with semi-axes (a, b), starting at
 /// arc-length fraction `start` (of the whole circumference), `count` points.
+#[cfg(test)]
 fn ellipse_points(a: f64, b: f64, start: f64, count: usize) -> Vec<[f64; 2]> {
+    ellipse_point_sets(a, b, &[start], count).remove(0)
+}
+
+/// [`ellipse_points`] for several start fractions, sharing one arc-length table (building the
+/// table dominates: 8192 `sin_cos` per call).
+fn ellipse_point_sets(a: f64, b: f64, starts: &[f64], count: usize) -> Vec<Vec<[f64; 2]>> {
     const STEPS: usize = 8192;
     // Cumulative arc length at angle samples, for inverting s(t).
     let mut cum = Vec::with_capacity(STEPS + 1);
@@ -571,25 +639,28 @@ fn ellipse_points(a: f64, b: f64, start: f64, count: usize) -> Vec<[f64; 2]> {
         cum.push(cum[i] + ds);
     }
     let total = cum[STEPS];
-    (0..count)
-        .map(|i| {
-            let frac = (start + i as f64 / count as f64).fract();
-            let target = frac * total;
-            let t = if total <= 0.0 {
-                0.0
-            } else {
-                let j = cum.partition_point(|&c| c <= target).clamp(1, STEPS);
-                let (c0, c1) = (cum[j - 1], cum[j]);
-                let u = if c1 > c0 {
-                    (target - c0) / (c1 - c0)
-                } else {
+    let points_from = |start: f64| -> Vec<[f64; 2]> {
+        (0..count)
+            .map(|i| {
+                let frac = (start + i as f64 / count as f64).fract();
+                let target = frac * total;
+                let t = if total <= 0.0 {
                     0.0
+                } else {
+                    let j = cum.partition_point(|&c| c <= target).clamp(1, STEPS);
+                    let (c0, c1) = (cum[j - 1], cum[j]);
+                    let u = if c1 > c0 {
+                        (target - c0) / (c1 - c0)
+                    } else {
+                        0.0
+                    };
+                    (j as f64 - 1.0 + u) * dt
                 };
-                (j as f64 - 1.0 + u) * dt
-            };
-            [a * t.cos(), b * t.sin()]
-        })
-        .collect()
+                [a * t.cos(), b * t.sin()]
+            })
+            .collect()
+    };
+    starts.iter().map(|&s| points_from(s)).collect()
 }
 
 /// The `ellipseN` pattern: PHASES phases of N arc-length-equispaced points, scaled so that the
@@ -601,9 +672,10 @@ fn ellipse_pattern(n: u32, l1: f64, l2: f64, e1: [f64; 2]) -> Pattern {
         return vec![vec![([0.0, 0.0], 1.0)]; PHASES];
     }
     let r = ellipse_ratio_for_variance_ratio(l2 / l1);
-    let phases: Vec<Vec<[f64; 2]>> = (0..PHASES)
-        .map(|p| ellipse_points(1.0, r, p as f64 / (PHASES * n) as f64, n))
+    let starts: Vec<f64> = (0..PHASES)
+        .map(|p| p as f64 / (PHASES * n) as f64)
         .collect();
+    let phases = ellipse_point_sets(1.0, r, &starts, n);
     let (mut sx, mut sy) = (0.0, 0.0);
     for pts in &phases {
         for q in pts {
@@ -708,8 +780,16 @@ fn poisson_pattern(n: u32, l1: f64, l2: f64, e1: [f64; 2]) -> Pattern {
         .collect()
 }
 
+/// Per-axis variance at or below which `gaussian:K` uses the 3-point pattern (v/2, 1 − v, v/2).
+const GAUSSIAN_THREE_POINT: f64 = 0.5;
+
 /// `gaussian:K`: a K×K grid of unit-spaced taps in the principal frame, centred on the mean,
 /// weighted by the Gaussian of variances (λ1, λ2), normalised to the exact target variance.
+///
+/// An axis of variance v ≤ 1/2 uses the 3-point pattern (v/2, 1 − v, v/2) at −1, 0, 1 instead:
+/// variance exactly v, and a non-negative spectrum 1 − v + v·cos ω (no checkerboard when
+/// iterated). The sampled Gaussian's ±1 weights e^(−1/2v) vanish as v → 0, so rescaling its
+/// positions to the exact variance would move its outer taps arbitrarily far (by √(v/got)).
 fn gaussian_taps(k: u32, l1: f64, l2: f64, e1: [f64; 2]) -> Vec<([f64; 2], f64)> {
     let to_pixels = principal_to_pixels(e1);
     let h = (k / 2) as i32;
@@ -717,6 +797,9 @@ fn gaussian_taps(k: u32, l1: f64, l2: f64, e1: [f64; 2]) -> Vec<([f64; 2], f64)>
     let axis = |var: f64| -> Vec<(f64, f64)> {
         if var <= 0.0 {
             return vec![(0.0, 1.0)];
+        }
+        if var <= GAUSSIAN_THREE_POINT {
+            return vec![(-1.0, 0.5 * var), (0.0, 1.0 - var), (1.0, 0.5 * var)];
         }
         let ws: Vec<f64> = (-h..=h)
             .map(|i| (-0.5 * f64::from(i * i) / var).exp())
@@ -726,10 +809,7 @@ fn gaussian_taps(k: u32, l1: f64, l2: f64, e1: [f64; 2]) -> Vec<([f64; 2], f64)>
             .zip(&ws)
             .map(|(i, w)| f64::from(i * i) * w / sum)
             .sum();
-        if got.is_nan() || got <= 0.0 {
-            // A variance far below one pixel²: every weight but the centre's underflowed.
-            return vec![(0.0, 1.0)];
-        }
+        // var > 1/2: the ±1 weights are ≥ e^-1 of the centre's, so `got` > 0.
         let stretch = (var / got).sqrt();
         (-h..=h)
             .zip(ws)
@@ -762,18 +842,22 @@ fn box_schedule(
     let to_pixels = principal_to_pixels(e1);
     // Variance of a discrete top-hat of 2h+1 unit-spaced taps: h(h+1)/3.
     let var_of = |h: u32| f64::from(h) * f64::from(h + 1) / 3.0;
-    // Compensation: bilinear reads of the mean's fraction add f(1-f) per axis to every box.
-    let interp = if compensate {
+    // Compensation: bilinear reads of the mean's fraction add f(1−f) along each pixel axis to
+    // every tap (exactly so for an axis-aligned box, whose taps are whole pixels apart); that
+    // covariance diag(bx, by) projected on the box's principal axes e1, e2 is what each axis owes.
+    let (interp1, interp2) = if compensate {
         let f = |v: f64| {
             let r = -v;
             let fr = r - r.floor();
             fr * (1.0 - fr)
         };
-        0.5 * (f(mean[0]) + f(mean[1]))
+        let (bx, by) = (f(mean[0]), f(mean[1]));
+        let (cx, cy) = (e1[0] * e1[0], e1[1] * e1[1]);
+        (bx * cx + by * cy, bx * cy + by * cx)
     } else {
-        0.0
+        (0.0, 0.0)
     };
-    let schedule_axis = |var: f64| -> Vec<u32> {
+    let schedule_axis = |var: f64, interp: f64| -> Vec<u32> {
         let mut acc = 0.0;
         (0..slabs)
             .map(|k| {
@@ -788,7 +872,7 @@ fn box_schedule(
             })
             .collect()
     };
-    let (hx, hy) = (schedule_axis(l1), schedule_axis(l2));
+    let (hx, hy) = (schedule_axis(l1, interp1), schedule_axis(l2, interp2));
     let mut combos: Vec<(u32, u32)> = Vec::new();
     let mut sched = Vec::with_capacity(slabs as usize);
     for (a, b) in hx.iter().zip(&hy) {
@@ -973,6 +1057,206 @@ mod tests {
                 (c[0] / k - 1.0).abs() < 1e-9
                     && (c[1] / k).abs() < 1e-9
                     && (c[2] / k - 1.0).abs() < 1e-9
+            );
+        }
+    }
+
+    /// Kernels whose compensated response must hit Σκ exactly (`box` has its own schedule).
+    const COMPENSATED: [&str; 7] = [
+        "ellipse2",
+        "ellipse3",
+        "ellipse5:slab",
+        "dirac",
+        "poisson8",
+        "poisson16",
+        "gaussian:19",
+    ];
+
+    /// The bound on a response moment's error that rounding the weights to f32 allows: each of a
+    /// phase's N corner weights is off by at most ε/2 relative, and the last one absorbs the f32
+    /// sum's rounding (at most N·ε/2 absolute), so the weight misplaced is ≤ N·ε and it sits at
+    /// most R px from the mean: the variance moves by ≤ N·ε·R².
+    fn rounding_bound(t: &KernelTable, mean: [f64; 2]) -> f64 {
+        let shift = t.slab_shift.first().copied().unwrap_or([0, 0]);
+        let mut r2: f64 = 1.0;
+        for tap in &t.taps {
+            for (c, w) in tap.w.iter().enumerate() {
+                if *w != 0.0 {
+                    let x = -f64::from(tap.dx + shift[0] + (c as i32 & 1));
+                    let y = -f64::from(tap.dy + shift[1] + (c as i32 >> 1));
+                    // Carried tables: the slab's mean is within 1 px of μκ.
+                    let d = (x - mean[0]).abs().max((y - mean[1]).abs()) + 1.0;
+                    r2 = r2.max(2.0 * d * d);
+                }
+            }
+        }
+        4.0 * f64::from(t.taps_per_phase) * f64::from(f32::EPSILON) * r2
+    }
+
+    /// Σκ = R(α) diag(a, b) R(α)ᵀ.
+    fn rotated(a: f64, b: f64, deg: f64) -> [[f64; 2]; 2] {
+        let (s, c) = deg.to_radians().sin_cos();
+        [
+            [c * c * a + s * s * b, c * s * (a - b)],
+            [c * s * (a - b), s * s * a + c * c * b],
+        ]
+    }
+
+    /// Builds a compensated table and checks the iterated moments: after n slabs the variance is
+    /// n·Σκ per axis (within the rounding bound) and the mean n·μκ (carried: within ½ px, the
+    /// rounding of n·μκ). Returns the table and its per-slab response.
+    fn compensated(spec: &str, m: KernelMoments) -> (KernelTable, KernelMoments, f64) {
+        const SLABS: u32 = 8;
+        let t = build_table(spec.parse().unwrap(), &m, SLABS, true);
+        for p in 0..t.phase_count {
+            assert_eq!(sequential_weight_sum(t.phase(p)), 1.0, "{spec} phase {p}");
+        }
+        let r = t.response_moments();
+        let tol = rounding_bound(&t, m.mean);
+        let carried = t.slab_shift.iter().any(|s| *s != [0, 0]);
+        let n = f64::from(SLABS);
+        for ax in 0..2 {
+            let (got, want) = (n * r.mean[ax], n * m.mean[ax]);
+            let bound = if carried { 0.5 + 1e-9 } else { n * tol };
+            assert!(
+                (got - want).abs() <= bound,
+                "{spec} {m:?}: iterated mean {got} vs {want} (carried {carried})"
+            );
+            assert!(
+                (r.cov[ax][ax] - m.cov[ax][ax]).abs() <= tol,
+                "{spec} {m:?}: axis {ax} variance {} vs {} (bound {tol:e}, carried {carried})",
+                r.cov[ax][ax],
+                m.cov[ax][ax]
+            );
+        }
+        (t, r, tol)
+    }
+
+    #[test]
+    fn compensated_response_variance_is_sigma_kappa_from_a_thousandth_to_a_hundred_px2() {
+        // Means with a fractional part (μκ at tilts 20° and −10°, a half pixel, 2.37 px) and an
+        // integer one; Σκ below f(1−f) of the fraction carries the mean, above it does not.
+        let means = [[-0.364, 0.176], [0.5, -0.5], [-2.373, 0.0], [-1.0, 2.0]];
+        let variances = [
+            0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.25, 0.5, 1.0, 3.0, 10.0, 30.0, 100.0,
+        ];
+        let mut carried = 0;
+        for spec in COMPENSATED {
+            for mean in means {
+                for v in variances {
+                    for cov in [[[v, 0.0], [0.0, v]], [[v, 0.0], [0.0, 4.0 * v]]] {
+                        let (t, _, _) = compensated(spec, KernelMoments { mean, cov });
+                        carried += usize::from(t.slab_shift.iter().any(|s| *s != [0, 0]));
+                    }
+                }
+            }
+        }
+        assert!(carried > 0, "some cases must carry the mean");
+    }
+
+    #[test]
+    fn compensated_response_keeps_the_correlation_when_sigma_kappa_allows_it() {
+        // Σκ − I/4 positive semi-definite: P = Σκ − diag(bilinear) ⪰ 0 exists (reads add at most
+        // 1/4 px² per axis), so the whole covariance is reached.
+        let mean = [-0.364, 0.176];
+        for (a, b, deg) in [
+            (0.25, 2.0, 65.0),
+            (0.3, 2.0, 30.0),
+            (1.0, 10.0, 45.0),
+            (5.0, 50.0, 20.0),
+        ] {
+            let cov = rotated(a, b, deg);
+            for spec in COMPENSATED {
+                let (_, r, tol) = compensated(spec, KernelMoments { mean, cov });
+                assert!(
+                    (r.cov[0][1] - cov[0][1]).abs() <= tol,
+                    "{spec} ({a}, {b}, {deg}°): covariance {} vs {}",
+                    r.cov[0][1],
+                    cov[0][1]
+                );
+            }
+        }
+        // Narrower rotated lights: the diagonal is still exact (checked in `compensated`) and
+        // the correlation is never exaggerated or flipped.
+        for (a, b, deg) in [(0.01, 0.2, 45.0), (0.001, 1.0, 30.0), (0.05, 0.1, 60.0)] {
+            let cov = rotated(a, b, deg);
+            for spec in COMPENSATED {
+                let (_, r, tol) = compensated(spec, KernelMoments { mean, cov });
+                assert!(
+                    r.cov[0][1] * cov[0][1] >= -tol && r.cov[0][1].abs() <= cov[0][1].abs() + tol,
+                    "{spec} ({a}, {b}, {deg}°): covariance {} vs {}",
+                    r.cov[0][1],
+                    cov[0][1]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn carried_mean_compensates_the_pattern_around_zero() {
+        // Σκ = 0.05 px² < f(1−f) = 0.24 of μκ = −0.6: the mean is carried. The pattern is read
+        // around 0, where its own taps add bilinear variance: uncompensated, ellipse2's two points
+        // at ±√(2·0.05)·(cos, sin) add E|x|·(1 − |x|) ≈ 0.18 px² per axis (+360 %).
+        let m = KernelMoments {
+            mean: [-0.6, 0.3],
+            cov: [[0.05, 0.0], [0.0, 0.05]],
+        };
+        let (t, _, _) = compensated("ellipse2", m);
+        assert!(
+            t.slab_shift.iter().any(|s| *s != [0, 0]),
+            "the mean is carried"
+        );
+        // Over 8 slabs the shifts add up to round(8·μκ) = (−5, 2) (read offsets are −moves).
+        let total = t
+            .slab_shift
+            .iter()
+            .fold([0, 0], |a, s| [a[0] - s[0], a[1] - s[1]]);
+        assert_eq!(total, [-5, 2]);
+    }
+
+    #[test]
+    fn gaussian_taps_of_small_variance_are_three_points() {
+        let var_x =
+            |taps: &[([f64; 2], f64)]| taps.iter().map(|(o, w)| w * o[0] * o[0]).sum::<f64>();
+        for v in [1e-9, 1e-3, 0.05, 0.25, 0.5] {
+            // Axis-aligned, y variance 0: one row of (v/2, 1 − v, v/2) at −1, 0, 1.
+            let taps = gaussian_taps(19, v, 0.0, [1.0, 0.0]);
+            let mut xs: Vec<(f64, f64)> = taps.iter().map(|(o, w)| (o[0], *w)).collect();
+            xs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            assert_eq!(
+                xs,
+                vec![(-1.0, 0.5 * v), (0.0, 1.0 - v), (1.0, 0.5 * v)],
+                "{v}"
+            );
+            assert!(taps.iter().all(|(o, _)| o[1] == 0.0));
+            assert!((var_x(&taps) - v).abs() <= 1e-15, "{v}");
+        }
+        // Above 1/2 the sampled Gaussian: variance exact, positions i·√(v/got). By Poisson
+        // summation the integer-sampled Gaussian's variance is v·(1 − O(e^(−2π²v))): got is
+        // within 1e-4 of v for v ≥ 1/2 (and the ±9 truncation is > 4 std away for v ≤ 4), so
+        // the stretch stays within 1 %.
+        for v in [0.5001, 1.0, 4.0] {
+            let taps = gaussian_taps(19, v, 0.0, [1.0, 0.0]);
+            assert!((var_x(&taps) - v).abs() <= 1e-12 * v, "{v}");
+            let stretch = taps
+                .iter()
+                .map(|(o, _)| o[0])
+                .filter(|x| *x > 0.0)
+                .fold(f64::INFINITY, f64::min);
+            assert!((stretch - 1.0).abs() <= 0.01, "{v}: stretch {stretch}");
+        }
+        // The case the old stretch broke: Σκ = 0.25 px², μκ = −0.364 (pattern variance ≈ 0.02):
+        // every read stays within |μκ| + 1 px (scale ≤ 1 of taps at ≤ 1 px, plus the bilinear
+        // neighbour).
+        let m = KernelMoments {
+            mean: [-0.364, 0.176],
+            cov: [[0.25, 0.0], [0.0, 0.25]],
+        };
+        let (t, _, _) = compensated("gaussian:19", m);
+        for tap in t.taps.iter().filter(|t| t.w != [0.0; 4]) {
+            assert!(
+                (-2..=1).contains(&tap.dx) && (-2..=1).contains(&tap.dy),
+                "{tap:?}"
             );
         }
     }

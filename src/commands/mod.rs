@@ -3,6 +3,7 @@
 pub mod diff;
 pub mod ldi;
 pub mod render;
+pub mod report;
 
 use std::path::Path;
 

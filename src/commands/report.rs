@@ -1,0 +1,44 @@
+//! `convshadow report`: speed against error over kernels and slab counts (issue 4), written as
+//! `report.csv`, `report.md` and `speed_vs_error.png` (see `crate::report`).
+
+use std::path::PathBuf;
+
+use crate::exit::{self, Failure};
+use crate::report::{ReportOptions, run as run_report};
+
+/// Arguments of `convshadow report`.
+#[derive(clap::Args, Debug)]
+pub struct ReportArgs {
+    /// Run the quick subset (under 2 minutes on 2 cores) instead of the full grid.
+    #[arg(long)]
+    pub quick: bool,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "report")]
+    pub out: PathBuf,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// One line per case on stderr.
+    #[arg(long, short)]
+    pub verbose: bool,
+}
+
+/// Runs `convshadow report`.
+pub fn run(args: &ReportArgs) -> Result<i32, Failure> {
+    let pool = super::thread_pool(args.threads)?;
+    let options = ReportOptions {
+        quick: args.quick,
+        out: args.out.clone(),
+        verbose: args.verbose,
+    };
+    let report = pool
+        .install(|| run_report(&options))
+        .map_err(|e| Failure::new(exit::OUTPUT_FAILED, e))?;
+    println!(
+        "report: {} cases in {:.0} s → {}/report.csv, report.md, speed_vs_error.png",
+        report.rows.len(),
+        report.seconds,
+        args.out.display()
+    );
+    Ok(exit::OK)
+}

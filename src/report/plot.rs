@@ -1,0 +1,168 @@
+//! The speed-vs-error plot (plotters, bitmap backend into a buffer, PNG by `image`).
+//!
+//! Text needs a font: plotters' `ab_glyph` feature loads none by itself, so a TrueType font is
+//! registered at run time from `CONVSHADOW_FONT` or the usual system paths (DejaVu Sans,
+//! Liberation Sans, FreeSans). Without one the plot is drawn without any text (axes, lines and
+//! points only) and [`draw`] says so, instead of failing.
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use plotters::prelude::*;
+
+/// One kernel's points: (time per frame in ms, error, slab count).
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// Kernel name (the legend).
+    pub name: String,
+    /// Points, in slab-count order.
+    pub points: Vec<(f64, f64, u32)>,
+}
+
+/// One panel: title, y-axis description and its series.
+#[derive(Clone, Debug)]
+pub struct Panel {
+    /// Panel title.
+    pub title: String,
+    /// Y axis description.
+    pub y_desc: String,
+    /// Series (one per kernel).
+    pub series: Vec<Series>,
+}
+
+const FONT_PATHS: [&str; 4] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+    "/usr/share/fonts/truetype/freefont/FreeSans.ttf",
+    "/System/Library/Fonts/Supplemental/Arial.ttf",
+];
+
+/// Registers a font for plotters once; returns whether text can be drawn.
+pub fn font_available() -> bool {
+    static FONT: OnceLock<bool> = OnceLock::new();
+    *FONT.get_or_init(|| {
+        let candidates = std::env::var("CONVSHADOW_FONT")
+            .ok()
+            .into_iter()
+            .chain(FONT_PATHS.iter().map(|s| s.to_string()));
+        for path in candidates {
+            if let Ok(bytes) = std::fs::read(&path) {
+                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                if plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_ok() {
+                    return true;
+                }
+            }
+        }
+        false
+    })
+}
+
+/// Draws the panels side by side (log–log: time per frame against error) into a PNG.
+/// Returns whether text (titles, axes, legend, slab labels) was drawn.
+pub fn draw(path: &Path, panels: &[Panel]) -> Result<bool, String> {
+    let text = font_available();
+    let (w, h) = (620 * panels.len().max(1) as u32, 560u32);
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let areas = root.split_evenly((1, panels.len().max(1)));
+        for (area, panel) in areas.iter().zip(panels) {
+            draw_panel(area, panel, text).map_err(|e| e.to_string())?;
+        }
+        root.present().map_err(|e| e.to_string())?;
+    }
+    image::save_buffer(path, &buf, w, h, image::ColorType::Rgb8)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(text)
+}
+
+type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+
+fn draw_panel(
+    area: &Area<'_>,
+    panel: &Panel,
+    text: bool,
+) -> Result<(), Box<dyn std::error::Error + 'static>> {
+    let pts = panel.series.iter().flat_map(|s| s.points.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
+    for p in pts {
+        x0 = x0.min(p.0);
+        x1 = x1.max(p.0);
+        y0 = y0.min(p.1.max(1e-6));
+        y1 = y1.max(p.1.max(1e-6));
+    }
+    if !x0.is_finite() || !y0.is_finite() {
+        (x0, x1, y0, y1) = (1.0, 10.0, 1e-3, 1.0);
+    }
+    // From the decade below the fastest point, so that the log axis labels a power of ten there.
+    let (x0, x1) = (10f64.powf((x0 / 1.3).log10().floor()), x1 * 1.3);
+    let (mut y0, mut y1) = (y0 / 1.5, y1 * 1.5);
+    // At least a decade, so that the log axis has labelled ticks.
+    if y1 / y0 < 10.0 {
+        let grow = (10.0 * y0 / y1).sqrt();
+        y0 /= grow;
+        y1 *= grow;
+    }
+    let mut builder = ChartBuilder::on(area);
+    builder.margin(12);
+    if text {
+        builder
+            .caption(&panel.title, ("sans-serif", 18))
+            .x_label_area_size(42)
+            .y_label_area_size(62);
+    } else {
+        builder.x_label_area_size(4).y_label_area_size(4);
+    }
+    let mut chart = builder.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+    if text {
+        chart
+            .configure_mesh()
+            .x_desc("time per frame (ms)")
+            .y_desc(panel.y_desc.as_str())
+            .x_labels(12)
+            .y_labels(12)
+            .x_label_formatter(&|v| format!("{v}"))
+            .y_label_formatter(&|v| format!("{v}"))
+            .label_style(("sans-serif", 13))
+            .draw()?;
+    } else {
+        chart
+            .configure_mesh()
+            .x_labels(0)
+            .y_labels(0)
+            .disable_x_mesh()
+            .disable_y_mesh()
+            .draw()?;
+    }
+    for (i, s) in panel.series.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        let line: Vec<(f64, f64)> = s.points.iter().map(|p| (p.0, p.1.max(1e-6))).collect();
+        let drawn = chart.draw_series(LineSeries::new(line.clone(), color.stroke_width(2)))?;
+        if text {
+            drawn.label(s.name.as_str()).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+            });
+        }
+        chart.draw_series(line.iter().map(|&p| Circle::new(p, 4, color.filled())))?;
+        if text {
+            chart.draw_series(s.points.iter().map(|p| {
+                Text::new(
+                    format!("{}", p.2),
+                    (p.0, p.1.max(1e-6)),
+                    ("sans-serif", 11).into_font().color(&BLACK),
+                )
+            }))?;
+        }
+    }
+    if text {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 12))
+            .draw()?;
+    }
+    Ok(())
+}

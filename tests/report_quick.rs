@@ -1,0 +1,111 @@
+//! `convshadow report --quick` runs end to end (issue 4): the CSV has a row per case of the
+//! quick subset, with finite numbers or an explicit empty cell explained by the `note` column,
+//! and the plot exists as a PNG.
+
+mod support;
+
+use convshadow::report::KERNELS;
+
+#[test]
+fn quick_report_writes_a_complete_csv_markdown_and_plot() {
+    let dir = support::temp_dir("report-quick");
+    let out = dir.join("out");
+    let out_s = out.to_string_lossy().into_owned();
+    let (code, stdout, stderr) = support::run_cli(&["report", "--quick", "--out", &out_s], &dir);
+    assert_eq!(code, 0, "stdout: {stdout}\nstderr: {stderr}");
+
+    let csv = std::fs::read_to_string(out.join("report.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| {
+            // The note is the last, quoted column (it may contain commas).
+            let (head, note) = l.split_once(",\"").expect("a quoted note column");
+            let mut cells: Vec<String> = head.split(',').map(str::to_string).collect();
+            cells.push(note.trim_end_matches('"').to_string());
+            cells
+        })
+        .collect();
+    assert!(rows.iter().all(|r| r.len() == header.len()));
+
+    // The quick subset (src/report/mod.rs, ReportOptions::describe): edge 3 distances × 2 slab
+    // counts × 2 variances × 2 tilts × (7 kernels + ellipse2 without compensation) = 192; disk
+    // 7 kernels; default scene 7 kernels.
+    let count = |family: &str| rows.iter().filter(|r| r[col("family")] == family).count();
+    assert_eq!(count("edge"), 3 * 2 * 2 * 2 * (KERNELS.len() + 1));
+    assert_eq!(count("disk"), KERNELS.len());
+    assert_eq!(count("scene"), KERNELS.len());
+    for k in KERNELS {
+        for family in ["edge", "disk", "scene"] {
+            assert!(
+                rows.iter()
+                    .any(|r| r[col("family")] == family && r[col("kernel")] == k),
+                "no {family} row for {k}"
+            );
+        }
+    }
+
+    // Every numeric cell is finite, or empty with a reason in `note`; each family has its errors.
+    let numeric = [
+        "slabs",
+        "variance",
+        "tilt_deg",
+        "distance_over_d1",
+        "width",
+        "height",
+        "time_ms",
+        "rmse_correct",
+        "rmse_iterated",
+        "isoline_err_px",
+        "width_err_correct_px",
+        "width_err_iterated_px",
+        "width_px",
+        "rmse_reference",
+        "reference_self_err",
+    ];
+    for r in &rows {
+        for name in numeric {
+            let cell = &r[col(name)];
+            if cell.is_empty() {
+                assert!(
+                    !r[col("note")].is_empty(),
+                    "empty {name} without a reason: {r:?}"
+                );
+            } else {
+                let v: f64 = cell.parse().unwrap_or_else(|_| panic!("{name} = {cell:?}"));
+                assert!(v.is_finite(), "{name} = {v} in {r:?}");
+            }
+        }
+        let required: &[&str] = match r[col("family")].as_str() {
+            "edge" | "disk" => &[
+                "rmse_correct",
+                "rmse_iterated",
+                "isoline_err_px",
+                "width_err_correct_px",
+                "width_err_iterated_px",
+            ],
+            _ => &["rmse_reference", "reference_self_err"],
+        };
+        for name in required {
+            assert!(!r[col(name)].is_empty(), "{name} missing in {r:?}");
+        }
+        assert!(r[col("time_ms")].parse::<f64>().unwrap() > 0.0);
+    }
+    // The reference's own error must be well below the errors it measures.
+    for r in rows.iter().filter(|r| r[col("family")] == "scene") {
+        let own: f64 = r[col("reference_self_err")].parse().unwrap();
+        let err: f64 = r[col("rmse_reference")].parse().unwrap();
+        assert!(
+            own < err,
+            "reference self-error {own} not below the measured {err}: {r:?}"
+        );
+    }
+
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("| kernel |") && md.contains("Machine:"), "{md}");
+    let png = std::fs::read(out.join("speed_vs_error.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    assert!(png.len() > 1000);
+    let _ = std::fs::remove_dir_all(&dir);
+}
