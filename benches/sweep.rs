@@ -1,15 +1,17 @@
-//! Sweep throughput (pixel·slab·light updates per second) of the scalar path, and the flush:
-//! a medium dense enough to drive the light below f32's normal range must not run slower than a
-//! clear one (without the flush, subnormal arithmetic would slow every gather).
+//! Sweep throughput in pixel·slab·light updates per second: every kernel on the SIMD path, the
+//! scalar path against the SIMD path on 1 and 2 threads, each "model only what the scene needs"
+//! measure on and off (quiet-chunk skipping, one light channel for grey transport), and the
+//! flush (a medium dense enough to drive the light below f32's normal range must not run slower
+//! than a clear one: without the flush, subnormal arithmetic would slow every gather).
 
 use std::path::Path;
 
 use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::Scene;
+use convshadow::common::scene::{Scene, SlabSpec};
 use convshadow::cpu::ldi::Ldi;
-use convshadow::cpu::sweep::{SweepOptions, sweep};
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use convshadow::cpu::sweep::{SweepOptions, SweepPath, sweep};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
 /// A box of fog filling the view; `opacity` and `transport` set how fast the light dies.
 fn fog(opacity: f64, transport: f64) -> Scene {
@@ -22,32 +24,147 @@ fn fog(opacity: f64, transport: f64) -> Scene {
     Scene::parse(&text, "bench", Path::new(".")).expect("bench scene")
 }
 
-fn bench_scene(c: &mut Criterion, name: &str, scene: &Scene) {
-    let g = SceneGeometry::build(scene).expect("geometry");
-    let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
-    let plan = RenderPlan::new(scene, &g).expect("plan");
-    let updates = u64::from(plan.grid_width * plan.grid_height * plan.slabs) * plan.lights.len() as u64;
-    let mut group = c.benchmark_group("sweep_scalar");
-    group.throughput(Throughput::Elements(updates));
+/// The default scene at 256², 256 slabs (a quarter of its pixels and half its slabs).
+fn default_256(kernel: &str) -> Scene {
+    let mut s = Scene::default_scene();
+    s.image.width = 256;
+    s.image.height = 256;
+    s.sweep.slabs = SlabSpec::Count(256);
+    s.sweep.kernel = kernel.parse().expect("kernel");
+    s
+}
+
+/// Everything a sweep needs, built once per scene.
+struct Prepared {
+    geometry: SceneGeometry,
+    ldi: Ldi,
+    plan: RenderPlan,
+}
+
+impl Prepared {
+    fn new(scene: &Scene) -> Prepared {
+        let geometry = SceneGeometry::build(scene).expect("geometry");
+        let ldi = Ldi::build(&geometry.raster, u64::MAX).expect("ldi");
+        let plan = RenderPlan::new(scene, &geometry).expect("plan");
+        Prepared {
+            geometry,
+            ldi,
+            plan,
+        }
+    }
+
+    /// Pixel·slab·light updates of one sweep.
+    fn updates(&self) -> u64 {
+        u64::from(self.plan.grid_width)
+            * u64::from(self.plan.grid_height)
+            * u64::from(self.plan.slabs)
+            * self.plan.lights.len() as u64
+    }
+
+    fn run(&self, pool: &rayon::ThreadPool, path: SweepPath, skip_quiet: bool) {
+        let options = SweepOptions {
+            path,
+            skip_quiet,
+            ..SweepOptions::default()
+        };
+        pool.install(|| sweep(&self.plan, &self.geometry.raster, &self.ldi, &options))
+            .expect("sweep");
+    }
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool")
+}
+
+/// Scalar vs SIMD (skipping on and off), 1 vs 2 threads, `ellipse2` on the default scene.
+fn paths_and_threads(c: &mut Criterion) {
+    let p = Prepared::new(&default_256("ellipse2"));
+    let mut group = c.benchmark_group("sweep_paths/default_256/ellipse2");
+    group.throughput(Throughput::Elements(p.updates()));
     group.sample_size(10);
     for threads in [1usize, 2] {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-        group.bench_function(format!("{name}/{threads}_threads"), |b| {
-            b.iter(|| pool.install(|| sweep(&plan, &g.raster, &ldi, &SweepOptions::default()).expect("sweep")))
-        });
+        let pool = pool(threads);
+        for (name, path, skip) in [
+            ("scalar", SweepPath::Scalar, false),
+            ("simd_no_skip", SweepPath::Simd, false),
+            ("simd", SweepPath::Simd, true),
+        ] {
+            group.bench_function(BenchmarkId::new(name, format!("{threads}_threads")), |b| {
+                b.iter(|| p.run(&pool, path, skip))
+            });
+        }
     }
     group.finish();
 }
 
-fn sweeps(c: &mut Criterion) {
-    // Clear: the light stays near 1. Dense: 0.35 per slab → 1e-20 after ~45 slabs, flushed to 0.
-    bench_scene(c, "fog_clear", &fog(0.001, 0.9));
-    bench_scene(c, "fog_dense_underflow", &fog(0.65, 0.0));
-    let mut default = Scene::default_scene();
-    default.image.width = 128;
-    default.image.height = 128;
-    default.sweep.slabs = convshadow::common::scene::SlabSpec::Count(128);
-    bench_scene(c, "default_128", &default);
+/// Every kernel on the SIMD path, 2 threads, skipping off (the kernel's own cost) and on.
+fn kernels(c: &mut Criterion) {
+    let mut group = c.benchmark_group("sweep_kernels/default_256");
+    group.sample_size(10);
+    let pool = pool(2);
+    for kernel in [
+        "ellipse2",
+        "ellipse3",
+        "ellipse2:slab",
+        "dirac",
+        "poisson8",
+        "poisson16",
+        "gaussian:19",
+        "box",
+    ] {
+        let p = Prepared::new(&default_256(kernel));
+        group.throughput(Throughput::Elements(p.updates()));
+        for (name, skip) in [("simd_no_skip", false), ("simd", true)] {
+            group.bench_function(BenchmarkId::new(name, kernel), |b| {
+                b.iter(|| p.run(&pool, SweepPath::Simd, skip))
+            });
+        }
+    }
+    group.finish();
+}
+
+/// One light channel when every transport is grey against three: the same scene with the cloud's
+/// transport made grey (1 channel) and left coloured (3 channels).
+fn channels(c: &mut Criterion) {
+    let mut group = c.benchmark_group("sweep_channels/default_256");
+    group.sample_size(10);
+    let pool = pool(2);
+    let rgb = default_256("ellipse2");
+    let mut grey = rgb.clone();
+    for m in &mut grey.materials {
+        m.transport = [m.transport[0]; 3];
+    }
+    for (name, scene) in [("3_channels", &rgb), ("1_channel", &grey)] {
+        let p = Prepared::new(scene);
+        assert_eq!(p.plan.channels, if name == "1_channel" { 1 } else { 3 });
+        group.throughput(Throughput::Elements(p.updates()));
+        group.bench_function(name, |b| b.iter(|| p.run(&pool, SweepPath::Simd, true)));
+    }
+    group.finish();
+}
+
+/// Clear against dense (underflowing, flushed) fog.
+fn flush(c: &mut Criterion) {
+    let mut group = c.benchmark_group("sweep_flush/fog_128");
+    group.sample_size(10);
+    let pool = pool(2);
+    for (name, scene) in [
+        // Clear: the light stays near 1. Dense: 0.35 per slab → 1e-20 after ~45 slabs, flushed.
+        ("clear", fog(0.001, 0.9)),
+        ("dense_underflow", fog(0.65, 0.0)),
+    ] {
+        let p = Prepared::new(&scene);
+        group.throughput(Throughput::Elements(p.updates()));
+        for (path_name, path) in [("scalar", SweepPath::Scalar), ("simd", SweepPath::Simd)] {
+            group.bench_function(BenchmarkId::new(path_name, name), |b| {
+                b.iter(|| p.run(&pool, path, true))
+            });
+        }
+    }
+    group.finish();
 }
 
 // Criterion's own plots are off: with plotters' `ab_glyph` feature (used by the report) they
@@ -55,6 +172,6 @@ fn sweeps(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default().without_plots();
-    targets = sweeps
+    targets = paths_and_threads, kernels, channels, flush
 }
 criterion_main!(benches);

@@ -10,7 +10,7 @@ use convshadow_common::image_io::RgbImage;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::Scene;
 use convshadow_cpu::ldi::{Ldi, LdiStats};
-use convshadow_cpu::sweep::{SweepError, SweepOptions, sweep};
+use convshadow_cpu::sweep::{ChunkCounts, SweepError, SweepOptions, SweepPath, sweep};
 use convshadow_gpu::GpuContext;
 
 use crate::exit::{self, Failure};
@@ -18,8 +18,10 @@ use crate::exit::{self, Failure};
 /// Which CPU code path runs the sweep.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum CpuPath {
-    /// The plain-Rust reference path.
+    /// One pixel at a time: the readable reference path.
     Scalar,
+    /// Eight pixels at a time with `wide`, the same bits as `scalar` (the default).
+    Simd,
 }
 
 impl CpuPath {
@@ -27,6 +29,15 @@ impl CpuPath {
     pub fn name(self) -> &'static str {
         match self {
             CpuPath::Scalar => "scalar",
+            CpuPath::Simd => "simd",
+        }
+    }
+
+    /// The sweep's code path.
+    pub fn sweep_path(self) -> SweepPath {
+        match self {
+            CpuPath::Scalar => SweepPath::Scalar,
+            CpuPath::Simd => SweepPath::Simd,
         }
     }
 }
@@ -95,6 +106,8 @@ pub struct RenderRequest<'a> {
     pub threads: usize,
     /// CPU code path.
     pub path: CpuPath,
+    /// SIMD path: skip chunks whose result is known exactly (see `convshadow_cpu::sweep`).
+    pub skip_quiet: bool,
     /// Memory budget in bytes for the LDI and the sweep's buffers.
     pub memory_budget: u64,
     /// Render even if meshes are open (the odd pixels are reported).
@@ -110,7 +123,8 @@ impl Default for RenderRequest<'_> {
         RenderRequest {
             backend: Backend::Cpu,
             threads: 0,
-            path: CpuPath::Scalar,
+            path: CpuPath::Simd,
+            skip_quiet: true,
             memory_budget: convshadow_cpu::default_memory_budget(),
             allow_open: false,
             progress: &|_| {},
@@ -141,6 +155,8 @@ pub struct Rendered {
     pub seconds_sweep: f64,
     /// Seconds in all.
     pub seconds_total: f64,
+    /// SIMD path: 8-pixel chunks `[full, skipped unoccluded, skipped dark]` over all slabs.
+    pub chunks: [u64; 3],
     /// `"cpu"` or `"gpu"`: the backend that rendered.
     pub backend: &'static str,
     /// The GPU adapter's name on the GPU backend.
@@ -295,17 +311,19 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Failur
         .map_err(|e| Failure::new(exit::BAD_INPUT, e.to_string()))?;
     let seconds_ldi = start.elapsed().as_secs_f64();
     let t_sweep = Instant::now();
+    let chunk_counts = ChunkCounts::default();
     let options = SweepOptions {
         progress: req.progress,
         cancel: req.cancel,
         initial_light: None,
+        path: req.path.sweep_path(),
+        skip_quiet: req.skip_quiet,
+        chunk_counts: Some(&chunk_counts),
     };
     let out = match &choice.gpu {
         Some(ctx) => convshadow_gpu::sweep::sweep(ctx, &plan, &geometry.raster, &ldi, &options)?,
         None => pool
-            .install(|| match req.path {
-                CpuPath::Scalar => sweep(&plan, &geometry.raster, &ldi, &options),
-            })
+            .install(|| sweep(&plan, &geometry.raster, &ldi, &options))
             .map_err(|e| match e {
                 SweepError::Interrupted => {
                     Failure::new(exit::INTERRUPTED, "interrupted; no output written")
@@ -328,6 +346,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Failur
         threads: pool.current_num_threads(),
         seconds_ldi,
         seconds_sweep,
+        chunks: chunk_counts.snapshot(),
         seconds_total: start.elapsed().as_secs_f64(),
         backend: choice.name(),
         adapter: choice.adapter(),

@@ -2,13 +2,49 @@
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::time::Instant;
 
+use convshadow_common::geometry::SceneGeometry;
+use convshadow_common::image_io::RgbImage;
 use convshadow_common::kernel::KernelSpec;
-use convshadow_common::scene::SlabSpec;
+use convshadow_common::plan::RenderPlan;
+use convshadow_common::scene::{Scene, SlabSpec};
+use convshadow_cpu::ldi::Ldi;
+use convshadow_cpu::reference::{Reference, ReferenceOptions, samples_side};
 use serde_json::json;
 
 use crate::exit::{self, Failure};
-use crate::pipeline::{Backend, CpuPath, RenderRequest, render};
+use crate::pipeline::{
+    Backend, CpuPath, MemoryNeed, RenderRequest, Rendered, image_fingerprint, render,
+};
+
+/// `--backend` of `convshadow render`: the pipeline's devices, or the ground-truth reference.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum RenderBackend {
+    /// The CPU oracle.
+    #[default]
+    Cpu,
+    /// The wgpu port (Vulkan: a hardware adapter, else Mesa lavapipe); exit code 5 without one.
+    Gpu,
+    /// The GPU when an adapter exists, else the CPU (and says so).
+    Auto,
+    /// The ground-truth reference (issue 4): the sweep's view samples, with the light
+    /// integrated over `--reference-samples` stratified directions of the Gaussian light and
+    /// marched through the continuous scene. Slow (quadratic in depth): for small images.
+    Reference,
+}
+
+impl RenderBackend {
+    /// The pipeline's backend, or `None` for the reference.
+    fn device(self) -> Option<Backend> {
+        match self {
+            RenderBackend::Cpu => Some(Backend::Cpu),
+            RenderBackend::Gpu => Some(Backend::Gpu),
+            RenderBackend::Auto => Some(Backend::Auto),
+            RenderBackend::Reference => None,
+        }
+    }
+}
 
 /// Arguments of `convshadow render`.
 #[derive(clap::Args, Debug)]
@@ -37,13 +73,23 @@ pub struct RenderArgs {
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
-    /// CPU code path.
-    #[arg(long, value_enum, default_value_t = CpuPath::Scalar)]
+    /// CPU code path: `simd` (8 pixels at a time) or `scalar` (the readable reference); both
+    /// give the same bits.
+    #[arg(long, value_enum, default_value_t = CpuPath::Simd)]
     pub path: CpuPath,
-    /// Backend: the CPU oracle, the GPU (wgpu/Vulkan; exit code 5 without an adapter), or auto
-    /// (the GPU when an adapter exists, else the CPU with a message).
-    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
-    pub backend: Backend,
+    /// SIMD path: compute every chunk, even those whose result is known exactly (unoccluded and
+    /// empty, or opaque in the dark). Same image; only for measuring what skipping saves.
+    #[arg(long)]
+    pub no_skip_quiet: bool,
+    /// Backend: the CPU oracle, the GPU (wgpu/Vulkan; exit code 5 without an adapter), auto
+    /// (the GPU when an adapter exists, else the CPU with a message), or the slow ground-truth
+    /// reference (Monte Carlo over light directions, for small images).
+    #[arg(long, value_enum, default_value_t = RenderBackend::Cpu)]
+    pub backend: RenderBackend,
+    /// Light directions per shading point and light for `--backend reference` (rounded up to a
+    /// square k²; default 64). Its error falls about as 1/√M.
+    #[arg(long)]
+    pub reference_samples: Option<u32>,
     /// Turn the bilinear-variance compensation on or off (overrides the scene).
     #[arg(long)]
     pub variance_compensation: Option<bool>,
@@ -104,7 +150,11 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         }
     }
 
-    let bar = if !args.quiet && std::io::stderr().is_terminal() {
+    // The reference has no per-slab progress to show.
+    let bar = if !args.quiet
+        && std::io::stderr().is_terminal()
+        && args.backend != RenderBackend::Reference
+    {
         let b = indicatif::ProgressBar::new(0);
         b.set_style(
             indicatif::ProgressStyle::with_template("{spinner} slab {pos}/{len} {wide_bar} {eta}")
@@ -125,15 +175,38 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             b.set_length(u64::from(n));
         }
     }
+    let samples = match (args.backend, args.reference_samples) {
+        (RenderBackend::Reference, None) => ReferenceOptions::default().samples,
+        (RenderBackend::Reference, Some(0)) => {
+            return Err(Failure::new(
+                exit::BAD_ARGUMENTS,
+                "--reference-samples: expected at least 1 light direction, got 0",
+            ));
+        }
+        (RenderBackend::Reference, Some(m)) => m,
+        (_, Some(_)) => {
+            return Err(Failure::new(
+                exit::BAD_ARGUMENTS,
+                "--reference-samples only applies to --backend reference",
+            ));
+        }
+        (_, None) => 0,
+    };
+    let budget = args
+        .max_memory
+        .map_or_else(convshadow_cpu::default_memory_budget, |m| {
+            m.saturating_mul(1 << 20)
+        });
+    let Some(backend) = args.backend.device() else {
+        let r = render_reference(&scene, args.threads, samples, budget, args.allow_open)?;
+        return finish(&scene, args, &outputs, &r, bar.as_ref(), samples);
+    };
     let request = RenderRequest {
-        backend: args.backend,
+        backend,
         threads: args.threads,
         path: args.path,
-        memory_budget: args
-            .max_memory
-            .map_or_else(convshadow_cpu::default_memory_budget, |m| {
-                m.saturating_mul(1 << 20)
-            }),
+        skip_quiet: !args.no_skip_quiet,
+        memory_budget: budget,
         allow_open: args.allow_open,
         progress: &progress,
         // SIGINT/SIGTERM raise it: the sweep stops and nothing is written (exit code 130).
@@ -143,11 +216,23 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     if let Some(note) = &r.backend_note {
         eprintln!("note: {note}");
     }
-    if let Some(b) = &bar {
+    finish(&scene, args, &outputs, &r, bar.as_ref(), 0)
+}
+
+/// Writes the outputs and the stats of a finished render and prints the summary line.
+fn finish(
+    scene: &Scene,
+    args: &RenderArgs,
+    outputs: &[PathBuf],
+    r: &Rendered,
+    bar: Option<&indicatif::ProgressBar>,
+    samples: u32,
+) -> Result<i32, Failure> {
+    if let Some(b) = bar {
         b.finish_and_clear();
     }
     exit::check_interrupt()?;
-    for p in &outputs {
+    for p in outputs {
         r.image.save(p)?;
     }
     let updates = f64::from(r.plan.grid_width)
@@ -169,8 +254,12 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             "odd_pixels": r.ldi.odd_pixels,
             "threads": r.threads,
             "path": args.path.name(),
+            "chunks_full": r.chunks[0],
+            "chunks_skipped_unoccluded": r.chunks[1],
+            "chunks_skipped_dark": r.chunks[2],
             "backend": r.backend,
             "adapter": r.adapter,
+            "reference_samples": (samples > 0).then_some(samples),
             "seconds_ldi": r.seconds_ldi,
             "seconds_sweep": r.seconds_sweep,
             "seconds_total": r.seconds_total,
@@ -203,6 +292,11 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             throughput / 1e6,
             match &r.adapter {
                 Some(a) => format!("GPU: {a}"),
+                None if samples > 0 => format!(
+                    "reference: {} light directions, {} threads",
+                    samples_side(samples) * samples_side(samples),
+                    r.threads
+                ),
                 None => format!("CPU: {} threads, {} path", r.threads, args.path.name()),
             },
             outputs
@@ -213,4 +307,71 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         );
     }
     Ok(exit::OK)
+}
+
+/// Renders with the ground-truth reference (`--backend reference`): the same checks and LDI as
+/// the pipeline, then [`Reference::render`] with `samples` light directions per shading point.
+/// No interrupt handler is installed for it: a signal ends the process at once, before any output
+/// is written (outputs are only ever renamed into place complete).
+fn render_reference(
+    scene: &Scene,
+    threads: usize,
+    samples: u32,
+    budget: u64,
+    allow_open: bool,
+) -> Result<Rendered, Failure> {
+    let start = Instant::now();
+    let fragment_budget = MemoryNeed::of(scene, true).check(scene, budget)?;
+    let pool = super::thread_pool(threads)?;
+    let geometry = SceneGeometry::build(scene)?;
+    exit::check_interrupt()?;
+    let ldi = pool.install(|| Ldi::build(&geometry.raster, fragment_budget))?;
+    let stats = pool.install(|| ldi.stats());
+    if !allow_open && (geometry.defect_edges() > 0 || stats.odd_pixels > 0) {
+        return Err(Failure::new(
+            exit::MESH_DEFECT,
+            format!(
+                "{}: refusing to render: the inside/outside test needs closed, consistently wound \
+                 meshes, but {} mesh edges are open, non-manifold or flipped and {} pixels have \
+                 an odd fragment count. Pass --allow-open to render anyway.",
+                scene.source,
+                geometry.defect_edges(),
+                stats.odd_pixels
+            ),
+        ));
+    }
+    let plan = RenderPlan::new(scene, &geometry)
+        .map_err(|e| Failure::new(exit::BAD_INPUT, e.to_string()))?;
+    let seconds_ldi = start.elapsed().as_secs_f64();
+    exit::check_interrupt()?;
+    let t_render = Instant::now();
+    let data = {
+        let reference = Reference::new(scene, &geometry, &plan, 0.0);
+        let options = ReferenceOptions {
+            samples,
+            ..ReferenceOptions::default()
+        };
+        pool.install(|| reference.render(&ldi, &options))
+    };
+    let seconds_sweep = t_render.elapsed().as_secs_f64();
+    Ok(Rendered {
+        image_hash: image_fingerprint(&data),
+        image: RgbImage {
+            width: scene.image.width,
+            height: scene.image.height,
+            data,
+        },
+        ldi: stats,
+        ldi_hash: ldi.fingerprint(),
+        plan,
+        light: Vec::new(),
+        threads: pool.current_num_threads(),
+        seconds_ldi,
+        seconds_sweep,
+        chunks: [0; 3],
+        seconds_total: start.elapsed().as_secs_f64(),
+        backend: "reference",
+        adapter: None,
+        backend_note: None,
+    })
 }

@@ -1,0 +1,122 @@
+//! The SIMD path's quiet-chunk skipping against the scalar path where it is easiest to get wrong:
+//! single pixels of light that differ from their surroundings, at every position relative to
+//! the 8-pixel chunks, next to unoccluded space (skipped when everything read is exactly 1) and
+//! next to opaque space in the dark (skipped when everything read is exactly 0).
+
+use std::path::Path;
+
+use convshadow::common::geometry::SceneGeometry;
+use convshadow::common::plan::RenderPlan;
+use convshadow::common::scene::Scene;
+use convshadow::cpu::ldi::Ldi;
+use convshadow::cpu::sweep::{ChunkCounts, SweepOptions, SweepPath, sweep};
+use convshadow::pipeline::image_fingerprint;
+
+/// Every kernel family (as in tests/determinism.rs).
+const KERNELS: [&str; 9] = [
+    "ellipse2",
+    "ellipse3",
+    "ellipse2:slab",
+    "ellipse5",
+    "dirac",
+    "poisson8",
+    "poisson16",
+    "gaussian:7",
+    "box",
+];
+
+/// A thin opaque wall over the image's left half at the front, and a small box far behind it so
+/// the sweep goes on for slabs after the wall.
+fn scene(kernel: &str) -> Scene {
+    let text = format!(
+        "[image]\nwidth = 75\nheight = 36\n[camera]\nview_width = 4.0\n[sweep]\nslabs = 20\n\
+         optimal_distance = 0.5\nkernel = \"{kernel}\"\n[[light]]\ntilt_deg = [20.0, 10.0]\n\
+         variance = [0.04, 0.02]\nrotation_deg = 25.0\n\
+         [[mesh]]\nshape = \"box\"\nsize = [2.0, 5.0, 0.05]\ntranslate = [1.0, 0.0, 0.0]\n\
+         material = \"wall\"\n\
+         [[mesh]]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ntranslate = [-1.8, 1.6, 2.0]\n\
+         material = \"wall\"\n[material.wall]\nopacity = 1.0\n"
+    );
+    Scene::parse(&text, "simd_quiet", Path::new(".")).expect("scene")
+}
+
+/// Runs both paths from `initial` light and compares image and light bits; returns the SIMD
+/// path's chunk counts.
+fn compare(kernel: &str, what: &str, initial_of: &dyn Fn(usize, usize, usize) -> f32) -> [u64; 3] {
+    let scene = scene(kernel);
+    let g = SceneGeometry::build(&scene).expect("geometry");
+    let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
+    let plan = RenderPlan::new(&scene, &g).expect("plan");
+    let (w, h, row_len) = (
+        plan.grid_width as usize,
+        plan.grid_height as usize,
+        plan.light_row_len(),
+    );
+    let planes = row_len / w;
+    let mut initial = vec![0.0f32; row_len * h];
+    for y in 0..h {
+        for p in 0..planes {
+            for x in 0..w {
+                initial[y * row_len + p * w + x] = initial_of(x, y, w);
+            }
+        }
+    }
+    let counts = ChunkCounts::default();
+    let run = |path: SweepPath, counts: Option<&ChunkCounts>| {
+        let options = SweepOptions {
+            initial_light: Some(&initial),
+            path,
+            chunk_counts: counts,
+            ..SweepOptions::default()
+        };
+        sweep(&plan, &g.raster, &ldi, &options).expect("sweep")
+    };
+    let scalar = run(SweepPath::Scalar, None);
+    let simd = run(SweepPath::Simd, Some(&counts));
+    assert_eq!(
+        (
+            image_fingerprint(&simd.image),
+            image_fingerprint(&simd.light)
+        ),
+        (
+            image_fingerprint(&scalar.image),
+            image_fingerprint(&scalar.light)
+        ),
+        "{kernel}, {what}: SIMD path with skipping differs from the scalar path"
+    );
+    counts.snapshot()
+}
+
+/// A dot every 9 pixels along x (so dots fall on every position within a chunk), shifted by 4
+/// every 5 rows.
+fn dot(x: usize, y: usize) -> bool {
+    y % 5 == 2 && (x + 4 * (y / 5)).is_multiple_of(9)
+}
+
+#[test]
+fn single_dots_of_shadow_in_unoccluded_light() {
+    for kernel in KERNELS {
+        let counts = compare(kernel, "shadow dots in light", &|x, y, _| {
+            if dot(x, y) { 0.5 } else { 1.0 }
+        });
+        assert!(
+            counts[1] > 0,
+            "{kernel}: no unoccluded chunk was skipped: {counts:?}"
+        );
+    }
+}
+
+#[test]
+fn single_dots_of_light_beside_opaque_darkness() {
+    // Dark everywhere but for dots of light in the unoccluded right half (grid x > w/2): the dots
+    // spread under the wall's opaque left half, whose chunks are skipped while all they read is 0.
+    for kernel in KERNELS {
+        let counts = compare(kernel, "light dots in the dark", &|x, y, w| {
+            if x > w / 2 && dot(x, y) { 0.5 } else { 0.0 }
+        });
+        assert!(
+            counts[2] > 0,
+            "{kernel}: no dark chunk was skipped: {counts:?}"
+        );
+    }
+}
