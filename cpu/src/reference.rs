@@ -30,7 +30,7 @@
 //! It is slow — every shading point marches `lights × M` rays — and meant for small images.
 
 use convshadow_common::geometry::SceneGeometry;
-use convshadow_common::hash::{mix32, pixel_hash, row_hash, unit_float};
+use convshadow_common::hash::{mix32, row_hash};
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{MaterialSpec, Scene};
 use rayon::prelude::*;
@@ -38,7 +38,7 @@ use rayon::prelude::*;
 use crate::composite::{composite, finish};
 use crate::ldi::Ldi;
 use crate::parity::{NO_CROSSING, advance, first_mesh};
-use crate::shading::{detail_value, shade, to_detail, transfer};
+use crate::shading::{detail_value, material_at, shade, shading_depth};
 
 /// Optical depth beyond which a shadow ray is treated as fully blocked (e^-40 ≈ 4e-18).
 const OPAQUE_DEPTH: f64 = 40.0;
@@ -442,27 +442,10 @@ impl<'a> Reference<'a> {
                         if 1.0 - alpha < TRANSPARENCY_CUTOFF {
                             break;
                         }
-                        let z = if crossed != NO_CROSSING {
-                            ldi.depth[crossed as usize]
-                        } else if plan.jitter {
-                            let jr = row_hash(plan.jitter_slab_hash[slab as usize], y as u32);
-                            front + unit_float(pixel_hash(jr, x as u32)) * plan.slab_distance
-                        } else {
-                            front + 0.5 * plan.slab_distance
-                        };
+                        let jitter_row = row_hash(plan.jitter_slab_hash[slab as usize], y as u32);
+                        let z = shading_depth(plan, ldi, crossed, front, jitter_row, x);
+                        let tf = material_at(plan, mesh, x, y, z);
                         let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
-                        let value = if material.tf.len() > 1 {
-                            let q = to_detail(
-                                &plan.mesh_to_detail[mesh as usize],
-                                x as f32 + 0.5,
-                                y as f32 + 0.5,
-                                z,
-                            );
-                            detail_value(material, q)
-                        } else {
-                            0.0
-                        };
-                        let tf = transfer(&material.tf, value);
                         let pos = [x as f64 + 0.5, y as f64 + 0.5, f64::from(z)];
                         let stream = mix32(mix32(p as u32) ^ slab);
                         for l in 0..lights {

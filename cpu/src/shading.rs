@@ -2,8 +2,12 @@
 //! light sum and specular highlight (DESIGN §2 step 3, paper §4.2). Mirrors
 //! `gpu/src/shaders/shading.wgsl`.
 
+use convshadow_common::hash::{pixel_hash, unit_float};
 use convshadow_common::plan::{MaterialPlan, RenderPlan, TF_SIZE, TfEntry};
 use wide::f32x8;
+
+use crate::ldi::Ldi;
+use crate::parity::NO_CROSSING;
 
 /// Evaluates a material's detail value in [0, 1] at detail coordinates `p` (0 for constant ones).
 #[inline]
@@ -15,6 +19,46 @@ pub fn detail_value(material: &MaterialPlan, p: [f32; 3]) -> f32 {
     } else {
         0.0
     }
+}
+
+/// The depth of the one point a slab shades in a pixel: the first surface crossed in the slab
+/// (`crossed`, an LDI fragment), else the slab's front plus a hashed jitter (`jitter_row` is the
+/// row's jitter hash), else the slab's centre.
+#[inline(always)]
+pub fn shading_depth(
+    plan: &RenderPlan,
+    ldi: &Ldi,
+    crossed: u32,
+    front: f32,
+    jitter_row: u32,
+    x: usize,
+) -> f32 {
+    if crossed != NO_CROSSING {
+        ldi.depth[crossed as usize]
+    } else if plan.jitter {
+        front + unit_float(pixel_hash(jitter_row, x as u32)) * plan.slab_distance
+    } else {
+        front + 0.5 * plan.slab_distance
+    }
+}
+
+/// The transfer-function entry of mesh `mesh`'s material at grid pixel (x, y) and relative depth
+/// `z`: detail value (0 for constant materials), then the table look-up.
+#[inline(always)]
+pub fn material_at(plan: &RenderPlan, mesh: u32, x: usize, y: usize, z: f32) -> TfEntry {
+    let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
+    let value = if material.tf.len() > 1 {
+        let q = to_detail(
+            &plan.mesh_to_detail[mesh as usize],
+            x as f32 + 0.5,
+            y as f32 + 0.5,
+            z,
+        );
+        detail_value(material, q)
+    } else {
+        0.0
+    };
+    transfer(&material.tf, value)
 }
 
 /// Maps pixel-grid coordinates and relative depth to a mesh's detail coordinates

@@ -13,7 +13,7 @@
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
-use convshadow_common::hash::{pixel_hash, row_hash, unit_float};
+use convshadow_common::hash::row_hash;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::raster::RasterSetup;
 use rayon::prelude::*;
@@ -22,7 +22,7 @@ use crate::composite::{attenuate, composite, finish};
 use crate::kernels::{Plane, gather, light_row_hash, phase_at};
 use crate::ldi::Ldi;
 use crate::parity::{NO_CROSSING, advance, first_mesh};
-use crate::shading::{detail_value, shade, to_detail, transfer};
+use crate::shading::{material_at, shade, shading_depth};
 use crate::sweep_simd::{QuietRow, QuietSetup, Reach, sweep_row_simd};
 
 /// Largest light count × channels handled per pixel on the stack.
@@ -387,26 +387,9 @@ pub(crate) fn shade_pixel(
     let Some(mesh) = mesh else {
         return [1.0; 3];
     };
-    let z = if crossed != NO_CROSSING {
-        ldi.depth[crossed as usize]
-    } else if plan.jitter {
-        ctx.front + unit_float(pixel_hash(jitter_row, x as u32)) * plan.slab_distance
-    } else {
-        ctx.front + 0.5 * plan.slab_distance
-    };
+    let z = shading_depth(plan, ldi, crossed, ctx.front, jitter_row, x);
+    let tf = material_at(plan, mesh, x, y, z);
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
-    let value = if material.tf.len() > 1 {
-        let q = to_detail(
-            &plan.mesh_to_detail[mesh as usize],
-            x as f32 + 0.5,
-            y as f32 + 0.5,
-            z,
-        );
-        detail_value(material, q)
-    } else {
-        0.0
-    };
-    let tf = transfer(&material.tf, value);
     let spec = match material.specular {
         Some((strength, exponent)) if crossed != NO_CROSSING => {
             let n = ctx.raster.triangles[ldi.triangle[crossed as usize] as usize].normal;
