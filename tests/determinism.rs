@@ -8,19 +8,7 @@ use std::path::{Path, PathBuf};
 
 use convshadow::common::scene::{Scene, SlabSpec};
 use convshadow::pipeline::{CpuPath, RenderRequest, render};
-
-/// Every kernel family; `gaussian:7` stands for `gaussian:K` (same code, fewer taps, faster).
-pub const KERNELS: [&str; 9] = [
-    "ellipse2",
-    "ellipse3",
-    "ellipse2:slab",
-    "ellipse5",
-    "dirac",
-    "poisson8",
-    "poisson16",
-    "gaussian:7",
-    "box",
-];
+use support::KERNELS;
 
 /// The example scenes, small; scenes using ../shared/models are skipped (loudly) without it.
 fn example_scenes() -> Vec<(PathBuf, Scene)> {

@@ -11,19 +11,9 @@ use convshadow::common::scene::Scene;
 use convshadow::cpu::ldi::Ldi;
 use convshadow::cpu::sweep::{ChunkCounts, SweepOptions, SweepPath, sweep};
 use convshadow::pipeline::image_fingerprint;
+use support::KERNELS;
 
-/// Every kernel family (as in tests/determinism.rs).
-const KERNELS: [&str; 9] = [
-    "ellipse2",
-    "ellipse3",
-    "ellipse2:slab",
-    "ellipse5",
-    "dirac",
-    "poisson8",
-    "poisson16",
-    "gaussian:7",
-    "box",
-];
+mod support;
 
 /// A thin opaque wall over the image's left half at the front, and a small box far behind it so
 /// the sweep goes on for slabs after the wall.

@@ -5,6 +5,19 @@ use std::path::{Path, PathBuf};
 
 use convshadow::common::scene::Scene;
 
+/// Every kernel family; `gaussian:7` stands for `gaussian:K` (same code, fewer taps, faster).
+pub const KERNELS: [&str; 9] = [
+    "ellipse2",
+    "ellipse3",
+    "ellipse2:slab",
+    "ellipse5",
+    "dirac",
+    "poisson8",
+    "poisson16",
+    "gaussian:7",
+    "box",
+];
+
 /// `../shared/models` beside the repository, or `None` (with a loud message) when it is missing.
 /// Under CI (env `CI` set) a missing folder is a failure, not a skip.
 pub fn models_dir() -> Option<PathBuf> {
