@@ -10,7 +10,7 @@ use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::kernel::eigen2;
 use convshadow_common::scene::{Scene, SceneError};
 
-use super::edge::phi;
+use super::edge::{CaseFrame, phi};
 
 /// One disk set-up (see the module documentation).
 #[derive(Clone, Debug, PartialEq)]
@@ -61,51 +61,29 @@ impl DiskSetup {
         let e = self.slab_distance;
         // Pixel +x is world −x for this camera (right = down × forward).
         let disk_x = 0.5 * self.shift_px() * self.pixel_size;
-        format!(
-            r#"
-[image]
-width = {w}
-height = {h}
-[camera]
-view_width = {vw:e}
-[sweep]
-slab_distance = {e:e}
-optimal_distance = {d1:e}
-kernel = "{kernel}"
-variance_compensation = {comp}
-[[light]]
-tilt_deg = [{tilt:e}, 0.0]
-variance = [{vx:e}, {vy:e}]
-rotation_deg = {rot:e}
-[[mesh]]
-shape = "cylinder"
-size = [{r:e}, {occ_size:e}, {DISK_SEGMENTS}]
-translate = [{disk_x:e}, 0.0, {occ_z:e}]
-material = "disk"
-[[mesh]]
-shape = "box"
-size = [20.0, 20.0, {rec_size:e}]
-translate = [0.0, 0.0, {rec_z:e}]
-material = "receiver"
-[material.disk]
-[material.receiver]
-transport = [1.0, 1.0, 1.0]
-"#,
-            w = self.width,
-            h = self.height,
-            vw = f64::from(self.width) * self.pixel_size,
-            d1 = self.optimal_distance,
-            kernel = self.kernel,
-            comp = self.compensation,
-            tilt = self.tilt_deg,
-            vx = self.variance[0],
-            vy = self.variance[1],
-            rot = self.rotation_deg,
-            r = self.radius,
-            occ_size = 0.2 * e,
-            occ_z = 0.4 * e,
-            rec_size = 0.2 * e,
-            rec_z = (f64::from(self.slabs) + 0.4) * e,
+        CaseFrame {
+            width: self.width,
+            height: self.height,
+            pixel_size: self.pixel_size,
+            slab_distance: e,
+            optimal_distance: self.optimal_distance,
+            kernel: &self.kernel,
+            compensation: self.compensation,
+            slabs: self.slabs,
+        }
+        .toml(
+            "",
+            &format!(
+                "tilt_deg = [{:e}, 0.0]\nvariance = [{:e}, {:e}]\nrotation_deg = {:e}\n",
+                self.tilt_deg, self.variance[0], self.variance[1], self.rotation_deg
+            ),
+            &format!(
+                "shape = \"cylinder\"\nsize = [{:e}, {:e}, {DISK_SEGMENTS}]\n\
+                 translate = [{disk_x:e}, 0.0, {:e}]\n",
+                self.radius,
+                0.2 * e,
+                0.4 * e
+            ),
         )
     }
 

@@ -40,6 +40,60 @@ pub struct EdgeSetup {
     pub seed: u32,
 }
 
+/// What the analytic cases (edge, disk) share: the image, the slabs, the kernel, and a transparent
+/// receiver box 0.2·e thick in the slab `slabs` behind an occluder 0.2·e thick in slab 0.
+pub(crate) struct CaseFrame<'a> {
+    pub width: u32,
+    pub height: u32,
+    pub pixel_size: f64,
+    pub slab_distance: f64,
+    pub optimal_distance: f64,
+    pub kernel: &'a str,
+    pub compensation: bool,
+    pub slabs: u32,
+}
+
+impl CaseFrame<'_> {
+    /// The scene text: `sweep_extra` adds `[sweep]` keys, `light` is the one `[[light]]`'s keys,
+    /// `occluder` the occluder `[[mesh]]`'s keys but its material.
+    pub(crate) fn toml(&self, sweep_extra: &str, light: &str, occluder: &str) -> String {
+        let e = self.slab_distance;
+        format!(
+            r#"
+[image]
+width = {w}
+height = {h}
+[camera]
+view_width = {vw:e}
+[sweep]
+slab_distance = {e:e}
+optimal_distance = {d1:e}
+kernel = "{kernel}"
+variance_compensation = {comp}
+{sweep_extra}[[light]]
+{light}[[mesh]]
+{occluder}material = "occluder"
+[[mesh]]
+shape = "box"
+size = [20.0, 20.0, {rec_size:e}]
+translate = [0.0, 0.0, {rec_z:e}]
+material = "receiver"
+[material.occluder]
+[material.receiver]
+transport = [1.0, 1.0, 1.0]
+"#,
+            w = self.width,
+            h = self.height,
+            vw = f64::from(self.width) * self.pixel_size,
+            d1 = self.optimal_distance,
+            kernel = self.kernel,
+            comp = self.compensation,
+            rec_size = 0.2 * e,
+            rec_z = (f64::from(self.slabs) + 0.4) * e,
+        )
+    }
+}
+
 impl EdgeSetup {
     /// The set-up of `tests/sweep_accuracy.rs`: e = 0.01, d1 = 0.16, 512 × 96 pixels of 0.01.
     pub fn classic(slabs: u32, tilt_deg: f64, variance: f64, kernel: &str) -> EdgeSetup {
@@ -66,49 +120,28 @@ impl EdgeSetup {
     /// The scene text (TOML).
     pub fn toml(&self) -> String {
         let e = self.slab_distance;
-        format!(
-            r#"
-[image]
-width = {w}
-height = {h}
-[camera]
-view_width = {vw:e}
-[sweep]
-slab_distance = {e:e}
-optimal_distance = {d1:e}
-kernel = "{kernel}"
-variance_compensation = {comp}
-seed = {seed}
-[[light]]
-tilt_deg = [{tilt:e}, 0.0]
-variance = [{var:e}, {var:e}]
-[[mesh]]
-shape = "box"
-size = [20.0, 20.0, {occ_size:e}]
-translate = [10.0, 0.0, {occ_z:e}]
-material = "occluder"
-[[mesh]]
-shape = "box"
-size = [20.0, 20.0, {rec_size:e}]
-translate = [0.0, 0.0, {rec_z:e}]
-material = "receiver"
-[material.occluder]
-[material.receiver]
-transport = [1.0, 1.0, 1.0]
-"#,
-            w = self.width,
-            h = self.height,
-            vw = f64::from(self.width) * self.pixel_size,
-            d1 = self.optimal_distance,
-            kernel = self.kernel,
-            comp = self.compensation,
-            seed = self.seed,
-            tilt = self.tilt_deg,
-            var = self.variance,
-            occ_size = 0.2 * e,
-            occ_z = 0.4 * e,
-            rec_size = 0.2 * e,
-            rec_z = (f64::from(self.slabs) + 0.4) * e,
+        CaseFrame {
+            width: self.width,
+            height: self.height,
+            pixel_size: self.pixel_size,
+            slab_distance: e,
+            optimal_distance: self.optimal_distance,
+            kernel: &self.kernel,
+            compensation: self.compensation,
+            slabs: self.slabs,
+        }
+        .toml(
+            &format!("seed = {}\n", self.seed),
+            &format!(
+                "tilt_deg = [{tilt:e}, 0.0]\nvariance = [{var:e}, {var:e}]\n",
+                tilt = self.tilt_deg,
+                var = self.variance
+            ),
+            &format!(
+                "shape = \"box\"\nsize = [20.0, 20.0, {:e}]\ntranslate = [10.0, 0.0, {:e}]\n",
+                0.2 * e,
+                0.4 * e
+            ),
         )
     }
 
