@@ -3,6 +3,8 @@
 //! Random numbers are hashes of (seed, stream, slab, row, column), chained so that the per-slab
 //! and per-row parts are computed once and each pixel costs a single `mix32`.
 
+use wide::u32x8;
+
 /// The "lowbias32" integer finalizer (Chris Wellons): a bijection of u32 with good avalanche.
 #[inline(always)]
 pub const fn mix32(mut x: u32) -> u32 {
@@ -12,6 +14,16 @@ pub const fn mix32(mut x: u32) -> u32 {
     x = x.wrapping_mul(0x846c_a68b);
     x ^= x >> 16;
     x
+}
+
+/// [`mix32`] on 8 lanes (`wide` u32x8, wrapping multiplies): the SIMD sweep's phase hash.
+#[inline(always)]
+pub fn mix32x8(x: u32x8) -> u32x8 {
+    let x = x ^ (x >> 16);
+    let x = x * u32x8::splat(0x7feb_352d);
+    let x = x ^ (x >> 15);
+    let x = x * u32x8::splat(0x846c_a68b);
+    x ^ (x >> 16)
 }
 
 /// Stream id of the shading-point jitter (light streams are 0, 1, 2, ...).
@@ -93,6 +105,16 @@ impl Fingerprint {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn mix32x8_is_mix32_in_every_lane() {
+        for base in (0..1_000_000u32).step_by(8 * 997).chain([u32::MAX - 7]) {
+            let lanes: [u32; 8] =
+                std::array::from_fn(|i| base.wrapping_add(i as u32 * 0x9e37_79b9));
+            let got = mix32x8(u32x8::new(lanes)).to_array();
+            assert_eq!(got, lanes.map(mix32), "{base}");
+        }
+    }
 
     #[test]
     fn mix32_is_a_bijection_on_a_sample_and_avalanches() {

@@ -4,7 +4,7 @@
 //! The sum order is fixed — tap by tap, corners (0,0), (1,0), (0,1), (1,1) — and each term is
 //! `acc = acc + w·v` with no fused multiply-add, so every path gives the same bits.
 
-use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
+use convshadow_common::hash::{mix32x8, phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
 use wide::{f32x8, u32x8};
 
@@ -222,14 +222,4 @@ pub fn phases8(table: &KernelTable, row_hash_v: u32, x0: u32) -> [u32; 8] {
     let x = u32x8::new(std::array::from_fn(|i| x0 + i as u32));
     let h = mix32x8(u32x8::splat(row_hash_v) ^ (x * u32x8::splat(0x9e37_79b9)));
     (h >> (32 - bits)).to_array()
-}
-
-/// [`convshadow_common::hash::mix32`] on 8 lanes.
-#[inline(always)]
-fn mix32x8(x: u32x8) -> u32x8 {
-    let x = x ^ (x >> 16);
-    let x = x * u32x8::splat(0x7feb_352d);
-    let x = x ^ (x >> 15);
-    let x = x * u32x8::splat(0x846c_a68b);
-    x ^ (x >> 16)
 }
