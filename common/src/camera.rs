@@ -1,4 +1,4 @@
-//! The orthographic camera and the slab range (DESIGN §2 "Camera and slabs").
+//! The orthographic camera and the slab range.
 //!
 //! Camera space: x right, y down (image rows), z forward. Pixel (i, j) has its centre at
 //! (i + 0.5, j + 0.5) in pixel coordinates; pixel coordinates are camera x/y divided by the pixel

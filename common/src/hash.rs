@@ -1,4 +1,4 @@
-//! Integer hashing: the only source of randomness (DESIGN §3), identical on CPU and GPU.
+//! Integer hashing: the only source of randomness, identical on CPU and GPU.
 //!
 //! Random numbers are hashes of (seed, stream, slab, row, column), chained so that the per-slab
 //! and per-row parts are computed once and each pixel costs a single `mix32`.

@@ -1,4 +1,4 @@
-//! Image-difference metrics for `convshadow diff` and the CPU ↔ GPU tests (DESIGN §3):
+//! Image-difference metrics for `convshadow diff` and the CPU ↔ GPU tests:
 //! maximum absolute error, RMSE, PSNR, 8-bit sRGB differences, a ULP histogram and a heat-map.
 //! FLIP is computed by the caller with the nv-flip crate (an existing implementation).
 
@@ -158,6 +158,17 @@ pub fn compare(a: &RgbImage, b: &RgbImage) -> Result<DiffMetrics, MetricsError> 
         values_differ,
         ulp_histogram,
     })
+}
+
+/// Root mean square of the differences of `(got, want)` pairs, summed in order in f64 (0 for
+/// none): the one RMSE of the report and the tests.
+pub fn rmse(pairs: impl IntoIterator<Item = (f64, f64)>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for (a, b) in pairs {
+        s += (a - b) * (a - b);
+        n += 1;
+    }
+    (s / n.max(1) as f64).sqrt()
 }
 
 /// A heat-map of the per-pixel largest channel error, as 8-bit RGB: black where the pixel is

@@ -1,4 +1,4 @@
-//! The render plan: every table the sweep reads, computed once on the host (DESIGN §3) and
+//! The render plan: every table the sweep reads, computed once on the host and
 //! shared by the scalar path, the SIMD path and the GPU port.
 //!
 //! Nothing per pixel calls a transcendental: kernel taps, slab hashes, the slab-thickness opacity

@@ -1,4 +1,4 @@
-//! Rasterizer set-up shared by the CPU and GPU LDI builders (DESIGN §2 "Layered depth image").
+//! Rasterizer set-up shared by the CPU and GPU LDI builders.
 //!
 //! Every triangle is projected to pixel space on the host in f64, its vertices snapped to fixed
 //! point with [`SUBPIXEL_BITS`] fractional bits, and oriented to positive area. Coverage of pixel

@@ -1,0 +1,131 @@
+//! `ellipseN`: N points equally spaced in arc length on an ellipse.
+
+use std::f64::consts::PI;
+
+use super::*;
+
+/// Arc-length statistics of an ellipse with semi-axes (1, r): (∮x² ds, ∮y² ds, L), by the
+/// midpoint rule in the angle parameter (the integrand is smooth and periodic: converges fast).
+pub(crate) fn ellipse_second_moments(r: f64) -> (f64, f64, f64) {
+    const STEPS: usize = 4096;
+    let (mut sx, mut sy, mut len) = (0.0, 0.0, 0.0);
+    for i in 0..STEPS {
+        let t = (i as f64 + 0.5) * 2.0 * PI / STEPS as f64;
+        let (s, c) = t.sin_cos();
+        let ds = (s * s + r * r * c * c).sqrt();
+        sx += c * c * ds;
+        sy += r * r * s * s * ds;
+        len += ds;
+    }
+    (sx / len, sy / len, len * 2.0 * PI / STEPS as f64)
+}
+
+/// The axis ratio r ∈ [0, 1] whose arc-length-uniform point set has Vy/Vx = `ratio` (≤ 1).
+pub fn ellipse_ratio_for_variance_ratio(ratio: f64) -> f64 {
+    if ratio <= 0.0 {
+        return 0.0;
+    }
+    if ratio >= 1.0 {
+        return 1.0;
+    }
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        let (vx, vy, _) = ellipse_second_moments(mid);
+        if vy / vx < ratio {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Points equally spaced in arc length on an ellipse with semi-axes (a, b), starting at
+/// arc-length fraction `start` (of the whole circumference), `count` points.
+#[cfg(test)]
+pub(crate) fn ellipse_points(a: f64, b: f64, start: f64, count: usize) -> Vec<[f64; 2]> {
+    ellipse_point_sets(a, b, &[start], count).remove(0)
+}
+
+/// [`ellipse_points`] for several start fractions, sharing one arc-length table (building the
+/// table dominates: 8192 `sin_cos` per call).
+pub(crate) fn ellipse_point_sets(
+    a: f64,
+    b: f64,
+    starts: &[f64],
+    count: usize,
+) -> Vec<Vec<[f64; 2]>> {
+    const STEPS: usize = 8192;
+    // Cumulative arc length at angle samples, for inverting s(t).
+    let mut cum = Vec::with_capacity(STEPS + 1);
+    cum.push(0.0);
+    let dt = 2.0 * PI / STEPS as f64;
+    for i in 0..STEPS {
+        let t = (i as f64 + 0.5) * dt;
+        let (s, c) = t.sin_cos();
+        let ds = (a * a * s * s + b * b * c * c).sqrt() * dt;
+        cum.push(cum[i] + ds);
+    }
+    let total = cum[STEPS];
+    let points_from = |start: f64| -> Vec<[f64; 2]> {
+        (0..count)
+            .map(|i| {
+                let frac = (start + i as f64 / count as f64).fract();
+                let target = frac * total;
+                let t = if total <= 0.0 {
+                    0.0
+                } else {
+                    let j = cum.partition_point(|&c| c <= target).clamp(1, STEPS);
+                    let (c0, c1) = (cum[j - 1], cum[j]);
+                    let u = if c1 > c0 {
+                        (target - c0) / (c1 - c0)
+                    } else {
+                        0.0
+                    };
+                    (j as f64 - 1.0 + u) * dt
+                };
+                [a * t.cos(), b * t.sin()]
+            })
+            .collect()
+    };
+    starts.iter().map(|&s| points_from(s)).collect()
+}
+
+/// The `ellipseN` pattern: PHASES phases of N arc-length-equispaced points, scaled so that the
+/// union of all phases has exactly variances (λ1, λ2) along the principal axes.
+pub(crate) fn ellipse_pattern(n: u32, l1: f64, l2: f64, e1: [f64; 2]) -> Pattern {
+    let to_pixels = principal_to_pixels(e1);
+    let n = n as usize;
+    if l1 <= 0.0 {
+        return vec![vec![([0.0, 0.0], 1.0)]; PHASES];
+    }
+    let r = ellipse_ratio_for_variance_ratio(l2 / l1);
+    let starts: Vec<f64> = (0..PHASES)
+        .map(|p| p as f64 / (PHASES * n) as f64)
+        .collect();
+    let phases = ellipse_point_sets(1.0, r, &starts, n);
+    let (mut sx, mut sy) = (0.0, 0.0);
+    for pts in &phases {
+        for q in pts {
+            sx += q[0] * q[0];
+            sy += q[1] * q[1];
+        }
+    }
+    let count = (PHASES * n) as f64;
+    let kx = (l1 / (sx / count)).sqrt();
+    let ky = if sy > 0.0 {
+        (l2 / (sy / count)).sqrt()
+    } else {
+        0.0
+    };
+    let w = 1.0 / n as f64;
+    phases
+        .into_iter()
+        .map(|pts| {
+            pts.into_iter()
+                .map(|q| (to_pixels(q[0] * kx, q[1] * ky), w))
+                .collect()
+        })
+        .collect()
+}

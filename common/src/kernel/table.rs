@@ -1,0 +1,287 @@
+//! Tap tables: the bilinear taps every path reads, built once on the host and summed to exactly 1.
+
+use super::*;
+
+/// Number of random phases per light for randomized kernels (a power of two: the phase is the
+/// top `PHASE_BITS` bits of a hash).
+pub const PHASE_BITS: u32 = 6;
+/// `2^PHASE_BITS`.
+pub const PHASES: usize = 1 << PHASE_BITS;
+
+/// Largest number of taps a single phase may have (bounds per-pixel work).
+pub const MAX_TAPS_PER_PHASE: usize = 4096;
+/// Tap weights below this (2^-56) are dropped (see `discretise`).
+pub(crate) const MIN_WEIGHT: f64 = 1.0 / 72_057_594_037_927_936.0;
+
+/// One gather tap: an integer offset and the bilinear weights of the four pixels
+/// (dx, dy), (dx+1, dy), (dx, dy+1), (dx+1, dy+1), already multiplied by the tap's weight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tap {
+    /// Integer x offset of the top-left pixel read.
+    pub dx: i32,
+    /// Integer y offset of the top-left pixel read.
+    pub dy: i32,
+    /// Weights of the four corners, in the order above.
+    pub w: [f32; 4],
+}
+
+/// How a slab picks its phase (its row of taps).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhaseMode {
+    /// A hash of (seed, light, slab, x, y): a different phase per pixel.
+    PerPixel,
+    /// A hash of (seed, light, slab): one phase per slab, shared by all pixels.
+    PerSlab,
+    /// `KernelTable::slab_phase[slab]`: a fixed schedule.
+    Schedule,
+}
+
+/// A light's tap table: built once on the host, read by every path and uploaded to the GPU.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KernelTable {
+    /// Number of phases (rows); a power of two for hashed modes.
+    pub phase_count: u32,
+    /// Taps per phase (columns).
+    pub taps_per_phase: u32,
+    /// The taps, phase-major: phase p's taps are `taps[p*taps_per_phase ..][..taps_per_phase]`.
+    pub taps: Vec<Tap>,
+    /// How a slab picks its phase.
+    pub phase_mode: PhaseMode,
+    /// For `PhaseMode::Schedule`: the phase of each slab.
+    pub slab_phase: Vec<u32>,
+    /// Whole-pixel shift added to every tap in each slab (all zero unless a mean carry is used).
+    pub slab_shift: Vec<[i32; 2]>,
+}
+
+impl KernelTable {
+    /// The taps of one phase.
+    pub fn phase(&self, p: u32) -> &[Tap] {
+        let n = self.taps_per_phase as usize;
+        &self.taps[p as usize * n..][..n]
+    }
+
+    /// log2 of the phase count for hashed modes (0 for a single phase).
+    pub fn phase_bits(&self) -> u32 {
+        self.phase_count.trailing_zeros()
+    }
+
+    /// Mean and covariance (pixels) of the gather's impulse response per slab, including the
+    /// variance the bilinear reads add and the slab's whole-pixel shift, averaged over the slabs.
+    /// A slab's response is its phases' mixture (the expected kernel of a randomized one); the
+    /// slabs' responses are convolved, so after n slabs the iterated kernel has n times these
+    /// moments. Used by tests and reports.
+    pub fn response_moments(&self) -> KernelMoments {
+        let slabs = self.slab_shift.len().max(1);
+        let mut mean = [0.0f64; 2];
+        let mut cov = [[0.0f64; 2]; 2];
+        for k in 0..slabs {
+            let shift = self.slab_shift.get(k).copied().unwrap_or([0, 0]);
+            let phases: Vec<u32> = match self.phase_mode {
+                PhaseMode::Schedule => vec![self.slab_phase.get(k).copied().unwrap_or(0)],
+                _ => (0..self.phase_count).collect(),
+            };
+            let mut m = [0.0f64; 2];
+            let mut s = [[0.0f64; 2]; 2];
+            let mut total = 0.0;
+            for &p in &phases {
+                for t in self.phase(p) {
+                    for (c, w) in t.w.iter().enumerate() {
+                        let w = f64::from(*w);
+                        // The response moves opposite to the read offset.
+                        let x = -f64::from(t.dx + shift[0] + (c as i32 & 1));
+                        let y = -f64::from(t.dy + shift[1] + (c as i32 >> 1));
+                        m[0] += w * x;
+                        m[1] += w * y;
+                        s[0][0] += w * x * x;
+                        s[0][1] += w * x * y;
+                        s[1][1] += w * y * y;
+                        total += w;
+                    }
+                }
+            }
+            let (mx, my) = (m[0] / total, m[1] / total);
+            mean[0] += mx;
+            mean[1] += my;
+            cov[0][0] += s[0][0] / total - mx * mx;
+            cov[0][1] += s[0][1] / total - mx * my;
+            cov[1][1] += s[1][1] / total - my * my;
+        }
+        let n = slabs as f64;
+        KernelMoments {
+            mean: [mean[0] / n, mean[1] / n],
+            cov: [
+                [cov[0][0] / n, cov[0][1] / n],
+                [cov[0][1] / n, cov[1][1] / n],
+            ],
+        }
+    }
+}
+
+/// A sample pattern before bilinear discretisation: per phase, (offset x, offset y, weight).
+pub(crate) type Pattern = Vec<Vec<([f64; 2], f64)>>;
+
+/// Builds a light's tap table for `slabs` slabs.
+///
+/// `compensate`: shape the pattern so that pattern + bilinear covariance equals Σκ, and where Σκ
+/// is smaller than what a bilinear read of the mean's fraction adds, carry the mean in whole
+/// pixels from slab to slab (see docs/accuracy.md).
+pub fn build_table(
+    spec: KernelSpec,
+    moments: &KernelMoments,
+    slabs: u32,
+    compensate: bool,
+) -> KernelTable {
+    let slabs_us = slabs as usize;
+    let carry = compensate && carry_mean(moments);
+    let (pattern_mean, slab_shift) = if carry {
+        let step = |i: usize| {
+            [
+                (moments.mean[0] * i as f64).round() as i64,
+                (moments.mean[1] * i as f64).round() as i64,
+            ]
+        };
+        let shifts = (0..slabs_us)
+            .map(|k| {
+                let (a, b) = (step(k), step(k + 1));
+                // A read offset of −move makes the response move by +move.
+                [-(b[0] - a[0]) as i32, -(b[1] - a[1]) as i32]
+            })
+            .collect();
+        ([0.0, 0.0], shifts)
+    } else {
+        (moments.mean, vec![[0, 0]; slabs_us])
+    };
+
+    if let KernelKind::Box = spec.kind {
+        let (l1, l2, e1) = eigen2(moments.cov);
+        let (pat, sched) = box_schedule(l1, l2, e1, slabs, compensate && !carry, pattern_mean);
+        return discretise(&pat, pattern_mean, PhaseMode::Schedule, sched, slab_shift);
+    }
+    let make = |cov: [[f64; 2]; 2]| -> Pattern {
+        let (l1, l2, e1) = eigen2(cov);
+        match spec.kind {
+            KernelKind::Ellipse(n) => ellipse_pattern(n, l1, l2, e1),
+            KernelKind::Dirac => dirac_pattern(l1, l2, e1),
+            KernelKind::Poisson(n) => poisson_pattern(n, l1, l2, e1),
+            KernelKind::Gaussian(k) => vec![gaussian_taps(k, l1, l2, e1)],
+            KernelKind::Box => unreachable!("handled above"),
+        }
+    };
+    // With the mean carried in whole pixels the pattern is read around 0, and its own taps still
+    // fall between pixels: compensate around mean 0 in that case too.
+    let pattern = if compensate {
+        compensated_pattern(&make, pattern_mean, moments.cov)
+    } else {
+        make(moments.cov)
+    };
+    let (mode, sched) = match spec.kind {
+        KernelKind::Ellipse(_) if spec.per_slab_phase => (PhaseMode::PerSlab, Vec::new()),
+        KernelKind::Ellipse(_) | KernelKind::Poisson(_) => (PhaseMode::PerPixel, Vec::new()),
+        KernelKind::Dirac => (PhaseMode::Schedule, (0..slabs).map(|k| k & 1).collect()),
+        _ => (PhaseMode::Schedule, vec![0; slabs_us]),
+    };
+    discretise(&pattern, pattern_mean, mode, sched, slab_shift)
+}
+
+/// Turns sample offsets into bilinear taps; rounds weights to f32 so that, summed in the
+/// sweep's order, they give exactly 1.0 (a constant unoccluded buffer then never drifts).
+pub(crate) fn discretise(
+    pattern: &Pattern,
+    mean: [f64; 2],
+    phase_mode: PhaseMode,
+    slab_phase: Vec<u32>,
+    slab_shift: Vec<[i32; 2]>,
+) -> KernelTable {
+    let taps_per_phase = pattern.iter().map(Vec::len).max().unwrap_or(1).max(1);
+    let mut taps = Vec::with_capacity(pattern.len() * taps_per_phase);
+    for phase in pattern {
+        let start = taps.len();
+        let mut phase_taps: Vec<(f64, Tap)> = phase
+            .iter()
+            .map(|(o, wt)| {
+                let rx = -(mean[0] + o[0]);
+                let ry = -(mean[1] + o[1]);
+                let (fx0, fy0) = (rx.floor(), ry.floor());
+                let (fx, fy) = (rx - fx0, ry - fy0);
+                let w = [
+                    (1.0 - fx) * (1.0 - fy) * wt,
+                    fx * (1.0 - fy) * wt,
+                    (1.0 - fx) * fy * wt,
+                    fx * fy * wt,
+                ];
+                let tap = Tap {
+                    dx: fx0 as i32,
+                    dy: fy0 as i32,
+                    // Weights below 2^-56 are dropped: with light values ≥ FLUSH_BELOW (1e-20)
+                    // every product stays above f32's smallest normal (1.2e-38).
+                    w: w.map(|x| if x < MIN_WEIGHT { 0.0 } else { x as f32 }),
+                };
+                (o[0] * o[0] + o[1] * o[1], tap)
+            })
+            .collect();
+        // The tap nearest the pattern's centre goes last: it absorbs the rounding of the weight
+        // sum (see `normalise_exactly`), which then moves the mean least.
+        let central = (0..phase_taps.len())
+            .min_by(|&a, &b| phase_taps[a].0.total_cmp(&phase_taps[b].0))
+            .unwrap_or(0);
+        let last = phase_taps.remove(central);
+        taps.extend(phase_taps.into_iter().map(|(_, t)| t));
+        // Pad short phases with zero-weight taps (adding 0·v leaves the sum unchanged).
+        while taps.len() - start < taps_per_phase - 1 {
+            taps.push(Tap {
+                dx: 0,
+                dy: 0,
+                w: [0.0; 4],
+            });
+        }
+        taps.push(last.1);
+        normalise_exactly(&mut taps[start..]);
+    }
+    KernelTable {
+        phase_count: pattern.len() as u32,
+        taps_per_phase: taps_per_phase as u32,
+        taps,
+        phase_mode,
+        slab_phase,
+        slab_shift,
+    }
+}
+
+/// The f32 sum of a phase's weights in the sweep's order (tap by tap, corner by corner).
+pub fn sequential_weight_sum(taps: &[Tap]) -> f32 {
+    let mut acc = 0.0f32;
+    for t in taps {
+        for w in t.w {
+            acc += w;
+        }
+    }
+    acc
+}
+
+/// Sets the last weight in the sweep's summation order so that the sequential f32 sum is exactly
+/// 1: with S the sum of all earlier terms, S + w steps by at most one ulp of w ≤ ulp(1) as w walks,
+/// so some w rounds the sum to exactly 1.0.
+pub(crate) fn normalise_exactly(taps: &mut [Tap]) {
+    let last = taps.len() - 1;
+    let before = {
+        let mut acc = 0.0f32;
+        for (i, t) in taps.iter().enumerate() {
+            for (c, w) in t.w.iter().enumerate() {
+                if i == last && c == 3 {
+                    break;
+                }
+                acc += *w;
+            }
+        }
+        acc
+    };
+    let mut w = (1.0 - f64::from(before)) as f32;
+    for _ in 0..256 {
+        let s = before + w;
+        if s == 1.0 {
+            break;
+        }
+        w = if s > 1.0 { w.next_down() } else { w.next_up() };
+    }
+    taps[last].w[3] = w;
+}
