@@ -52,7 +52,7 @@ fn ldi_build(c: &mut Criterion) {
 }
 
 // Criterion's own plots are off: with plotters' `ab_glyph` feature (used by the report) they
-// panic for want of a font (DESIGN §6). The numbers are printed and kept in target/criterion.
+// panic for want of a font. The numbers are printed and kept in target/criterion.
 criterion_group! {
     name = benches;
     config = Criterion::default().without_plots();

@@ -7,6 +7,7 @@
 use std::path::Path;
 
 use convshadow::common::geometry::SceneGeometry;
+use convshadow::common::kernel::KERNEL_NAMES;
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::{Scene, SlabSpec};
 use convshadow::cpu::ldi::Ldi;
@@ -105,16 +106,7 @@ fn kernels(c: &mut Criterion) {
     let mut group = c.benchmark_group("sweep_kernels/default_256");
     group.sample_size(10);
     let pool = pool(2);
-    for kernel in [
-        "ellipse2",
-        "ellipse3",
-        "ellipse2:slab",
-        "dirac",
-        "poisson8",
-        "poisson16",
-        "gaussian:19",
-        "box",
-    ] {
+    for kernel in KERNEL_NAMES {
         // `gaussian:19` and `box` read tens of taps per pixel (a sweep of default_256 takes ~26 s):
         // they run on a quarter of the pixels and half the slabs, with skipping only.
         let heavy = kernel == "gaussian:19" || kernel == "box";
@@ -182,7 +174,7 @@ fn flush(c: &mut Criterion) {
 }
 
 // Criterion's own plots are off: with plotters' `ab_glyph` feature (used by the report) they
-// panic for want of a font (DESIGN §6). The numbers are printed and kept in target/criterion.
+// panic for want of a font. The numbers are printed and kept in target/criterion.
 criterion_group! {
     name = benches;
     config = Criterion::default().without_plots();

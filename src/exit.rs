@@ -74,6 +74,45 @@ impl std::fmt::Display for Failure {
     }
 }
 
+/// Every library error reaches the CLI through here: the exit code of each kind (docs/errors.md);
+/// the message is the error's own.
+impl From<crate::pipeline::RenderError> for Failure {
+    fn from(e: crate::pipeline::RenderError) -> Self {
+        use crate::pipeline::RenderError as R;
+        let code = match &e {
+            R::Scene(_) | R::BadPlan(_) => BAD_INPUT,
+            R::Geometry(g) => geometry_code(g),
+            R::Ldi(_) | R::OutOfMemory(_) => RESOURCE_LIMIT,
+            R::Gpu(g) => gpu_code(g),
+            R::MeshDefect(_) => MESH_DEFECT,
+            R::Interrupted => INTERRUPTED,
+            R::Threads(_) => INTERNAL,
+        };
+        Failure::new(code, e.to_string())
+    }
+}
+
+/// The exit code of a geometry error: too many slabs is a limit, the rest bad input.
+fn geometry_code(e: &convshadow_common::geometry::GeometryError) -> i32 {
+    use convshadow_common::geometry::GeometryError as G;
+    match e {
+        G::TooManySlabs { .. } => RESOURCE_LIMIT,
+        _ => BAD_INPUT,
+    }
+}
+
+/// The exit code of a GPU error.
+fn gpu_code(e: &convshadow_gpu::GpuError) -> i32 {
+    use convshadow_gpu::GpuError as G;
+    match e {
+        G::TooLarge { .. } | G::Ldi(_) => RESOURCE_LIMIT,
+        G::Interrupted => INTERRUPTED,
+        G::NoAdapter { .. } | G::Device { .. } | G::Unsupported(_) | G::ReadBack(_) => {
+            GPU_UNAVAILABLE
+        }
+    }
+}
+
 impl From<convshadow_common::scene::SceneError> for Failure {
     fn from(e: convshadow_common::scene::SceneError) -> Self {
         Failure::new(BAD_INPUT, e.to_string())
@@ -82,12 +121,7 @@ impl From<convshadow_common::scene::SceneError> for Failure {
 
 impl From<convshadow_common::geometry::GeometryError> for Failure {
     fn from(e: convshadow_common::geometry::GeometryError) -> Self {
-        use convshadow_common::geometry::GeometryError as G;
-        let code = match e {
-            G::TooManySlabs { .. } => RESOURCE_LIMIT,
-            _ => BAD_INPUT,
-        };
-        Failure::new(code, e.to_string())
+        Failure::new(geometry_code(&e), e.to_string())
     }
 }
 
@@ -105,14 +139,6 @@ impl From<convshadow_common::image_io::OutputError> for Failure {
 
 impl From<convshadow_gpu::GpuError> for Failure {
     fn from(e: convshadow_gpu::GpuError) -> Self {
-        use convshadow_gpu::GpuError as G;
-        let code = match e {
-            G::TooLarge { .. } | G::Ldi(_) => RESOURCE_LIMIT,
-            G::Interrupted => INTERRUPTED,
-            G::NoAdapter { .. } | G::Device { .. } | G::Unsupported(_) | G::ReadBack(_) => {
-                GPU_UNAVAILABLE
-            }
-        };
-        Failure::new(code, e.to_string())
+        Failure::new(gpu_code(&e), e.to_string())
     }
 }

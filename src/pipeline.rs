@@ -1,19 +1,59 @@
 //! The render pipeline as a library call: scene → geometry → LDI → plan → sweep → image.
-//! The `render` command and the tests both go through [`render`].
+//! The `render` command and the tests both go through [`render`]. Library code: failures are a
+//! typed [`RenderError`]; the exit codes they map to live in the CLI (`crate::exit`).
 
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use convshadow_common::geometry::SceneGeometry;
+use convshadow_common::geometry::{GeometryError, SceneGeometry};
 use convshadow_common::hash::Fingerprint;
 use convshadow_common::image_io::RgbImage;
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::Scene;
-use convshadow_cpu::ldi::{Ldi, LdiStats};
+use convshadow_common::scene::{Scene, SceneError};
+use convshadow_cpu::ldi::{Ldi, LdiError, LdiStats};
 use convshadow_cpu::sweep::{ChunkCounts, SweepError, SweepOptions, SweepPath, sweep};
-use convshadow_gpu::GpuContext;
+use convshadow_gpu::{GpuContext, GpuError};
 
-use crate::exit::{self, Failure};
+/// Why a render (or an LDI build) failed. The CLI maps each to an exit code (docs/errors.md);
+/// the message is the error's `Display`.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The scene is invalid.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The geometry could not be built (a bad mesh, or too many slabs).
+    #[error(transparent)]
+    Geometry(#[from] GeometryError),
+    /// The LDI exceeds its fragment budget.
+    #[error(transparent)]
+    Ldi(#[from] LdiError),
+    /// The GPU backend failed: no adapter, a device error, or a limit.
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    /// The per-pixel buffers alone exceed the memory budget (the message has the numbers).
+    #[error("{0}")]
+    OutOfMemory(String),
+    /// The meshes are open, non-manifold or inconsistently wound (the message names them).
+    #[error("{0}")]
+    MeshDefect(String),
+    /// The scene's tables could not be planned.
+    #[error("{0}")]
+    BadPlan(String),
+    /// The cancel flag was raised; nothing was written.
+    #[error("interrupted; no output written")]
+    Interrupted,
+    /// The worker threads could not start.
+    #[error("cannot start threads: {0}")]
+    Threads(String),
+}
+
+/// A thread pool with `threads` workers (0 = rayon's default: one per core).
+pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, RenderError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| RenderError::Threads(e.to_string()))
+}
 
 /// Which CPU code path runs the sweep.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -64,7 +104,7 @@ pub struct BackendChoice {
 
 impl BackendChoice {
     /// Opens the backend: `gpu` fails without an adapter, `auto` falls back to the CPU.
-    pub fn open(backend: Backend) -> Result<BackendChoice, Failure> {
+    pub fn open(backend: Backend) -> Result<BackendChoice, RenderError> {
         match backend {
             Backend::Cpu => Ok(BackendChoice {
                 gpu: None,
@@ -223,52 +263,46 @@ impl MemoryNeed {
         self.ldi_pixels + self.light_buffers + self.sweep_state + self.output
     }
 
-    /// Refuses (exit code 4, with the numbers) when the need exceeds `budget`; else returns what
-    /// is left of the budget for the LDI's fragments.
-    pub fn check(&self, scene: &Scene, budget: u64) -> Result<u64, Failure> {
+    /// Refuses (with the numbers) when the need exceeds `budget`; else returns what is left of
+    /// the budget for the LDI's fragments.
+    pub fn check(&self, scene: &Scene, budget: u64) -> Result<u64, RenderError> {
         let need = self.total();
         if need <= budget {
             return Ok(budget - need);
         }
         let mib = |b: u64| b.div_ceil(1 << 20);
-        Err(Failure::new(
-            exit::RESOURCE_LIMIT,
-            format!(
-                "{}: the render needs {} MiB before any fragment ({} grid pixels: LDI arrays {} \
+        Err(RenderError::OutOfMemory(format!(
+            "{}: the render needs {} MiB before any fragment ({} grid pixels: LDI arrays {} \
                  MiB, light buffers {} MiB for {} lights, sweep state {} MiB, output {} MiB), \
                  more than the memory budget of {} MiB; lower image.width/image.height, \
                  sweep.guard_band or the light count, or raise --max-memory",
-                scene.source,
-                mib(need),
-                self.grid_pixels,
-                mib(self.ldi_pixels),
-                mib(self.light_buffers),
-                scene.lights.len(),
-                mib(self.sweep_state),
-                mib(self.output),
-                budget >> 20
-            ),
-        ))
+            scene.source,
+            mib(need),
+            self.grid_pixels,
+            mib(self.ldi_pixels),
+            mib(self.light_buffers),
+            scene.lights.len(),
+            mib(self.sweep_state),
+            mib(self.output),
+            budget >> 20
+        )))
     }
 }
 
-/// Stops with the interrupted failure (exit code 130) when the cancel flag is raised.
-fn check_cancel(cancel: Option<&AtomicBool>) -> Result<(), Failure> {
+/// Stops with [`RenderError::Interrupted`] when the cancel flag is raised.
+fn check_cancel(cancel: Option<&AtomicBool>) -> Result<(), RenderError> {
     if cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
-        return Err(Failure::new(
-            exit::INTERRUPTED,
-            "interrupted; no output written",
-        ));
+        return Err(RenderError::Interrupted);
     }
     Ok(())
 }
 
 /// Renders a scene on the CPU or, with `req.backend`, on the GPU.
-pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Failure> {
+pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, RenderError> {
     let start = Instant::now();
     // Refuse before allocating: the per-pixel buffers first, the fragments in `Ldi::build`.
     let fragment_budget = MemoryNeed::of(scene, true).check(scene, req.memory_budget)?;
-    let pool = crate::commands::thread_pool(req.threads)?;
+    let pool = thread_pool(req.threads)?;
     let choice = BackendChoice::open(req.backend)?;
     let geometry = SceneGeometry::build(scene)?;
     check_cancel(req.cancel)?;
@@ -291,24 +325,21 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Failur
                 )
             })
             .collect();
-        return Err(Failure::new(
-            exit::MESH_DEFECT,
-            format!(
-                "{}: refusing to render: the inside/outside parity test needs closed, consistently \
+        return Err(RenderError::MeshDefect(format!(
+            "{}: refusing to render: the inside/outside parity test needs closed, consistently \
                  wound meshes, but {}{} pixels have an odd fragment count. Pass --allow-open to \
                  render anyway.",
-                scene.source,
-                if names.is_empty() {
-                    String::new()
-                } else {
-                    names.join("; ") + "; "
-                },
-                stats.odd_pixels
-            ),
-        ));
+            scene.source,
+            if names.is_empty() {
+                String::new()
+            } else {
+                names.join("; ") + "; "
+            },
+            stats.odd_pixels
+        )));
     }
-    let plan = RenderPlan::new(scene, &geometry)
-        .map_err(|e| Failure::new(exit::BAD_INPUT, e.to_string()))?;
+    let plan =
+        RenderPlan::new(scene, &geometry).map_err(|e| RenderError::BadPlan(e.to_string()))?;
     let seconds_ldi = start.elapsed().as_secs_f64();
     let t_sweep = Instant::now();
     let chunk_counts = ChunkCounts::default();
@@ -325,9 +356,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Failur
         None => pool
             .install(|| sweep(&plan, &geometry.raster, &ldi, &options))
             .map_err(|e| match e {
-                SweepError::Interrupted => {
-                    Failure::new(exit::INTERRUPTED, "interrupted; no output written")
-                }
+                SweepError::Interrupted => RenderError::Interrupted,
             })?,
     };
     let seconds_sweep = t_sweep.elapsed().as_secs_f64();

@@ -126,31 +126,9 @@ fn open_meshes_are_refused_unless_allowed() {
 fn backend_reference_renders_the_sweeps_view_samples_with_reference_light() {
     // One opaque box and nothing between it and the light: the reference's light is exactly 1
     // (every shadow ray leaves the scene unblocked), so its image is the sweep's up to f32
-    // rounding of 1·colour (issue 4: the images differ only by the shadow error).
+    // rounding of 1·colour (the images differ only by the shadow error).
     let dir = support::temp_dir("render-reference");
-    std::fs::write(
-        dir.join("lone.toml"),
-        r#"
-[image]
-width = 16
-height = 16
-[camera]
-view_width = 4.0
-[sweep]
-slabs = 8
-optimal_distance = 0.5
-[[light]]
-tilt_deg = [20.0, 10.0]
-variance = [0.02, 0.02]
-[[mesh]]
-shape = "box"
-size = [6.0, 6.0, 0.5]
-material = "m"
-[material.m]
-color = [0.8, 0.6, 0.4]
-"#,
-    )
-    .unwrap();
+    std::fs::write(dir.join("lone.toml"), support::lone_box_scene(16, 8)).unwrap();
     let (code, out, err) = support::run_cli(&["render", "lone.toml", "-o", "cpu.exr"], &dir);
     assert_eq!(code, 0, "{out}{err}");
     let (code, out, err) = support::run_cli(

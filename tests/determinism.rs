@@ -1,4 +1,4 @@
-//! Bit-exactness of the CPU oracle (DESIGN §3): the same `image_hash` for 1, 2, 3 and 8 threads
+//! Bit-exactness of the CPU oracle: the same `image_hash` for 1, 2, 3 and 8 threads
 //! and across runs, and for the scalar and SIMD paths (with and without quiet-chunk skipping),
 //! on every example scene and every kernel.
 
@@ -8,7 +8,6 @@ use std::path::{Path, PathBuf};
 
 use convshadow::common::scene::{Scene, SlabSpec};
 use convshadow::pipeline::{CpuPath, RenderRequest, render};
-use support::KERNELS;
 
 /// The example scenes, small; scenes using ../shared/models are skipped (loudly) without it.
 fn example_scenes() -> Vec<(PathBuf, Scene)> {
@@ -39,7 +38,7 @@ fn example_scenes() -> Vec<(PathBuf, Scene)> {
 #[test]
 fn image_hash_is_the_same_for_any_thread_count_and_run() {
     for (path, base) in example_scenes() {
-        for kernel in KERNELS {
+        for kernel in support::kernels() {
             let mut scene = base.clone();
             scene.sweep.kernel = kernel.parse().unwrap();
             let hashes: Vec<u64> = [1, 2, 3, 8, 2]
@@ -87,7 +86,11 @@ fn simd_and_scalar_paths_give_the_same_bits() {
     // the SIMD path with and without quiet-chunk skipping; light buffers compared too.
     let mut skipped = [0u64; 2];
     for (path, base) in example_scenes() {
-        for (kernel, width) in KERNELS.iter().map(|k| (k, 53)).chain([(&"ellipse2", 7)]) {
+        for (kernel, width) in support::kernels()
+            .into_iter()
+            .map(|k| (k, 53))
+            .chain([("ellipse2", 7)])
+        {
             let mut scene = base.clone();
             scene.sweep.kernel = kernel.parse().unwrap();
             scene.image.width = width;

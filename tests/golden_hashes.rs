@@ -13,8 +13,6 @@ mod support;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use support::KERNELS;
-
 const GOLDEN: &str = "tests/data/golden_hashes.tsv";
 
 /// One render through the CLI: `(image_hash, ldi_hash)` from `--stats-json`.
@@ -85,7 +83,7 @@ fn cases() -> Vec<(String, PathBuf, Vec<String>)> {
     let mut out = Vec::new();
     for scene in example_scenes() {
         let name = scene.file_stem().unwrap().to_string_lossy().into_owned();
-        for kernel in KERNELS {
+        for kernel in support::kernels() {
             let args = [
                 "--width", "53", "--height", "40", "--slabs", "24", "--kernel", kernel,
             ];

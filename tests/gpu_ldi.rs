@@ -10,6 +10,7 @@ use convshadow::common::raster::{FIXED_ONE, RasterSetup, TriangleSetup};
 use convshadow::cpu::ldi::Ldi;
 use convshadow_gpu::GpuContext;
 use convshadow_gpu::ldi::build_ldi;
+use support::TestRng;
 
 const BUDGET: u64 = 1 << 30;
 
@@ -138,21 +139,6 @@ fn gpu_ldi_equals_cpu_on_real_models() {
     }
 }
 
-/// SplitMix64.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn range(&mut self, lo: i64, hi: i64) -> i64 {
-        lo + (self.next() % (hi - lo + 1) as u64) as i64
-    }
-}
-
 /// A triangle set up the way `RasterSetup::new` does (positive area, clipped box), or `None`.
 fn setup_triangle(
     mut v: [[i64; 2]; 3],
@@ -200,7 +186,7 @@ fn gpu_ldi_equals_cpu_on_hard_triangles() {
     };
     let (w, h) = (96u32, 80u32);
     let limit = (1i64 << 21) * FIXED_ONE - 1;
-    let mut rng = Rng(42);
+    let mut rng = TestRng::new(42);
     let mut triangles = Vec::new();
     let centre = |i: i64| i * FIXED_ONE + FIXED_ONE / 2;
     // A fan of triangles sharing edges through pixel centres (top-left rule on shared edges).
@@ -226,7 +212,7 @@ fn gpu_ldi_equals_cpu_on_hard_triangles() {
             // One far vertex, two near the grid: long slivers crossing the image.
             1 => {
                 let far = [rng.range(-limit, limit), rng.range(-limit, limit)];
-                let near = |r: &mut Rng| [r.range(-512, 100 * 256), r.range(-512, 90 * 256)];
+                let near = |r: &mut TestRng| [r.range(-512, 100 * 256), r.range(-512, 90 * 256)];
                 [far, near(&mut rng), near(&mut rng)]
             }
             // Vertices exactly on pixel centres.
@@ -239,7 +225,7 @@ fn gpu_ldi_equals_cpu_on_hard_triangles() {
             }
         };
         // Depth planes with arbitrary bits, including negative and tiny slopes.
-        let d = |r: &mut Rng| (r.range(-1_000_000, 1_000_000) as f32) * 1.37e-4;
+        let d = |r: &mut TestRng| (r.range(-1_000_000, 1_000_000) as f32) * 1.37e-4;
         let depth = [d(&mut rng), d(&mut rng) * 1e-3, d(&mut rng) * 1e-3];
         triangles.extend(setup_triangle(v, w, h, n % 5, depth));
     }

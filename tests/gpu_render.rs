@@ -18,7 +18,7 @@ fn run(scene: &Scene, backend: Backend) -> Rendered {
         allow_open: true,
         ..RenderRequest::default()
     };
-    render(scene, &req).unwrap_or_else(|f| panic!("{}: {}", scene.source, f.message))
+    render(scene, &req).unwrap_or_else(|f| panic!("{}: {}", scene.source, f))
 }
 
 /// Renders on both backends and checks the contract for the adapter.
@@ -97,16 +97,7 @@ fn gpu_image_equals_cpu_for_every_kernel() {
     };
     let mut scene = Scene::default_scene();
     gpu_common::shrink(&mut scene, 48, 24);
-    for kernel in [
-        "ellipse2",
-        "ellipse3",
-        "ellipse2:slab",
-        "dirac",
-        "poisson8",
-        "poisson16",
-        "gaussian:5",
-        "box",
-    ] {
+    for kernel in support::kernels() {
         scene.sweep.kernel = kernel.parse().unwrap();
         for compensate in [true, false] {
             scene.sweep.variance_compensation = compensate;

@@ -1,7 +1,10 @@
-//! Hard cases of DESIGN §4 that `sweep_accuracy.rs`, `ldi_parity.rs` and the reliability tests
-//! do not already cover, plus the convergence of the ground-truth reference (issue 4).
-//! Every expected value comes from the scene parameters (DESIGN §2 formulas, the Gaussian CDF)
-//! or from an independent implementation, never from a render of the code under test.
+//! Hard cases (grazing tilts, extreme anisotropy, 8 and 4096 slabs, depth on a slab boundary, …)
+//! that `sweep_accuracy.rs`, `ldi_parity.rs` and the reliability tests do not already cover, plus
+//! the convergence of the ground-truth reference. Every expected value comes from the scene
+//! parameters (the kernel moment formulas of docs/ARCHITECTURE.md, the Gaussian CDF) or from an
+//! independent implementation, never from a render of the code under test.
+
+mod support;
 
 use std::path::Path;
 
@@ -10,21 +13,12 @@ use convshadow::common::kernel::{KernelTable, PhaseMode};
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::Scene;
 use convshadow::cpu::ldi::Ldi;
+use convshadow::cpu::reference::disk::DiskSetup;
+use convshadow::cpu::reference::edge::{EdgeSetup, half_crossing, model_profile, phi, width_10_90};
+use convshadow::cpu::reference::impulse::{empty_scene, impulse, moments};
 use convshadow::cpu::reference::{Reference, ReferenceOptions};
 use convshadow::cpu::sweep::{SweepOptions, sweep};
-use convshadow::report::disk::DiskSetup;
-use convshadow::report::edge::{EdgeSetup, half_crossing, model_profile, phi, width_10_90};
-use convshadow::report::impulse::{empty_scene, impulse, moments};
-
-const KERNELS: [&str; 7] = [
-    "ellipse2",
-    "ellipse3",
-    "dirac",
-    "poisson8",
-    "poisson16",
-    "gaussian:19",
-    "box",
-];
+use convshadow::report::kernels;
 
 /// An edge whose per-slab shift `e·tan ω / px` is non-integer at every tilt tested
 /// (e/px = 1.37: shifts 0, 0.419, 1.37, 2.373 px per slab at 0°, 17°, 45°, 60°).
@@ -44,7 +38,7 @@ fn zero_variance_light_casts_a_one_pixel_penumbra_at_any_tilt_and_distance() {
     // 0.8 px. The occluder's shadow moves by round((j+n)·μκ) − round(j·μκ) for an occluder in
     // slab j: a difference of two roundings, so the isoline is within 1 px of −d·tan ω.
     let mut failures = Vec::new();
-    for kernel in KERNELS {
+    for kernel in kernels() {
         for tilt in [0.0, 17.0, 45.0, 60.0] {
             for slabs in [3u32, 16, 40] {
                 let s = sharp_edge(slabs, tilt, kernel);
@@ -102,7 +96,7 @@ fn penumbra_check(slabs: u32, kernel: &str) -> (f64, f64, bool) {
 #[test]
 fn eight_slabs_give_the_iterated_penumbra() {
     let mut failures = Vec::new();
-    for kernel in KERNELS {
+    for kernel in kernels() {
         // 8 slabs: Σκ = 6.4 px² per slab. Per-pixel random kernels keep visible noise after only
         // 8 slabs in a 16-row average (stated tolerance 0.05), the others 0.02.
         let (rmse, iso, sane) = penumbra_check(8, kernel);
@@ -127,7 +121,7 @@ fn many_thin_slabs_give_the_iterated_penumbra_and_keep_the_isoline() {
     // compensation's hardest regime: the penumbra must still be the iterated model's (RMSE below
     // 0.02), with no NaN, no value outside [0, 1] and the isoline within 0.5 px.
     let mut failures = Vec::new();
-    for kernel in KERNELS {
+    for kernel in kernels() {
         for slabs in [1024, 4096] {
             let (rmse, iso, sane) = penumbra_check(slabs, kernel);
             if !sane || rmse >= 0.02 || iso.abs() > 0.5 || iso.is_nan() {
@@ -143,7 +137,7 @@ fn many_thin_slabs_give_the_iterated_penumbra_and_keep_the_isoline() {
 #[test]
 fn a_surface_exactly_on_a_slab_boundary_belongs_to_the_next_slab() {
     // Occluder front at depth 0, receiver front at exactly 1.0 = the back face of slab 3 (e = 1/4,
-    // exact in f32). DESIGN/how-it-works: a fragment on a back face belongs to the next slab, so
+    // exact in f32). As docs/how-it-works.md says, a fragment on a back face belongs to the next slab, so
     // the receiver is shaded in slab 4 with the light after 4 convolutions: a zero-variance light
     // at −45° moves the shadow edge by 4·e·tan 45° / px = 16 px (slab 3 would give 12 px).
     let w = 128u32;
@@ -242,7 +236,7 @@ const SIGMA_CASES: [([f64; 2], f64); 6] = [
 fn compensated_iterated_variance_is_n_times_sigma_kappa() {
     let mut failures = Vec::new();
     for case in &SIGMA_CASES {
-        for kernel in KERNELS {
+        for kernel in kernels() {
             failures.extend(compensated_failures(*case, kernel));
         }
     }
@@ -455,26 +449,8 @@ fn the_reference_reproduces_the_correct_edge_shadow() {
 fn the_reference_sees_the_same_scene_as_the_sweep_without_shadows() {
     // With no occluder between a point and the light the reference's light is exactly 1, so a
     // lone opaque box renders the same image as the sweep up to f32 rounding of 1·colour.
-    let text = r#"
-[image]
-width = 24
-height = 24
-[camera]
-view_width = 4.0
-[sweep]
-slabs = 16
-optimal_distance = 0.5
-[[light]]
-tilt_deg = [20.0, 10.0]
-variance = [0.02, 0.02]
-[[mesh]]
-shape = "box"
-size = [6.0, 6.0, 0.5]
-material = "m"
-[material.m]
-color = [0.8, 0.6, 0.4]
-"#;
-    let scene = Scene::parse(text, "lone.toml", Path::new(".")).unwrap();
+    let text = support::lone_box_scene(24, 16);
+    let scene = Scene::parse(&text, "lone.toml", Path::new(".")).unwrap();
     let g = SceneGeometry::build(&scene).unwrap();
     let ldi = Ldi::build(&g.raster, 1 << 30).unwrap();
     let plan = RenderPlan::new(&scene, &g).unwrap();

@@ -1,6 +1,7 @@
-//! The LDI and its parity test (issue: CPU foundation). Closed meshes must give an even fragment
-//! count at every pixel, including the hard cases of DESIGN §4; the inside test must agree with
-//! the analytic shapes away from a derived band around their surfaces; the build must not depend
+//! The LDI and its parity test. Closed meshes must give an even fragment count at every pixel,
+//! including the hard cases (vertices and edges exactly on pixel centres, shared edges, sliver and
+//! sub-pixel triangles, coplanar touching meshes); the inside test must agree with the analytic
+//! shapes away from a derived band around their surfaces; the build must not depend
 //! on the thread count.
 
 mod support;
@@ -334,36 +335,10 @@ fn ldi_hash_is_independent_of_thread_count() {
     assert!(hashes.windows(2).all(|w| w[0] == w[1]), "{hashes:x?}");
 }
 
+/// A scene framing an OBJ model with a 10 % margin (the loader's errors are the test's).
 fn model_scene(path: &Path, width: u32) -> Scene {
-    let mesh = load_obj(path).unwrap_or_else(|e| panic!("{e}"));
-    let (lo, hi) = mesh.bounds();
-    let c = (lo + hi) * 0.5;
-    let extent = (hi - lo).max_element();
-    let text = format!(
-        r#"
-[image]
-width = {width}
-height = {width}
-[camera]
-direction = [0.3, -0.2, 1.0]
-center = [{}, {}, {}]
-view_width = {}
-[sweep]
-slabs = 64
-optimal_distance = 0.5
-[[mesh]]
-shape = "obj"
-path = "{}"
-material = "m"
-[material.m]
-"#,
-        c.x,
-        c.y,
-        c.z,
-        extent * 1.1,
-        path.display()
-    );
-    support::scene(&text, Path::new("."))
+    load_obj(path).unwrap_or_else(|e| panic!("{e}"));
+    support::scene(&support::framed_obj_scene(path, width, 1.1), Path::new("."))
 }
 
 #[test]

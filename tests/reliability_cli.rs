@@ -1,4 +1,4 @@
-//! Reliability of the `convshadow` binary (issue 7): every bad input is refused with a message
+//! Reliability of the `convshadow` binary: every bad input is refused with a message
 //! naming the problem and a documented exit code (docs/errors.md), nothing panics, no output or
 //! temporary file is left behind, memory limits are enforced before allocating, and SIGINT/SIGTERM
 //! stop a render cleanly with exit code 130.

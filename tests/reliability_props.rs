@@ -1,4 +1,4 @@
-//! Property tests of issue 7: random closed meshes (convex hulls of random point clouds, unions
+//! Property tests: random closed meshes (convex hulls of random point clouds, unions
 //! of procedural boxes, spheres and tori under random transforms) keep even fragment counts;
 //! random valid scenes render without NaN; random invalid scenes are rejected naming the key.
 
@@ -386,16 +386,7 @@ fn gen_scene() -> impl Strategy<Value = GenScene> {
         ),
         (
             1u32..=16,
-            prop::sample::select(vec![
-                "ellipse2",
-                "ellipse3",
-                "ellipse2:slab",
-                "dirac",
-                "poisson8",
-                "poisson16",
-                "gaussian:5",
-                "box",
-            ]),
+            prop::sample::select(support::kernels()),
             any::<u32>(),
             0u32..4,
             any::<bool>(),
@@ -555,7 +546,7 @@ proptest! {
             .map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
         let req = RenderRequest { threads: 1, ..RenderRequest::default() };
         let r = render(&scene, &req)
-            .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e.message)))?;
+            .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e)))?;
         prop_assert_eq!(r.image.data.len(), (s.width * s.height * 3) as usize);
         prop_assert!(
             r.image.data.iter().all(|v| v.is_finite() && *v >= 0.0),

@@ -11,7 +11,6 @@ use convshadow::common::scene::Scene;
 use convshadow::cpu::ldi::Ldi;
 use convshadow::cpu::sweep::{ChunkCounts, SweepOptions, SweepPath, sweep};
 use convshadow::pipeline::image_fingerprint;
-use support::KERNELS;
 
 mod support;
 
@@ -85,7 +84,7 @@ fn dot(x: usize, y: usize) -> bool {
 
 #[test]
 fn single_dots_of_shadow_in_unoccluded_light() {
-    for kernel in KERNELS {
+    for kernel in support::kernels() {
         let counts = compare(kernel, "shadow dots in light", &|x, y, _| {
             if dot(x, y) { 0.5 } else { 1.0 }
         });
@@ -100,7 +99,7 @@ fn single_dots_of_shadow_in_unoccluded_light() {
 fn single_dots_of_light_beside_opaque_darkness() {
     // Dark everywhere but for dots of light in the unoccluded right half (grid x > w/2): the dots
     // spread under the wall's opaque left half, whose chunks are skipped while all they read is 0.
-    for kernel in KERNELS {
+    for kernel in support::kernels() {
         let counts = compare(kernel, "light dots in the dark", &|x, y, w| {
             if x > w / 2 && dot(x, y) { 0.5 } else { 0.0 }
         });

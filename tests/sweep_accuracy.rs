@@ -1,26 +1,16 @@
-//! Analytic accuracy of the slab sweep (issue: the CPU oracle renders). Every expected value is
-//! derived from the scene parameters (DESIGN §2 formulas, the Gaussian CDF), never from a render.
+//! Analytic accuracy of the slab sweep. Every expected value is derived from the scene
+//! parameters (μκ = −e·μl, Σκ = d1·e·R Σl Rᵀ, the Gaussian CDF), never from a render.
 
 mod support;
 
 use std::path::Path;
 
+use convshadow::common::kernel::{KERNEL_NAMES as KERNELS, KernelKind, KernelSpec};
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::Scene;
+use convshadow::cpu::reference::edge::{self, EdgeSetup, InitialLight, phi, run_light};
+use convshadow::cpu::reference::impulse::{self, moments};
 use convshadow::cpu::sweep::SweepOutput;
-use convshadow::report::edge::{self, EdgeSetup, InitialLight, phi, run_light};
-use convshadow::report::impulse::{self, moments};
-
-const KERNELS: [&str; 8] = [
-    "ellipse2",
-    "ellipse3",
-    "ellipse2:slab",
-    "dirac",
-    "poisson8",
-    "poisson16",
-    "gaussian:19",
-    "box",
-];
 
 /// Runs the sweep of a scene, optionally from a given initial light buffer.
 fn run(scene: &Scene, initial: Option<InitialLight<'_>>) -> (RenderPlan, SweepOutput) {
@@ -28,7 +18,7 @@ fn run(scene: &Scene, initial: Option<InitialLight<'_>>) -> (RenderPlan, SweepOu
     (plan, out)
 }
 
-/// The shared pure-convolution scene (`convshadow::report::impulse::empty_scene`).
+/// The shared pure-convolution scene (`convshadow::cpu::reference::impulse::empty_scene`).
 fn empty_scene(
     n: u32,
     grid: u32,
@@ -42,7 +32,7 @@ fn empty_scene(
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// DESIGN §2 in pixel units with e = d1 = pixel size = 1: μκ = −tan ω, Σκ = R diag(σ²) Rᵀ.
+/// The kernel moments in pixel units with e = d1 = pixel size = 1: μκ = −tan ω, Σκ = R diag(σ²) Rᵀ.
 fn design_moments(tilt: [f64; 2], variance: [f64; 2], rotation: f64) -> ([f64; 2], [[f64; 2]; 2]) {
     let mean = [-tilt[0].to_radians().tan(), -tilt[1].to_radians().tan()];
     let (s, c) = rotation.to_radians().sin_cos();
@@ -54,10 +44,17 @@ fn design_moments(tilt: [f64; 2], variance: [f64; 2], rotation: f64) -> ([f64; 2
     (mean, cov)
 }
 
-/// Kernels whose phase is drawn per pixel: a single impulse's mass is then only conserved in
+/// Whether the kernel draws its phase per pixel: a single impulse's mass is then only conserved in
 /// expectation (each output pixel's weights sum to 1, not each input pixel's), so their response
 /// is averaged over seeds. The others are shift-invariant per slab and conserve it exactly.
-const PER_PIXEL_RANDOM: [&str; 4] = ["ellipse2", "ellipse3", "poisson8", "poisson16"];
+fn per_pixel_random(kernel: &str) -> bool {
+    let spec: KernelSpec = kernel.parse().unwrap();
+    match spec.kind {
+        KernelKind::Ellipse(_) => !spec.per_slab_phase,
+        KernelKind::Poisson(_) => true,
+        _ => false,
+    }
+}
 const SEEDS: u32 = 12;
 
 #[test]
@@ -74,7 +71,7 @@ fn impulse_response_has_the_kernel_moments_for_every_kernel() {
         let (mu, sigma) = design_moments(tilt, variance, rotation);
         let n = f64::from(N);
         for kernel in KERNELS {
-            let random = PER_PIXEL_RANDOM.contains(&kernel);
+            let random = per_pixel_random(kernel);
             for compensate in [false, true] {
                 let mut scene = empty_scene(N, GRID, tilt, variance, rotation, kernel, compensate);
                 let c = (GRID / 2) as usize;
@@ -198,7 +195,7 @@ fn half_shadow_isoline_follows_the_light_at_every_distance() {
         for m in [4u32, 16, 64] {
             let s = EdgeSetup::classic(m, tilt, variance, "ellipse2");
             let d = f64::from(m) * s.slab_distance;
-            // The edge projects to the image centre; the isoline moves by −d·tan ω (DESIGN §2).
+            // The edge projects to the image centre; the isoline moves by −d·tan ω.
             let expected = f64::from(s.width) / 2.0 - d * tilt.to_radians().tan() / s.pixel_size;
             let got = half_crossing(&edge_profile(m, tilt, variance, "ellipse2"));
             assert!(

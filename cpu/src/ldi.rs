@@ -1,4 +1,4 @@
-//! The layered depth image (DESIGN §2 "Layered depth image", paper §4.1), built in parallel.
+//! The layered depth image (paper §4.1), built in parallel.
 //!
 //! Counts → prefix sum → fill, in CSR form: pixel p's fragments are
 //! `offsets[p] .. offsets[p+1]`, sorted front to back by (depth, triangle index). Triangles are

@@ -1,6 +1,6 @@
 //! The CPU oracle of convshadow: LDI, parity cursor, kernels and the slab sweep.
 //!
-//! Every stage is bit-exact for any thread count (DESIGN §3): work is split by pixels, never by
+//! Every stage is bit-exact for any thread count: work is split by pixels, never by
 //! partial sums, and all randomness comes from integer hashes.
 
 pub mod composite;

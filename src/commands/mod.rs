@@ -35,12 +35,9 @@ pub fn override_size(
     Ok(())
 }
 
-/// A thread pool with `threads` workers (0 = rayon's default: one per core).
+/// The pipeline's thread pool with `threads` workers (0 = one per core), its error as a failure.
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, Failure> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Failure::new(crate::exit::INTERNAL, format!("cannot start threads: {e}")))
+    Ok(crate::pipeline::thread_pool(threads)?)
 }
 
 /// Writes a JSON value atomically.

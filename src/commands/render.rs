@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::image_io::RgbImage;
-use convshadow_common::kernel::KernelSpec;
+use convshadow_common::kernel::{KERNEL_SYNTAX, KernelSpec};
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SlabSpec};
 use convshadow_cpu::ldi::Ldi;
@@ -28,7 +28,7 @@ pub enum RenderBackend {
     Gpu,
     /// The GPU when an adapter exists, else the CPU (and says so).
     Auto,
-    /// The ground-truth reference (issue 4): the sweep's view samples, with the light
+    /// The ground-truth reference: the sweep's view samples, with the light
     /// integrated over `--reference-samples` stratified directions of the Gaussian light and
     /// marched through the continuous scene. Slow (quadratic in depth): for small images.
     Reference,
@@ -64,8 +64,8 @@ pub struct RenderArgs {
     /// Override the slab count.
     #[arg(long)]
     pub slabs: Option<u32>,
-    /// Override the kernel (ellipse2, ellipse3, ellipseN:slab, dirac, poisson8, poisson16, gaussian:K, box).
-    #[arg(long)]
+    /// Override the kernel (the help lists the kernels of `common::kernel::KERNEL_SYNTAX`).
+    #[arg(long, help = format!("Override the kernel ({KERNEL_SYNTAX})"))]
     pub kernel: Option<String>,
     /// Override the seed.
     #[arg(long)]

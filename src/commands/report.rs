@@ -1,4 +1,4 @@
-//! `convshadow report`: speed against error over kernels and slab counts (issue 4), written as
+//! `convshadow report`: speed against error over kernels and slab counts, written as
 //! `report.csv`, `report.md` and `speed_vs_error.png` (see `crate::report`).
 
 use std::path::PathBuf;

@@ -10,6 +10,10 @@ use std::sync::OnceLock;
 
 use plotters::prelude::*;
 
+use super::Row;
+use super::grid::kernels;
+use super::runner::mean;
+
 /// One kernel's points: (time per frame in ms, error, slab count).
 #[derive(Clone, Debug)]
 pub struct Series {
@@ -165,4 +169,61 @@ fn draw_panel(
             .draw()?;
     }
     Ok(())
+}
+
+/// Per (kernel, slabs): mean time and mean of `err` over the rows selected by `keep`.
+fn aggregate(
+    rows: &[Row],
+    keep: &dyn Fn(&Row) -> bool,
+    err: &dyn Fn(&Row) -> Option<f64>,
+) -> Vec<Series> {
+    kernels()
+        .map(|k| {
+            let mut slabs: Vec<u32> = rows
+                .iter()
+                .filter(|r| r.kernel == *k && keep(r))
+                .map(|r| r.slabs)
+                .collect();
+            slabs.sort_unstable();
+            slabs.dedup();
+            let points = slabs
+                .iter()
+                .filter_map(|&n| {
+                    let sel: Vec<&Row> = rows
+                        .iter()
+                        .filter(|r| r.kernel == *k && r.slabs == n && keep(r))
+                        .collect();
+                    let t = mean(sel.iter().map(|r| r.time_ms));
+                    let e = mean(sel.iter().filter_map(|r| err(r)));
+                    (t.is_finite() && e.is_finite()).then_some((t, e, n))
+                })
+                .collect();
+            Series {
+                name: k.to_string(),
+                points,
+            }
+        })
+        .collect()
+}
+
+/// The figure's three panels: edge against both references, the scene against shadow rays.
+pub fn panels(rows: &[Row]) -> Vec<Panel> {
+    let edge_on = |r: &Row| r.family == "edge" && r.compensation;
+    vec![
+        Panel {
+            title: "edge: error vs the correct shadow".into(),
+            y_desc: "mean RMSE (light)".into(),
+            series: aggregate(rows, &edge_on, &|r| r.rmse_correct),
+        },
+        Panel {
+            title: "edge: error vs the iterated model".into(),
+            y_desc: "mean RMSE (light)".into(),
+            series: aggregate(rows, &edge_on, &|r| r.rmse_iterated),
+        },
+        Panel {
+            title: "default scene vs shadow-ray reference".into(),
+            y_desc: "image RMSE (linear)".into(),
+            series: aggregate(rows, &|r| r.family == "scene", &|r| r.rmse_reference),
+        },
+    ]
 }

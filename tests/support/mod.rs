@@ -3,20 +3,53 @@
 
 use std::path::{Path, PathBuf};
 
+use convshadow::common::hash::mix32;
+use convshadow::common::kernel::KERNEL_NAMES;
 use convshadow::common::scene::Scene;
 
-/// Every kernel family; `gaussian:7` stands for `gaussian:K` (same code, fewer taps, faster).
-pub const KERNELS: [&str; 9] = [
-    "ellipse2",
-    "ellipse3",
-    "ellipse2:slab",
-    "ellipse5",
-    "dirac",
-    "poisson8",
-    "poisson16",
-    "gaussian:7",
-    "box",
-];
+/// The one kernel list of `common`, with `gaussian:K` at K = 7 (the same code as 19, a fraction
+/// of the taps) and `ellipse5` (an N other than 2 and 3): the grid the golden hashes record.
+pub fn kernels() -> Vec<&'static str> {
+    let mut out: Vec<&'static str> = KERNEL_NAMES
+        .iter()
+        .map(|&k| {
+            if k.starts_with("gaussian:") {
+                "gaussian:7"
+            } else {
+                k
+            }
+        })
+        .collect();
+    out.insert(3, "ellipse5");
+    out
+}
+
+/// The one test RNG: a counter through `common::hash::mix32` (the project's only hash), so tests
+/// draw their random cases the way the renderer draws its phases.
+pub struct TestRng {
+    /// The next counter value.
+    state: u32,
+}
+
+impl TestRng {
+    /// A generator for `seed`.
+    pub fn new(seed: u32) -> TestRng {
+        TestRng { state: mix32(seed) }
+    }
+
+    /// The next 32 random bits.
+    pub fn next_u32(&mut self) -> u32 {
+        self.state = self.state.wrapping_add(0x9e37_79b9);
+        mix32(self.state)
+    }
+
+    /// A uniform integer in `lo..=hi` (`hi - lo` below 2^32; the modulo bias is irrelevant here).
+    pub fn range(&mut self, lo: i64, hi: i64) -> i64 {
+        let lo_bits = u64::from(self.next_u32());
+        let bits = (u64::from(self.next_u32()) << 32) | lo_bits;
+        lo + (bits % (hi - lo + 1) as u64) as i64
+    }
+}
 
 /// `../shared/models` beside the repository, or `None` (with a loud message) when it is missing.
 /// Under CI (env `CI` set) a missing folder is a failure, not a skip.
@@ -56,6 +89,32 @@ pub fn run_cli(args: &[&str], cwd: &Path) -> (i32, String, String) {
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stdout).into_owned(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// One opaque box filling a `size`² view and nothing between it and the light: every shadow
+/// ray leaves the scene unblocked, so the sweep and the shadow-ray reference see light 1.
+pub fn lone_box_scene(size: u32, slabs: u32) -> String {
+    format!(
+        r#"
+[image]
+width = {size}
+height = {size}
+[camera]
+view_width = 4.0
+[sweep]
+slabs = {slabs}
+optimal_distance = 0.5
+[[light]]
+tilt_deg = [20.0, 10.0]
+variance = [0.02, 0.02]
+[[mesh]]
+shape = "box"
+size = [6.0, 6.0, 0.5]
+material = "m"
+[material.m]
+color = [0.8, 0.6, 0.4]
+"#
     )
 }
 

@@ -1,15 +1,15 @@
-//! The opaque-edge harness (paper appendix A.3, DESIGN §3): an opaque half-plane occluder in the
+//! The opaque-edge harness (paper appendix A.3): an opaque half-plane occluder in the
 //! first slab and a fully transparent receiver `m` slabs behind it, so the light buffer after the
 //! last slab is exactly the light the receiver gets after `m` convolutions. Shared by the
 //! accuracy report, `tests/sweep_accuracy.rs` and `tests/hard_cases.rs`.
 
 use std::path::Path;
 
+use crate::ldi::Ldi;
+use crate::sweep::{SweepOptions, SweepOutput, sweep};
 use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SceneError};
-use convshadow_cpu::ldi::Ldi;
-use convshadow_cpu::sweep::{SweepOptions, SweepOutput, sweep};
 
 /// One edge set-up. The occluder covers world x ≥ 0, i.e. the image columns left of the centre
 /// (column boundary `width / 2`); the receiver is `slabs` slabs of thickness `slab_distance`
@@ -151,7 +151,7 @@ impl EdgeSetup {
     }
 
     /// Where the half-shadow isoline is expected (pixel coordinate along x): the edge's image
-    /// column boundary moved by −d·tan ω (DESIGN §2).
+    /// column boundary moved by −d·tan ω.
     pub fn expected_isoline(&self) -> f64 {
         f64::from(self.width) / 2.0
             - self.distance() * self.tilt_deg.to_radians().tan() / self.pixel_size
@@ -258,5 +258,5 @@ pub fn model_profile(len: usize, center: f64, std: f64) -> Vec<f64> {
 
 /// The standard normal CDF Φ (to about 1e-15; see `convshadow_cpu::reference::normal_cdf`).
 pub fn phi(x: f64) -> f64 {
-    convshadow_cpu::reference::normal_cdf(x)
+    super::normal_cdf(x)
 }

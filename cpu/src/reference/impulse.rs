@@ -4,14 +4,14 @@
 
 use std::path::Path;
 
+use crate::sweep::SweepOutput;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SceneError};
-use convshadow_cpu::sweep::SweepOutput;
 
 use super::edge::light_at;
 
 /// `n` slabs of thickness exactly 1 with d1 = 1 and pixel size 1 on a `grid`² image, so that
-/// in pixel units μκ = −tan ω and Σκ = R diag(σ²) Rᵀ (DESIGN §2).
+/// in pixel units μκ = −tan ω and Σκ = R diag(σ²) Rᵀ.
 pub fn empty_scene(
     n: u32,
     grid: u32,

@@ -1,4 +1,4 @@
-//! The ground-truth reference (issue 4, DESIGN §3 "Speed against error"): the light arriving at
+//! The ground-truth shadow-ray reference: the light arriving at
 //! every shading point, integrated by Monte Carlo over the Gaussian light's directions with
 //! transmittance marched along each shadow ray through the continuous scene.
 //!

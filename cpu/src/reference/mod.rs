@@ -1,0 +1,17 @@
+//! The references the sweep is measured against, in one place for the report and the tests:
+//!
+//! - [`shadow_ray`]: the ground truth of any scene, the light at every shading point integrated
+//!   by Monte Carlo over shadow rays (`--backend reference`);
+//! - [`edge`]: a straight shadow edge, whose exact profile is a normal CDF;
+//! - [`disk`]: a polygonal occluder over a plane, whose exact shadow is a Gaussian integral over
+//!   the polygon;
+//! - [`impulse`]: a single lit pixel through an empty scene, whose exact spread is n·Σκ.
+//!
+//! Library code only: no exit codes, no printing.
+
+pub mod disk;
+pub mod edge;
+pub mod impulse;
+pub mod shadow_ray;
+
+pub use shadow_ray::{Reference, ReferenceOptions, inverse_normal_cdf, normal_cdf, samples_side};

@@ -1,0 +1,97 @@
+//! The grid of cases: kernels, slab counts, light variances and tilts, and the edge and disk
+//! set-ups of one case.
+
+use std::path::PathBuf;
+
+use convshadow_common::kernel::KERNEL_NAMES;
+use convshadow_cpu::reference::disk::DiskSetup;
+use convshadow_cpu::reference::edge::EdgeSetup;
+
+/// The kernels of the report: the one kernel list, without the per-slab phase variant (the
+/// same pattern as its per-pixel twin, it adds no point to the figure).
+pub fn kernels() -> impl Iterator<Item = &'static str> + Clone {
+    KERNEL_NAMES.into_iter().filter(|k| !k.ends_with(":slab"))
+}
+/// The slab counts of the full report.
+pub const SLAB_COUNTS: [u32; 4] = [64, 128, 256, 512];
+/// Light variance levels σ² (name, value) of the analytic cases.
+pub const VARIANCES: [(&str, f64); 3] = [("zero", 0.0), ("low", 0.002), ("high", 0.05)];
+/// Light tilts (degrees) of the analytic cases.
+pub const TILTS: [f64; 2] = [0.0, 45.0];
+/// d1 of the analytic cases (world units); the pixel size is 0.01.
+pub const D1: f64 = 0.16;
+/// Pixel size of the analytic cases.
+pub const PX: f64 = 0.01;
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct ReportOptions {
+    /// The quick subset (see [`ReportOptions::describe`]).
+    pub quick: bool,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Print one line per case on stderr.
+    pub verbose: bool,
+}
+
+impl ReportOptions {
+    /// A sentence saying which cases run.
+    pub fn describe(&self) -> String {
+        if self.quick {
+            "quick subset: edge at d = d1/4, d1, 4·d1 × all 7 kernels × slabs 64, 128 × variance \
+             zero, high × tilt 0°, 45° (compensation on), plus ellipse2 with compensation off; disk at \
+             d = 4·d1, tilt 45°, high variance, slabs 128, all kernels; default scene at 24×24, \
+             slabs 64, all kernels, reference M = 16 (self-error against M = 64)"
+                .to_string()
+        } else {
+            "full grid: edge at d = d1/4, d1, 4·d1 × 7 kernels × slabs 64, 128, 256, 512 × variance \
+             zero, low, high × tilt 0°, 45°, with compensation on and off; disk at d = d1 and 4·d1 \
+             × 7 kernels × 4 slab counts × 3 variances × 2 tilts (compensation on); default scene \
+             at 24×24 × 7 kernels × slabs 64, 128, 256, 512, reference M = 16 (self-error against \
+             M = 64)"
+                .to_string()
+        }
+    }
+}
+
+/// The edge set-up of the report for distance factor `k` (d = k·d1), slab count, tilt, σ².
+pub fn edge_setup(
+    k: f64,
+    slabs: u32,
+    tilt: f64,
+    variance: f64,
+    kernel: &str,
+    comp: bool,
+) -> EdgeSetup {
+    EdgeSetup {
+        slabs,
+        slab_distance: k * D1 / f64::from(slabs),
+        optimal_distance: D1,
+        pixel_size: PX,
+        width: 384,
+        height: 64,
+        tilt_deg: tilt,
+        variance,
+        kernel: kernel.to_string(),
+        compensation: comp,
+        seed: 0,
+    }
+}
+
+/// The disk set-up of the report.
+pub fn disk_setup(k: f64, slabs: u32, tilt: f64, variance: f64, kernel: &str) -> DiskSetup {
+    DiskSetup {
+        slabs,
+        slab_distance: k * D1 / f64::from(slabs),
+        optimal_distance: D1,
+        pixel_size: PX,
+        width: 256,
+        height: 192,
+        radius: 0.2,
+        tilt_deg: tilt,
+        variance: [variance, variance],
+        rotation_deg: 0.0,
+        kernel: kernel.to_string(),
+        compensation: true,
+    }
+}

@@ -1,0 +1,238 @@
+//! `report.md`: the tables of the report.
+
+use std::fmt::Write as _;
+
+use super::grid::{TILTS, kernels};
+use super::runner::{machine, mean};
+use super::{Report, ReportOptions, Row};
+
+fn fmt(v: f64) -> String {
+    if v.is_nan() {
+        "–".into()
+    } else if v.abs() >= 100.0 {
+        format!("{v:.0}")
+    } else if v.abs() >= 0.01 || v == 0.0 {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
+fn max_abs(v: impl Iterator<Item = f64>) -> f64 {
+    v.fold(f64::NAN, |m, x| {
+        if m.is_nan() || x.abs() > m {
+            x.abs()
+        } else {
+            m
+        }
+    })
+}
+
+/// The text of `report.md`.
+pub fn markdown(report: &Report, options: &ReportOptions) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "# convshadow speed-against-error report\n");
+    let _ = writeln!(
+        md,
+        "Machine: {}. Report time {:.0} s. Cases: {}.\n",
+        machine(),
+        report.seconds,
+        options.describe()
+    );
+    let _ = writeln!(
+        md,
+        "Times are the sweep's wall time for one frame (edge 384×64, disk 256×192, scene as \
+         given) on all cores; they are noisy when the machine is shared. Light values are in \
+         [0, 1]. Every number is in `report.csv`.\n"
+    );
+    if !report.plot_text {
+        let _ = writeln!(
+            md,
+            "Note: no TrueType font was found, so `speed_vs_error.png` has no text \
+             (set CONVSHADOW_FONT to a .ttf file).\n"
+        );
+    }
+    edge_table(&mut md, &report.rows);
+    over_blur_table(&mut md, &report.rows);
+    growth_table(&mut md, &report.rows);
+    disk_table(&mut md, &report.rows);
+    scene_table(&mut md, &report.rows);
+    md
+}
+
+/// Edge cases with compensation on, per kernel × slab count.
+fn edge_table(md: &mut String, rows: &[Row]) {
+    let _ = writeln!(
+        md,
+        "## Edge (compensation on): mean over distances, variances and tilts\n"
+    );
+    let _ = writeln!(
+        md,
+        "| kernel | slabs | time ms | RMSE vs correct | RMSE vs iterated | max abs isoline err px | max abs 10–90 width err vs iterated px |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
+    for k in kernels() {
+        let mut ns: Vec<u32> = rows
+            .iter()
+            .filter(|r| r.family == "edge")
+            .map(|r| r.slabs)
+            .collect();
+        ns.sort_unstable();
+        ns.dedup();
+        for n in ns {
+            let sel: Vec<&Row> = rows
+                .iter()
+                .filter(|r| r.family == "edge" && r.compensation && r.kernel == k && r.slabs == n)
+                .collect();
+            if sel.is_empty() {
+                continue;
+            }
+            let _ = writeln!(
+                md,
+                "| {k} | {n} | {} | {} | {} | {} | {} |",
+                fmt(mean(sel.iter().map(|r| r.time_ms))),
+                fmt(mean(sel.iter().filter_map(|r| r.rmse_correct))),
+                fmt(mean(sel.iter().filter_map(|r| r.rmse_iterated))),
+                fmt(max_abs(sel.iter().filter_map(|r| r.isoline_err_px))),
+                fmt(max_abs(sel.iter().filter_map(|r| r.width_err_iterated_px))),
+            );
+        }
+    }
+}
+
+/// Zero-variance penumbra widths, compensation on and off.
+fn over_blur_table(md: &mut String, rows: &[Row]) {
+    let _ = writeln!(
+        md,
+        "\n## Over-blur: zero-variance light, measured 10–90 % width (px; a sampled step measures 0.8)\n"
+    );
+    let _ = writeln!(
+        md,
+        "| kernel | compensation | tilt | max width px | mean RMSE vs iterated, all variances |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|");
+    for k in kernels() {
+        for comp in [true, false] {
+            for tilt in TILTS {
+                let sel: Vec<&Row> = rows
+                    .iter()
+                    .filter(|r| {
+                        r.family == "edge"
+                            && r.kernel == k
+                            && r.compensation == comp
+                            && r.tilt_deg == Some(tilt)
+                    })
+                    .collect();
+                if sel.is_empty() {
+                    continue;
+                }
+                let zero = max_abs(
+                    sel.iter()
+                        .filter(|r| r.variance_level == "zero")
+                        .filter_map(|r| r.width_px),
+                );
+                let _ = writeln!(
+                    md,
+                    "| {k} | {} | {tilt}° | {} | {} |",
+                    if comp { "on" } else { "off" },
+                    fmt(zero),
+                    fmt(mean(sel.iter().filter_map(|r| r.rmse_iterated))),
+                );
+            }
+        }
+    }
+}
+
+/// The √d growth of the penumbra: ellipse2 against both references per distance.
+fn growth_table(md: &mut String, rows: &[Row]) {
+    let _ = writeln!(
+        md,
+        "\n## Penumbra growth (paper §6): edge, ellipse2, compensation on, high variance\n"
+    );
+    let _ = writeln!(
+        md,
+        "| d / d1 | slabs | RMSE vs correct | RMSE vs iterated | width err vs correct px | width err vs iterated px |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for r in rows.iter().filter(|r| {
+        r.family == "edge"
+            && r.kernel == "ellipse2"
+            && r.compensation
+            && r.variance_level == "high"
+            && r.tilt_deg == Some(45.0)
+    }) {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} |",
+            fmt(r.distance_over_d1.unwrap_or(f64::NAN)),
+            r.slabs,
+            fmt(r.rmse_correct.unwrap_or(f64::NAN)),
+            fmt(r.rmse_iterated.unwrap_or(f64::NAN)),
+            fmt(r.width_err_correct_px.unwrap_or(f64::NAN)),
+            fmt(r.width_err_iterated_px.unwrap_or(f64::NAN)),
+        );
+    }
+}
+
+/// The disk over a plane, per kernel.
+fn disk_table(md: &mut String, rows: &[Row]) {
+    let _ = writeln!(
+        md,
+        "\n## Disk over a plane: mean over its cases per kernel\n"
+    );
+    let _ = writeln!(
+        md,
+        "| kernel | time ms | RMSE vs correct | RMSE vs iterated | mean isoline displacement px | width err vs iterated px |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for k in kernels() {
+        let sel: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.family == "disk" && r.kernel == k)
+            .collect();
+        if sel.is_empty() {
+            continue;
+        }
+        let _ = writeln!(
+            md,
+            "| {k} | {} | {} | {} | {} | {} |",
+            fmt(mean(sel.iter().map(|r| r.time_ms))),
+            fmt(mean(sel.iter().filter_map(|r| r.rmse_correct))),
+            fmt(mean(sel.iter().filter_map(|r| r.rmse_iterated))),
+            fmt(mean(sel.iter().filter_map(|r| r.isoline_err_px))),
+            fmt(mean(sel.iter().filter_map(|r| r.width_err_iterated_px))),
+        );
+    }
+}
+
+/// The default scene against the shadow-ray reference.
+fn scene_table(md: &mut String, rows: &[Row]) {
+    let _ = writeln!(md, "\n## Default scene against the shadow-ray reference\n");
+    let _ = writeln!(
+        md,
+        "| kernel | slabs | size | time ms | image RMSE vs reference | reference self-error (M vs 4M) |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for r in rows.iter().filter(|r| r.family == "scene") {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {}×{} | {} | {} | {} |",
+            r.kernel,
+            r.slabs,
+            r.width,
+            r.height,
+            fmt(r.time_ms),
+            fmt(r.rmse_reference.unwrap_or(f64::NAN)),
+            fmt(r.reference_self_err.unwrap_or(f64::NAN)),
+        );
+    }
+    if rows.iter().any(|r| r.family == "scene") {
+        let _ = writeln!(
+            md,
+            "\nThe image RMSE is against the 4·M reference. The self-error is the M run's \
+             difference from it, an estimate of the M run's own error; the 4·M run's is smaller \
+             still (its error falls at least 1.6× each time M quadruples: \
+             `tests/hard_cases.rs`)."
+        );
+    }
+}

@@ -1,0 +1,375 @@
+//! Running the grid: each case against its reference, then the files.
+
+use std::time::Instant;
+
+use convshadow_common::geometry::SceneGeometry;
+use convshadow_common::metrics::rmse;
+use convshadow_common::plan::RenderPlan;
+use convshadow_common::scene::{Scene, SlabSpec};
+use convshadow_cpu::ldi::Ldi;
+use convshadow_cpu::reference::disk::DiskSetup;
+use convshadow_cpu::reference::edge::{self, EdgeSetup, model_profile, run_light};
+use convshadow_cpu::reference::{Reference, ReferenceOptions};
+use convshadow_cpu::sweep::{SweepOptions, sweep};
+
+use super::grid::{SLAB_COUNTS, TILTS, VARIANCES, disk_setup, edge_setup, kernels};
+use super::{Report, ReportOptions, Row, csv, markdown, plot};
+
+/// The machine: `nproc` and the CPU model from /proc/cpuinfo.
+pub fn machine() -> String {
+    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".to_string());
+    format!("{cpus} logical CPUs (nproc), {model}")
+}
+
+/// Runs one edge case.
+pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
+    let (profile, seconds) = setup.profile();
+    let d = setup.distance();
+    let sigma = setup.variance.sqrt();
+    let center = setup.expected_isoline();
+    let std_correct = d * sigma / setup.pixel_size;
+    let std_iter = (d * setup.optimal_distance).sqrt() * sigma / setup.pixel_size;
+    let correct = model_profile(profile.len(), center, std_correct);
+    let iterated = model_profile(profile.len(), center, std_iter);
+    let from = setup.first_trusted_column();
+    // The window: the penumbra of either model plus 3 px, inside the trusted columns.
+    let half = 4.0 * std_correct.max(std_iter) + 3.0;
+    let lo = ((center - half).floor().max(from as f64)) as usize;
+    let hi = ((center + half).ceil() as usize).min(profile.len());
+    let measure = |p: &[f64]| (edge::half_crossing(p, from), edge::width_10_90(p, from));
+    let (iso, width) = measure(&profile);
+    let (iso_c, width_c) = measure(&correct);
+    let (_, width_i) = measure(&iterated);
+    let diff = |a: Option<f64>, b: Option<f64>| Some(a? - b?);
+    let mut note = String::new();
+    if iso.is_none() || width.is_none() {
+        note = "the profile never crosses 0.1/0.5/0.9 in the trusted columns".into();
+    }
+    Row {
+        family: "edge".into(),
+        kernel: setup.kernel.clone(),
+        slabs: setup.slabs,
+        variance_level: level.into(),
+        variance: Some(setup.variance),
+        tilt_deg: Some(setup.tilt_deg),
+        distance_over_d1: Some(d / setup.optimal_distance),
+        compensation: setup.compensation,
+        width: setup.width,
+        height: setup.height,
+        time_ms: seconds * 1e3,
+        rmse_correct: Some(rmse((lo..hi).map(|i| (profile[i], correct[i])))),
+        rmse_iterated: Some(rmse((lo..hi).map(|i| (profile[i], iterated[i])))),
+        isoline_err_px: diff(iso, iso_c),
+        width_err_correct_px: diff(width, width_c),
+        width_err_iterated_px: diff(width, width_i),
+        width_px: width,
+        rmse_reference: None,
+        reference_self_err: None,
+        note: if note.is_empty() {
+            "analytic case: closed-form references, no shadow-ray reference needed".into()
+        } else {
+            note
+        },
+    }
+}
+
+/// Disk references for one (d, tilt, σ²): the correct and the iterated light per pixel.
+struct DiskReference {
+    correct: Vec<f64>,
+    iterated: Vec<f64>,
+    window: Vec<usize>,
+    perimeter: f64,
+}
+
+fn disk_reference(setup: &DiskSetup) -> DiskReference {
+    let scene = setup.scene().unwrap_or_else(|e| panic!("{e}"));
+    let g = SceneGeometry::build(&scene).unwrap_or_else(|e| panic!("{e}"));
+    let d = setup.distance();
+    let correct = setup.reference_light(&g, d * d);
+    let iterated = setup.reference_light(&g, d * setup.optimal_distance);
+    let poly = setup.polygon(&g);
+    let perimeter: f64 = (0..poly.len())
+        .map(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
+        })
+        .sum();
+    // Window: pixels away from the border (8 px) where either reference is below 1 − 1e-9 or
+    // within 3 px of such a pixel's box: the shadow and its penumbra.
+    let (w, h) = (setup.width as usize, setup.height as usize);
+    let (mut x0, mut x1, mut y0, mut y1) = (w, 0, h, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if correct[i].min(iterated[i]) < 1.0 - 1e-9 {
+                x0 = x0.min(x);
+                x1 = x1.max(x);
+                y0 = y0.min(y);
+                y1 = y1.max(y);
+            }
+        }
+    }
+    let window = (y0.saturating_sub(3).max(8)..(y1 + 4).min(h - 8))
+        .flat_map(|y| (x0.saturating_sub(3).max(8)..(x1 + 4).min(w - 8)).map(move |x| y * w + x))
+        .collect();
+    DiskReference {
+        correct,
+        iterated,
+        window,
+        perimeter,
+    }
+}
+
+/// Area (px²) of `{v < level}` over the window.
+fn area_below(v: &[f64], window: &[usize], level: f64) -> f64 {
+    window.iter().filter(|&&i| v[i] < level).count() as f64
+}
+
+fn disk_row(setup: &DiskSetup, level: &str, r: &DiskReference) -> Row {
+    let scene = setup.scene().unwrap_or_else(|e| panic!("{e}"));
+    let (plan, out, seconds) = run_light(&scene, None);
+    let w = plan.grid_width as usize;
+    let light: Vec<f64> = (0..plan.grid_height as usize * w)
+        .map(|i| edge::light_at(&plan, &out, i % w, i / w))
+        .collect();
+    let win = &r.window;
+    // Mean isoline displacement: symmetric difference of the half-shadow regions / perimeter.
+    let sym = win
+        .iter()
+        .filter(|&&i| (light[i] < 0.5) != (r.correct[i] < 0.5))
+        .count() as f64;
+    let width = |v: &[f64]| (area_below(v, win, 0.9) - area_below(v, win, 0.1)) / r.perimeter;
+    let (wm, wc, wi) = (width(&light), width(&r.correct), width(&r.iterated));
+    Row {
+        family: "disk".into(),
+        kernel: setup.kernel.clone(),
+        slabs: setup.slabs,
+        variance_level: level.into(),
+        variance: Some(setup.variance[0]),
+        tilt_deg: Some(setup.tilt_deg),
+        distance_over_d1: Some(setup.distance() / setup.optimal_distance),
+        compensation: setup.compensation,
+        width: setup.width,
+        height: setup.height,
+        time_ms: seconds * 1e3,
+        rmse_correct: Some(rmse(win.iter().map(|&i| (light[i], r.correct[i])))),
+        rmse_iterated: Some(rmse(win.iter().map(|&i| (light[i], r.iterated[i])))),
+        isoline_err_px: Some(sym / r.perimeter),
+        width_err_correct_px: Some(wm - wc),
+        width_err_iterated_px: Some(wm - wi),
+        width_px: Some(wm),
+        rmse_reference: None,
+        reference_self_err: None,
+        note: "analytic case (numerical f64 disk convolution); isoline error = mean unsigned \
+               displacement (symmetric-difference area / perimeter); widths = area between the \
+               0.1 and 0.9 levels / perimeter"
+            .into(),
+    }
+}
+
+/// A sweep of a full scene: (plan, geometry, ldi, image, seconds).
+fn render_scene(scene: &Scene) -> (RenderPlan, SceneGeometry, Ldi, Vec<f32>, f64) {
+    let g = SceneGeometry::build(scene).unwrap_or_else(|e| panic!("{e}"));
+    let ldi = Ldi::build(&g.raster, 8 << 30).unwrap_or_else(|e| panic!("{e}"));
+    let plan = RenderPlan::new(scene, &g).unwrap_or_else(|e| panic!("{e}"));
+    let t = Instant::now();
+    let out =
+        sweep(&plan, &g.raster, &ldi, &SweepOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    (plan, g, ldi, out.image, t.elapsed().as_secs_f64())
+}
+
+/// RMSE of two float images, through [`rmse`].
+fn rmse_f32(a: &[f32], b: &[f32]) -> f64 {
+    rmse(a.iter().zip(b).map(|(x, y)| (f64::from(*x), f64::from(*y))))
+}
+
+/// The default scene at `size`² with `slabs`: one row per kernel against the reference.
+fn scene_rows(size: u32, slabs: u32, samples: u32, verbose: bool) -> Vec<Row> {
+    let mut base = Scene::default_scene();
+    base.image.width = size;
+    base.image.height = size;
+    base.sweep.slabs = SlabSpec::Count(slabs);
+    // The reference depends on the view samples (slab count, jitter), not on the kernel.
+    let (plan, g, ldi, _, _) = render_scene(&base);
+    let reference = Reference::new(&base, &g, &plan, 0.0);
+    let t = Instant::now();
+    let ref_m = reference.render(
+        &ldi,
+        &ReferenceOptions {
+            samples,
+            ..Default::default()
+        },
+    );
+    let ref_4m = reference.render(
+        &ldi,
+        &ReferenceOptions {
+            samples: 4 * samples,
+            ..Default::default()
+        },
+    );
+    let self_err = rmse_f32(&ref_m, &ref_4m);
+    if verbose {
+        eprintln!(
+            "scene {size}² slabs {slabs}: reference M={samples} and {} in {:.1} s, self error {self_err:.2e}",
+            4 * samples,
+            t.elapsed().as_secs_f64()
+        );
+    }
+    kernels()
+        .map(|k| {
+            let mut scene = base.clone();
+            scene.sweep.kernel = k.parse().unwrap_or_else(|e: String| panic!("{e}"));
+            let (_, _, _, image, seconds) = render_scene(&scene);
+            Row {
+                family: "scene".into(),
+                kernel: k.to_string(),
+                slabs,
+                variance_level: "scene".into(),
+                compensation: scene.sweep.variance_compensation,
+                width: size,
+                height: size,
+                time_ms: seconds * 1e3,
+                // Against the 4·M run, the better estimate of the truth.
+                rmse_reference: Some(rmse_f32(&image, &ref_4m)),
+                reference_self_err: Some(self_err),
+                note: "full scene (the scene's own lights): no closed form, so only the \
+                       shadow-ray reference; variance/tilt/distance are the scene's"
+                    .into(),
+                ..Row::default()
+            }
+        })
+        .collect()
+}
+
+/// Runs the report and writes its files.
+pub fn run(options: &ReportOptions) -> Result<Report, String> {
+    let start = Instant::now();
+    std::fs::create_dir_all(&options.out)
+        .map_err(|e| format!("{}: cannot create: {e}", options.out.display()))?;
+    let mut rows = Vec::new();
+    let log = |r: &Row| {
+        if options.verbose {
+            eprintln!(
+                "{} {} n={} var={} tilt={:?} d/d1={:?} comp={} {:.1} ms rmse_c={:?} rmse_i={:?} ref={:?}",
+                r.family,
+                r.kernel,
+                r.slabs,
+                r.variance_level,
+                r.tilt_deg,
+                r.distance_over_d1,
+                r.compensation,
+                r.time_ms,
+                r.rmse_correct,
+                r.rmse_iterated,
+                r.rmse_reference
+            );
+        }
+    };
+    let quick = options.quick;
+    // Edge.
+    let slab_counts: &[u32] = if quick { &[64, 128] } else { &SLAB_COUNTS };
+    let variances: Vec<(&str, f64)> = if quick {
+        vec![VARIANCES[0], VARIANCES[2]]
+    } else {
+        VARIANCES.to_vec()
+    };
+    for k in [0.25, 1.0, 4.0] {
+        for &n in slab_counts {
+            for &(level, var) in &variances {
+                for tilt in TILTS {
+                    for kernel in kernels() {
+                        for comp in [true, false] {
+                            if !comp && quick && kernel != "ellipse2" {
+                                continue;
+                            }
+                            let row = edge_row(&edge_setup(k, n, tilt, var, kernel, comp), level);
+                            log(&row);
+                            rows.push(row);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // Disk.
+    let disk_grid: Vec<(f64, u32, &str, f64, f64)> = if quick {
+        vec![(4.0, 128, "high", 0.05, 45.0)]
+    } else {
+        let mut v = Vec::new();
+        for k in [1.0, 4.0] {
+            for &(level, var) in &VARIANCES {
+                for tilt in TILTS {
+                    for n in SLAB_COUNTS {
+                        v.push((k, n, level, var, tilt));
+                    }
+                }
+            }
+        }
+        v
+    };
+    let mut cached: Option<((u64, u64, u64), DiskReference)> = None;
+    for (k, n, level, var, tilt) in disk_grid {
+        let key = (k.to_bits(), var.to_bits(), tilt.to_bits());
+        if cached.as_ref().is_none_or(|c| c.0 != key) {
+            // The reference depends on d, σ² and tilt only (the disk polygon is the same mesh).
+            cached = Some((
+                key,
+                disk_reference(&disk_setup(k, 64, tilt, var, "ellipse2")),
+            ));
+        }
+        let reference = &cached.as_ref().map(|c| &c.1).ok_or("no disk reference")?;
+        for kernel in kernels() {
+            let row = disk_row(&disk_setup(k, n, tilt, var, kernel), level, reference);
+            log(&row);
+            rows.push(row);
+        }
+    }
+    // Full scene.
+    let (size, scene_slabs): (u32, &[u32]) = if quick {
+        (24, &[64])
+    } else {
+        (24, &SLAB_COUNTS)
+    };
+    for &n in scene_slabs {
+        for row in scene_rows(size, n, 16, options.verbose) {
+            log(&row);
+            rows.push(row);
+        }
+    }
+
+    // Files.
+    let write = |name: &str, text: &str| {
+        let p = options.out.join(name);
+        std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))
+    };
+    write("report.csv", &csv::csv(&rows))?;
+    let panels = plot::panels(&rows);
+    let plot_text = plot::draw(&options.out.join("speed_vs_error.png"), &panels)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let report = Report {
+        rows,
+        seconds,
+        plot_text,
+    };
+    write("report.md", &markdown::markdown(&report, options))?;
+    Ok(report)
+}
+
+/// The mean of `v`, NaN when empty.
+pub(crate) fn mean(v: impl Iterator<Item = f64>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for x in v {
+        s += x;
+        n += 1;
+    }
+    if n == 0 { f64::NAN } else { s / n as f64 }
+}
