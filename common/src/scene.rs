@@ -711,13 +711,8 @@ impl Validator<'_> {
         })
     }
 
-    fn mesh(
-        &self,
-        i: usize,
-        raw: RawMesh,
-        materials: &[String],
-        base_dir: &Path,
-    ) -> Result<MeshSpec, SceneError> {
+    /// The shape of mesh `i`: its `shape`, `size` and `path` keys.
+    fn shape(&self, i: usize, raw: &RawMesh, base_dir: &Path) -> Result<ShapeSpec, SceneError> {
         let key = |k: &str| format!("mesh[{i}].{k}");
         let size = |n: usize, what: &str| -> Result<Vec<f64>, SceneError> {
             let s = raw.size.clone().ok_or_else(|| {
@@ -749,7 +744,7 @@ impl Validator<'_> {
         if raw.path.is_some() && raw.shape != "obj" {
             return Err(self.err(key("path"), "`path` is only for shape = \"obj\""));
         }
-        let shape = match raw.shape.as_str() {
+        Ok(match raw.shape.as_str() {
             "box" => {
                 let s = size(3, "[x, y, z] full extents")?;
                 for (j, v) in s.iter().enumerate() {
@@ -824,7 +819,18 @@ impl Validator<'_> {
                     format!("expected one of box, sphere, torus, cylinder, obj; got {other:?}"),
                 ));
             }
-        };
+        })
+    }
+
+    fn mesh(
+        &self,
+        i: usize,
+        raw: RawMesh,
+        materials: &[String],
+        base_dir: &Path,
+    ) -> Result<MeshSpec, SceneError> {
+        let key = |k: &str| format!("mesh[{i}].{k}");
+        let shape = self.shape(i, &raw, base_dir)?;
         let material = materials
             .iter()
             .position(|n| *n == raw.material)
@@ -849,6 +855,48 @@ impl Validator<'_> {
             scale,
             material,
         })
+    }
+
+    /// The `gradient` of material `name`: stops sorted by value (`needed`: the material has
+    /// detail or a texture, which the gradient maps to colour and opacity).
+    fn gradient(
+        &self,
+        name: &str,
+        raw: Option<Vec<[f64; 5]>>,
+        needed: bool,
+    ) -> Result<Vec<GradientStop>, SceneError> {
+        let key = |k: &str| format!("material.{name}.{k}");
+        let mut gradient = Vec::new();
+        if let Some(g) = raw {
+            if g.is_empty() {
+                return Err(self.err(key("gradient"), "expected at least one stop"));
+            }
+            for (j, s) in g.iter().enumerate() {
+                let k = format!("material.{name}.gradient[{j}]");
+                for v in s {
+                    self.finite(&k, *v)?;
+                }
+                self.unit_interval(&format!("{k}[0]"), s[0])?;
+                self.color(&k, [s[1], s[2], s[3]])?;
+                self.unit_interval(&format!("{k}[4]"), s[4])?;
+                if let Some(prev) = gradient.last().map(|p: &GradientStop| p.value)
+                    && s[0] < prev
+                {
+                    return Err(self.err(k, "expected stops sorted by value"));
+                }
+                gradient.push(GradientStop {
+                    value: s[0],
+                    color: [s[1], s[2], s[3]],
+                    opacity: s[4],
+                });
+            }
+        } else if needed {
+            return Err(self.err(
+                key("gradient"),
+                "a material with detail or texture needs `gradient` = [[value, r, g, b, opacity], ...]",
+            ));
+        }
+        Ok(gradient)
     }
 
     fn material(
@@ -912,36 +960,7 @@ impl Validator<'_> {
                 "expected either `detail` or `texture`, not both",
             ));
         }
-        let mut gradient = Vec::new();
-        if let Some(g) = raw.gradient {
-            if g.is_empty() {
-                return Err(self.err(key("gradient"), "expected at least one stop"));
-            }
-            for (j, s) in g.iter().enumerate() {
-                let k = format!("material.{name}.gradient[{j}]");
-                for v in s {
-                    self.finite(&k, *v)?;
-                }
-                self.unit_interval(&format!("{k}[0]"), s[0])?;
-                self.color(&k, [s[1], s[2], s[3]])?;
-                self.unit_interval(&format!("{k}[4]"), s[4])?;
-                if let Some(prev) = gradient.last().map(|p: &GradientStop| p.value)
-                    && s[0] < prev
-                {
-                    return Err(self.err(k, "expected stops sorted by value"));
-                }
-                gradient.push(GradientStop {
-                    value: s[0],
-                    color: [s[1], s[2], s[3]],
-                    opacity: s[4],
-                });
-            }
-        } else if detail.is_some() || texture.is_some() {
-            return Err(self.err(
-                key("gradient"),
-                "a material with detail or texture needs `gradient` = [[value, r, g, b, opacity], ...]",
-            ));
-        }
+        let gradient = self.gradient(name, raw.gradient, detail.is_some() || texture.is_some())?;
         if raw.opacity.is_some() && !gradient.is_empty() {
             return Err(self.err(
                 key("opacity"),
