@@ -13,7 +13,7 @@
 //! the GPU. All host maths here is f64; only the final weights are rounded to f32.
 //!
 //! One file per topic: [`spec`] (names), [`moments`] (μκ, Σκ), [`table`] (taps, discretisation),
-//! [`compensation`] (bilinear variance), and one file per kernel family; every item is
+//! `compensation` (bilinear variance), and one file per kernel family; every item is
 //! re-exported here, so `kernel::X` paths do not depend on the file layout.
 
 mod box_kernel;

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-/// Errors of [`load_obj`]; every message names the file, the line where known, and what was expected.
+/// Errors of [`load_obj`](super::load_obj); every message names the file, the line where known, and what was expected.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
     /// The file could not be opened or read.
