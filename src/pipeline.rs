@@ -297,6 +297,62 @@ fn check_cancel(cancel: Option<&AtomicBool>) -> Result<(), RenderError> {
     Ok(())
 }
 
+/// A scene's geometry and LDI, built without sweeping (`convshadow ldi`).
+pub struct BuiltLdi {
+    /// The scene's meshes (with their closure reports) and rasterizer set-up.
+    pub geometry: SceneGeometry,
+    /// The layered depth image.
+    pub ldi: Ldi,
+    /// Its numbers.
+    pub stats: LdiStats,
+    /// Threads used.
+    pub threads: usize,
+    /// `"cpu"` or `"gpu"`: the backend that built it.
+    pub backend: &'static str,
+    /// The GPU adapter's name on the GPU backend.
+    pub adapter: Option<String>,
+    /// Why `--backend auto` fell back to the CPU, if it did.
+    pub backend_note: Option<String>,
+    /// Seconds building the LDI alone.
+    pub seconds_ldi: f64,
+    /// Seconds building geometry and LDI.
+    pub seconds_total: f64,
+}
+
+/// Builds a scene's geometry and LDI on `backend` with `threads` workers (0 = one per core)
+/// within `memory_budget` bytes; open meshes are reported in the result, not refused.
+pub fn build_ldi(
+    scene: &Scene,
+    backend: Backend,
+    threads: usize,
+    memory_budget: u64,
+) -> Result<BuiltLdi, RenderError> {
+    // Refuse before allocating: the per-pixel arrays here, the fragments in `Ldi::build`.
+    let budget = MemoryNeed::of(scene, false).check(scene, memory_budget)?;
+    let pool = thread_pool(threads)?;
+    let choice = BackendChoice::open(backend)?;
+    let start = Instant::now();
+    let geometry = SceneGeometry::build(scene)?;
+    let t_ldi = Instant::now();
+    let ldi = match &choice.gpu {
+        Some(ctx) => convshadow_gpu::ldi::build_ldi(ctx, &geometry.raster, budget)?,
+        None => pool.install(|| Ldi::build(&geometry.raster, budget))?,
+    };
+    let seconds_ldi = t_ldi.elapsed().as_secs_f64();
+    let stats = pool.install(|| ldi.stats());
+    Ok(BuiltLdi {
+        geometry,
+        ldi,
+        stats,
+        threads: pool.current_num_threads(),
+        backend: choice.name(),
+        adapter: choice.adapter(),
+        backend_note: choice.note,
+        seconds_ldi,
+        seconds_total: start.elapsed().as_secs_f64(),
+    })
+}
+
 /// Renders a scene on the CPU or, with `req.backend`, on the GPU.
 pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, RenderError> {
     let start = Instant::now();

@@ -1,13 +1,11 @@
 //! `convshadow ldi`: build the layered depth image and report its numbers and mesh defects.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
-use convshadow_common::geometry::SceneGeometry;
-use convshadow_cpu::ldi::Ldi;
 use serde_json::json;
 
 use crate::exit::{self, Failure};
+use crate::pipeline::{BuiltLdi, build_ldi};
 
 /// Arguments of `convshadow ldi`.
 #[derive(clap::Args, Debug)]
@@ -50,25 +48,21 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         .map_or_else(convshadow_cpu::default_memory_budget, |m| {
             m.saturating_mul(1 << 20)
         });
-    // Refuse before allocating: the per-pixel arrays here, the fragments in `Ldi::build`.
-    let budget = crate::pipeline::MemoryNeed::of(&scene, false).check(&scene, budget)?;
-    let pool = super::thread_pool(args.threads)?;
-    let choice = crate::pipeline::BackendChoice::open(args.backend)?;
-    if let Some(note) = &choice.note {
+    let BuiltLdi {
+        geometry,
+        ldi,
+        stats,
+        threads,
+        backend,
+        adapter,
+        backend_note,
+        seconds_ldi,
+        seconds_total,
+    } = build_ldi(&scene, args.backend, args.threads, budget)?;
+    if let Some(note) = &backend_note {
         eprintln!("note: {note}");
     }
-
-    let start = Instant::now();
-    let geometry = SceneGeometry::build(&scene)?;
-    let t_ldi = Instant::now();
-    let ldi = match &choice.gpu {
-        Some(ctx) => convshadow_gpu::ldi::build_ldi(ctx, &geometry.raster, budget)?,
-        None => pool.install(|| Ldi::build(&geometry.raster, budget))?,
-    };
-    let seconds_ldi = t_ldi.elapsed().as_secs_f64();
-    let stats = pool.install(|| ldi.stats());
     let hash = ldi.fingerprint();
-    let seconds_total = start.elapsed().as_secs_f64();
 
     let degenerate: usize = geometry
         .meshes
@@ -118,7 +112,7 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         );
     }
     println!("  ldi_hash {hash:016x}");
-    if let Some(a) = choice.adapter() {
+    if let Some(a) = &adapter {
         println!("  backend gpu: {a}");
     }
 
@@ -142,9 +136,9 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
             "boundary_edges": boundary,
             "nonmanifold_edges": nonmanifold,
             "flipped_edges": flipped,
-            "threads": pool.current_num_threads(),
-            "backend": choice.name(),
-            "adapter": choice.adapter(),
+            "threads": threads,
+            "backend": backend,
+            "adapter": adapter,
             "seconds_ldi": seconds_ldi,
             "seconds_total": seconds_total,
             "ldi_hash": format!("{hash:016x}"),
