@@ -127,7 +127,7 @@ fn every_bad_scene_file_is_refused_naming_file_and_key_and_writes_nothing() {
         }
         names.push(name);
     }
-    // The list, each present.
+    // The required bad inputs, each present.
     for required in [
         "unknown_key.toml",
         "wrong_type.toml",
