@@ -436,3 +436,43 @@ fn readme_usage_lists_every_help_option() {
         );
     }
 }
+
+#[test]
+fn messages_say_1_light_and_label_the_triangle_counts() {
+    let dir = support::temp_dir("messages");
+    let scene = "[image]\nwidth = 16\nheight = 16\n[camera]\nview_width = 2.0\n[sweep]\nslabs = 4\n\
+                 optimal_distance = 1.0\n[[light]]\n[[mesh]]\nshape = \"sphere\"\nsize = [0.5, 1]\n\
+                 material = \"m\"\n[material.m]\ncolor = [1.0, 1.0, 1.0]\nopacity = 0.5\n";
+    std::fs::write(dir.join("one.toml"), scene).unwrap();
+    let (code, out, err) = support::run_cli(&["render", "one.toml", "-o", "one.png"], &dir);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains(" 1 light,"), "{out}");
+    let (code, out, err) = support::run_cli(&["ldi", "--width", "24", "--height", "24"], &dir);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("triangles rasterized of"), "{out}");
+}
+
+#[test]
+fn no_xdg_runtime_dir_noise_without_the_variable() {
+    let dir = support::temp_dir("xdg");
+    // `auto`: the GPU where Vulkan has an adapter (lavapipe here), else the CPU; either way the
+    // loader must not complain about XDG_RUNTIME_DIR.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_convshadow"))
+        .args([
+            "render",
+            "--backend",
+            "auto",
+            "--size",
+            "16x16",
+            "--slabs",
+            "4",
+        ])
+        .args(["-o", "x.png"])
+        .env_remove("XDG_RUNTIME_DIR")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("XDG_RUNTIME_DIR"), "{err}");
+}
