@@ -220,6 +220,15 @@ fn the_texture_keeps_the_voxel_spacings_aspect() {
     let px = geometry.camera.pixel_size;
     assert!((du_dx / px - 0.5).abs() < 1e-4, "{}", du_dx / px);
     assert!((dw_dz - 0.5 * 256.0 / 52.8).abs() < 1e-3, "{dw_dz}");
+    // Rendered through the CLI, the 4D file says that only its first volume is used.
+    let tmp = support::temp_dir("nifti-4d");
+    std::fs::write(tmp.join("s.toml"), scene_text("[2.0, 2.0, 2.0]")).unwrap();
+    let (code, _, err) = support::run_cli(&["render", "s.toml", "-o", "s.png"], &tmp);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warning:") && err.contains("128x96x24x2") && err.contains("first 3D volume"),
+        "{err}"
+    );
 }
 
 #[test]
