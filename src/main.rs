@@ -26,7 +26,29 @@ enum Command {
     Report(commands::report::ReportArgs),
 }
 
+/// Gives the process a private runtime folder when `XDG_RUNTIME_DIR` is unset or unusable (not
+/// a folder, or open to others), so the Vulkan loader and Mesa do not print "XDG_RUNTIME_DIR is
+/// invalid" on a successful GPU run (docs/gpu.md).
+fn ensure_runtime_dir() {
+    use std::os::unix::fs::{MetadataExt, PermissionsExt};
+    let valid = std::env::var_os("XDG_RUNTIME_DIR")
+        .is_some_and(|d| std::fs::metadata(&d).is_ok_and(|m| m.is_dir() && m.mode() & 0o077 == 0));
+    if valid {
+        return;
+    }
+    let uid = std::fs::metadata("/proc/self").map_or(0, |m| m.uid());
+    let dir = std::env::temp_dir().join(format!("convshadow-runtime-{uid}"));
+    let ok = std::fs::create_dir_all(&dir).is_ok()
+        && std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)).is_ok()
+        && std::fs::metadata(&dir).is_ok_and(|m| m.uid() == uid);
+    if ok {
+        // SAFETY: called first thing in main, before any other thread exists.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+    }
+}
+
 fn main() {
+    ensure_runtime_dir();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {

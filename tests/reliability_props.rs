@@ -116,6 +116,8 @@ fn camera(direction: [f64; 3], width: u32, view: f64) -> Camera {
         width,
         height: width,
         background: [0.0; 3],
+        exposure: 0.0,
+        tonemap: Default::default(),
     };
     Camera::new(&spec, &image)
 }

@@ -107,5 +107,39 @@ fn quick_report_writes_a_complete_csv_markdown_and_plot() {
     let png = std::fs::read(out.join("speed_vs_error.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
     assert!(png.len() > 1000);
+
+    // Case by case (`--case I`, for job arrays) gives the same rows as the whole report, but for
+    // the measured time. Two edge cases keep it fast (the disk and scene cases recompute their
+    // references: tens of seconds each); an index past the last case is refused.
+    let without_time = |line: &str| {
+        let mut cells: Vec<&str> = line.split(',').collect();
+        cells.remove(col("time_ms"));
+        cells.join(",")
+    };
+    let whole: Vec<&str> = csv.lines().skip(1).collect();
+    for i in [3usize, 191] {
+        let case_out = dir.join(format!("case{i}"));
+        let case_s = case_out.to_string_lossy().into_owned();
+        let (code, stdout, stderr) = support::run_cli(
+            &[
+                "report",
+                "--quick",
+                "--case",
+                &i.to_string(),
+                "--out",
+                &case_s,
+            ],
+            &dir,
+        );
+        assert_eq!(code, 0, "stdout: {stdout}\nstderr: {stderr}");
+        let one = std::fs::read_to_string(case_out.join("report.csv")).unwrap();
+        let lines: Vec<&str> = one.lines().collect();
+        assert_eq!(lines.len(), 2, "header and one row: {one}");
+        assert_eq!(lines[0], csv.lines().next().unwrap());
+        assert_eq!(without_time(lines[1]), without_time(whole[i]), "case {i}");
+    }
+    let past = whole.len().to_string();
+    let (code, _, stderr) = support::run_cli(&["report", "--quick", "--case", &past], &dir);
+    assert_eq!(code, 2, "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -87,6 +87,8 @@ mod tests {
                 width: 8,
                 height: 4,
                 background: [0.0; 3],
+                exposure: 0.0,
+                tonemap: Default::default(),
             },
         )
     }

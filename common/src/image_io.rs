@@ -130,16 +130,27 @@ impl RgbImage {
         self.data.iter().map(|&v| linear_to_srgb8(v)).collect()
     }
 
-    /// Writes the image by extension: `.png` (sRGB 8-bit) or `.exr` (linear float).
+    /// Writes the image by extension: `.png` (sRGB 8-bit, clamped) or `.exr` (linear float).
     pub fn save(&self, path: &Path) -> Result<(), OutputError> {
+        self.save_mapped(path, &crate::tonemap::DisplayMap::CLAMP)
+    }
+
+    /// Writes the image by extension: `.png` through `map` (exposure, tone curve, sRGB 8-bit) or
+    /// `.exr` (linear float, `map` ignored).
+    pub fn save_mapped(
+        &self,
+        path: &Path,
+        map: &crate::tonemap::DisplayMap,
+    ) -> Result<(), OutputError> {
         let ext = path
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase())
             .unwrap_or_default();
         match ext.as_str() {
             "png" => {
-                let buf = image::RgbImage::from_raw(self.width, self.height, self.to_srgb8())
-                    .ok_or_else(|| out_err(path, "image buffer has the wrong size"))?;
+                let buf =
+                    image::RgbImage::from_raw(self.width, self.height, map.to_srgb8(&self.data))
+                        .ok_or_else(|| out_err(path, "image buffer has the wrong size"))?;
                 encode(
                     path,
                     image::DynamicImage::ImageRgb8(buf),

@@ -13,7 +13,7 @@ use crate::geometry::SceneGeometry;
 use crate::hash::{JITTER_STREAM, slab_hash};
 use crate::kernel::{KernelMoments, KernelTable, build_table};
 use crate::noise::Detail;
-use crate::scene::{MaterialSpec, Scene};
+use crate::scene::{MaterialSpec, Scene, TextureFormat, TextureSpec};
 use crate::texture3d::{Texture3d, TextureError};
 
 /// Entries of a material's transfer-function table over detail values [0, 1].
@@ -42,6 +42,9 @@ pub struct MaterialPlan {
     pub detail: Option<Detail>,
     /// 3D texture, if any (sampled at normalised object coordinates).
     pub texture: Option<Arc<Texture3d>>,
+    /// The texture's physical extent (NIfTI: dims · spacing), whose aspect its mapping keeps;
+    /// `None` (raw textures): stretched to the mesh's bounds.
+    pub texture_extent: Option<[f64; 3]>,
     /// Specular strength and exponent.
     pub specular: Option<(f32, u32)>,
 }
@@ -190,7 +193,10 @@ impl RenderPlan {
                 let pixel_to_world = DAffine3::from_cols(dx, dy, cam.forward, origin);
                 let mut m = wm.world_to_object * pixel_to_world;
                 if scene.materials[spec.material].texture.is_some() {
-                    let (lo, hi) = wm.object_bounds;
+                    let (mut lo, mut hi) = wm.object_bounds;
+                    if let Some(extent) = materials[spec.material].texture_extent {
+                        (lo, hi) = fit_extent(lo, hi, DVec3::from(extent));
+                    }
                     let size = (hi - lo).max(DVec3::splat(1e-30));
                     let to_unit = DAffine3::from_scale_rotation_translation(
                         size.recip(),
@@ -237,6 +243,17 @@ impl RenderPlan {
     }
 }
 
+/// The largest box with the aspect of `extent`, centred in the bounds `lo..hi`: a NIfTI volume's
+/// voxels keep their spacing's proportions (outside the box, sampling clamps to the edge voxels).
+fn fit_extent(lo: DVec3, hi: DVec3, extent: DVec3) -> (DVec3, DVec3) {
+    let size = hi - lo;
+    let extent = extent.max(DVec3::splat(1e-30));
+    let scale = (size / extent).min_element();
+    let fitted = extent * scale;
+    let centre = (lo + hi) * 0.5;
+    (centre - fitted * 0.5, centre + fitted * 0.5)
+}
+
 /// Colours below 2^-24 become 0, so products in shading never approach the subnormal range.
 fn flush_tiny(c: f32) -> f32 {
     if c < 1.0 / 16_777_216.0 { 0.0 } else { c }
@@ -281,14 +298,29 @@ fn material_plan(m: &MaterialSpec, e: f64) -> Result<MaterialPlan, TextureError>
             d.time.map(|t| t as f32),
         )
     });
-    let texture = match &m.texture {
-        Some(t) => Some(Arc::new(Texture3d::load_raw(&t.path, t.dims, t.voxel)?)),
-        None => None,
+    let (texture, texture_extent) = match &m.texture {
+        Some(TextureSpec {
+            path,
+            format: TextureFormat::Raw { dims, voxel },
+        }) => (
+            Some(Arc::new(Texture3d::load_raw(path, *dims, *voxel)?)),
+            None,
+        ),
+        Some(TextureSpec {
+            path,
+            format: TextureFormat::Nifti { window },
+        }) => {
+            let n = crate::nifti::load_nifti(path, *window)?;
+            let extent = n.extent();
+            (Some(Arc::new(n.texture)), Some(extent))
+        }
+        None => (None, None),
     };
     Ok(MaterialPlan {
         tf,
         detail,
         texture,
+        texture_extent,
         specular: m.specular.as_ref().map(|s| (s.strength, s.exponent)),
     })
 }

@@ -13,9 +13,12 @@ use serde::Deserialize;
 use crate::kernel::KernelSpec;
 use crate::noise::DetailKind;
 use crate::texture3d::VoxelType;
+use crate::tonemap::{DisplayMap, Tonemap};
 
 /// Largest accepted image width or height in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
+/// Largest accepted |exposure| in stops (2^64 is far past any useful brightening).
+pub const MAX_EXPOSURE_STOPS: f64 = 64.0;
 /// Largest accepted slab count.
 pub const MAX_SLABS: u32 = 65536;
 /// Largest accepted number of lights.
@@ -80,6 +83,8 @@ struct RawImage {
     width: u32,
     height: u32,
     background: Option<[f64; 3]>,
+    exposure: Option<f64>,
+    tonemap: Option<Tonemap>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -153,9 +158,10 @@ struct RawDetail {
 #[serde(deny_unknown_fields)]
 struct RawTexture {
     path: String,
-    dims: [u32; 3],
+    dims: Option<[u32; 3]>,
     #[serde(rename = "type")]
-    voxel: VoxelType,
+    voxel: Option<VoxelType>,
+    window: Option<[f64; 2]>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -198,6 +204,20 @@ pub struct ImageSpec {
     pub height: u32,
     /// Linear RGB composited behind everything.
     pub background: [f32; 3],
+    /// PNG output only: exposure in stops (0 = as rendered).
+    pub exposure: f64,
+    /// PNG output only: the tone curve (default `aces`, which does not clip the default scene).
+    pub tonemap: Tonemap,
+}
+
+impl ImageSpec {
+    /// How PNG output maps the linear image to 8-bit sRGB.
+    pub fn display_map(&self) -> DisplayMap {
+        DisplayMap {
+            exposure: self.exposure,
+            tonemap: self.tonemap,
+        }
+    }
 }
 
 /// Orthographic camera.
@@ -326,15 +346,31 @@ pub struct DetailSpec {
     pub time: Option<f64>,
 }
 
-/// A raw 3D texture, mapped onto the mesh's object-space bounding box.
+/// A 3D texture, mapped onto the mesh's object-space bounding box.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TextureSpec {
     /// Resolved path.
     pub path: PathBuf,
-    /// Voxel counts in x, y, z.
-    pub dims: [u32; 3],
-    /// Voxel type.
-    pub voxel: VoxelType,
+    /// How the file is read.
+    pub format: TextureFormat,
+}
+
+/// The file format of a 3D texture.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TextureFormat {
+    /// A headerless raw file: dims and voxel type given in the scene; stretched to the bounds.
+    Raw {
+        /// Voxel counts in x, y, z.
+        dims: [u32; 3],
+        /// Voxel type.
+        voxel: VoxelType,
+    },
+    /// NIfTI-1 (`.nii`, `.nii.gz`): dims, spacing and type from the header; the physical extent
+    /// keeps its aspect inside the bounds.
+    Nifti {
+        /// Values mapped to [0, 1]; `None`: the data's min–max.
+        window: Option<[f64; 2]>,
+    },
 }
 
 /// A specular highlight at crossed surfaces.
@@ -415,10 +451,45 @@ impl Scene {
             .all(|m| m.transport[0] == m.transport[1] && m.transport[1] == m.transport[2])
     }
 
+    /// Overrides camera values (command line): the direction is normalised and checked against
+    /// `up` like the file's, the centre must be finite and the view width positive.
+    pub fn override_camera(
+        &mut self,
+        direction: Option<[f64; 3]>,
+        center: Option<[f64; 3]>,
+        view_width: Option<f64>,
+    ) -> Result<(), SceneError> {
+        let v = Validator { file: &self.source };
+        if let Some(d) = direction {
+            let d = v.unit_vector("--camera-direction", d)?;
+            let u = self.camera.up;
+            let cross = [
+                d[1] * u[2] - d[2] * u[1],
+                d[2] * u[0] - d[0] * u[2],
+                d[0] * u[1] - d[1] * u[0],
+            ];
+            if (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt() < 1e-6 {
+                return Err(v.err(
+                    "--camera-direction",
+                    "expected a direction not parallel to camera.up",
+                ));
+            }
+            self.camera.direction = d;
+        }
+        if let Some(c) = center {
+            self.camera.center = v.finite3("--camera-center", c)?;
+        }
+        if let Some(w) = view_width {
+            self.camera.view_width = v.positive("--view-width", w)?;
+        }
+        Ok(())
+    }
+
     /// Re-checks the values that command-line overrides may have changed.
     pub fn revalidate(&self) -> Result<(), SceneError> {
         let v = Validator { file: &self.source };
         v.image_size(self.image.width, self.image.height)?;
+        v.exposure(self.image.exposure)?;
         match self.sweep.slabs {
             SlabSpec::Count(n) => v.slab_count(n)?,
             SlabSpec::Distance(d) => {
@@ -540,6 +611,19 @@ impl Validator<'_> {
         Ok(())
     }
 
+    fn exposure(&self, stops: f64) -> Result<f64, SceneError> {
+        let stops = self.finite("image.exposure", stops)?;
+        if stops.abs() > MAX_EXPOSURE_STOPS {
+            return Err(self.err(
+                "image.exposure",
+                format!(
+                    "expected stops in [-{MAX_EXPOSURE_STOPS}, {MAX_EXPOSURE_STOPS}], got {stops}"
+                ),
+            ));
+        }
+        Ok(stops)
+    }
+
     fn slab_count(&self, n: u32) -> Result<(), SceneError> {
         if n == 0 || n > MAX_SLABS {
             return Err(self.err(
@@ -558,6 +642,8 @@ impl Validator<'_> {
             width: raw.image.width,
             height: raw.image.height,
             background: background.map(|c| c as f32),
+            exposure: self.exposure(raw.image.exposure.unwrap_or(0.0))?,
+            tonemap: raw.image.tonemap.unwrap_or_default(),
         };
 
         let direction = self.unit_vector(
@@ -944,14 +1030,44 @@ impl Validator<'_> {
         let texture = match raw.texture {
             None => None,
             Some(t) => {
-                if t.dims.contains(&0) {
-                    return Err(self.err(key("texture.dims"), "expected three dimensions >= 1"));
-                }
-                Some(TextureSpec {
-                    path: base_dir.join(&t.path),
-                    dims: t.dims,
-                    voxel: t.voxel,
-                })
+                let path = base_dir.join(&t.path);
+                let format = if crate::nifti::is_nifti_path(&path) {
+                    if t.dims.is_some() || t.voxel.is_some() {
+                        return Err(self.err(
+                            key("texture"),
+                            "a NIfTI texture (.nii, .nii.gz) takes dims and type from its header; \
+                             remove `dims` and `type`",
+                        ));
+                    }
+                    if let Some([lo, hi]) = t.window
+                        && !(lo.is_finite() && hi.is_finite() && lo < hi)
+                    {
+                        return Err(self.err(
+                            key("texture.window"),
+                            format!("expected [lo, hi] with finite lo < hi, got [{lo}, {hi}]"),
+                        ));
+                    }
+                    TextureFormat::Nifti { window: t.window }
+                } else {
+                    let (Some(dims), Some(voxel)) = (t.dims, t.voxel) else {
+                        return Err(self.err(
+                            key("texture"),
+                            "a raw texture needs `dims = [x, y, z]` and `type` (u8, u16, f32); \
+                             NIfTI files end in .nii or .nii.gz",
+                        ));
+                    };
+                    if dims.contains(&0) {
+                        return Err(self.err(key("texture.dims"), "expected three dimensions >= 1"));
+                    }
+                    if t.window.is_some() {
+                        return Err(self.err(
+                            key("texture.window"),
+                            "`window` applies to NIfTI textures only (raw ones are normalised by type)",
+                        ));
+                    }
+                    TextureFormat::Raw { dims, voxel }
+                };
+                Some(TextureSpec { path, format })
             }
         };
         if detail.is_some() && texture.is_some() {

@@ -111,6 +111,14 @@ pub enum TextureError {
         /// The offending value.
         value: f32,
     },
+    /// A NIfTI file that is not NIfTI-1, is truncated, or has values the texture cannot hold.
+    #[error("{}: {message}", .path.display())]
+    Nifti {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// A 3D texture normalised to f32 in [0, 1] (u8/255, u16/65535; f32 as stored, must be finite).

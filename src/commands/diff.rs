@@ -23,6 +23,57 @@ pub struct DiffArgs {
     /// Write a heat-map PNG of the per-pixel error (black = bit-identical).
     #[arg(long)]
     pub heatmap: Option<PathBuf>,
+    /// Fail (exit code 1) when the RMSE exceeds this.
+    #[arg(long, value_name = "X")]
+    pub max_rmse: Option<f64>,
+    /// Fail (exit code 1) when the largest absolute error exceeds this.
+    #[arg(long, value_name = "X")]
+    pub max_abs: Option<f64>,
+    /// Fail (exit code 1) when the mean FLIP exceeds this.
+    #[arg(long, value_name = "X")]
+    pub max_flip: Option<f64>,
+    /// Fail (exit code 1) when more than N pixels differ in their 8-bit sRGB encoding.
+    #[arg(long, value_name = "N")]
+    pub max_differing_pixels: Option<u64>,
+}
+
+/// Exit code of `diff` when a threshold is exceeded (or a NaN meets any threshold).
+pub const THRESHOLD_EXCEEDED: i32 = 1;
+
+/// NaN values of one image: how many, and the first one's (x, y, channel).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NanReport {
+    /// NaN values (pixel channels).
+    pub count: u64,
+    /// The first NaN in row-major order.
+    pub first: Option<(u32, u32, u32)>,
+}
+
+impl NanReport {
+    /// The NaNs of `img`.
+    pub fn of(img: &RgbImage) -> NanReport {
+        let mut r = NanReport::default();
+        for (i, v) in img.data.iter().enumerate() {
+            if v.is_nan() {
+                if r.first.is_none() {
+                    let p = (i / 3) as u32;
+                    r.first = Some((p % img.width.max(1), p / img.width.max(1), (i % 3) as u32));
+                }
+                r.count += 1;
+            }
+        }
+        r
+    }
+
+    fn describe(&self, name: &str) -> Option<String> {
+        self.first.map(|(x, y, c)| {
+            format!(
+                "{name} has {} NaN value{} (first at ({x}, {y}, channel {c}))",
+                self.count,
+                if self.count == 1 { "" } else { "s" }
+            )
+        })
+    }
 }
 
 /// Mean FLIP (LDR, from the 8-bit sRGB encodings) of B against reference A, via nv-flip.
@@ -78,7 +129,11 @@ pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
         )
     })?;
     let flip = mean_flip(&a, &b);
-    let psnr = if m.psnr.is_finite() {
+    let nans = [NanReport::of(&a), NanReport::of(&b)];
+    let any_nan = nans.iter().any(|n| n.count > 0);
+    let psnr = if any_nan {
+        "n/a (NaN)".to_string()
+    } else if m.psnr.is_finite() {
         format!("{:.2} dB", m.psnr)
     } else {
         "inf".to_string()
@@ -104,6 +159,27 @@ pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
             ""
         },
     );
+    for (n, name) in nans.iter().zip(["A", "B"]) {
+        if let Some(text) = n.describe(name) {
+            println!("  NaN: {text}");
+        }
+    }
+    let mut failed = Vec::new();
+    let mut check = |what: &str, value: f64, limit: Option<f64>| {
+        if let Some(limit) = limit
+            && (any_nan || value.is_nan() || value > limit)
+        {
+            failed.push(format!("{what} {value:.4e} (limit {limit:.4e})"));
+        }
+    };
+    check("RMSE", m.rmse, args.max_rmse);
+    check("max abs error", m.max_abs, args.max_abs);
+    check("mean FLIP", flip, args.max_flip);
+    check(
+        "8-bit differing pixels",
+        m.srgb8_pixels_differ as f64,
+        args.max_differing_pixels.map(|n| n as f64),
+    );
     if let Some(p) = &args.heatmap {
         let data = heatmap(&a, &b, m.max_abs);
         image::save_buffer_with_format(
@@ -122,7 +198,33 @@ pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
         })?;
     }
     if let Some(p) = &args.json {
-        super::write_json(p, &metrics_json(&m, flip))?;
+        let mut v = metrics_json(&m, flip);
+        if let Some(o) = v.as_object_mut() {
+            if any_nan {
+                // PSNR is only infinite for identical finite images.
+                o.insert("psnr_db".into(), serde_json::Value::String("nan".into()));
+            }
+            for (n, key) in nans.iter().zip(["nan_a", "nan_b"]) {
+                o.insert(
+                    key.into(),
+                    json!({"count": n.count, "first": n.first.map(|(x, y, c)| [x, y, c])}),
+                );
+            }
+            o.insert("thresholds_failed".into(), json!(failed));
+        }
+        super::write_json(p, &v)?;
+    }
+    if !failed.is_empty() {
+        eprintln!(
+            "diff: threshold exceeded: {}{}",
+            failed.join(", "),
+            if any_nan {
+                " (an image has NaN values: every threshold fails)"
+            } else {
+                ""
+            }
+        );
+        return Ok(THRESHOLD_EXCEEDED);
     }
     Ok(exit::OK)
 }

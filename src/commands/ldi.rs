@@ -85,11 +85,16 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         .map(|m| m.report.flipped_edges)
         .collect();
     println!(
-        "ldi: {}x{} px, {} triangles, {} fragments, max {} layers, {} odd pixels, {} degenerate \
-         triangles dropped, {:.3} s build ({:.1} M fragments/s)",
+        "ldi: {}x{} px, {} triangles rasterized of {}, {} fragments, max {} layers, {} odd \
+         pixels, {} degenerate triangles dropped, {:.3} s build ({:.1} M fragments/s)",
         ldi.width,
         ldi.height,
         geometry.raster.triangles.len(),
+        geometry
+            .meshes
+            .iter()
+            .map(|m| m.mesh.triangles.len())
+            .sum::<usize>(),
         stats.fragments,
         stats.max_layers,
         stats.odd_pixels,

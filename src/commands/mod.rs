@@ -1,6 +1,7 @@
 //! The `convshadow` subcommands.
 
 pub mod diff;
+pub mod frames;
 pub mod ldi;
 pub mod render;
 pub mod report;

@@ -9,10 +9,12 @@ use convshadow_common::image_io::RgbImage;
 use convshadow_common::kernel::{KERNEL_SYNTAX, KernelSpec};
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SlabSpec};
+use convshadow_common::tonemap::Tonemap;
 use convshadow_cpu::ldi::Ldi;
 use convshadow_cpu::reference::{Reference, ReferenceOptions, samples_side};
 use serde_json::json;
 
+use super::frames;
 use crate::exit::{self, Failure};
 use crate::pipeline::{
     Backend, CpuPath, MemoryNeed, RenderRequest, Rendered, image_fingerprint, render,
@@ -55,12 +57,43 @@ pub struct RenderArgs {
     /// Default: render.png in the current folder.
     #[arg(short = 'o', long = "output")]
     pub outputs: Vec<PathBuf>,
-    /// Override the image width.
+    /// Override the image width (the height stays, and so does camera.view_width: a wider image
+    /// shows the same width of the scene, a taller one more of it; use --size to keep the view).
     #[arg(long)]
     pub width: Option<u32>,
-    /// Override the image height.
+    /// Override the image height (the width and camera.view_width stay).
     #[arg(long)]
     pub height: Option<u32>,
+    /// Image size WxH; when the aspect changes, camera.view_width grows so the scene's whole
+    /// view stays in frame (and says so).
+    #[arg(long, value_name = "WxH", conflicts_with_all = ["width", "height"])]
+    pub size: Option<String>,
+    /// Override camera.view_width (world units across the image).
+    #[arg(long, value_name = "W", allow_hyphen_values = true)]
+    pub view_width: Option<f64>,
+    /// Override camera.direction (X,Y,Z; normalised).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub camera_direction: Option<String>,
+    /// Override camera.center (X,Y,Z).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub camera_center: Option<String>,
+    /// PNG output: exposure in stops (overrides image.exposure; EXR stays linear).
+    #[arg(long, value_name = "STOPS", allow_hyphen_values = true)]
+    pub exposure: Option<f64>,
+    /// PNG output: tone curve clamp, reinhard or aces (overrides image.tonemap; default aces).
+    #[arg(long, value_name = "CURVE")]
+    pub tonemap: Option<String>,
+    /// Render frames A..B (B excluded; A..=B includes it) of the 4D detail: frame k sets every
+    /// detail material's time to its detail.time (or 0) + k·--time-step. Outputs need a frame
+    /// pattern such as out_%04d.png.
+    #[arg(long, value_name = "A..B", conflicts_with = "frame")]
+    pub frames: Option<String>,
+    /// Render frame K alone: the same bits as frame K of --frames.
+    #[arg(long, value_name = "K")]
+    pub frame: Option<u32>,
+    /// Detail time advanced per frame (default 0.05).
+    #[arg(long, value_name = "DT", allow_hyphen_values = true)]
+    pub time_step: Option<f64>,
     /// Override the slab count.
     #[arg(long)]
     pub slabs: Option<u32>,
@@ -100,7 +133,7 @@ pub struct RenderArgs {
     /// memory); a scene that needs more is refused before allocating (exit code 4).
     #[arg(long)]
     pub max_memory: Option<u64>,
-    /// Write the numbers as JSON.
+    /// Write the numbers as JSON (with --frames/--frame: one entry per frame under "frames").
     #[arg(long)]
     pub stats_json: Option<PathBuf>,
     /// No progress bar and no summary line.
@@ -108,10 +141,71 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
+/// One rendered frame of a sequence, for the stats.
+struct FrameStats {
+    frame: u32,
+    time: Option<f64>,
+    image_hash: u64,
+    ldi_hash: u64,
+    seconds_total: f64,
+    outputs: Vec<PathBuf>,
+}
+
 /// Runs `convshadow render`.
 pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     let mut scene = super::load_scene(args.scene.as_deref())?;
     super::override_size(&mut scene, args.width, args.height)?;
+    let bad = |flag: &str, e: String| Failure::new(exit::BAD_ARGUMENTS, format!("{flag}: {e}"));
+    if let Some(text) = &args.size {
+        let (w, h) = frames::parse_size(text).map_err(|e| bad("--size", e))?;
+        if let Some(note) = frames::apply_size(&mut scene, w, h)?
+            && !args.quiet
+        {
+            eprintln!("note: {note}");
+        }
+    }
+    let direction = args
+        .camera_direction
+        .as_deref()
+        .map(frames::parse_vec3)
+        .transpose()
+        .map_err(|e| bad("--camera-direction", e))?;
+    let center = args
+        .camera_center
+        .as_deref()
+        .map(frames::parse_vec3)
+        .transpose()
+        .map_err(|e| bad("--camera-center", e))?;
+    scene
+        .override_camera(direction, center, args.view_width)
+        .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, e.to_string()))?;
+    if let Some(x) = args.exposure {
+        scene.image.exposure = x;
+    }
+    if let Some(t) = &args.tonemap {
+        scene.image.tonemap = t.parse::<Tonemap>().map_err(|e| bad("--tonemap", e))?;
+    }
+    let frame_list: Option<Vec<u32>> = match (&args.frames, args.frame) {
+        (Some(text), _) => {
+            let r = frames::FrameRange::parse(text).map_err(|e| bad("--frames", e))?;
+            Some((r.start..r.end).collect())
+        }
+        (None, Some(k)) => Some(vec![k]),
+        (None, None) => None,
+    };
+    let time_step = args.time_step.unwrap_or(frames::DEFAULT_TIME_STEP);
+    if !time_step.is_finite() {
+        return Err(bad(
+            "--time-step",
+            format!("expected a finite number, got {time_step}"),
+        ));
+    }
+    if args.time_step.is_some() && frame_list.is_none() {
+        return Err(Failure::new(
+            exit::BAD_ARGUMENTS,
+            "--time-step only applies with --frames or --frame",
+        ));
+    }
     if let Some(n) = args.slabs {
         scene.sweep.slabs = SlabSpec::Count(n);
     }
@@ -130,11 +224,41 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         .revalidate()
         .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, format!("command-line override: {e}")))?;
     let outputs = if args.outputs.is_empty() {
-        vec![PathBuf::from("render.png")]
+        match &frame_list {
+            Some(_) => vec![PathBuf::from("render_%04d.png")],
+            None => vec![PathBuf::from("render.png")],
+        }
     } else {
         args.outputs.clone()
     };
-    for p in outputs.iter().chain(&args.stats_json) {
+    if let Some(list) = &frame_list
+        && list.len() > 1
+        && let Some(p) = outputs.iter().find(|p| !frames::has_frame_pattern(p))
+    {
+        return Err(Failure::new(
+            exit::BAD_ARGUMENTS,
+            format!(
+                "{}: {} frames would overwrite one file; put a frame number pattern in the \
+                 name, such as out_%04d.png",
+                p.display(),
+                list.len()
+            ),
+        ));
+    }
+    if args.backend == RenderBackend::Reference && frame_list.is_some() {
+        return Err(Failure::new(
+            exit::BAD_ARGUMENTS,
+            "--frames/--frame do not apply to --backend reference",
+        ));
+    }
+    let first_outputs: Vec<PathBuf> = match &frame_list {
+        Some(list) => outputs
+            .iter()
+            .map(|p| frames::frame_path(p, list[0]))
+            .collect(),
+        None => outputs.clone(),
+    };
+    for p in first_outputs.iter().chain(&args.stats_json) {
         convshadow_common::image_io::check_writable(p)?;
         let ext = p
             .extension()
@@ -164,15 +288,32 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     } else {
         None
     };
+    // One bar over all frames: frame i's slab s is at i·slabs + s + 1.
+    let frame_index = std::sync::atomic::AtomicU64::new(0);
+    let frame_count = frame_list.as_ref().map_or(1, Vec::len) as u64;
+    let slab_count = std::sync::atomic::AtomicU64::new(match scene.sweep.slabs {
+        SlabSpec::Count(n) => u64::from(n),
+        SlabSpec::Distance(_) => 0,
+    });
     let progress = |slab: u32| {
         if let Some(b) = &bar {
-            b.set_position(u64::from(slab) + 1);
+            use std::sync::atomic::Ordering::Relaxed;
+            let per = slab_count.load(Relaxed);
+            b.set_position(frame_index.load(Relaxed) * per + u64::from(slab) + 1);
         }
     };
     if let Some(b) = &bar {
         // The slab count is known once geometry is built; a count override is known now.
         if let SlabSpec::Count(n) = scene.sweep.slabs {
-            b.set_length(u64::from(n));
+            b.set_length(u64::from(n) * frame_count);
+        }
+        if frame_count > 1 {
+            b.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{spinner} {msg} slab {pos}/{len} {wide_bar} {eta}",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
         }
     }
     let samples = match (args.backend, args.reference_samples) {
@@ -212,11 +353,126 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         // SIGINT/SIGTERM raise it: the sweep stops and nothing is written (exit code 130).
         cancel: Some(exit::install_interrupt_handler()),
     };
-    let r = render(&scene, &request)?;
-    if let Some(note) = &r.backend_note {
-        eprintln!("note: {note}");
+    let Some(list) = frame_list else {
+        let r = render(&scene, &request)?;
+        if let Some(note) = &r.backend_note {
+            eprintln!("note: {note}");
+        }
+        return finish(&scene, args, &outputs, &r, bar.as_ref(), 0);
+    };
+    let mut done: Vec<FrameStats> = Vec::new();
+    let mut last = None;
+    for (i, &k) in list.iter().enumerate() {
+        use std::sync::atomic::Ordering::Relaxed;
+        frame_index.store(i as u64, Relaxed);
+        if let Some(b) = &bar {
+            b.set_message(format!("frame {}/{}", i + 1, list.len()));
+        }
+        let frame_scene = frames::scene_at_frame(&scene, k, time_step);
+        let r = render(&frame_scene, &request)?;
+        if i == 0 {
+            if let Some(note) = &r.backend_note {
+                eprintln!("note: {note}");
+            }
+            slab_count.store(u64::from(r.plan.slabs), Relaxed);
+            if let Some(b) = &bar {
+                b.set_length(u64::from(r.plan.slabs) * frame_count);
+            }
+        }
+        exit::check_interrupt()?;
+        let paths: Vec<PathBuf> = outputs.iter().map(|p| frames::frame_path(p, k)).collect();
+        for p in &paths {
+            r.image.save_mapped(p, &scene.image.display_map())?;
+        }
+        done.push(FrameStats {
+            frame: k,
+            time: frames::frame_time(&scene, k, time_step),
+            image_hash: r.image_hash,
+            ldi_hash: r.ldi_hash,
+            seconds_total: r.seconds_total,
+            outputs: paths,
+        });
+        last = Some(r);
     }
-    finish(&scene, args, &outputs, &r, bar.as_ref(), 0)
+    let r = last.expect("a parsed frame list is not empty");
+    finish_frames(&scene, args, &r, bar.as_ref(), &done, time_step)
+}
+
+/// Stats and summary of a sequence (each frame is already written).
+fn finish_frames(
+    scene: &Scene,
+    args: &RenderArgs,
+    last: &Rendered,
+    bar: Option<&indicatif::ProgressBar>,
+    done: &[FrameStats],
+    time_step: f64,
+) -> Result<i32, Failure> {
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let seconds: f64 = done.iter().map(|f| f.seconds_total).sum();
+    if let Some(p) = &args.stats_json {
+        let mut value = stats_value(scene, args, last, 0, &[]);
+        if let Some(o) = value.as_object_mut() {
+            for key in ["image_hash", "outputs", "seconds_ldi", "seconds_sweep"] {
+                o.remove(key);
+            }
+            o.insert("seconds_total".into(), json!(seconds));
+            o.insert("time_step".into(), json!(time_step));
+            o.insert(
+                "frames".into(),
+                json!(
+                    done.iter()
+                        .map(|f| json!({
+                            "frame": f.frame,
+                            "time": f.time,
+                            "image_hash": format!("{:016x}", f.image_hash),
+                            "ldi_hash": format!("{:016x}", f.ldi_hash),
+                            "seconds_total": f.seconds_total,
+                            "outputs": f.outputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+                        }))
+                        .collect::<Vec<_>>()
+                ),
+            );
+        }
+        super::write_json(p, &value)?;
+    }
+    if !args.quiet {
+        for f in done {
+            println!(
+                "frame {} (time {}): image_hash {:016x}, {:.2} s → {}",
+                f.frame,
+                f.time.map_or_else(|| "-".to_string(), |t| format!("{t}")),
+                f.image_hash,
+                f.seconds_total,
+                f.outputs
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        println!(
+            "rendered {} frame{} of {}x{} px, {} slabs, {}: {:.2} s",
+            done.len(),
+            if done.len() == 1 { "" } else { "s" },
+            scene.image.width,
+            scene.image.height,
+            last.plan.slabs,
+            plural(last.plan.lights.len(), "light"),
+            seconds
+        );
+    }
+    Ok(exit::OK)
+}
+
+/// `n thing` or `n things`.
+pub fn plural(n: usize, thing: &str) -> String {
+    if n == 1 {
+        format!("1 {thing}")
+    } else {
+        format!("{n} {thing}s")
+    }
 }
 
 /// Writes the outputs and the stats of a finished render and prints the summary line.
@@ -233,15 +489,70 @@ fn finish(
     }
     exit::check_interrupt()?;
     for p in outputs {
-        r.image.save(p)?;
+        r.image.save_mapped(p, &scene.image.display_map())?;
     }
+    if let Some(p) = &args.stats_json {
+        super::write_json(p, &stats_value(scene, args, r, samples, outputs))?;
+    }
+    if r.ldi.odd_pixels > 0 {
+        eprintln!(
+            "warning: {} pixels have an odd fragment count (open meshes, rendered with --allow-open)",
+            r.ldi.odd_pixels
+        );
+    }
+    let throughput = throughput(r);
+    if !args.quiet {
+        println!(
+            "rendered {}x{} px, {} slabs, {}, {}, {} fragments: {:.2} s (LDI {:.2} s, sweep \
+             {:.2} s, {:.1} M pixel·slab·light/s, {}) → {}",
+            scene.image.width,
+            scene.image.height,
+            r.plan.slabs,
+            plural(r.plan.lights.len(), "light"),
+            scene.sweep.kernel,
+            r.ldi.fragments,
+            r.seconds_total,
+            r.seconds_ldi,
+            r.seconds_sweep,
+            throughput / 1e6,
+            match &r.adapter {
+                Some(a) => format!("GPU: {a}"),
+                None if samples > 0 => format!(
+                    "reference: {} light directions, {} threads",
+                    samples_side(samples) * samples_side(samples),
+                    r.threads
+                ),
+                None => format!("CPU: {} threads, {} path", r.threads, args.path.name()),
+            },
+            outputs
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    Ok(exit::OK)
+}
+
+/// Pixel·slab·light updates per second of the sweep.
+fn throughput(r: &Rendered) -> f64 {
     let updates = f64::from(r.plan.grid_width)
         * f64::from(r.plan.grid_height)
         * f64::from(r.plan.slabs)
         * r.plan.lights.len() as f64;
-    let throughput = updates / r.seconds_sweep.max(1e-9);
-    if let Some(p) = &args.stats_json {
-        let value = json!({
+    updates / r.seconds_sweep.max(1e-9)
+}
+
+/// The `--stats-json` object of one render.
+fn stats_value(
+    scene: &Scene,
+    args: &RenderArgs,
+    r: &Rendered,
+    samples: u32,
+    outputs: &[PathBuf],
+) -> serde_json::Value {
+    let throughput = throughput(r);
+    json!({
             "width": scene.image.width,
             "height": scene.image.height,
             "slabs": r.plan.slabs,
@@ -267,46 +578,9 @@ fn finish(
             "ldi_hash": format!("{:016x}", r.ldi_hash),
             "image_hash": format!("{:016x}", r.image_hash),
             "outputs": outputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-        });
-        super::write_json(p, &value)?;
-    }
-    if r.ldi.odd_pixels > 0 {
-        eprintln!(
-            "warning: {} pixels have an odd fragment count (open meshes, rendered with --allow-open)",
-            r.ldi.odd_pixels
-        );
-    }
-    if !args.quiet {
-        println!(
-            "rendered {}x{} px, {} slabs, {} lights, {}, {} fragments: {:.2} s (LDI {:.2} s, sweep \
-             {:.2} s, {:.1} M pixel·slab·light/s, {}) → {}",
-            scene.image.width,
-            scene.image.height,
-            r.plan.slabs,
-            r.plan.lights.len(),
-            scene.sweep.kernel,
-            r.ldi.fragments,
-            r.seconds_total,
-            r.seconds_ldi,
-            r.seconds_sweep,
-            throughput / 1e6,
-            match &r.adapter {
-                Some(a) => format!("GPU: {a}"),
-                None if samples > 0 => format!(
-                    "reference: {} light directions, {} threads",
-                    samples_side(samples) * samples_side(samples),
-                    r.threads
-                ),
-                None => format!("CPU: {} threads, {} path", r.threads, args.path.name()),
-            },
-            outputs
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-    }
-    Ok(exit::OK)
+        "exposure": scene.image.exposure,
+        "tonemap": scene.image.tonemap.name(),
+    })
 }
 
 /// Renders with the ground-truth reference (`--backend reference`): the same checks and LDI as

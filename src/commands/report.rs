@@ -21,6 +21,10 @@ pub struct ReportArgs {
     /// One line per case on stderr.
     #[arg(long, short)]
     pub verbose: bool,
+    /// Run only case I (0-based: row I of the whole report's report.csv) and write report.csv
+    /// with that row alone, for job arrays (docs/scale-out.md).
+    #[arg(long, value_name = "I")]
+    pub case: Option<usize>,
 }
 
 /// Runs `convshadow report`.
@@ -30,10 +34,24 @@ pub fn run(args: &ReportArgs) -> Result<i32, Failure> {
         quick: args.quick,
         out: args.out.clone(),
         verbose: args.verbose,
+        case: args.case,
     };
-    let report = pool
-        .install(|| run_report(&options))
-        .map_err(|e| Failure::new(exit::OUTPUT_FAILED, e))?;
+    let report = pool.install(|| run_report(&options)).map_err(|e| {
+        let code = if e.starts_with("--case") {
+            exit::BAD_ARGUMENTS
+        } else {
+            exit::OUTPUT_FAILED
+        };
+        Failure::new(code, e)
+    })?;
+    if let Some(c) = args.case {
+        println!(
+            "report: case {c} in {:.1} s → {}/report.csv",
+            report.seconds,
+            args.out.display()
+        );
+        return Ok(exit::OK);
+    }
     println!(
         "report: {} cases in {:.0} s → {}/report.csv, report.md, speed_vs_error.png",
         report.rows.len(),

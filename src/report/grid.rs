@@ -32,6 +32,9 @@ pub struct ReportOptions {
     pub out: PathBuf,
     /// Print one line per case on stderr.
     pub verbose: bool,
+    /// Run only case I (0-based, in the order of `report.csv`'s rows) and write its row alone to
+    /// `report.csv` (no markdown, no plot): for running the cases as separate jobs.
+    pub case: Option<usize>,
 }
 
 impl ReportOptions {

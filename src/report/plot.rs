@@ -81,6 +81,57 @@ pub fn draw(path: &Path, panels: &[Panel]) -> Result<bool, String> {
     Ok(text)
 }
 
+/// A pixel rectangle (left, top, right, bottom).
+type Rect = (i32, i32, i32, i32);
+
+/// Candidate label offsets from a point (right, left, above, below): the first whose box is free
+/// is taken and added to `taken`.
+fn free_offset(taken: &mut Vec<Rect>, (x, y): (i32, i32), chars: usize) -> Option<(i32, i32)> {
+    let (w, h) = (7 * chars as i32 + 2, 12);
+    let candidates = [
+        (7, -6),
+        (-7 - w, -6),
+        (6, -h - 4),
+        (6, 4),
+        (-w - 6, -h - 4),
+        (-w - 6, 4),
+        (-w / 2, -h - 7),
+        (-w / 2, 7),
+    ];
+    let overlaps = |a: &Rect, b: &Rect| a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3;
+    for (dx, dy) in candidates {
+        let r = (x + dx, y + dy, x + dx + w, y + dy + h);
+        if !taken.iter().any(|t| overlaps(t, &r)) {
+            taken.push(r);
+            return Some((dx, dy));
+        }
+    }
+    None
+}
+
+/// A log axis' tick label: only at 1, 2 and 5 times a power of ten (the others stay unlabelled,
+/// so the labels of a decade's upper ticks do not run into each other), printed without float
+/// noise (0.002, not 0.0020000000000000005).
+fn log_tick(v: &f64) -> String {
+    if !(v.is_finite() && *v > 0.0) {
+        return String::new();
+    }
+    let e = v.log10().floor();
+    let m = v / 10f64.powf(e);
+    // The key points of a log axis can land a hair either side of the mantissa.
+    let m = if m > 9.999 { 1.0 } else { m };
+    let e = if v / 10f64.powf(e) > 9.999 {
+        e + 1.0
+    } else {
+        e
+    };
+    if ![1.0, 2.0, 5.0].iter().any(|k| (m - k).abs() < 1e-3) {
+        return String::new();
+    }
+    let decimals = if e < 0.0 { (-e) as usize } else { 0 };
+    format!("{:.*}", decimals, m.round() * 10f64.powf(e))
+}
+
 type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
 
 fn draw_panel(
@@ -126,8 +177,8 @@ fn draw_panel(
             .y_desc(panel.y_desc.as_str())
             .x_labels(12)
             .y_labels(12)
-            .x_label_formatter(&|v| format!("{v}"))
-            .y_label_formatter(&|v| format!("{v}"))
+            .x_label_formatter(&log_tick)
+            .y_label_formatter(&log_tick)
             .label_style(("sans-serif", 13))
             .draw()?;
     } else {
@@ -149,15 +200,32 @@ fn draw_panel(
             });
         }
         chart.draw_series(line.iter().map(|&p| Circle::new(p, 4, color.filled())))?;
-        if text {
-            chart.draw_series(s.points.iter().map(|p| {
-                Text::new(
-                    format!("{}", p.2),
-                    (p.0, p.1.max(1e-6)),
-                    ("sans-serif", 11).into_font().color(&BLACK),
-                )
-            }))?;
+    }
+    if text {
+        // Slab-count labels beside their points, each where it overlaps no point and no other
+        // label (in pixels); a label with no free place is left out rather than drawn over one.
+        let at = |p: &(f64, f64, u32)| (p.0, p.1.max(1e-6));
+        let mut taken: Vec<Rect> = panel
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .map(|p| {
+                let (x, y) = chart.backend_coord(&at(p));
+                (x - 5, y - 5, x + 5, y + 5)
+            })
+            .collect();
+        let mut labels = Vec::new();
+        for p in panel.series.iter().flat_map(|s| s.points.iter()) {
+            let label = p.2.to_string();
+            let (x, y) = chart.backend_coord(&at(p));
+            if let Some(offset) = free_offset(&mut taken, (x, y), label.len()) {
+                labels.push((at(p), label, offset));
+            }
         }
+        chart.draw_series(labels.into_iter().map(|(p, label, offset)| {
+            EmptyElement::at(p)
+                + Text::new(label, offset, ("sans-serif", 11).into_font().color(&BLACK))
+        }))?;
     }
     if text {
         chart
@@ -226,4 +294,32 @@ pub fn panels(rows: &[Row]) -> Vec<Panel> {
             series: aggregate(rows, &|r| r.family == "scene", &|r| r.rmse_reference),
         },
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_ticks_label_one_two_five_only() {
+        assert_eq!(log_tick(&100.0), "100");
+        assert_eq!(log_tick(&20.000000000000004), "20");
+        assert_eq!(log_tick(&0.0020000000000000005), "0.002");
+        assert_eq!(log_tick(&0.049999999999), "0.05");
+        assert_eq!(log_tick(&0.0999999999), "0.1");
+        assert_eq!(log_tick(&80.0), "");
+        assert_eq!(log_tick(&0.03), "");
+    }
+
+    #[test]
+    fn labels_take_free_places_or_none() {
+        let mut taken = vec![(0, 0, 10, 10)];
+        // Right of a point far away: the first candidate.
+        assert_eq!(free_offset(&mut taken, (100, 100), 2), Some((7, -6)));
+        // The same point again: the right is taken now, so the left.
+        assert_eq!(free_offset(&mut taken, (100, 100), 2), Some((-7 - 16, -6)));
+        // Surrounded: no place at all.
+        let mut full = vec![(-1000, -1000, 1000, 1000)];
+        assert_eq!(free_offset(&mut full, (0, 0), 3), None);
+    }
 }

@@ -275,6 +275,10 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
         }
     };
     let quick = options.quick;
+    // Cases are numbered in row order; with `options.case` only that one is computed.
+    let want = |i: usize| options.case.is_none_or(|c| c == i);
+    let mut next = 0usize;
+    let kernel_count = kernels().count();
     // Edge.
     let slab_counts: &[u32] = if quick { &[64, 128] } else { &SLAB_COUNTS };
     let variances: Vec<(&str, f64)> = if quick {
@@ -289,6 +293,10 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
                     for kernel in kernels() {
                         for comp in [true, false] {
                             if !comp && quick && kernel != "ellipse2" {
+                                continue;
+                            }
+                            next += 1;
+                            if !want(next - 1) {
                                 continue;
                             }
                             let row = edge_row(&edge_setup(k, n, tilt, var, kernel, comp), level);
@@ -318,6 +326,11 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
     };
     let mut cached: Option<((u64, u64, u64), DiskReference)> = None;
     for (k, n, level, var, tilt) in disk_grid {
+        let group = next..next + kernel_count;
+        if !group.clone().any(want) {
+            next = group.end;
+            continue;
+        }
         let key = (k.to_bits(), var.to_bits(), tilt.to_bits());
         if cached.as_ref().is_none_or(|c| c.0 != key) {
             // The reference depends on d, σ² and tilt only (the disk polygon is the same mesh).
@@ -328,6 +341,10 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
         }
         let reference = &cached.as_ref().map(|c| &c.1).ok_or("no disk reference")?;
         for kernel in kernels() {
+            next += 1;
+            if !want(next - 1) {
+                continue;
+            }
             let row = disk_row(&disk_setup(k, n, tilt, var, kernel), level, reference);
             log(&row);
             rows.push(row);
@@ -340,10 +357,26 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
         (24, &SLAB_COUNTS)
     };
     for &n in scene_slabs {
-        for row in scene_rows(size, n, 16, options.verbose) {
-            log(&row);
-            rows.push(row);
+        let group = next..next + kernel_count;
+        next = group.end;
+        if !group.clone().any(want) {
+            continue;
         }
+        for (i, row) in group.zip(scene_rows(size, n, 16, options.verbose)) {
+            if want(i) {
+                log(&row);
+                rows.push(row);
+            }
+        }
+    }
+    if let Some(c) = options.case
+        && c >= next
+    {
+        return Err(format!(
+            "--case {c}: the {} report has {next} cases, 0 to {}",
+            if quick { "quick" } else { "full" },
+            next - 1
+        ));
     }
 
     // Files.
@@ -352,6 +385,13 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
         std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))
     };
     write("report.csv", &csv::csv(&rows))?;
+    if options.case.is_some() {
+        return Ok(Report {
+            rows,
+            seconds: start.elapsed().as_secs_f64(),
+            plot_text: false,
+        });
+    }
     let panels = plot::panels(&rows);
     let plot_text = plot::draw(&options.out.join("speed_vs_error.png"), &panels)?;
     let seconds = start.elapsed().as_secs_f64();
