@@ -9,7 +9,7 @@ use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::kernel::{KernelTable, PhaseMode};
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::Scene;
-use convshadow::cpu::ldi::Ldi;
+use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::cpu::reference::{Reference, ReferenceOptions};
 use convshadow::cpu::sweep::{SweepOptions, sweep};
 use convshadow::report::disk::DiskSetup;

@@ -1,4 +1,5 @@
-//! The layered depth image on the GPU (`shaders/ldi.wgsl`), mirroring `convshadow_cpu::ldi`.
+//! The layered depth image on the GPU (`shaders/ldi.wgsl`), mirroring the CPU builder
+//! (`convshadow_cpu::ldi`).
 //!
 //! The triangles are the same [`RasterSetup`] the CPU rasterizes (fixed-point vertices, boxes and
 //! depth planes computed once on the host) and are uploaded as they are. Passes:
@@ -11,11 +12,11 @@
 //! 4. `sort`: per-pixel sort by (depth key, triangle index): one invocation per fragment finds
 //!    its pixel (binary search of the offsets) and its rank among the pixel's fragments.
 //!
-//! The result is read back into the CPU's [`Ldi`] type, so `ldi_hash`, statistics and the sweep
+//! The result is read back into the shared [`Ldi`] type, so `ldi_hash`, statistics and the sweep
 //! input are the same code on both backends.
 
+use convshadow_common::ldi::{BYTES_PER_FRAGMENT, Ldi, LdiError, from_sortable_bits};
 use convshadow_common::raster::RasterSetup;
-use convshadow_cpu::ldi::{BYTES_PER_FRAGMENT, Ldi, LdiError, from_sortable_bits};
 
 use crate::buffers::{bind, check_size, groups_1d, pipeline, read_back, uniform, upload, zeroed};
 use crate::device::{GpuContext, GpuError};

@@ -9,11 +9,12 @@
 //! uniform filled by a buffer copy before each dispatch, so many slabs go in one submission.
 
 use convshadow_common::kernel::PhaseMode;
+use convshadow_common::ldi::Ldi;
 use convshadow_common::noise::{DetailKind, PERLIN4_SCALE};
 use convshadow_common::plan::{FLUSH_BELOW, RenderPlan, TF_SIZE};
 use convshadow_common::raster::RasterSetup;
-use convshadow_cpu::ldi::Ldi;
-use convshadow_cpu::sweep::{SweepOptions, SweepOutput};
+use convshadow_common::scene::MAX_MESHES;
+use convshadow_common::sweep_io::{MAX_LIGHT_CHANNELS, SweepOptions, SweepOutput};
 
 use crate::buffers::{bind, check_size, pipeline, read_back, uniform, upload, wait, zeroed};
 use crate::device::{GpuContext, GpuError};
@@ -31,10 +32,6 @@ pub const SWEEP_WGSL: &str = concat!(
     include_str!("shaders/sweep.wgsl"),
 );
 
-/// Largest lights × channels per pixel (the shader's private array; the CPU's bound too).
-pub const MAX_LIGHT_CHANNELS: usize = 48;
-/// Largest mesh count (mesh ids take 5 bits of a fragment's meta word).
-pub const MAX_MESHES: usize = 32;
 /// Largest triangle index + 1 (the other 27 bits of the meta word).
 pub const MAX_TRIANGLES: usize = 1 << 27;
 /// Words per light header and per material header.

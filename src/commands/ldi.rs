@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use convshadow_common::geometry::SceneGeometry;
-use convshadow_cpu::ldi::Ldi;
+use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use serde_json::json;
 
 use crate::exit::{self, Failure};

@@ -9,7 +9,7 @@ use convshadow_common::image_io::RgbImage;
 use convshadow_common::kernel::KernelSpec;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SlabSpec};
-use convshadow_cpu::ldi::Ldi;
+use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_cpu::reference::{Reference, ReferenceOptions, samples_side};
 use serde_json::json;
 

@@ -8,7 +8,7 @@ use std::path::Path;
 use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SceneError};
-use convshadow_cpu::ldi::Ldi;
+use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_cpu::sweep::{SweepOptions, SweepOutput, sweep};
 
 /// One edge set-up. The occluder covers world x ≥ 0, i.e. the image columns left of the centre

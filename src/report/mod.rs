@@ -25,7 +25,7 @@ use std::time::Instant;
 use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SlabSpec};
-use convshadow_cpu::ldi::Ldi;
+use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_cpu::reference::{Reference, ReferenceOptions};
 use convshadow_cpu::sweep::{SweepOptions, sweep};
 
