@@ -6,7 +6,7 @@ use std::path::Path;
 use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::mesh::load_obj;
 use convshadow::common::scene::Scene;
-use convshadow::cpu::ldi::Ldi;
+use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
 fn scene() -> Scene {

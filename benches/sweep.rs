@@ -10,8 +10,8 @@ use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::kernel::KERNEL_NAMES;
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::{Scene, SlabSpec};
-use convshadow::cpu::ldi::Ldi;
-use convshadow::cpu::sweep::{SweepOptions, SweepPath, sweep};
+use convshadow::cpu::ldi::{BuildLdi, Ldi};
+use convshadow::cpu::sweep::{CpuSweepOptions, SweepOptions, SweepPath, sweep_with};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
 /// A box of fog filling the view; `opacity` and `transport` set how fast the light dies.
@@ -63,13 +63,21 @@ impl Prepared {
     }
 
     fn run(&self, pool: &rayon::ThreadPool, path: SweepPath, skip_quiet: bool) {
-        let options = SweepOptions {
+        let cpu = CpuSweepOptions {
             path,
             skip_quiet,
-            ..SweepOptions::default()
+            ..CpuSweepOptions::default()
         };
-        pool.install(|| sweep(&self.plan, &self.geometry.raster, &self.ldi, &options))
-            .expect("sweep");
+        pool.install(|| {
+            sweep_with(
+                &self.plan,
+                &self.geometry.raster,
+                &self.ldi,
+                &SweepOptions::default(),
+                &cpu,
+            )
+        })
+        .expect("sweep");
     }
 }
 

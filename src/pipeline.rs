@@ -10,8 +10,10 @@ use convshadow_common::hash::Fingerprint;
 use convshadow_common::image_io::RgbImage;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SceneError};
-use convshadow_cpu::ldi::{Ldi, LdiError, LdiStats};
-use convshadow_cpu::sweep::{ChunkCounts, SweepError, SweepOptions, SweepPath, sweep};
+use convshadow_cpu::ldi::{BuildLdi, Ldi, LdiError, LdiStats};
+use convshadow_cpu::sweep::{
+    ChunkCounts, CpuSweepOptions, SweepError, SweepOptions, SweepPath, sweep_with,
+};
 use convshadow_gpu::{GpuContext, GpuError};
 
 /// Why a render (or an LDI build) failed. The CLI maps each to an exit code (docs/errors.md);
@@ -403,6 +405,8 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
         progress: req.progress,
         cancel: req.cancel,
         initial_light: None,
+    };
+    let cpu_options = CpuSweepOptions {
         path: req.path.sweep_path(),
         skip_quiet: req.skip_quiet,
         chunk_counts: Some(&chunk_counts),
@@ -410,7 +414,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     let out = match &choice.gpu {
         Some(ctx) => convshadow_gpu::sweep::sweep(ctx, &plan, &geometry.raster, &ldi, &options)?,
         None => pool
-            .install(|| sweep(&plan, &geometry.raster, &ldi, &options))
+            .install(|| sweep_with(&plan, &geometry.raster, &ldi, &options, &cpu_options))
             .map_err(|e| match e {
                 SweepError::Interrupted => RenderError::Interrupted,
             })?,

@@ -7,7 +7,7 @@ mod support;
 
 use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::raster::{FIXED_ONE, RasterSetup, TriangleSetup};
-use convshadow::cpu::ldi::Ldi;
+use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow_gpu::GpuContext;
 use convshadow_gpu::ldi::build_ldi;
 use support::TestRng;

@@ -12,7 +12,7 @@ use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::kernel::{KernelTable, PhaseMode};
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::Scene;
-use convshadow::cpu::ldi::Ldi;
+use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::cpu::reference::disk::DiskSetup;
 use convshadow::cpu::reference::edge::{EdgeSetup, half_crossing, model_profile, phi, width_10_90};
 use convshadow::cpu::reference::impulse::{empty_scene, impulse, moments};

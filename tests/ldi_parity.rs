@@ -11,7 +11,7 @@ use std::path::Path;
 use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::mesh::load_obj;
 use convshadow::common::scene::Scene;
-use convshadow::cpu::ldi::Ldi;
+use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::cpu::parity::inside;
 use glam::DVec3;
 use proptest::prelude::*;

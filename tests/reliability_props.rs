@@ -11,7 +11,7 @@ use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::mesh::TriMesh;
 use convshadow::common::raster::RasterSetup;
 use convshadow::common::scene::{CameraSpec, ImageSpec, Scene};
-use convshadow::cpu::ldi::Ldi;
+use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::pipeline::{RenderRequest, render};
 use glam::DVec3;
 use proptest::prelude::*;

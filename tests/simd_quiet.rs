@@ -8,8 +8,8 @@ use std::path::Path;
 use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::Scene;
-use convshadow::cpu::ldi::Ldi;
-use convshadow::cpu::sweep::{ChunkCounts, SweepOptions, SweepPath, sweep};
+use convshadow::cpu::ldi::{BuildLdi, Ldi};
+use convshadow::cpu::sweep::{ChunkCounts, CpuSweepOptions, SweepOptions, SweepPath, sweep_with};
 use convshadow::pipeline::image_fingerprint;
 
 mod support;
@@ -54,11 +54,14 @@ fn compare(kernel: &str, what: &str, initial_of: &dyn Fn(usize, usize, usize) ->
     let run = |path: SweepPath, counts: Option<&ChunkCounts>| {
         let options = SweepOptions {
             initial_light: Some(&initial),
-            path,
-            chunk_counts: counts,
             ..SweepOptions::default()
         };
-        sweep(&plan, &g.raster, &ldi, &options).expect("sweep")
+        let cpu = CpuSweepOptions {
+            path,
+            chunk_counts: counts,
+            ..CpuSweepOptions::default()
+        };
+        sweep_with(&plan, &g.raster, &ldi, &options, &cpu).expect("sweep")
     };
     let scalar = run(SweepPath::Scalar, None);
     let simd = run(SweepPath::Simd, Some(&counts));

@@ -11,7 +11,7 @@
 //! reference, in this file), and [`SweepPath::Simd`], eight pixels at a time with `wide`
 //! (`crate::sweep_simd`), which gives the same bits and may skip provably quiet pixels.
 
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use convshadow_common::hash::row_hash;
 use convshadow_common::plan::RenderPlan;
@@ -25,25 +25,8 @@ use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{material_at, shade, shading_depth};
 use crate::sweep_simd::{QuietRow, QuietSetup, Reach, sweep_row_simd};
 
-/// Largest light count × channels handled per pixel on the stack.
-pub const MAX_LIGHT_CHANNELS: usize = 48;
-
-/// Why a sweep stopped early.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-pub enum SweepError {
-    /// The cancel flag was raised (Ctrl-C / SIGTERM).
-    #[error("interrupted")]
-    Interrupted,
-}
-
-/// The result of a sweep.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SweepOutput {
-    /// Linear RGB, `width·height·3`, the guard band cropped away.
-    pub image: Vec<f32>,
-    /// The light buffers after the last slab (grid-sized, row-major `[row][light][channel][x]`).
-    pub light: Vec<f32>,
-}
+// The backend-neutral contract lives in `convshadow-common`, shared with the GPU port.
+pub use convshadow_common::sweep_io::{MAX_LIGHT_CHANNELS, SweepError, SweepOptions, SweepOutput};
 
 /// Which CPU code path runs the sweep. Both give the same bits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -55,15 +38,10 @@ pub enum SweepPath {
     Simd,
 }
 
-/// Options of a sweep run.
-pub struct SweepOptions<'a> {
-    /// Called after every slab with the slab index.
-    pub progress: &'a (dyn Fn(u32) + Sync),
-    /// Checked between slabs; when raised the sweep stops with [`SweepError::Interrupted`].
-    pub cancel: Option<&'a AtomicBool>,
-    /// Initial light value per light and channel (`None` = 1, the unoccluded light).
-    pub initial_light: Option<&'a [f32]>,
-    /// The CPU code path (the GPU port ignores it).
+/// CPU-only knobs of a sweep run (the shared ones are in [`SweepOptions`]).
+#[derive(Clone, Copy, Debug)]
+pub struct CpuSweepOptions<'a> {
+    /// The CPU code path.
     pub path: SweepPath,
     /// SIMD path only: skip 8-pixel chunks whose result is known exactly without computing it
     /// (unoccluded light and no mesh, or opaque pixels in the dark). On by default; off only to
@@ -95,12 +73,9 @@ impl ChunkCounts {
     }
 }
 
-impl Default for SweepOptions<'_> {
+impl Default for CpuSweepOptions<'_> {
     fn default() -> Self {
-        SweepOptions {
-            progress: &|_| {},
-            cancel: None,
-            initial_light: None,
+        CpuSweepOptions {
             path: SweepPath::default(),
             skip_quiet: true,
             chunk_counts: None,
@@ -129,12 +104,23 @@ pub(crate) struct RowState<'a> {
     pub alpha: &'a mut [f32],
 }
 
-/// Runs the sweep on the current rayon pool with the path chosen in `options`.
+/// Runs the sweep on the current rayon pool with the default CPU knobs (SIMD, quiet skipping).
 pub fn sweep(
     plan: &RenderPlan,
     raster: &RasterSetup,
     ldi: &Ldi,
     options: &SweepOptions<'_>,
+) -> Result<SweepOutput, SweepError> {
+    sweep_with(plan, raster, ldi, options, &CpuSweepOptions::default())
+}
+
+/// Runs the sweep on the current rayon pool with the path and knobs chosen in `cpu`.
+pub fn sweep_with(
+    plan: &RenderPlan,
+    raster: &RasterSetup,
+    ldi: &Ldi,
+    options: &SweepOptions<'_>,
+    cpu: &CpuSweepOptions<'_>,
 ) -> Result<SweepOutput, SweepError> {
     let w = plan.grid_width as usize;
     let h = plan.grid_height as usize;
@@ -158,8 +144,8 @@ pub fn sweep(
 
     // SIMD path: per-row spans of the light that is not exactly 1 / not exactly 0, and per-chunk
     // cursor summaries, so quiet chunks can be recognised without touching their pixels.
-    let quiet = (options.path == SweepPath::Simd && options.skip_quiet)
-        .then(|| QuietSetup::new(plan, ldi, &prev));
+    let quiet =
+        (cpu.path == SweepPath::Simd && cpu.skip_quiet).then(|| QuietSetup::new(plan, ldi, &prev));
     let chunks_per_row = (w / 8).max(1);
     let (mut spans_prev, mut spans_cur, mut chunk_states) = match &quiet {
         Some(q) => (
@@ -203,12 +189,12 @@ pub fn sweep(
                     },
                 )
             });
-        match (options.path, &quiet) {
+        match (cpu.path, &quiet) {
             (SweepPath::Scalar, _) => rows.for_each(|(y, row)| {
                 sweep_row_scalar(&ctx, y, prev_ref, row);
             }),
             (SweepPath::Simd, None) => rows.for_each(|(y, row)| {
-                sweep_row_simd(&ctx, &reach, y, prev_ref, row, None, options.chunk_counts);
+                sweep_row_simd(&ctx, &reach, y, prev_ref, row, None, cpu.chunk_counts);
             }),
             (SweepPath::Simd, Some(q)) => {
                 let spans_prev_ref = &spans_prev;
@@ -228,7 +214,7 @@ pub fn sweep(
                             prev_ref,
                             row,
                             Some(quiet_row),
-                            options.chunk_counts,
+                            cpu.chunk_counts,
                         );
                     });
                 std::mem::swap(&mut spans_prev, &mut spans_cur);

@@ -7,7 +7,7 @@
 use arbitrary::Arbitrary;
 use convshadow_common::camera::Camera;
 use convshadow_common::raster::RasterSetup;
-use convshadow_cpu::ldi::{Ldi, LdiError};
+use convshadow_cpu::ldi::{BuildLdi, Ldi, LdiError};
 use glam::DVec3;
 use libfuzzer_sys::fuzz_target;
 

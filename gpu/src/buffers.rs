@@ -22,32 +22,34 @@ pub fn check_size(ctx: &GpuContext, what: &'static str, bytes: u64) -> Result<()
     Ok(())
 }
 
-/// A storage buffer holding `data` (padded to at least [`MIN_BYTES`]).
-pub fn upload(
+/// A storage buffer holding `data`, zero-padded to at least one element and [`MIN_BYTES`] (a
+/// binding of a runtime-sized array must hold one element).
+pub fn upload<T: bytemuck::Pod>(
     ctx: &GpuContext,
     what: &'static str,
-    data: &[u32],
+    data: &[T],
     copy_src: bool,
 ) -> Result<wgpu::Buffer, GpuError> {
-    let bytes = data.len() as u64 * 4;
-    check_size(ctx, what, bytes)?;
+    let bytes: &[u8] = bytemuck::cast_slice(data);
+    check_size(ctx, what, bytes.len() as u64)?;
     let mut usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
     if copy_src {
         usage |= wgpu::BufferUsages::COPY_SRC;
     }
+    let least = std::mem::size_of::<T>().max(MIN_BYTES as usize);
     let mut padded;
-    let contents: &[u32] = if bytes < MIN_BYTES {
-        padded = data.to_vec();
-        padded.resize((MIN_BYTES / 4) as usize, 0);
+    let contents: &[u8] = if bytes.len() < least {
+        padded = bytes.to_vec();
+        padded.resize(least, 0);
         &padded
     } else {
-        data
+        bytes
     };
     Ok(ctx
         .device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(what),
-            contents: bytemuck::cast_slice(contents),
+            contents,
             usage,
         }))
 }
@@ -66,14 +68,12 @@ pub fn zeroed(ctx: &GpuContext, what: &'static str, words: u64) -> Result<wgpu::
     }))
 }
 
-/// A uniform buffer holding `data`.
-pub fn uniform(ctx: &GpuContext, what: &'static str, data: &[u32]) -> wgpu::Buffer {
-    let mut padded = data.to_vec();
-    padded.resize(padded.len().next_multiple_of(4).max(4), 0);
+/// A uniform buffer holding `value` (its WGSL struct is padded to a multiple of 16 bytes).
+pub fn uniform<T: bytemuck::Pod>(ctx: &GpuContext, what: &'static str, value: &T) -> wgpu::Buffer {
     ctx.device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(what),
-            contents: bytemuck::cast_slice(&padded),
+            contents: bytemuck::bytes_of(value),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         })
 }

@@ -1,4 +1,5 @@
-//! The layered depth image on the GPU (`shaders/ldi.wgsl`), mirroring `convshadow_cpu::ldi`.
+//! The layered depth image on the GPU (`shaders/ldi.wgsl`), mirroring the CPU builder
+//! (`convshadow_cpu::ldi`).
 //!
 //! The triangles are the same [`RasterSetup`] the CPU rasterizes (fixed-point vertices, boxes and
 //! depth planes computed once on the host) and are uploaded as they are. Passes:
@@ -11,48 +12,45 @@
 //! 4. `sort`: per-pixel sort by (depth key, triangle index): one invocation per fragment finds
 //!    its pixel (binary search of the offsets) and its rank among the pixel's fragments.
 //!
-//! The result is read back into the CPU's [`Ldi`] type, so `ldi_hash`, statistics and the sweep
+//! The result is read back into the shared [`Ldi`] type, so `ldi_hash`, statistics and the sweep
 //! input are the same code on both backends.
 
+use convshadow_common::ldi::{BYTES_PER_FRAGMENT, Ldi, LdiError, from_sortable_bits};
 use convshadow_common::raster::RasterSetup;
-use convshadow_cpu::ldi::{BYTES_PER_FRAGMENT, Ldi, LdiError, from_sortable_bits};
 
 use crate::buffers::{bind, check_size, groups_1d, pipeline, read_back, uniform, upload, zeroed};
 use crate::device::{GpuContext, GpuError};
+use crate::layout::{LdiParams, Triangle, WorkItem, slot};
+use crate::shader::ldi_wgsl;
 
-/// The WGSL source of the LDI passes.
-pub const LDI_WGSL: &str = include_str!("shaders/ldi.wgsl");
-/// Words per uploaded triangle.
-const TRI_WORDS: usize = 16;
 /// Invocations per workgroup (`@workgroup_size(64)` in the shader).
 const WORKGROUP: u32 = 64;
 
-/// The triangles as the shader reads them (see the layout comment in `ldi.wgsl`).
-fn triangle_words(setup: &RasterSetup) -> Vec<u32> {
-    let mut words = Vec::with_capacity(setup.triangles.len() * TRI_WORDS);
-    for t in &setup.triangles {
-        for v in t.v {
-            words.push(v[0] as u32);
-            words.push(v[1] as u32);
-        }
-        words.extend(t.bbox.map(|b| b as u32));
-        words.push(t.depth_ref.to_bits());
-        words.push(t.depth_dx.to_bits());
-        words.push(t.depth_dy.to_bits());
-        words.push(t.mesh);
-        words.push(0);
-        words.push(0);
-    }
-    words
+/// The triangles as the shader reads them.
+fn triangles(setup: &RasterSetup) -> Vec<Triangle> {
+    setup
+        .triangles
+        .iter()
+        .map(|t| Triangle {
+            v: t.v,
+            bbox: t.bbox,
+            depth_ref: t.depth_ref,
+            depth_dx: t.depth_dx,
+            depth_dy: t.depth_dy,
+            mesh: t.mesh,
+        })
+        .collect()
 }
 
 /// One (triangle, row) work item per covered row of each triangle's box.
-fn work_items(setup: &RasterSetup) -> Vec<u32> {
+fn work_items(setup: &RasterSetup) -> Vec<WorkItem> {
     let mut items = Vec::new();
     for (t, tri) in setup.triangles.iter().enumerate() {
         for y in tri.bbox[1]..=tri.bbox[3] {
-            items.push(t as u32);
-            items.push(y as u32);
+            items.push(WorkItem {
+                triangle: t as u32,
+                row: y as u32,
+            });
         }
     }
     items
@@ -82,16 +80,14 @@ fn params(ctx: &GpuContext, items: u32, setup: &RasterSetup) -> wgpu::Buffer {
     uniform(
         ctx,
         "ldi params",
-        &[
+        &LdiParams {
             items,
-            setup.width,
-            setup.height,
-            setup.width * setup.height,
-            x * WORKGROUP,
-            0,
-            0,
-            0,
-        ],
+            width: setup.width,
+            height: setup.height,
+            pixels: setup.width * setup.height,
+            stride: x * WORKGROUP,
+            ..LdiParams::default()
+        },
     )
 }
 
@@ -113,13 +109,13 @@ pub fn build_ldi(
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("ldi.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(LDI_WGSL.into()),
+            source: wgpu::ShaderSource::Wgsl(ldi_wgsl().into()),
         });
-    let tris = upload(ctx, "LDI triangle", &triangle_words(setup), false)?;
-    let item_words = work_items(setup);
-    let n_items = (item_words.len() / 2) as u32;
-    let items = upload(ctx, "LDI work item", &item_words, false)?;
-    drop(item_words);
+    let tris = upload(ctx, "LDI triangle", &triangles(setup), false)?;
+    let item_list = work_items(setup);
+    let n_items = item_list.len() as u32;
+    let items = upload(ctx, "LDI work item", &item_list, false)?;
+    drop(item_list);
     let counts = zeroed(ctx, "LDI count", pixels)?;
 
     // 1. Counts.
@@ -128,7 +124,12 @@ pub fn build_ldi(
     let group = bind(
         ctx,
         &count,
-        &[(0, &item_params), (1, &tris), (2, &items), (3, &counts)],
+        &[
+            (slot::LDI_PARAMS, &item_params),
+            (slot::TRIS, &tris),
+            (slot::ITEMS, &items),
+            (slot::COUNTS, &counts),
+        ],
     );
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     dispatch(&mut encoder, &count, &group, n_items);
@@ -165,12 +166,12 @@ pub fn build_ldi(
         ctx,
         &fill,
         &[
-            (0, &item_params),
-            (1, &tris),
-            (2, &items),
-            (4, &cursor),
-            (5, &key_depth),
-            (6, &key_tri),
+            (slot::LDI_PARAMS, &item_params),
+            (slot::TRIS, &tris),
+            (slot::ITEMS, &items),
+            (slot::CURSOR, &cursor),
+            (slot::KEY_DEPTH, &key_depth),
+            (slot::KEY_TRI, &key_tri),
         ],
     );
     let sorted_depth = zeroed(ctx, "LDI fragment key", total)?;
@@ -180,12 +181,12 @@ pub fn build_ldi(
         ctx,
         &sort,
         &[
-            (0, &fragment_params),
-            (5, &key_depth),
-            (6, &key_tri),
-            (7, &offsets_buf),
-            (8, &sorted_depth),
-            (9, &sorted_tri),
+            (slot::LDI_PARAMS, &fragment_params),
+            (slot::KEY_DEPTH, &key_depth),
+            (slot::KEY_TRI, &key_tri),
+            (slot::OFFSETS, &offsets_buf),
+            (slot::SORTED_DEPTH, &sorted_depth),
+            (slot::SORTED_TRI, &sorted_tri),
         ],
     );
     let mut encoder = ctx.device.create_command_encoder(&Default::default());

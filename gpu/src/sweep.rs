@@ -1,70 +1,54 @@
-//! The slab sweep on the GPU (`shaders/sweep.wgsl` and the stage files it is concatenated with),
-//! mirroring `convshadow_cpu::sweep`.
+//! The slab sweep on the GPU (`shaders/sweep.wgsl` and the stage files it imports), mirroring
+//! `convshadow_cpu::sweep`.
 //!
 //! Every table the sweep reads comes from the [`RenderPlan`] built on the host (kernel taps,
 //! per-slab hashes, phases and shifts, transfer functions, octave tables, detail transforms,
-//! slab faces) and is uploaded as it is into one `tables` storage buffer of 32-bit words (floats
-//! as their bits): nothing is recomputed on the device. One dispatch per slab, one invocation per
+//! slab faces) and is uploaded as it is, one storage buffer per table, each an array of one of
+//! the `layout` structs: nothing is recomputed on the device. One dispatch per slab, one invocation per
 //! grid pixel; the two light buffers ping-pong; the slab index reaches the shader through a small
 //! uniform filled by a buffer copy before each dispatch, so many slabs go in one submission.
 
 use convshadow_common::kernel::PhaseMode;
+use convshadow_common::ldi::Ldi;
 use convshadow_common::noise::{DetailKind, PERLIN4_SCALE};
-use convshadow_common::plan::{FLUSH_BELOW, RenderPlan, TF_SIZE};
+use convshadow_common::plan::{FLUSH_BELOW, LightPlan, MaterialPlan, RenderPlan, TF_SIZE};
 use convshadow_common::raster::RasterSetup;
-use convshadow_cpu::ldi::Ldi;
-use convshadow_cpu::sweep::{SweepOptions, SweepOutput};
+use convshadow_common::scene::MAX_MESHES;
+use convshadow_common::sweep_io::{MAX_LIGHT_CHANNELS, SweepOptions, SweepOutput};
 
 use crate::buffers::{bind, check_size, pipeline, read_back, uniform, upload, wait, zeroed};
 use crate::device::{GpuContext, GpuError};
+use crate::layout::{
+    Cursor, DETAIL_FBM, DETAIL_NONE, DETAIL_PERLIN, DETAIL_RIDGED, DETAIL_TURBULENCE, Globals,
+    LightHeader, LightSlab, MESH_BITS, MaterialHeader, MeshHeader, Octave, PHASE_PER_PIXEL,
+    PHASE_PER_SLAB, PHASE_SCHEDULE, Slab, SlabParams, Tap, TransferEntry, slot,
+};
+use crate::shader::sweep_wgsl;
 
-/// The WGSL source of the sweep: the stage files concatenated (hash, noise, texture3d, kernels,
-/// parity, shading, composite, sweep).
-pub const SWEEP_WGSL: &str = concat!(
-    include_str!("shaders/hash.wgsl"),
-    include_str!("shaders/noise.wgsl"),
-    include_str!("shaders/texture3d.wgsl"),
-    include_str!("shaders/kernels.wgsl"),
-    include_str!("shaders/parity.wgsl"),
-    include_str!("shaders/shading.wgsl"),
-    include_str!("shaders/composite.wgsl"),
-    include_str!("shaders/sweep.wgsl"),
-);
-
-/// Largest lights × channels per pixel (the shader's private array; the CPU's bound too).
-pub const MAX_LIGHT_CHANNELS: usize = 48;
-/// Largest mesh count (mesh ids take 5 bits of a fragment's meta word).
-pub const MAX_MESHES: usize = 32;
-/// Largest triangle index + 1 (the other 27 bits of the meta word).
-pub const MAX_TRIANGLES: usize = 1 << 27;
-/// Words per light header and per material header.
-const HEADER_WORDS: usize = 16;
+/// Largest triangle index + 1 (the bits of a fragment's meta word above the mesh id).
+pub const MAX_TRIANGLES: usize = 1 << (32 - MESH_BITS);
 /// Slabs encoded per submission (progress and cancel are checked between submissions).
 const SLABS_PER_SUBMIT: u32 = 32;
 /// The sweep's workgroup edge (`@workgroup_size(8, 8)`).
 const TILE: u32 = 8;
 
-/// A word buffer with float pushes.
-#[derive(Default)]
-struct Words(Vec<u32>);
-
-impl Words {
-    fn at(&self) -> u32 {
-        self.0.len() as u32
-    }
-    fn u(&mut self, v: u32) {
-        self.0.push(v);
-    }
-    fn f(&mut self, v: f32) {
-        self.0.push(v.to_bits());
-    }
-    fn fs(&mut self, v: &[f32]) {
-        self.0.extend(v.iter().map(|x| x.to_bits()));
-    }
+/// Everything the sweep reads besides the LDI and the light buffers, as the shader's structs.
+struct Tables {
+    globals: Globals,
+    slabs: Vec<Slab>,
+    lights: Vec<LightHeader>,
+    light_slabs: Vec<LightSlab>,
+    taps: Vec<Tap>,
+    materials: Vec<MaterialHeader>,
+    tf_entries: Vec<TransferEntry>,
+    octaves: Vec<Octave>,
+    voxels: Vec<f32>,
+    meshes: Vec<MeshHeader>,
+    normals: Vec<[f32; 3]>,
 }
 
-/// The tables buffer and the `Globals` uniform words (layout: `struct Globals` in sweep.wgsl).
-fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<(Vec<u32>, Vec<u32>), GpuError> {
+/// Checks the scene against the shader's limits.
+fn check_limits(plan: &RenderPlan, raster: &RasterSetup) -> Result<(), GpuError> {
     let lights = plan.lights.len();
     let ch = plan.channels as usize;
     if lights * ch > MAX_LIGHT_CHANNELS {
@@ -84,167 +68,142 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<(Vec<u32>, Ve
             raster.triangles.len()
         )));
     }
+    Ok(())
+}
+
+/// One light's header, appending its taps and per-slab values.
+fn light_tables(light: &LightPlan, slabs: usize, t: &mut Tables) -> LightHeader {
+    let table = &light.table;
+    let header = LightHeader {
+        taps: t.taps.len() as u32,
+        taps_per_phase: table.taps_per_phase,
+        phase_bits: table.phase_bits(),
+        phase_mode: match table.phase_mode {
+            PhaseMode::PerPixel => PHASE_PER_PIXEL,
+            PhaseMode::PerSlab => PHASE_PER_SLAB,
+            PhaseMode::Schedule => PHASE_SCHEDULE,
+        },
+        color: light.color,
+        half_vector: light.half_vector,
+    };
+    t.taps.extend(table.taps.iter().map(|tap| Tap {
+        dx: tap.dx,
+        dy: tap.dy,
+        w: tap.w,
+    }));
+    t.light_slabs.extend((0..slabs).map(|k| LightSlab {
+        hash: light.slab_hash.get(k).copied().unwrap_or(0),
+        phase: table.slab_phase.get(k).copied().unwrap_or(0),
+        shift: table.slab_shift.get(k).copied().unwrap_or([0, 0]),
+    }));
+    header
+}
+
+/// One material's header, appending its transfer function, octaves and texture voxels.
+fn material_tables(m: &MaterialPlan, t: &mut Tables) -> MaterialHeader {
+    // Transfer functions are either constant or TF_SIZE entries (the shader assumes so).
+    debug_assert!(m.tf.len() == 1 || m.tf.len() == TF_SIZE);
+    let mut header = MaterialHeader {
+        tf: t.tf_entries.len() as u32,
+        tf_len: m.tf.len() as u32,
+        detail_kind: DETAIL_NONE,
+        octaves: t.octaves.len() as u32,
+        texture: t.voxels.len() as u32,
+        dims: [1, 1, 1],
+        ..MaterialHeader::default()
+    };
+    t.tf_entries.extend(m.tf.iter().map(|e| TransferEntry {
+        color: e.color,
+        alpha: e.alpha,
+        attenuation: e.attenuation,
+    }));
+    if let Some(d) = &m.detail {
+        let n = d.octave_frequency.len().min(d.octave_amplitude.len());
+        t.octaves.extend((0..n).map(|i| Octave {
+            frequency: d.octave_frequency[i],
+            amplitude: d.octave_amplitude[i],
+        }));
+        header.detail_kind = match d.kind {
+            DetailKind::Perlin => DETAIL_PERLIN,
+            DetailKind::Fbm => DETAIL_FBM,
+            DetailKind::Ridged => DETAIL_RIDGED,
+            DetailKind::Turbulence => DETAIL_TURBULENCE,
+        };
+        header.octave_count = n as u32;
+        header.inv_amplitude_sum = d.inv_amplitude_sum;
+        header.animated = u32::from(d.time.is_some());
+        header.time = d.time.unwrap_or(0.0);
+    }
+    if let Some(tex) = &m.texture {
+        t.voxels.extend_from_slice(&tex.voxels);
+        header.dims = tex.dims;
+        header.has_texture = 1;
+    }
+    if let Some((strength, exponent)) = m.specular {
+        header.has_specular = 1;
+        header.spec_strength = strength;
+        header.spec_exponent = exponent;
+    }
+    header
+}
+
+/// All the sweep's tables from the plan (nothing is recomputed on the device).
+fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuError> {
+    check_limits(plan, raster)?;
     let slabs = plan.slabs as usize;
-    let mut t = Words::default();
-    let off_slab_front = t.at();
-    t.fs(&plan.slab_front);
-    let off_slab_back = t.at();
-    t.fs(&plan.slab_back);
-    let off_jitter_hash = t.at();
-    t.0.extend(&plan.jitter_slab_hash);
-
-    // Per light: taps (dx, dy, w0..w3), slab hashes, slab phases, slab shifts.
-    let mut light_offsets = Vec::with_capacity(lights);
+    let mut t = Tables {
+        globals: Globals {
+            grid_w: plan.grid_width,
+            grid_h: plan.grid_height,
+            guard: plan.guard,
+            width: plan.width,
+            height: plan.height,
+            slabs: plan.slabs,
+            lights: plan.lights.len() as u32,
+            channels: plan.channels,
+            jitter: u32::from(plan.jitter),
+            slab_distance: plan.slab_distance,
+            flush_below: FLUSH_BELOW,
+            perlin4_scale: PERLIN4_SCALE,
+            bg_r: plan.background[0],
+            bg_g: plan.background[1],
+            bg_b: plan.background[2],
+            row_len: plan.light_row_len() as u32,
+        },
+        slabs: (0..slabs)
+            .map(|k| Slab {
+                front: plan.slab_front[k],
+                back: plan.slab_back[k],
+                jitter_hash: plan.jitter_slab_hash.get(k).copied().unwrap_or(0),
+            })
+            .collect(),
+        lights: Vec::with_capacity(plan.lights.len()),
+        light_slabs: Vec::new(),
+        taps: Vec::new(),
+        materials: Vec::with_capacity(plan.materials.len()),
+        tf_entries: Vec::new(),
+        octaves: Vec::new(),
+        voxels: Vec::new(),
+        meshes: plan
+            .mesh_to_detail
+            .iter()
+            .zip(&plan.mesh_material)
+            .map(|(&to_detail, &material)| MeshHeader {
+                to_detail,
+                material,
+            })
+            .collect(),
+        normals: raster.triangles.iter().map(|tri| tri.normal).collect(),
+    };
     for light in &plan.lights {
-        let table = &light.table;
-        let taps = t.at();
-        for tap in &table.taps {
-            t.u(tap.dx as u32);
-            t.u(tap.dy as u32);
-            t.fs(&tap.w);
-        }
-        let hashes = t.at();
-        t.0.extend(&light.slab_hash);
-        let phases = t.at();
-        for k in 0..slabs {
-            t.u(table.slab_phase.get(k).copied().unwrap_or(0));
-        }
-        let shifts = t.at();
-        for k in 0..slabs {
-            let s = table.slab_shift.get(k).copied().unwrap_or([0, 0]);
-            t.u(s[0] as u32);
-            t.u(s[1] as u32);
-        }
-        light_offsets.push((taps, hashes, phases, shifts));
+        let header = light_tables(light, slabs, &mut t);
+        t.lights.push(header);
     }
-
-    // Per material: transfer function (7 words an entry), octave table (frequency, amplitude),
-    // texture voxels.
-    let mut material_offsets = Vec::with_capacity(plan.materials.len());
     for m in &plan.materials {
-        let tf = t.at();
-        for e in &m.tf {
-            t.fs(&e.color);
-            t.f(e.alpha);
-            t.fs(&e.attenuation);
-        }
-        let octaves = t.at();
-        if let Some(d) = &m.detail {
-            let n = d.octave_frequency.len().min(d.octave_amplitude.len());
-            for i in 0..n {
-                t.f(d.octave_frequency[i]);
-                t.f(d.octave_amplitude[i]);
-            }
-        }
-        let texture = t.at();
-        if let Some(tex) = &m.texture {
-            t.fs(&tex.voxels);
-        }
-        material_offsets.push((tf, octaves, texture));
+        let header = material_tables(m, &mut t);
+        t.materials.push(header);
     }
-
-    let off_lights = t.at();
-    for (light, &(taps, hashes, phases, shifts)) in plan.lights.iter().zip(&light_offsets) {
-        let table = &light.table;
-        let start = t.at();
-        t.u(taps);
-        t.u(table.taps_per_phase);
-        t.u(table.phase_bits());
-        t.u(match table.phase_mode {
-            PhaseMode::PerPixel => 0,
-            PhaseMode::PerSlab => 1,
-            PhaseMode::Schedule => 2,
-        });
-        t.u(hashes);
-        t.u(phases);
-        t.u(shifts);
-        t.fs(&light.color);
-        t.fs(&light.half_vector);
-        while t.at() < start + HEADER_WORDS as u32 {
-            t.u(0);
-        }
-    }
-    let off_materials = t.at();
-    for (m, &(tf, octaves, texture)) in plan.materials.iter().zip(&material_offsets) {
-        let start = t.at();
-        t.u(tf);
-        t.u(m.tf.len() as u32);
-        match &m.detail {
-            Some(d) => {
-                t.u(match d.kind {
-                    DetailKind::Perlin => 1,
-                    DetailKind::Fbm => 2,
-                    DetailKind::Ridged => 3,
-                    DetailKind::Turbulence => 4,
-                });
-                t.u(d.octave_frequency.len().min(d.octave_amplitude.len()) as u32);
-                t.u(octaves);
-                t.f(d.inv_amplitude_sum);
-                t.u(u32::from(d.time.is_some()));
-                t.f(d.time.unwrap_or(0.0));
-            }
-            None => {
-                t.0.extend([0, 0, octaves, 0, 0, 0]);
-            }
-        }
-        match &m.texture {
-            Some(tex) => {
-                t.u(texture);
-                t.0.extend(tex.dims);
-                t.u(1);
-            }
-            None => t.0.extend([texture, 1, 1, 1, 0]),
-        }
-        match m.specular {
-            Some((strength, exponent)) => {
-                t.u(1);
-                t.f(strength);
-                t.u(exponent);
-            }
-            None => t.0.extend([0, 0, 0]),
-        }
-        debug_assert_eq!(t.at(), start + HEADER_WORDS as u32);
-        // Transfer functions are either constant or TF_SIZE entries (the shader assumes so).
-        debug_assert!(m.tf.len() == 1 || m.tf.len() == TF_SIZE);
-    }
-    let off_mesh_material = t.at();
-    t.0.extend(&plan.mesh_material);
-    let off_mesh_to_detail = t.at();
-    for m in &plan.mesh_to_detail {
-        t.fs(m);
-    }
-    let off_normals = t.at();
-    for tri in &raster.triangles {
-        t.fs(&tri.normal);
-    }
-
-    let globals = vec![
-        plan.grid_width,
-        plan.grid_height,
-        plan.guard,
-        plan.width,
-        plan.height,
-        plan.slabs,
-        lights as u32,
-        plan.channels,
-        u32::from(plan.jitter),
-        plan.slab_distance.to_bits(),
-        FLUSH_BELOW.to_bits(),
-        PERLIN4_SCALE.to_bits(),
-        plan.background[0].to_bits(),
-        plan.background[1].to_bits(),
-        plan.background[2].to_bits(),
-        plan.light_row_len() as u32,
-        off_slab_front,
-        off_slab_back,
-        off_jitter_hash,
-        off_lights,
-        off_materials,
-        off_mesh_material,
-        off_mesh_to_detail,
-        off_normals,
-    ];
-    Ok((t.0, globals))
+    Ok(t)
 }
 
 /// Runs the sweep on the GPU: the same image and final light buffers as
@@ -266,7 +225,7 @@ pub fn sweep(
             plan.light_row_len() / w.max(1) as usize
         )));
     }
-    let (tables, globals) = build_tables(plan, raster)?;
+    let tables = build_tables(plan, raster)?;
     check_size(ctx, "light", light_words * 4)?;
     check_size(ctx, "per-pixel colour", pixels * 16)?;
 
@@ -277,30 +236,42 @@ pub fn sweep(
     let light_a = upload(ctx, "light", &initial, true)?;
     drop(initial);
     let light_b = zeroed(ctx, "light", light_words)?;
-    let cursors: Vec<u32> = ldi.offsets[..pixels as usize]
+    let cursors: Vec<Cursor> = ldi.offsets[..pixels as usize]
         .iter()
-        .flat_map(|&o| [o, 0])
+        .map(|&o| Cursor { next: o, inside: 0 })
         .collect();
     let cursors = upload(ctx, "layer cursor", &cursors, false)?;
     let accum = zeroed(ctx, "per-pixel colour", pixels * 4)?;
     let offsets = upload(ctx, "LDI offset", &ldi.offsets, false)?;
-    let depth: Vec<u32> = ldi.depth.iter().map(|d| d.to_bits()).collect();
-    let frag_depth = upload(ctx, "fragment depth", &depth, false)?;
-    drop(depth);
+    let frag_depth = upload(ctx, "fragment depth", &ldi.depth, false)?;
     let meta: Vec<u32> = ldi
         .mesh
         .iter()
         .zip(&ldi.triangle)
-        .map(|(&m, &t)| u32::from(m) | (t << 5))
+        .map(|(&m, &t)| u32::from(m) | (t << MESH_BITS))
         .collect();
     let frag_meta = upload(ctx, "fragment meta", &meta, false)?;
     drop(meta);
-    let tables = upload(ctx, "table", &tables, false)?;
+    let slabs = upload(ctx, "slab", &tables.slabs, false)?;
+    let lights = upload(ctx, "light header", &tables.lights, false)?;
+    let light_slabs = upload(ctx, "light slab", &tables.light_slabs, false)?;
+    let taps = upload(ctx, "kernel tap", &tables.taps, false)?;
+    let materials = upload(ctx, "material header", &tables.materials, false)?;
+    let tf_entries = upload(ctx, "transfer function", &tables.tf_entries, false)?;
+    let octaves = upload(ctx, "octave", &tables.octaves, false)?;
+    let voxels = upload(ctx, "texture voxel", &tables.voxels, false)?;
+    let meshes = upload(ctx, "mesh header", &tables.meshes, false)?;
+    let normals = upload(ctx, "triangle normal", &tables.normals, false)?;
     let image_words = u64::from(plan.width) * u64::from(plan.height) * 3;
     let image = zeroed(ctx, "image", image_words)?;
-    let globals = uniform(ctx, "globals", &globals);
-    let slab_param = uniform(ctx, "slab", &[0, 0, 0, 0]);
-    let all_params: Vec<u32> = (0..plan.slabs).flat_map(|k| [k, 0, 0, 0]).collect();
+    let globals = uniform(ctx, "globals", &tables.globals);
+    let slab_param = uniform(ctx, "slab", &SlabParams::default());
+    let all_params: Vec<SlabParams> = (0..plan.slabs)
+        .map(|slab| SlabParams {
+            slab,
+            ..SlabParams::default()
+        })
+        .collect();
     let all_params = {
         use wgpu::util::DeviceExt;
         ctx.device
@@ -315,24 +286,33 @@ pub fn sweep(
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("sweep.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SWEEP_WGSL.into()),
+            source: wgpu::ShaderSource::Wgsl(sweep_wgsl().into()),
         });
     let slab_pipe = pipeline(ctx, &module, "sweep_slab");
     let finish_pipe = pipeline(ctx, &module, "finish_image");
-    let common: [(u32, &wgpu::Buffer); 7] = [
-        (0, &slab_param),
-        (1, &globals),
-        (4, &cursors),
-        (5, &accum),
-        (6, &offsets),
-        (7, &frag_depth),
-        (8, &frag_meta),
+    let common: [(u32, &wgpu::Buffer); 17] = [
+        (slot::SLAB_PARAMS, &slab_param),
+        (slot::GLOBALS, &globals),
+        (slot::CURSORS, &cursors),
+        (slot::ACCUM, &accum),
+        (slot::OFFSETS, &offsets),
+        (slot::FRAG_DEPTH, &frag_depth),
+        (slot::FRAG_META, &frag_meta),
+        (slot::SLABS, &slabs),
+        (slot::LIGHTS, &lights),
+        (slot::LIGHT_SLABS, &light_slabs),
+        (slot::TAPS, &taps),
+        (slot::MATERIALS, &materials),
+        (slot::TF_ENTRIES, &tf_entries),
+        (slot::OCTAVES, &octaves),
+        (slot::VOXELS, &voxels),
+        (slot::MESHES, &meshes),
+        (slot::NORMALS, &normals),
     ];
     let group_for = |prev: &wgpu::Buffer, cur: &wgpu::Buffer| {
         let mut e: Vec<(u32, &wgpu::Buffer)> = common.to_vec();
-        e.push((2, prev));
-        e.push((3, cur));
-        e.push((9, &tables));
+        e.push((slot::LIGHT_PREV, prev));
+        e.push((slot::LIGHT_CUR, cur));
         bind(ctx, &slab_pipe, &e)
     };
     let even = group_for(&light_a, &light_b);
@@ -350,7 +330,8 @@ pub fn sweep(
         let end = (slab + SLABS_PER_SUBMIT).min(plan.slabs);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         for k in slab..end {
-            encoder.copy_buffer_to_buffer(&all_params, u64::from(k) * 16, &slab_param, 0, 16);
+            let size = std::mem::size_of::<SlabParams>() as u64;
+            encoder.copy_buffer_to_buffer(&all_params, u64::from(k) * size, &slab_param, 0, size);
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("slab"),
                 timestamp_writes: None,
@@ -370,7 +351,11 @@ pub fn sweep(
     let finish_group = bind(
         ctx,
         &finish_pipe,
-        &[(1, &globals), (5, &accum), (10, &image)],
+        &[
+            (slot::GLOBALS, &globals),
+            (slot::ACCUM, &accum),
+            (slot::IMAGE, &image),
+        ],
     );
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     {

@@ -10,7 +10,7 @@ use convshadow_common::kernel::{KERNEL_SYNTAX, KernelSpec};
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SlabSpec};
 use convshadow_common::tonemap::Tonemap;
-use convshadow_cpu::ldi::Ldi;
+use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_cpu::reference::{Reference, ReferenceOptions, samples_side};
 use serde_json::json;
 

@@ -6,7 +6,7 @@ use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::metrics::rmse;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SlabSpec};
-use convshadow_cpu::ldi::Ldi;
+use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_cpu::reference::disk::DiskSetup;
 use convshadow_cpu::reference::edge::{self, EdgeSetup, model_profile, run_light};
 use convshadow_cpu::reference::{Reference, ReferenceOptions};

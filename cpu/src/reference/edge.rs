@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use crate::ldi::Ldi;
+use crate::ldi::{BuildLdi, Ldi};
 use crate::sweep::{SweepOptions, SweepOutput, sweep};
 use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::plan::RenderPlan;

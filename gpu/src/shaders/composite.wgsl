@@ -1,6 +1,8 @@
 // Stages 4 and 5: mirrors cpu/src/composite.rs (front-to-back compositing, attenuation with the
 // explicit flush, the final background).
 
+#import shared/bindings
+
 // `composite`: t = (1 − A)·α; C += t·c; A += t. `acc` is (C.rgb, A).
 fn composite(acc: vec4<f32>, c: vec3<f32>, a: f32) -> vec4<f32> {
     let t = (1.0 - acc.w) * a;

@@ -10,31 +10,8 @@
 // Passes: `count` (atomic per-pixel counts), host prefix sum, `fill` (atomic slot claim, sort
 // keys), `sort` (per-pixel sort by (sortable depth bits, triangle index), by rank).
 
-struct Params {
-    items: u32,       // (triangle, row) work items
-    width: u32,       // grid width
-    height: u32,      // grid height
-    pixels: u32,      // width · height
-    stride: u32,      // invocations per dispatch row (x groups · 64)
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-}
-
-// Triangle t: words 16t.. = v0x v0y v1x v1y v2x v2y (i32), bbox x0 y0 x1 y1 (i32),
-// depth_ref depth_dx depth_dy (f32 bits), mesh, pad, pad.
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> tris: array<u32>;
-@group(0) @binding(2) var<storage, read> items: array<vec2<u32>>;
-@group(0) @binding(3) var<storage, read_write> counts: array<atomic<u32>>;
-@group(0) @binding(4) var<storage, read_write> cursor: array<atomic<u32>>;
-@group(0) @binding(5) var<storage, read_write> key_depth: array<u32>;
-@group(0) @binding(6) var<storage, read_write> key_tri: array<u32>;
-@group(0) @binding(7) var<storage, read> offsets: array<u32>;
-@group(0) @binding(8) var<storage, read_write> sorted_depth: array<u32>;
-@group(0) @binding(9) var<storage, read_write> sorted_tri: array<u32>;
-
-const FIXED_ONE: i32 = 256;
+#import shared/constants
+#import shared/bindings
 
 // Unsigned 32×32 → 64-bit product as (lo, hi), from 16-bit limbs.
 fn mul_wide_u32(a: u32, b: u32) -> vec2<u32> {
@@ -74,14 +51,6 @@ fn sub64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
     return vec2<u32>(lo, a.y - b.y - borrow);
 }
 
-fn tri_i(t: u32, k: u32) -> i32 {
-    return bitcast<i32>(tris[16u * t + k]);
-}
-
-fn tri_f(t: u32, k: u32) -> f32 {
-    return bitcast<f32>(tris[16u * t + k]);
-}
-
 // `is_top_left(dx, dy)`: dy < 0 || (dy == 0 && dx > 0).
 fn is_top_left(dx: i32, dy: i32) -> bool {
     return dy < 0 || (dy == 0 && dx > 0);
@@ -90,11 +59,12 @@ fn is_top_left(dx: i32, dy: i32) -> bool {
 // Whether edge k of triangle t, with its bias, covers the fixed-point point (px, py):
 // `e + bias >= 0`, i.e. e >= 0 on top-left edges and e >= 1 on the others.
 fn edge_covers(t: u32, k: u32, px: i32, py: i32) -> bool {
-    let k1 = (k + 1u) % 3u;
-    let ax = tri_i(t, 2u * k);
-    let ay = tri_i(t, 2u * k + 1u);
-    let bx = tri_i(t, 2u * k1);
-    let by = tri_i(t, 2u * k1 + 1u);
+    let a = tris[t].v[k];
+    let b = tris[t].v[(k + 1u) % 3u];
+    let ax = a.x;
+    let ay = a.y;
+    let bx = b.x;
+    let by = b.y;
     let dx = bx - ax;
     let dy = by - ay;
     let e = sub64(mul_i32(dx, py - ay), mul_i32(dy, px - ax));
@@ -113,11 +83,12 @@ fn covers(t: u32, i: i32, j: i32) -> bool {
 
 // `TriangleSetup::depth_at`: (depth_ref + depth_dx·Δi) + depth_dy·Δj.
 fn depth_at(t: u32, i: i32, j: i32) -> f32 {
-    let di = f32(i - tri_i(t, 6u));
-    let dj = f32(j - tri_i(t, 7u));
-    let a = tri_f(t, 11u) * di;
-    let b = tri_f(t, 12u) * dj;
-    return (tri_f(t, 10u) + a) + b;
+    let tri = tris[t];
+    let di = f32(i - tri.bbox[0]);
+    let dj = f32(j - tri.bbox[1]);
+    let a = tri.depth_dx * di;
+    let b = tri.depth_dy * dj;
+    return (tri.depth_ref + a) + b;
 }
 
 // `sortable_bits`: unsigned order of the result is the float's total order.
@@ -130,21 +101,21 @@ fn sortable_bits(f: f32) -> u32 {
 }
 
 fn item_index(gid: vec3<u32>) -> u32 {
-    return gid.x + gid.y * params.stride;
+    return gid.x + gid.y * ldi_params.stride;
 }
 
 @compute @workgroup_size(64)
 fn count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let n = item_index(gid);
-    if n >= params.items {
+    if n >= ldi_params.items {
         return;
     }
     let item = items[n];
-    let t = item.x;
-    let j = i32(item.y);
-    for (var i = tri_i(t, 6u); i <= tri_i(t, 8u); i++) {
+    let t = item.triangle;
+    let j = i32(item.row);
+    for (var i = tris[t].bbox[0]; i <= tris[t].bbox[2]; i++) {
         if covers(t, i, j) {
-            atomicAdd(&counts[u32(j) * params.width + u32(i)], 1u);
+            atomicAdd(&counts[u32(j) * ldi_params.width + u32(i)], 1u);
         }
     }
 }
@@ -152,15 +123,15 @@ fn count(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(64)
 fn fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     let n = item_index(gid);
-    if n >= params.items {
+    if n >= ldi_params.items {
         return;
     }
     let item = items[n];
-    let t = item.x;
-    let j = i32(item.y);
-    for (var i = tri_i(t, 6u); i <= tri_i(t, 8u); i++) {
+    let t = item.triangle;
+    let j = i32(item.row);
+    for (var i = tris[t].bbox[0]; i <= tris[t].bbox[2]; i++) {
         if covers(t, i, j) {
-            let slot = atomicAdd(&cursor[u32(j) * params.width + u32(i)], 1u);
+            let slot = atomicAdd(&cursor[u32(j) * ldi_params.width + u32(i)], 1u);
             key_depth[slot] = sortable_bits(depth_at(t, i, j));
             key_tri[slot] = t;
         }
@@ -174,12 +145,12 @@ fn fill(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(64)
 fn sort(@builtin(global_invocation_id) gid: vec3<u32>) {
     let f = item_index(gid);
-    if f >= params.items {
+    if f >= ldi_params.items {
         return;
     }
     // The pixel p with offsets[p] <= f < offsets[p + 1]: the last p with offsets[p] <= f.
     var lo = 0u;
-    var hi = params.pixels;
+    var hi = ldi_params.pixels;
     loop {
         if lo >= hi {
             break;

@@ -3,6 +3,10 @@
 // f32 → i32 of an integral value, and u32 wrapping arithmetic. No fma, mix, min, max or
 // transcendentals. Every expression keeps the Rust evaluation order (left to right).
 
+#import shared/constants
+#import shared/bindings
+#import hash
+
 // `hash`: lowbias32 (the same bijection as `mix32`).
 fn noise_hash(k: u32) -> u32 {
     return mix32(k);
@@ -164,33 +168,27 @@ fn clamp01(v: f32) -> f32 {
     return select(r, 1.0, r > 1.0);
 }
 
-// Detail kinds as uploaded (0 = none).
-const DETAIL_PERLIN: u32 = 1u;
-const DETAIL_FBM: u32 = 2u;
-const DETAIL_RIDGED: u32 = 3u;
-const DETAIL_TURBULENCE: u32 = 4u;
-
-// Noise of octave i of material header `m` (see `material_words` in gpu/src/sweep.rs).
-fn octave(m: u32, i: u32, x: f32, y: f32, z: f32) -> f32 {
-    let f = tf(tu(m + 4u) + 2u * i);
-    if tu(m + 6u) == 0u {
+// Noise of octave i of material `m` (the DETAIL_* codes come from gpu/src/layout.rs).
+fn octave(m: MaterialHeader, i: u32, x: f32, y: f32, z: f32) -> f32 {
+    let f = octaves[m.octaves + i].frequency;
+    if m.animated == 0u {
         return perlin3(x * f, y * f, z * f);
     }
-    return perlin4(x * f, y * f, z * f, tf(m + 7u) * f);
+    return perlin4(x * f, y * f, z * f, m.time * f);
 }
 
-fn amplitude(m: u32, i: u32) -> f32 {
-    return tf(tu(m + 4u) + 2u * i + 1u);
+fn amplitude(m: MaterialHeader, i: u32) -> f32 {
+    return octaves[m.octaves + i].amplitude;
 }
 
 // `Detail::eval`: the detail value in [0, 1] at object-space point (x, y, z).
-fn detail_eval(m: u32, x: f32, y: f32, z: f32) -> f32 {
-    let kind = tu(m + 2u);
-    let n_oct = tu(m + 3u);
+fn detail_eval(m: MaterialHeader, x: f32, y: f32, z: f32) -> f32 {
+    let kind = m.detail_kind;
+    let n_oct = m.octave_count;
     if n_oct == 0u {
         return 0.0;
     }
-    let inv = tf(m + 5u);
+    let inv = m.inv_amplitude_sum;
     var v: f32;
     if kind == DETAIL_TURBULENCE {
         var sum = amplitude(m, 0u) * abs_bits(octave(m, 0u, x, y, z));

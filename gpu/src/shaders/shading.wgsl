@@ -1,8 +1,10 @@
 // Stage 3, shading: mirrors cpu/src/shading.rs (detail value, transfer function, light sum,
-// specular by repeated squaring). Transfer-function entries are 7 words: colour rgb, alpha,
-// attenuation rgb.
+// specular by repeated squaring).
 
-const TF_SIZE: u32 = 256u;
+#import shared/constants
+#import shared/bindings
+#import noise
+#import texture3d
 
 struct TfEntry {
     color: vec3<f32>,
@@ -10,33 +12,35 @@ struct TfEntry {
     attenuation: vec3<f32>,
 }
 
-fn tf_entry(at: u32) -> TfEntry {
+fn tf_entry(i: u32) -> TfEntry {
+    let e = tf_entries[i];
     return TfEntry(
-        vec3<f32>(tf(at), tf(at + 1u), tf(at + 2u)),
-        tf(at + 3u),
-        vec3<f32>(tf(at + 4u), tf(at + 5u), tf(at + 6u)),
+        vec3<f32>(e.color[0], e.color[1], e.color[2]),
+        e.alpha,
+        vec3<f32>(e.attenuation[0], e.attenuation[1], e.attenuation[2]),
     );
 }
 
 // `detail_value`: procedural detail, else the 3D texture, else 0.
-fn detail_value(m: u32, p: vec3<f32>) -> f32 {
-    if tu(m + 2u) != 0u {
+fn detail_value(m: MaterialHeader, p: vec3<f32>) -> f32 {
+    if m.detail_kind != DETAIL_NONE {
         return detail_eval(m, p.x, p.y, p.z);
     }
-    if tu(m + 12u) != 0u {
+    if m.has_texture != 0u {
         return texture_sample(m, p.x, p.y, p.z);
     }
     return 0.0;
 }
 
-// `to_detail`: row-major 3×4 affine at word `at`, each row `((a + b) + c) + t`.
-fn to_detail(at: u32, x: f32, y: f32, z: f32) -> vec3<f32> {
+// `to_detail`: the row-major 3×4 affine of `mesh`, each row `((a + b) + c) + t`.
+fn to_detail(mesh: u32, x: f32, y: f32, z: f32) -> vec3<f32> {
+    let t = meshes[mesh].to_detail;
     var out: vec3<f32>;
     for (var r = 0u; r < 3u; r++) {
-        let a = tf(at + 4u * r) * x;
-        let b = tf(at + 4u * r + 1u) * y;
-        let c = tf(at + 4u * r + 2u) * z;
-        out[r] = ((a + b) + c) + tf(at + 4u * r + 3u);
+        let a = t[4u * r] * x;
+        let b = t[4u * r + 1u] * y;
+        let c = t[4u * r + 2u] * z;
+        out[r] = ((a + b) + c) + t[4u * r + 3u];
     }
     return out;
 }
@@ -47,9 +51,9 @@ fn lerp3(f: f32, u: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
 
 // `transfer`: linear interpolation between the two nearest entries (index clamped to
 // [0, TF_SIZE − 2] with Rust's saturating float → int conversion).
-fn transfer(m: u32, value: f32) -> TfEntry {
-    let base = tu(m);
-    if tu(m + 1u) == 1u {
+fn transfer(m: MaterialHeader, value: f32) -> TfEntry {
+    let base = m.tf;
+    if m.tf_len == 1u {
         return tf_entry(base);
     }
     let pos = value * f32(TF_SIZE - 1u);
@@ -61,8 +65,8 @@ fn transfer(m: u32, value: f32) -> TfEntry {
         i = u32(fl);
     }
     let f = pos - f32(i);
-    let a = tf_entry(base + 7u * i);
-    let b = tf_entry(base + 7u * (i + 1u));
+    let a = tf_entry(base + i);
+    let b = tf_entry(base + i + 1u);
     return TfEntry(
         lerp3(f, a.color, b.color),
         a.alpha + f * (b.alpha - a.alpha),
@@ -96,13 +100,9 @@ fn specular(n: vec3<f32>, h: vec3<f32>, strength: f32, exponent: u32) -> f32 {
     return strength * powi_by_squaring(d, exponent);
 }
 
-fn light_header(l: u32) -> u32 {
-    return globals.off_lights + 16u * l;
-}
-
 fn light_color(l: u32) -> vec3<f32> {
-    let lh = light_header(l);
-    return vec3<f32>(tf(lh + 7u), tf(lh + 8u), tf(lh + 9u));
+    let c = lights[l].color;
+    return vec3<f32>(c[0], c[1], c[2]);
 }
 
 fn iin_at(l: u32, c: u32) -> f32 {
@@ -122,8 +122,8 @@ fn shade(color: vec3<f32>, has_spec: bool, strength: f32, exponent: u32, n: vec3
     var out = vec3<f32>(color.x * sum.x, color.y * sum.y, color.z * sum.z);
     if has_spec {
         for (var l = 0u; l < globals.lights; l++) {
-            let lh = light_header(l);
-            let h = vec3<f32>(tf(lh + 10u), tf(lh + 11u), tf(lh + 12u));
+            let hv = lights[l].half_vector;
+            let h = vec3<f32>(hv[0], hv[1], hv[2]);
             let w = specular(n, h, strength, exponent);
             let lc = light_color(l);
             for (var c = 0u; c < 3u; c++) {

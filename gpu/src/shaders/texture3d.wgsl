@@ -1,5 +1,8 @@
 // The trilinear 3D-texture sampler: mirrors common/src/texture3d.rs (`axis` and `sample_lanes`).
 
+#import shared/bindings
+#import noise
+
 struct Axis {
     i0: u32,
     i1: u32,
@@ -18,12 +21,12 @@ fn texture_axis(u: f32, dim: u32) -> Axis {
     return Axis(u32(fl), u32(fl1), f);
 }
 
-// Trilinear sample of the texture of material header `m` at normalised coordinates.
-fn texture_sample(m: u32, u: f32, v: f32, w: f32) -> f32 {
-    let base = tu(m + 8u);
-    let dx = tu(m + 9u);
-    let dy = tu(m + 10u);
-    let dz = tu(m + 11u);
+// Trilinear sample of the texture of material `m` at normalised coordinates.
+fn texture_sample(m: MaterialHeader, u: f32, v: f32, w: f32) -> f32 {
+    let base = m.texture;
+    let dx = m.dims[0];
+    let dy = m.dims[1];
+    let dz = m.dims[2];
     let ax = texture_axis(u, dx);
     let ay = texture_axis(v, dy);
     let az = texture_axis(w, dz);
@@ -33,10 +36,10 @@ fn texture_sample(m: u32, u: f32, v: f32, w: f32) -> f32 {
     let r10 = ay.i1 * sy + az.i0 * sz;
     let r01 = ay.i0 * sy + az.i1 * sz;
     let r11 = ay.i1 * sy + az.i1 * sz;
-    let c00 = lerp(ax.f, tf(base + ax.i0 + r00), tf(base + ax.i1 + r00));
-    let c10 = lerp(ax.f, tf(base + ax.i0 + r10), tf(base + ax.i1 + r10));
-    let c01 = lerp(ax.f, tf(base + ax.i0 + r01), tf(base + ax.i1 + r01));
-    let c11 = lerp(ax.f, tf(base + ax.i0 + r11), tf(base + ax.i1 + r11));
+    let c00 = lerp(ax.f, voxels[base + ax.i0 + r00], voxels[base + ax.i1 + r00]);
+    let c10 = lerp(ax.f, voxels[base + ax.i0 + r10], voxels[base + ax.i1 + r10]);
+    let c01 = lerp(ax.f, voxels[base + ax.i0 + r01], voxels[base + ax.i1 + r01]);
+    let c11 = lerp(ax.f, voxels[base + ax.i0 + r11], voxels[base + ax.i1 + r11]);
     let c0 = lerp(ay.f, c00, c10);
     let c1 = lerp(ay.f, c01, c11);
     return lerp(az.f, c0, c1);

@@ -1,0 +1,514 @@
+//! The GPU buffer layouts: one `#[repr(C)]` Pod struct per element type the host uploads, each
+//! mirrored field for field by a WGSL struct of the same name in `shaders/shared/bindings.wgsl`,
+//! and the binding slot of every resource.
+//!
+//! Only 4-byte scalars, `vec2<i32>` and `array<T, N>` of them appear in storage structs, so the
+//! WGSL layout rules give the same offsets as `repr(C)`; the test below parses the assembled
+//! WGSL with naga and checks every struct's size and member offsets against the Rust side.
+
+use bytemuck::{Pod, Zeroable};
+use convshadow_common::scene::MAX_MESHES;
+
+/// Uniform parameters of one LDI pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct LdiParams {
+    /// Invocations that do work: (triangle, row) items, or fragments for the sort.
+    pub items: u32,
+    /// Grid width.
+    pub width: u32,
+    /// Grid height.
+    pub height: u32,
+    /// `width · height`.
+    pub pixels: u32,
+    /// Invocations per dispatch row (x groups · workgroup size).
+    pub stride: u32,
+    /// Uniform structs are a multiple of 16 bytes.
+    pub _pad0: u32,
+    /// See `_pad0`.
+    pub _pad1: u32,
+    /// See `_pad0`.
+    pub _pad2: u32,
+}
+
+/// One rasterized triangle as the LDI passes read it (`TriangleSetup` less its normal).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Triangle {
+    /// Fixed-point vertices.
+    pub v: [[i32; 2]; 3],
+    /// Pixel box `[x0, y0, x1, y1]`, inclusive.
+    pub bbox: [i32; 4],
+    /// Depth at the box's corner pixel.
+    pub depth_ref: f32,
+    /// Depth step per pixel in x.
+    pub depth_dx: f32,
+    /// Depth step per pixel in y.
+    pub depth_dy: f32,
+    /// Mesh index (scene order).
+    pub mesh: u32,
+}
+
+/// One (triangle, row) work item of the count and fill passes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct WorkItem {
+    /// Triangle index.
+    pub triangle: u32,
+    /// Grid row.
+    pub row: u32,
+}
+
+/// The slab index of one sweep dispatch (copied into the uniform before each dispatch).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct SlabParams {
+    /// Slab index.
+    pub slab: u32,
+    /// Uniform structs are a multiple of 16 bytes.
+    pub _pad0: u32,
+    /// See `_pad0`.
+    pub _pad1: u32,
+    /// See `_pad0`.
+    pub _pad2: u32,
+}
+
+/// Per-render constants of the sweep (uniform).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Globals {
+    /// Grid width (image + 2·guard).
+    pub grid_w: u32,
+    /// Grid height.
+    pub grid_h: u32,
+    /// Guard band in pixels.
+    pub guard: u32,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Slab count.
+    pub slabs: u32,
+    /// Light count.
+    pub lights: u32,
+    /// Light-buffer channels (1 or 3).
+    pub channels: u32,
+    /// 1 when the shading point is jittered inside the slab.
+    pub jitter: u32,
+    /// Slab thickness.
+    pub slab_distance: f32,
+    /// Light values below this are flushed to zero.
+    pub flush_below: f32,
+    /// Scale of the 4D Perlin noise.
+    pub perlin4_scale: f32,
+    /// Background red.
+    pub bg_r: f32,
+    /// Background green.
+    pub bg_g: f32,
+    /// Background blue.
+    pub bg_b: f32,
+    /// Floats per light-buffer row (`lights · channels · grid_w`).
+    pub row_len: u32,
+}
+
+/// One slab's faces and jitter hash.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Slab {
+    /// Front face (depth relative to the first slab's front).
+    pub front: f32,
+    /// Back face.
+    pub back: f32,
+    /// Hash of (seed, jitter stream, slab).
+    pub jitter_hash: u32,
+}
+
+/// One light's kernel table header and shading constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct LightHeader {
+    /// Index of the light's first tap in the taps buffer.
+    pub taps: u32,
+    /// Taps per phase.
+    pub taps_per_phase: u32,
+    /// Bits of the phase hash used to pick a phase.
+    pub phase_bits: u32,
+    /// One of the `PHASE_*` codes.
+    pub phase_mode: u32,
+    /// Linear RGB colour.
+    pub color: [f32; 3],
+    /// Blinn–Phong half vector.
+    pub half_vector: [f32; 3],
+}
+
+/// One light's per-slab values (`light · slabs + slab` in the light-slab buffer).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct LightSlab {
+    /// Hash of (seed, light, slab).
+    pub hash: u32,
+    /// The scheduled phase (`PHASE_SCHEDULE` mode).
+    pub phase: u32,
+    /// The kernel's integer shift in this slab.
+    pub shift: [i32; 2],
+}
+
+/// One kernel tap: the offset of its top-left pixel and the weights of its four corners.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Tap {
+    /// Integer x offset.
+    pub dx: i32,
+    /// Integer y offset.
+    pub dy: i32,
+    /// Weights of (0,0), (1,0), (0,1), (1,1).
+    pub w: [f32; 4],
+}
+
+/// One material's header: where its tables start and its scalar parameters.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MaterialHeader {
+    /// Index of the first transfer-function entry.
+    pub tf: u32,
+    /// Transfer-function entries (1 or `TF_SIZE`).
+    pub tf_len: u32,
+    /// One of the `DETAIL_*` codes (`DETAIL_NONE` without procedural detail).
+    pub detail_kind: u32,
+    /// Octaves of the detail.
+    pub octave_count: u32,
+    /// Index of the first octave.
+    pub octaves: u32,
+    /// 1 / Σ amplitudes.
+    pub inv_amplitude_sum: f32,
+    /// 1 when the detail is animated (4D noise at `time`).
+    pub animated: u32,
+    /// Animation time.
+    pub time: f32,
+    /// Index of the first texture voxel.
+    pub texture: u32,
+    /// Texture dimensions (1 without a texture).
+    pub dims: [u32; 3],
+    /// 1 when the material has a 3D texture.
+    pub has_texture: u32,
+    /// 1 when the material has a specular term.
+    pub has_specular: u32,
+    /// Specular strength.
+    pub spec_strength: f32,
+    /// Specular exponent.
+    pub spec_exponent: u32,
+}
+
+/// One transfer-function entry.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct TransferEntry {
+    /// Linear RGB colour.
+    pub color: [f32; 3],
+    /// Opacity of one slab.
+    pub alpha: f32,
+    /// Light attenuation per channel.
+    pub attenuation: [f32; 3],
+}
+
+/// One detail octave.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Octave {
+    /// Frequency.
+    pub frequency: f32,
+    /// Amplitude.
+    pub amplitude: f32,
+}
+
+/// One mesh's detail transform and material.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MeshHeader {
+    /// (grid x, grid y, relative depth) → detail coordinates, row-major 3×4.
+    pub to_detail: [f32; 12],
+    /// Material index.
+    pub material: u32,
+}
+
+/// A pixel's layer cursor: its next fragment and the inside bit of every mesh.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Cursor {
+    /// Index of the next fragment not yet passed.
+    pub next: u32,
+    /// Bit m set while inside mesh m.
+    pub inside: u32,
+}
+
+/// Mesh ids take this many low bits of a fragment's meta word, the triangle index the rest.
+pub const MESH_BITS: u32 = MAX_MESHES.trailing_zeros();
+const _: () = assert!(MAX_MESHES.is_power_of_two() && MAX_MESHES <= 32);
+
+/// `phase_mode` codes.
+pub const PHASE_PER_PIXEL: u32 = 0;
+/// See [`PHASE_PER_PIXEL`].
+pub const PHASE_PER_SLAB: u32 = 1;
+/// See [`PHASE_PER_PIXEL`].
+pub const PHASE_SCHEDULE: u32 = 2;
+/// `detail_kind` codes.
+pub const DETAIL_NONE: u32 = 0;
+/// See [`DETAIL_NONE`].
+pub const DETAIL_PERLIN: u32 = 1;
+/// See [`DETAIL_NONE`].
+pub const DETAIL_FBM: u32 = 2;
+/// See [`DETAIL_NONE`].
+pub const DETAIL_RIDGED: u32 = 3;
+/// See [`DETAIL_NONE`].
+pub const DETAIL_TURBULENCE: u32 = 4;
+
+/// Declares the binding slots (group 0) as constants and as a (WGSL name, slot) table.
+macro_rules! slots {
+    ($($konst:ident = $name:literal, $slot:literal;)*) => {
+        $(
+            #[doc = concat!("Slot of `", $name, "` in `shaders/shared/bindings.wgsl`.")]
+            pub const $konst: u32 = $slot;
+        )*
+        /// Every slot as (WGSL variable name, binding number).
+        #[cfg(test)]
+        pub const ALL: &[(&str, u32)] = &[$(($name, $slot)),*];
+    };
+}
+
+/// Binding slots of group 0, one numbering for every pipeline (auto layouts keep only the slots
+/// an entry point uses, so the LDI and sweep resources share the group without clashing).
+pub mod slot {
+    slots! {
+        LDI_PARAMS = "ldi_params", 0;
+        TRIS = "tris", 1;
+        ITEMS = "items", 2;
+        COUNTS = "counts", 3;
+        CURSOR = "cursor", 4;
+        KEY_DEPTH = "key_depth", 5;
+        KEY_TRI = "key_tri", 6;
+        OFFSETS = "offsets", 7;
+        SORTED_DEPTH = "sorted_depth", 8;
+        SORTED_TRI = "sorted_tri", 9;
+        SLAB_PARAMS = "slab_params", 10;
+        GLOBALS = "globals", 11;
+        LIGHT_PREV = "light_prev", 12;
+        LIGHT_CUR = "light_cur", 13;
+        CURSORS = "cursors", 14;
+        ACCUM = "accum", 15;
+        FRAG_DEPTH = "frag_depth", 16;
+        FRAG_META = "frag_meta", 17;
+        IMAGE = "image", 18;
+        SLABS = "slabs", 19;
+        LIGHTS = "lights", 20;
+        LIGHT_SLABS = "light_slabs", 21;
+        TAPS = "taps", 22;
+        MATERIALS = "materials", 23;
+        TF_ENTRIES = "tf_entries", 24;
+        OCTAVES = "octaves", 25;
+        VOXELS = "voxels", 26;
+        MESHES = "meshes", 27;
+        NORMALS = "normals", 28;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::{offset_of, size_of};
+
+    use super::*;
+    use crate::shader::{ldi_wgsl, sweep_wgsl};
+
+    /// A struct's layout: name, size, and (member, offset) in declaration order.
+    type Layout = (&'static str, usize, Vec<(&'static str, usize)>);
+
+    /// The Rust side of `layout!(Type { field, … })`.
+    macro_rules! layout {
+        ($t:ident { $($f:ident),* $(,)? }) => {
+            (stringify!($t), size_of::<$t>(), vec![$((stringify!($f), offset_of!($t, $f))),*])
+        };
+    }
+
+    /// Every struct shared with WGSL, with all its fields.
+    fn rust_layouts() -> Vec<Layout> {
+        vec![
+            layout!(LdiParams {
+                items,
+                width,
+                height,
+                pixels,
+                stride,
+                _pad0,
+                _pad1,
+                _pad2
+            }),
+            layout!(Triangle {
+                v,
+                bbox,
+                depth_ref,
+                depth_dx,
+                depth_dy,
+                mesh
+            }),
+            layout!(WorkItem { triangle, row }),
+            layout!(SlabParams {
+                slab,
+                _pad0,
+                _pad1,
+                _pad2
+            }),
+            layout!(Globals {
+                grid_w,
+                grid_h,
+                guard,
+                width,
+                height,
+                slabs,
+                lights,
+                channels,
+                jitter,
+                slab_distance,
+                flush_below,
+                perlin4_scale,
+                bg_r,
+                bg_g,
+                bg_b,
+                row_len,
+            }),
+            layout!(Slab {
+                front,
+                back,
+                jitter_hash
+            }),
+            layout!(LightHeader {
+                taps,
+                taps_per_phase,
+                phase_bits,
+                phase_mode,
+                color,
+                half_vector
+            }),
+            layout!(LightSlab { hash, phase, shift }),
+            layout!(Tap { dx, dy, w }),
+            layout!(MaterialHeader {
+                tf,
+                tf_len,
+                detail_kind,
+                octave_count,
+                octaves,
+                inv_amplitude_sum,
+                animated,
+                time,
+                texture,
+                dims,
+                has_texture,
+                has_specular,
+                spec_strength,
+                spec_exponent,
+            }),
+            layout!(TransferEntry {
+                color,
+                alpha,
+                attenuation
+            }),
+            layout!(Octave {
+                frequency,
+                amplitude
+            }),
+            layout!(MeshHeader {
+                to_detail,
+                material
+            }),
+            layout!(Cursor { next, inside }),
+        ]
+    }
+
+    /// Every disagreement between the Rust layouts and the structs and bindings of `wgsl`.
+    fn mismatches(wgsl: &str, layouts: &[Layout], slots: &[(&str, u32)]) -> Vec<String> {
+        let module = match naga::front::wgsl::parse_str(wgsl) {
+            Ok(m) => m,
+            Err(e) => return vec![format!("WGSL does not parse: {}", e.emit_to_string(wgsl))],
+        };
+        let mut out = Vec::new();
+        for (name, size, fields) in layouts {
+            let found = module.types.iter().find_map(|(_, ty)| match &ty.inner {
+                naga::TypeInner::Struct { members, span } if ty.name.as_deref() == Some(name) => {
+                    Some((members, *span))
+                }
+                _ => None,
+            });
+            let Some((members, span)) = found else {
+                out.push(format!("struct {name}: not in the WGSL"));
+                continue;
+            };
+            if span as usize != *size {
+                out.push(format!("struct {name}: WGSL size {span}, Rust size {size}"));
+            }
+            let wgsl_fields: Vec<(String, usize)> = members
+                .iter()
+                .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
+                .collect();
+            let rust_fields: Vec<(String, usize)> =
+                fields.iter().map(|&(f, o)| (f.to_string(), o)).collect();
+            if wgsl_fields != rust_fields {
+                out.push(format!(
+                    "struct {name}: WGSL members {wgsl_fields:?}, Rust fields {rust_fields:?}"
+                ));
+            }
+        }
+        for &(name, slot) in slots {
+            let binding = module
+                .global_variables
+                .iter()
+                .find(|(_, g)| g.name.as_deref() == Some(name))
+                .map(|(_, g)| g.binding.as_ref().map(|b| (b.group, b.binding)));
+            if binding != Some(Some((0, slot))) {
+                out.push(format!(
+                    "binding {name}: WGSL {binding:?}, Rust (0, {slot})"
+                ));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn rust_and_wgsl_layouts_agree() {
+        for (what, wgsl) in [("ldi", ldi_wgsl()), ("sweep", sweep_wgsl())] {
+            let bad = mismatches(&wgsl, &rust_layouts(), slot::ALL);
+            assert!(bad.is_empty(), "{what} shader: {bad:#?}");
+        }
+    }
+
+    #[test]
+    fn a_moved_field_is_reported() {
+        let wgsl = sweep_wgsl();
+        // Swap two members of one struct on the WGSL side only.
+        let moved = wgsl.replacen(
+            "    depth_dx: f32,\n    depth_dy: f32,\n",
+            "    depth_dy: f32,\n    depth_dx: f32,\n",
+            1,
+        );
+        assert_ne!(moved, wgsl, "the test's pattern must match bindings.wgsl");
+        let bad = mismatches(&moved, &rust_layouts(), slot::ALL);
+        assert_eq!(bad.len(), 1, "{bad:#?}");
+        assert!(bad[0].starts_with("struct Triangle:"), "{bad:#?}");
+        // A member whose offset changes (an inserted field) is reported too.
+        let grown = wgsl.replacen(
+            "    jitter_hash: u32,\n",
+            "    jitter_hash: u32,\n    extra: u32,\n",
+            1,
+        );
+        let bad = mismatches(&grown, &rust_layouts(), slot::ALL);
+        assert!(
+            bad.iter()
+                .any(|m| m.starts_with("struct Slab: WGSL size 16")),
+            "{bad:#?}"
+        );
+        // And a binding moved on one side.
+        let rebound = wgsl.replacen("@binding(22)", "@binding(29)", 1);
+        let bad = mismatches(&rebound, &rust_layouts(), slot::ALL);
+        assert!(
+            bad.iter().any(|m| m.starts_with("binding taps:")),
+            "{bad:#?}"
+        );
+    }
+}

@@ -1,0 +1,167 @@
+// Every buffer layout and binding the shaders share: the structs mirror the `#[repr(C)]` Pod
+// structs of gpu/src/layout.rs field for field (checked by its layout test through naga), and
+// the slots are `layout::slot`. Storage structs hold only 4-byte scalars, vec2<i32> and arrays
+// of them, so WGSL's layout rules and `repr(C)` give the same offsets. Each pipeline's entry
+// points use a subset of the bindings; automatic layouts keep only the slots they use.
+
+// ---- LDI passes (ldi.wgsl) ----
+
+struct LdiParams {
+    items: u32,       // invocations that do work: (triangle, row) items, or fragments
+    width: u32,       // grid width
+    height: u32,      // grid height
+    pixels: u32,      // width · height
+    stride: u32,      // invocations per dispatch row (x groups · 64)
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// `TriangleSetup` as rasterized: fixed-point vertices, inclusive pixel box, depth plane, mesh.
+struct Triangle {
+    v: array<vec2<i32>, 3>,
+    bbox: array<i32, 4>,
+    depth_ref: f32,
+    depth_dx: f32,
+    depth_dy: f32,
+    mesh: u32,
+}
+
+struct WorkItem {
+    triangle: u32,
+    row: u32,
+}
+
+@group(0) @binding(0) var<uniform> ldi_params: LdiParams;
+@group(0) @binding(1) var<storage, read> tris: array<Triangle>;
+@group(0) @binding(2) var<storage, read> items: array<WorkItem>;
+@group(0) @binding(3) var<storage, read_write> counts: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> cursor: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read_write> key_depth: array<u32>;
+@group(0) @binding(6) var<storage, read_write> key_tri: array<u32>;
+// CSR offsets of the LDI (`width·height + 1`), read by the sort and by the sweep.
+@group(0) @binding(7) var<storage, read> offsets: array<u32>;
+@group(0) @binding(8) var<storage, read_write> sorted_depth: array<u32>;
+@group(0) @binding(9) var<storage, read_write> sorted_tri: array<u32>;
+
+// ---- The sweep (sweep.wgsl and the stage files it imports) ----
+
+struct SlabParams {
+    slab: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// Per-render constants.
+struct Globals {
+    grid_w: u32,
+    grid_h: u32,
+    guard: u32,
+    width: u32,
+    height: u32,
+    slabs: u32,
+    lights: u32,
+    channels: u32,
+    jitter: u32,
+    slab_distance: f32,
+    flush_below: f32,
+    perlin4_scale: f32,
+    bg_r: f32,
+    bg_g: f32,
+    bg_b: f32,
+    row_len: u32,     // floats per light-buffer row: lights · channels · grid_w
+}
+
+struct Slab {
+    front: f32,
+    back: f32,
+    jitter_hash: u32,
+}
+
+// A light's kernel table (`taps`: its first tap) and shading constants.
+struct LightHeader {
+    taps: u32,
+    taps_per_phase: u32,
+    phase_bits: u32,
+    phase_mode: u32,  // PHASE_*
+    color: array<f32, 3>,
+    half_vector: array<f32, 3>,
+}
+
+// A light's values in one slab, at `light · slabs + slab`.
+struct LightSlab {
+    hash: u32,
+    phase: u32,       // the scheduled phase (PHASE_SCHEDULE)
+    shift: vec2<i32>,
+}
+
+// Offset of the top-left pixel read and the weights of corners (0,0), (1,0), (0,1), (1,1).
+struct Tap {
+    dx: i32,
+    dy: i32,
+    w: array<f32, 4>,
+}
+
+// A material: where its tables start (`tf`, `octaves`, `texture`) and its parameters.
+struct MaterialHeader {
+    tf: u32,
+    tf_len: u32,      // 1 (constant) or TF_SIZE
+    detail_kind: u32, // DETAIL_*
+    octave_count: u32,
+    octaves: u32,
+    inv_amplitude_sum: f32,
+    animated: u32,
+    time: f32,
+    texture: u32,
+    dims: array<u32, 3>,
+    has_texture: u32,
+    has_specular: u32,
+    spec_strength: f32,
+    spec_exponent: u32,
+}
+
+struct TransferEntry {
+    color: array<f32, 3>,
+    alpha: f32,
+    attenuation: array<f32, 3>,
+}
+
+struct Octave {
+    frequency: f32,
+    amplitude: f32,
+}
+
+// (grid x, grid y, relative depth) → detail coordinates, row-major 3×4, and the material.
+struct MeshHeader {
+    to_detail: array<f32, 12>,
+    material: u32,
+}
+
+// A pixel's layer cursor: the next fragment and the inside bit of every mesh.
+struct Cursor {
+    next: u32,
+    inside: u32,
+}
+
+@group(0) @binding(10) var<uniform> slab_params: SlabParams;
+@group(0) @binding(11) var<uniform> globals: Globals;
+@group(0) @binding(12) var<storage, read> light_prev: array<f32>;
+@group(0) @binding(13) var<storage, read_write> light_cur: array<f32>;
+@group(0) @binding(14) var<storage, read_write> cursors: array<Cursor>;
+@group(0) @binding(15) var<storage, read_write> accum: array<vec4<f32>>;
+@group(0) @binding(16) var<storage, read> frag_depth: array<f32>;
+// Fragment meta: `mesh | triangle << MESH_BITS`.
+@group(0) @binding(17) var<storage, read> frag_meta: array<u32>;
+@group(0) @binding(18) var<storage, read_write> image: array<f32>;
+@group(0) @binding(19) var<storage, read> slabs: array<Slab>;
+@group(0) @binding(20) var<storage, read> lights: array<LightHeader>;
+@group(0) @binding(21) var<storage, read> light_slabs: array<LightSlab>;
+@group(0) @binding(22) var<storage, read> taps: array<Tap>;
+@group(0) @binding(23) var<storage, read> materials: array<MaterialHeader>;
+@group(0) @binding(24) var<storage, read> tf_entries: array<TransferEntry>;
+@group(0) @binding(25) var<storage, read> octaves: array<Octave>;
+@group(0) @binding(26) var<storage, read> voxels: array<f32>;
+@group(0) @binding(27) var<storage, read> meshes: array<MeshHeader>;
+// Per rasterized triangle: its unit normal.
+@group(0) @binding(28) var<storage, read> normals: array<array<f32, 3>>;
