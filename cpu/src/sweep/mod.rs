@@ -7,26 +7,36 @@
 //! A pixel's result depends only on the previous slab and its own state, so the image is the
 //! same bits for any thread count.
 //!
-//! Two code paths run the same stages: [`SweepPath::Scalar`], one pixel at a time (the readable
-//! reference, in this file), and [`SweepPath::Simd`], eight pixels at a time with `wide`
-//! (`crate::sweep_simd`), which gives the same bits and may skip provably quiet pixels.
+//! Two code paths run the same stage code: [`SweepPath::Scalar`], one pixel at a time (its 1-lane
+//! instance), and [`SweepPath::Simd`], eight pixels at a time with `wide` (its 8-lane instance),
+//! which gives the same bits and may skip provably quiet pixels.
 
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+//!
+//! Modules, with imports in one direction only: this driver (the per-slab loop, ping-pong
+//! buffers, cancel and progress) → `rows` (the lane paths: a row at a time, scalar or 8 lanes with
+//! `quiet` chunk skipping) → `stage` (the per-pixel stage, generic over the lane type) → `kit`
+//! (slab context, row state, row hashes) → the stage functions in `kernels`, `parity`, `shading`
+//! and `composite`.
 
-use convshadow_common::hash::row_hash;
+mod kit;
+mod quiet;
+mod rows;
+mod stage;
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::raster::RasterSetup;
 use rayon::prelude::*;
 
-use crate::composite::{attenuate, composite, finish};
-use crate::kernels::{Plane, gather, light_row_hash, phase_at};
+use crate::composite::finish;
 use crate::ldi::Ldi;
-use crate::parity::{NO_CROSSING, advance, first_mesh};
-use crate::shading::{material_at, shade, shading_depth};
-use crate::sweep_simd::{QuietRow, QuietSetup, Reach, sweep_row_simd};
+use kit::{Reach, RowState, SlabContext};
+use quiet::{QuietRow, QuietSetup};
+use rows::{sweep_row_scalar, sweep_row_simd};
 
-/// Largest light count × channels handled per pixel on the stack.
-pub const MAX_LIGHT_CHANNELS: usize = 48;
+pub use kit::MAX_LIGHT_CHANNELS;
+pub use quiet::ChunkCounts;
 
 /// Why a sweep stopped early.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -73,28 +83,6 @@ pub struct SweepOptions<'a> {
     pub chunk_counts: Option<&'a ChunkCounts>,
 }
 
-/// How the SIMD path processed its 8-pixel chunks, summed over slabs and rows.
-#[derive(Debug, Default)]
-pub struct ChunkCounts {
-    /// Chunks that ran all five stages.
-    pub full: AtomicU64,
-    /// Chunks skipped as unoccluded and empty (light out exactly 1).
-    pub unoccluded: AtomicU64,
-    /// Chunks skipped as opaque in the dark (light out exactly 0, cursors advanced).
-    pub dark: AtomicU64,
-}
-
-impl ChunkCounts {
-    /// `[full, unoccluded, dark]` now.
-    pub fn snapshot(&self) -> [u64; 3] {
-        [
-            self.full.load(Ordering::Relaxed),
-            self.unoccluded.load(Ordering::Relaxed),
-            self.dark.load(Ordering::Relaxed),
-        ]
-    }
-}
-
 impl Default for SweepOptions<'_> {
     fn default() -> Self {
         SweepOptions {
@@ -106,27 +94,6 @@ impl Default for SweepOptions<'_> {
             chunk_counts: None,
         }
     }
-}
-
-/// What every pixel of one slab shares.
-pub(crate) struct SlabContext<'a> {
-    pub plan: &'a RenderPlan,
-    pub raster: &'a RasterSetup,
-    pub ldi: &'a Ldi,
-    pub slab: u32,
-    /// Back face of the slab (the cursor advances past fragments in front of it).
-    pub back: f32,
-    /// Front face of the slab.
-    pub front: f32,
-}
-
-/// One row's mutable per-pixel state. Colours are planar per row: `[R…][G…][B…]`.
-pub(crate) struct RowState<'a> {
-    pub light: &'a mut [f32],
-    pub next: &'a mut [u32],
-    pub inside: &'a mut [u32],
-    pub color: &'a mut [f32],
-    pub alpha: &'a mut [f32],
 }
 
 /// Runs the sweep on the current rayon pool with the path chosen in `options`.
@@ -205,7 +172,7 @@ pub fn sweep(
             });
         match (options.path, &quiet) {
             (SweepPath::Scalar, _) => rows.for_each(|(y, row)| {
-                sweep_row_scalar(&ctx, y, prev_ref, row);
+                sweep_row_scalar(&ctx, &reach, y, prev_ref, row);
             }),
             (SweepPath::Simd, None) => rows.for_each(|(y, row)| {
                 sweep_row_simd(&ctx, &reach, y, prev_ref, row, None, options.chunk_counts);
@@ -255,149 +222,4 @@ pub fn sweep(
             }
         });
     Ok(SweepOutput { image, light: prev })
-}
-
-/// Every light's row hash for row `y` of the slab (the prefix of each per-pixel phase hash).
-pub(crate) fn light_row_hashes(ctx: &SlabContext<'_>, y: usize) -> [u32; MAX_LIGHT_CHANNELS] {
-    let mut row_hashes = [0u32; MAX_LIGHT_CHANNELS];
-    for (l, light) in ctx.plan.lights.iter().enumerate() {
-        row_hashes[l] = light_row_hash(light.slab_hash[ctx.slab as usize], y as u32);
-    }
-    row_hashes
-}
-
-/// The jitter row hash of row `y` of the slab.
-pub(crate) fn jitter_row_hash(ctx: &SlabContext<'_>, y: usize) -> u32 {
-    row_hash(ctx.plan.jitter_slab_hash[ctx.slab as usize], y as u32)
-}
-
-/// Processes one row of one slab, one pixel at a time (the scalar reference path).
-fn sweep_row_scalar(ctx: &SlabContext<'_>, y: usize, prev: &[f32], mut row: RowState<'_>) {
-    let w = ctx.plan.grid_width as usize;
-    let row_hashes = light_row_hashes(ctx, y);
-    let jitter_row = jitter_row_hash(ctx, y);
-    for x in 0..w {
-        sweep_pixel(ctx, y, x, prev, &mut row, &row_hashes, jitter_row);
-    }
-}
-
-/// All five stages for pixel (x, y) of one slab.
-#[inline(always)]
-pub(crate) fn sweep_pixel(
-    ctx: &SlabContext<'_>,
-    y: usize,
-    x: usize,
-    prev: &[f32],
-    row: &mut RowState<'_>,
-    row_hashes: &[u32; MAX_LIGHT_CHANNELS],
-    jitter_row: u32,
-) {
-    let plan = ctx.plan;
-    let w = plan.grid_width as usize;
-    let ch = plan.channels as usize;
-    let n = plan.lights.len() * ch;
-    let mut iin = [0.0f32; MAX_LIGHT_CHANNELS];
-    // 1. Convolution of every light buffer.
-    gather_pixel(ctx, prev, x, y, row_hashes, &mut iin);
-
-    // 2. Intersection: advance the layer cursor to the slab's back face.
-    let p = y * w + x;
-    let end = ctx.ldi.offsets[p + 1];
-    let crossed = advance(ctx.ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
-
-    // 3–4. Shading and compositing, if inside a mesh or a surface was crossed.
-    let mut c = [row.color[x], row.color[w + x], row.color[2 * w + x]];
-    let attenuation = shade_pixel(
-        ctx,
-        x,
-        jitter_row,
-        y,
-        crossed,
-        row.inside[x],
-        &iin[..n],
-        &mut c,
-        &mut row.alpha[x],
-    );
-    row.color[x] = c[0];
-    row.color[w + x] = c[1];
-    row.color[2 * w + x] = c[2];
-
-    // 5. Attenuate (and flush) into this slab's outgoing light buffer.
-    for l in 0..plan.lights.len() {
-        for c in 0..ch {
-            row.light[(l * ch + c) * w + x] = attenuate(iin[l * ch + c], attenuation[c]);
-        }
-    }
-}
-
-/// Stage 1 for one pixel: every light and channel through its kernel into `iin`.
-#[inline(always)]
-fn gather_pixel(
-    ctx: &SlabContext<'_>,
-    prev: &[f32],
-    x: usize,
-    y: usize,
-    row_hashes: &[u32; MAX_LIGHT_CHANNELS],
-    iin: &mut [f32; MAX_LIGHT_CHANNELS],
-) {
-    let plan = ctx.plan;
-    let slab = ctx.slab as usize;
-    let ch = plan.channels as usize;
-    for (l, light) in plan.lights.iter().enumerate() {
-        let t = &light.table;
-        let phase = phase_at(t, ctx.slab, light.slab_hash[slab], row_hashes[l], x as u32);
-        let taps = t.phase(phase);
-        let shift = t.slab_shift[slab];
-        for c in 0..ch {
-            let plane = Plane {
-                data: prev,
-                base: (l * ch + c) * plan.grid_width as usize,
-                row_stride: plan.light_row_len(),
-                width: plan.grid_width as i32,
-                height: plan.grid_height as i32,
-            };
-            iin[l * ch + c] = gather(&plane, taps, shift, x as i32, y as i32);
-        }
-    }
-}
-
-/// Stages 3–4 for one pixel: shades one point if the pixel is inside a mesh or crossed a
-/// surface, composites it into `color`/`alpha`, and returns the light attenuation per channel
-/// (1 where there is no mesh).
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-pub(crate) fn shade_pixel(
-    ctx: &SlabContext<'_>,
-    x: usize,
-    jitter_row: u32,
-    y: usize,
-    crossed: u32,
-    inside: u32,
-    iin: &[f32],
-    color: &mut [f32; 3],
-    alpha: &mut f32,
-) -> [f32; 3] {
-    let plan = ctx.plan;
-    let ldi = ctx.ldi;
-    let mesh = if crossed != NO_CROSSING {
-        Some(u32::from(ldi.mesh[crossed as usize]))
-    } else {
-        first_mesh(inside)
-    };
-    let Some(mesh) = mesh else {
-        return [1.0; 3];
-    };
-    let z = shading_depth(plan, ldi, crossed, ctx.front, jitter_row, x);
-    let tf = material_at(plan, mesh, x, y, z);
-    let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
-    let spec = match material.specular {
-        Some((strength, exponent)) if crossed != NO_CROSSING => {
-            let n = ctx.raster.triangles[ldi.triangle[crossed as usize] as usize].normal;
-            Some((strength, exponent, n))
-        }
-        _ => None,
-    };
-    let shaded = shade(plan, tf.color, iin, spec);
-    composite(color, alpha, shaded, tf.alpha);
-    tf.attenuation
 }

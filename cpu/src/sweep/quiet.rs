@@ -1,11 +1,5 @@
-//! The SIMD path of the slab sweep: the five stages of `sweep.rs` on 8 pixels at a time
-//! (`wide` f32x8/u32x8), bit-identical to the scalar path lane by lane.
-//!
-//! Vector work: the gather's arithmetic (and its loads, when a slab's phase is the same for
-//! every pixel), the phase hash, the detail function, the transfer-function interpolation,
-//! shading, compositing and attenuation. Per lane: the layer cursor (a short data-dependent
-//! loop) and table look-ups. Chunks whose lanes hit different meshes, and the row's last
-//! `width mod 8` pixels, run the scalar stage functions.
+//! Quiet-chunk skipping on the 8-lane path: which 8-pixel chunks' results are known exactly
+//! without running the stages, and the per-row and per-chunk summaries that tell.
 //!
 //! **Quiet chunks** are skipped without changing a bit of the result:
 //! - *unoccluded*: every light value the chunk's kernels can read is exactly 1, no lane is inside
@@ -22,69 +16,17 @@
 //! 1, where it is not exactly 0) and the kernel tables' reach; these spans are this path's model
 //! of "the region the scene and its shadows can reach", updated every slab.
 
-use convshadow_common::hash::{pixel_hash, unit_float};
-use convshadow_common::kernel::PhaseMode;
-use convshadow_common::plan::RenderPlan;
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicU64, Ordering};
 
+use convshadow_common::lane::Lane;
+use convshadow_common::plan::RenderPlan;
 use wide::f32x8;
 
-use crate::composite::{attenuate, attenuate8, composite8};
-use crate::kernels::{LightPlanes, gather8_lanes, gather8_uniform, phases8};
+use super::kit::{Reach, SlabContext};
 use crate::ldi::Ldi;
-use crate::parity::{NO_CROSSING, advance, first_mesh};
-use crate::shading::{Specular8, detail_value8, shade8, to_detail8, transfer8};
-use crate::sweep::{
-    ChunkCounts, MAX_LIGHT_CHANNELS, RowState, SlabContext, jitter_row_hash, light_row_hashes,
-    shade_pixel, sweep_pixel,
-};
 
 /// Lanes per chunk.
-const LANES: usize = 8;
-
-/// How far the gather of any light, phase and slab reads from the pixel it writes (bilinear
-/// corners and mean-carry shifts included): x in `x + x0 ..= x + x1`, y in `y + y0 ..= y + y1`.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Reach {
-    pub x0: i32,
-    pub x1: i32,
-    pub y0: i32,
-    pub y1: i32,
-}
-
-impl Reach {
-    /// The reach of every light's table over all its phases and slabs.
-    pub(crate) fn of(plan: &RenderPlan) -> Reach {
-        let mut r = Reach {
-            x0: 0,
-            x1: 0,
-            y0: 0,
-            y1: 0,
-        };
-        for light in &plan.lights {
-            let t = &light.table;
-            for tap in &t.taps {
-                for s in &t.slab_shift {
-                    r.x0 = r.x0.min(tap.dx + s[0]);
-                    r.x1 = r.x1.max(tap.dx + s[0] + 1);
-                    r.y0 = r.y0.min(tap.dy + s[1]);
-                    r.y1 = r.y1.max(tap.dy + s[1] + 1);
-                }
-            }
-        }
-        r
-    }
-
-    /// Whether every read of the chunk at x0..x0+8 in row y lies inside the grid.
-    #[inline(always)]
-    fn interior(&self, x0: usize, y: usize, w: usize, h: usize) -> bool {
-        let (x0, y) = (x0 as i64, y as i64);
-        x0 + i64::from(self.x0) >= 0
-            && x0 + LANES as i64 - 1 + i64::from(self.x1) < w as i64
-            && y + i64::from(self.y0) >= 0
-            && y + i64::from(self.y1) < h as i64
-    }
-}
+pub(crate) const LANES: usize = <f32x8 as Lane>::LANES;
 
 /// Per row of a light buffer (all lights and channels): the x range `[lo, hi)` of values that
 /// are not exactly 1, and of values that are not exactly 0 (empty when `lo >= hi`).
@@ -96,14 +38,14 @@ pub(crate) struct RowSpans {
 
 impl RowSpans {
     /// No value recorded.
-    const EMPTY: RowSpans = RowSpans {
+    pub(crate) const EMPTY: RowSpans = RowSpans {
         not_one: (i32::MAX, i32::MIN),
         not_zero: (i32::MAX, i32::MIN),
     };
 
     /// Records the values of pixels `x..x + n` (not-one / not-zero flags of the whole group).
     #[inline(always)]
-    fn record(&mut self, x: usize, n: usize, not_one: bool, not_zero: bool) {
+    pub(crate) fn record(&mut self, x: usize, n: usize, not_one: bool, not_zero: bool) {
         let (lo, hi) = (x as i32, (x + n) as i32);
         if not_one {
             self.not_one = (self.not_one.0.min(lo), self.not_one.1.max(hi));
@@ -133,7 +75,14 @@ pub(crate) struct ChunkState {
 
 impl ChunkState {
     /// The summary of lanes x0..x0+8 of row y.
-    fn of(ldi: &Ldi, y: usize, x0: usize, next: &[u32], inside: &[u32], alpha: &[f32]) -> Self {
+    pub(crate) fn of(
+        ldi: &Ldi,
+        y: usize,
+        x0: usize,
+        next: &[u32],
+        inside: &[u32],
+        alpha: &[f32],
+    ) -> Self {
         let w = ldi.width as usize;
         let mut s = ChunkState {
             event_depth: f32::INFINITY,
@@ -224,7 +173,7 @@ pub(crate) struct QuietRow<'a> {
 }
 
 /// What a chunk needs this slab.
-enum ChunkWork {
+pub(crate) enum ChunkWork {
     /// All five stages; the gather's result if it is known (every value read is 1, or 0).
     Full(Option<f32>),
     /// Unoccluded and empty: light out 1.
@@ -236,7 +185,13 @@ enum ChunkWork {
 impl QuietRow<'_> {
     /// Classifies chunk `c` (pixels x0..x0+8) of row y.
     #[inline(always)]
-    fn classify(&self, ctx: &SlabContext<'_>, reach: &Reach, y: usize, c: usize) -> ChunkWork {
+    pub(crate) fn classify(
+        &self,
+        ctx: &SlabContext<'_>,
+        reach: &Reach,
+        y: usize,
+        c: usize,
+    ) -> ChunkWork {
         let state = self.chunks[c];
         let w = ctx.plan.grid_width as usize;
         let h = ctx.plan.grid_height as usize;
@@ -257,8 +212,9 @@ impl QuietRow<'_> {
         if all_ones && state.inside_any == 0 && no_crossing {
             return ChunkWork::Unoccluded;
         }
-        let all_zeros =
-            !all_ones && reach.interior(c * LANES, y, w, h) && !rows(&|s| meets(s.not_zero, a, b));
+        let all_zeros = !all_ones
+            && reach.interior(c * LANES, LANES, y, w, h)
+            && !rows(&|s| meets(s.not_zero, a, b));
         if all_zeros && state.opaque {
             return ChunkWork::Dark;
         }
@@ -273,330 +229,31 @@ impl QuietRow<'_> {
     }
 }
 
-/// Processes one row of one slab, 8 pixels at a time; the last `width mod 8` pixels go through
-/// the scalar [`sweep_pixel`].
-pub(crate) fn sweep_row_simd(
-    ctx: &SlabContext<'_>,
-    reach: &Reach,
-    y: usize,
-    prev: &[f32],
-    mut row: RowState<'_>,
-    mut quiet: Option<QuietRow<'_>>,
-    counts: Option<&ChunkCounts>,
-) {
-    let plan = ctx.plan;
-    let w = plan.grid_width as usize;
-    let h = plan.grid_height as usize;
-    let planes = plan.lights.len() * plan.channels as usize;
-    let row_hashes = light_row_hashes(ctx, y);
-    let jitter_row = jitter_row_hash(ctx, y);
-    let mut spans = RowSpans::EMPTY;
-    let mut tally = [0u64; 3];
-    let full_chunks = w / LANES;
-    let chunk_fn: ChunkFn = match planes {
-        0..=2 => sweep_chunk::<2>,
-        3..=6 => sweep_chunk::<6>,
-        7..=12 => sweep_chunk::<12>,
-        _ => sweep_chunk::<MAX_LIGHT_CHANNELS>,
-    };
-
-    for c in 0..full_chunks {
-        let x0 = c * LANES;
-        let work = match &quiet {
-            Some(q) => q.classify(ctx, reach, y, c),
-            None => ChunkWork::Full(None),
-        };
-        match work {
-            ChunkWork::Unoccluded => {
-                tally[1] += 1;
-                for p in 0..planes {
-                    row.light[p * w + x0..][..LANES].fill(1.0);
-                }
-                spans.record(x0, LANES, false, true);
-                continue;
-            }
-            ChunkWork::Dark => {
-                tally[2] += 1;
-                for x in x0..x0 + LANES {
-                    let end = ctx.ldi.offsets[y * w + x + 1];
-                    advance(ctx.ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
-                }
-                for p in 0..planes {
-                    row.light[p * w + x0..][..LANES].fill(0.0);
-                }
-                spans.record(x0, LANES, true, false);
-            }
-            ChunkWork::Full(known_light) => {
-                tally[0] += 1;
-                let interior = reach.interior(x0, y, w, h);
-                let (not_one, not_zero) = chunk_fn(
-                    ctx,
-                    y,
-                    x0,
-                    prev,
-                    &mut row,
-                    &row_hashes,
-                    jitter_row,
-                    interior,
-                    known_light,
-                );
-                spans.record(x0, LANES, not_one, not_zero);
-            }
-        }
-        if let Some(q) = &mut quiet {
-            q.chunks[c] = ChunkState::of(ctx.ldi, y, x0, row.next, row.inside, row.alpha);
-        }
-    }
-
-    for x in full_chunks * LANES..w {
-        sweep_pixel(ctx, y, x, prev, &mut row, &row_hashes, jitter_row);
-        for p in 0..planes {
-            let v = row.light[p * w + x];
-            spans.record(x, 1, v != 1.0, v != 0.0);
-        }
-    }
-    if let Some(q) = quiet {
-        *q.span_out = spans;
-    }
-    if let Some(c) = counts {
-        c.full.fetch_add(tally[0], Ordering::Relaxed);
-        c.unoccluded.fetch_add(tally[1], Ordering::Relaxed);
-        c.dark.fetch_add(tally[2], Ordering::Relaxed);
-    }
+/// How the SIMD path processed its 8-pixel chunks, summed over slabs and rows.
+#[derive(Debug, Default)]
+pub struct ChunkCounts {
+    /// Chunks that ran all five stages.
+    pub full: AtomicU64,
+    /// Chunks skipped as unoccluded and empty (light out exactly 1).
+    pub unoccluded: AtomicU64,
+    /// Chunks skipped as opaque in the dark (light out exactly 0, cursors advanced).
+    pub dark: AtomicU64,
 }
 
-/// [`sweep_chunk`] instantiated for one light-channel capacity.
-type ChunkFn = fn(
-    &SlabContext<'_>,
-    usize,
-    usize,
-    &[f32],
-    &mut RowState<'_>,
-    &[u32; MAX_LIGHT_CHANNELS],
-    u32,
-    bool,
-    Option<f32>,
-) -> (bool, bool);
-
-/// All five stages for the 8 pixels x0..x0+8 of row y. Returns whether any outgoing light value
-/// is not exactly 1, and whether any is not exactly 0.
-#[allow(clippy::too_many_arguments)]
-fn sweep_chunk<const N: usize>(
-    ctx: &SlabContext<'_>,
-    y: usize,
-    x0: usize,
-    prev: &[f32],
-    row: &mut RowState<'_>,
-    row_hashes: &[u32; MAX_LIGHT_CHANNELS],
-    jitter_row: u32,
-    interior: bool,
-    known_light: Option<f32>,
-) -> (bool, bool) {
-    let plan = ctx.plan;
-    let ldi = ctx.ldi;
-    let w = plan.grid_width as usize;
-    let ch = plan.channels as usize;
-    let slab = ctx.slab as usize;
-    let n = plan.lights.len() * ch;
-
-    // 1. Convolution of every light buffer.
-    // N ≥ lights × channels, as small as possible: zeroing a 48-vector array per chunk costs.
-    let mut iin = [f32x8::ZERO; N];
-    if let Some(v) = known_light {
-        iin[..n].fill(f32x8::splat(v));
-    }
-    for (l, light) in plan.lights.iter().enumerate() {
-        if known_light.is_some() {
-            break;
-        }
-        let t = &light.table;
-        let planes = LightPlanes {
-            data: prev,
-            base: l * ch * w,
-            channels: ch,
-            row_stride: plan.light_row_len(),
-            width: w as i32,
-            height: plan.grid_height as i32,
-        };
-        let shift = t.slab_shift[slab];
-        let acc = &mut iin[l * ch..(l + 1) * ch];
-        let uniform = match t.phase_mode {
-            PhaseMode::PerPixel => None,
-            PhaseMode::PerSlab => Some(crate::kernels::phase_at(
-                t,
-                ctx.slab,
-                light.slab_hash[slab],
-                0,
-                0,
-            )),
-            PhaseMode::Schedule => Some(t.slab_phase[slab]),
-        };
-        match uniform {
-            Some(p) => {
-                gather8_uniform(
-                    &planes,
-                    t.phase(p),
-                    shift,
-                    x0 as i32,
-                    y as i32,
-                    interior,
-                    acc,
-                );
-            }
-            None => {
-                let phases = phases8(t, row_hashes[l], x0 as u32);
-                gather8_lanes(
-                    &planes, t, &phases, shift, x0 as i32, y as i32, interior, acc,
-                );
-            }
-        }
+impl ChunkCounts {
+    /// `[full, unoccluded, dark]` now.
+    pub fn snapshot(&self) -> [u64; 3] {
+        [
+            self.full.load(Ordering::Relaxed),
+            self.unoccluded.load(Ordering::Relaxed),
+            self.dark.load(Ordering::Relaxed),
+        ]
     }
 
-    // 2. Intersection: every lane's cursor.
-    let mut crossed = [NO_CROSSING; LANES];
-    let mut mesh = [None; LANES];
-    for i in 0..LANES {
-        let x = x0 + i;
-        let end = ldi.offsets[y * w + x + 1];
-        crossed[i] = advance(ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
-        mesh[i] = if crossed[i] != NO_CROSSING {
-            Some(u32::from(ldi.mesh[crossed[i] as usize]))
-        } else {
-            first_mesh(row.inside[x])
-        };
+    /// Adds one row's `[full, unoccluded, dark]` tally.
+    pub(crate) fn add(&self, tally: [u64; 3]) {
+        self.full.fetch_add(tally[0], Ordering::Relaxed);
+        self.unoccluded.fetch_add(tally[1], Ordering::Relaxed);
+        self.dark.fetch_add(tally[2], Ordering::Relaxed);
     }
-
-    // 3–4. Shading and compositing.
-    let mut attenuation = [f32x8::ONE; 3];
-    let first = mesh.iter().flatten().next().copied();
-    if let Some(m) = first {
-        if mesh.iter().all(|&k| k.is_none() || k == Some(m)) {
-            attenuation = shade_chunk(ctx, y, x0, row, &iin, m, &mesh, &crossed, jitter_row);
-        } else {
-            // Lanes on different meshes: the scalar stage, lane by lane.
-            let mut att = [[1.0f32; 8]; 3];
-            for i in 0..LANES {
-                let x = x0 + i;
-                let mut lane_iin = [0.0f32; MAX_LIGHT_CHANNELS];
-                for (k, v) in iin.iter().take(n).enumerate() {
-                    lane_iin[k] = v.to_array()[i];
-                }
-                let mut c = [row.color[x], row.color[w + x], row.color[2 * w + x]];
-                let a = shade_pixel(
-                    ctx,
-                    x,
-                    jitter_row,
-                    y,
-                    crossed[i],
-                    row.inside[x],
-                    &lane_iin[..n],
-                    &mut c,
-                    &mut row.alpha[x],
-                );
-                row.color[x] = c[0];
-                row.color[w + x] = c[1];
-                row.color[2 * w + x] = c[2];
-                for k in 0..3 {
-                    att[k][i] = a[k];
-                }
-            }
-            attenuation = att.map(f32x8::new);
-        }
-    }
-
-    // 5. Attenuate (and flush) into this slab's outgoing light buffer.
-    let mut not_one = f32x8::ZERO;
-    let mut not_zero = f32x8::ZERO;
-    for l in 0..plan.lights.len() {
-        for c in 0..ch {
-            let out = attenuate8(iin[l * ch + c], attenuation[c]);
-            not_one |= out.simd_ne(f32x8::ONE);
-            not_zero |= out.simd_ne(f32x8::ZERO);
-            let dst: &mut [f32; 8] = (&mut row.light[(l * ch + c) * w + x0..][..LANES])
-                .try_into()
-                .expect("8 lanes");
-            *dst = out.to_array();
-        }
-    }
-    debug_assert_eq!(attenuate(1.0, 1.0), 1.0);
-    (not_one.any(), not_zero.any())
-}
-
-/// Stages 3–4 for a chunk whose shaded lanes all lie in mesh `m`: vector shading and
-/// compositing. Returns the attenuation per channel (1 in lanes without a mesh).
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn shade_chunk(
-    ctx: &SlabContext<'_>,
-    y: usize,
-    x0: usize,
-    row: &mut RowState<'_>,
-    iin: &[f32x8],
-    m: u32,
-    mesh: &[Option<u32>; LANES],
-    crossed: &[u32; LANES],
-    jitter_row: u32,
-) -> [f32x8; 3] {
-    let plan = ctx.plan;
-    let ldi = ctx.ldi;
-    let w = plan.grid_width as usize;
-    let n = plan.lights.len() * plan.channels as usize;
-    let lane_mask = |f: &dyn Fn(usize) -> bool| {
-        f32x8::new(std::array::from_fn(|i| {
-            if f(i) { f32::from_bits(u32::MAX) } else { 0.0 }
-        }))
-    };
-    let active = lane_mask(&|i| mesh[i].is_some());
-    let z = f32x8::new(std::array::from_fn(|i| {
-        if crossed[i] != NO_CROSSING {
-            ldi.depth[crossed[i] as usize]
-        } else if plan.jitter {
-            ctx.front + unit_float(pixel_hash(jitter_row, (x0 + i) as u32)) * plan.slab_distance
-        } else {
-            ctx.front + 0.5 * plan.slab_distance
-        }
-    }));
-    let material = &plan.materials[plan.mesh_material[m as usize] as usize];
-    let value = if material.tf.len() > 1 {
-        let xs = f32x8::new(std::array::from_fn(|i| (x0 + i) as f32 + 0.5));
-        let ys = f32x8::splat(y as f32 + 0.5);
-        let q = to_detail8(&plan.mesh_to_detail[m as usize], xs, ys, z);
-        detail_value8(material, q)
-    } else {
-        f32x8::ZERO
-    };
-    let tf = transfer8(&material.tf, value);
-    let spec = material.specular.and_then(|(strength, exponent)| {
-        if crossed.iter().all(|&c| c == NO_CROSSING) {
-            return None;
-        }
-        let normals: [[f32; 3]; LANES] = std::array::from_fn(|i| {
-            if crossed[i] != NO_CROSSING {
-                ctx.raster.triangles[ldi.triangle[crossed[i] as usize] as usize].normal
-            } else {
-                [0.0, 0.0, 1.0]
-            }
-        });
-        Some(Specular8 {
-            strength,
-            exponent,
-            normal: std::array::from_fn(|k| f32x8::new(normals.map(|nv| nv[k]))),
-            lanes: lane_mask(&|i| crossed[i] != NO_CROSSING),
-        })
-    });
-    let shaded = shade8(plan, tf.color, &iin[..n], spec.as_ref());
-
-    let load = |s: &[f32]| f32x8::new(s[..LANES].try_into().expect("8 lanes"));
-    let mut color = [
-        load(&row.color[x0..]),
-        load(&row.color[w + x0..]),
-        load(&row.color[2 * w + x0..]),
-    ];
-    let mut alpha = load(&row.alpha[x0..]);
-    composite8(&mut color, &mut alpha, shaded, tf.alpha, active);
-    for (k, v) in color.iter().enumerate() {
-        row.color[k * w + x0..][..LANES].copy_from_slice(&v.to_array());
-    }
-    row.alpha[x0..x0 + LANES].copy_from_slice(&alpha.to_array());
-    tf.attenuation.map(|a| active.select(a, f32x8::ONE))
 }
