@@ -250,3 +250,214 @@ fn shade_chunk<L: Lane>(
         L::select(active, tf.attenuation[2], one),
     ]
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use convshadow_common::geometry::SceneGeometry;
+    use convshadow_common::hash::{mix32, unit_float};
+    use convshadow_common::plan::RenderPlan;
+    use convshadow_common::scene::Scene;
+    use wide::f32x8;
+
+    use super::*;
+    use crate::ldi::Ldi;
+    use crate::sweep::kit::{Reach, jitter_row_hash, light_row_hashes};
+
+    /// The test RNG: a counter through the project's `mix32`.
+    struct Rng(u32);
+
+    impl Rng {
+        fn next(&mut self) -> u32 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9);
+            mix32(self.0)
+        }
+        fn below(&mut self, n: u32) -> u32 {
+            self.next() % n
+        }
+        /// A value in [0, 1], exactly 0 or exactly 1 one time in eight each.
+        fn value(&mut self) -> f32 {
+            match self.below(8) {
+                0 => 0.0,
+                1 => 1.0,
+                _ => unit_float(self.next()),
+            }
+        }
+    }
+
+    /// One row's state, owned.
+    #[derive(Clone)]
+    struct Row {
+        light: Vec<f32>,
+        next: Vec<u32>,
+        inside: Vec<u32>,
+        color: Vec<f32>,
+        alpha: Vec<f32>,
+    }
+
+    impl Row {
+        fn state(&mut self) -> RowState<'_> {
+            RowState {
+                light: &mut self.light,
+                next: &mut self.next,
+                inside: &mut self.inside,
+                color: &mut self.color,
+                alpha: &mut self.alpha,
+            }
+        }
+    }
+
+    /// The first difference in bits between two rows' states, if any.
+    fn mismatch(a: &Row, b: &Row) -> Option<String> {
+        let floats = [
+            ("light", &a.light, &b.light),
+            ("color", &a.color, &b.color),
+            ("alpha", &a.alpha, &b.alpha),
+        ];
+        for (name, u, v) in floats {
+            if let Some(i) = (0..u.len()).find(|&i| u[i].to_bits() != v[i].to_bits()) {
+                return Some(format!("{name}[{i}]: {} vs {}", u[i], v[i]));
+            }
+        }
+        for (name, u, v) in [("next", &a.next, &b.next), ("inside", &a.inside, &b.inside)] {
+            if let Some(i) = (0..u.len()).find(|&i| u[i] != v[i]) {
+                return Some(format!("{name}[{i}]: {} vs {}", u[i], v[i]));
+            }
+        }
+        None
+    }
+
+    /// The default scene, small: two coloured lights (six light channels), noise and specular
+    /// materials, three meshes, through `kernel`.
+    fn plan_of(kernel: &str) -> (Scene, SceneGeometry, Ldi, RenderPlan) {
+        let text = include_str!("../../../scenes/default.toml")
+            .replace("width = 512\nheight = 512", "width = 37\nheight = 19")
+            .replace("slabs = 512", "slabs = 24")
+            .replace("kernel = \"ellipse2\"", &format!("kernel = \"{kernel}\""));
+        let scene = Scene::parse(&text, "lanes", Path::new(".")).expect("scene");
+        let g = SceneGeometry::build(&scene).expect("geometry");
+        let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
+        let plan = RenderPlan::new(&scene, &g).expect("plan");
+        (scene, g, ldi, plan)
+    }
+
+    /// Runs `eight` (an 8-lane stage) and the 1-lane stage eight times on the same random
+    /// inputs, at every chunk position of some rows of every slab; returns the first
+    /// difference.
+    fn compare_lanes(kernel: &str, seed: u32, eight: ChunkFn) -> Option<String> {
+        let (_scene, g, ldi, plan) = plan_of(kernel);
+        let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
+        let row_len = plan.light_row_len();
+        let meshes = plan.mesh_material.len() as u32;
+        let planes = plan.lights.len() * plan.channels as usize;
+        assert_eq!(planes, 6, "two lights, three channels");
+        let one: ChunkFn = chunk_fn::<f32>(planes);
+        let reach = Reach::of(&plan);
+        let mut rng = Rng(seed);
+        let prev: Vec<f32> = (0..row_len * h).map(|_| rng.value()).collect();
+        let mut counts = [0u32; 9];
+        for slab in 0..plan.slabs {
+            let ctx = SlabContext {
+                plan: &plan,
+                raster: &g.raster,
+                ldi: &ldi,
+                slab,
+                back: plan.slab_back[slab as usize],
+                front: plan.slab_front[slab as usize],
+            };
+            for y in [0, 1, h / 2, h - 1, rng.below(h as u32) as usize] {
+                let row_hashes = light_row_hashes(&ctx, y);
+                let jitter_row = jitter_row_hash(&ctx, y);
+                // Inside masks: none, one mesh everywhere, or mixed (lanes on different meshes).
+                let mode = rng.below(3);
+                let fixed = 1 << rng.below(meshes);
+                let row = Row {
+                    light: vec![f32::NAN; row_len],
+                    next: (0..w)
+                        .map(|x| {
+                            let (a, b) = (ldi.offsets[y * w + x], ldi.offsets[y * w + x + 1]);
+                            a + rng.below(b - a + 1)
+                        })
+                        .collect(),
+                    inside: (0..w)
+                        .map(|_| match mode {
+                            0 => 0,
+                            1 => fixed,
+                            _ => rng.next() & ((1 << meshes) - 1),
+                        })
+                        .collect(),
+                    color: (0..3 * w).map(|_| rng.value()).collect(),
+                    alpha: (0..w).map(|_| rng.value()).collect(),
+                };
+                for x0 in 0..=w - 8 {
+                    let (mut a, mut b) = (row.clone(), row.clone());
+                    let interior = reach.interior(x0, 8, y, w, h);
+                    let (rh, jr) = (&row_hashes, jitter_row);
+                    eight(&ctx, y, x0, &prev, &mut a.state(), rh, jr, interior, None);
+                    for x in x0..x0 + 8 {
+                        let interior = reach.interior(x, 1, y, w, h);
+                        one(&ctx, y, x, &prev, &mut b.state(), rh, jr, interior, None);
+                    }
+                    if let Some(d) = mismatch(&a, &b) {
+                        return Some(format!("{kernel}, slab {slab}, row {y}, x0 {x0}: {d}"));
+                    }
+                    let shaded = (0..8).filter(|&i| a.alpha[x0 + i] != row.alpha[x0 + i]);
+                    counts[shaded.count()] += 1;
+                }
+            }
+        }
+        // The inputs must reach every branch: chunks shaded in no lane, in some and in all.
+        assert!(
+            counts[0] > 0 && counts[8] > 0 && counts[1..8].iter().sum::<u32>() > 0,
+            "{kernel}: chunks by shaded lanes {counts:?}"
+        );
+        None
+    }
+
+    #[test]
+    fn eight_lanes_and_one_lane_give_the_same_bits() {
+        // Per-pixel, per-slab and scheduled phases.
+        for (k, kernel) in ["ellipse2", "ellipse2:slab", "gaussian:7", "poisson8"]
+            .iter()
+            .enumerate()
+        {
+            let eight = chunk_fn::<f32x8>(6);
+            assert_eq!(compare_lanes(kernel, 17 + k as u32, eight), None);
+        }
+    }
+
+    /// The 8-lane stage with one lane's first light value off by one bit.
+    #[allow(clippy::too_many_arguments)]
+    fn wrong_lane(
+        ctx: &SlabContext<'_>,
+        y: usize,
+        x0: usize,
+        prev: &[f32],
+        row: &mut RowState<'_>,
+        row_hashes: &[u32; MAX_LIGHT_CHANNELS],
+        jitter_row: u32,
+        interior: bool,
+        known_light: Option<f32>,
+    ) -> (bool, bool) {
+        let r = sweep_chunk::<f32x8, 6>(
+            ctx,
+            y,
+            x0,
+            prev,
+            row,
+            row_hashes,
+            jitter_row,
+            interior,
+            known_light,
+        );
+        row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
+        r
+    }
+
+    #[test]
+    fn a_lane_that_disagrees_fails_the_comparison() {
+        let d = compare_lanes("ellipse2", 3, wrong_lane).expect("the flipped bit is found");
+        assert!(d.contains("light["), "{d}");
+    }
+}
