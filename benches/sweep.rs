@@ -10,7 +10,7 @@ use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::{Scene, SlabSpec};
 use convshadow::cpu::ldi::Ldi;
-use convshadow::cpu::sweep::{SweepOptions, SweepPath, sweep};
+use convshadow::cpu::sweep::{CpuOptions, SweepOptions, SweepPath, sweep_with};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
 /// A box of fog filling the view; `opacity` and `transport` set how fast the light dies.
@@ -62,12 +62,13 @@ impl Prepared {
     }
 
     fn run(&self, pool: &rayon::ThreadPool, path: SweepPath, skip_quiet: bool) {
-        let options = SweepOptions {
+        let cpu = CpuOptions {
             path,
             skip_quiet,
-            ..SweepOptions::default()
+            ..CpuOptions::default()
         };
-        pool.install(|| sweep(&self.plan, &self.geometry.raster, &self.ldi, &options))
+        let (plan, raster, ldi) = (&self.plan, &self.geometry.raster, &self.ldi);
+        pool.install(|| sweep_with(plan, raster, ldi, &SweepOptions::default(), &cpu))
             .expect("sweep");
     }
 }

@@ -10,7 +10,9 @@ use convshadow_common::image_io::RgbImage;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::Scene;
 use convshadow_cpu::ldi::{Ldi, LdiStats};
-use convshadow_cpu::sweep::{ChunkCounts, SweepError, SweepOptions, SweepPath, sweep};
+use convshadow_cpu::sweep::{
+    ChunkCounts, CpuOptions, SweepError, SweepOptions, SweepPath, sweep_with,
+};
 use convshadow_gpu::GpuContext;
 
 use crate::exit::{self, Failure};
@@ -316,6 +318,8 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Failur
         progress: req.progress,
         cancel: req.cancel,
         initial_light: None,
+    };
+    let cpu = CpuOptions {
         path: req.path.sweep_path(),
         skip_quiet: req.skip_quiet,
         chunk_counts: Some(&chunk_counts),
@@ -323,7 +327,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Failur
     let out = match &choice.gpu {
         Some(ctx) => convshadow_gpu::sweep::sweep(ctx, &plan, &geometry.raster, &ldi, &options)?,
         None => pool
-            .install(|| sweep(&plan, &geometry.raster, &ldi, &options))
+            .install(|| sweep_with(&plan, &geometry.raster, &ldi, &options, &cpu))
             .map_err(|e| match e {
                 SweepError::Interrupted => {
                     Failure::new(exit::INTERRUPTED, "interrupted; no output written")

@@ -9,7 +9,7 @@ use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::Scene;
 use convshadow::cpu::ldi::Ldi;
-use convshadow::cpu::sweep::{ChunkCounts, SweepOptions, SweepPath, sweep};
+use convshadow::cpu::sweep::{ChunkCounts, CpuOptions, SweepOptions, SweepPath, sweep_with};
 use convshadow::pipeline::image_fingerprint;
 use support::KERNELS;
 
@@ -55,11 +55,14 @@ fn compare(kernel: &str, what: &str, initial_of: &dyn Fn(usize, usize, usize) ->
     let run = |path: SweepPath, counts: Option<&ChunkCounts>| {
         let options = SweepOptions {
             initial_light: Some(&initial),
-            path,
-            chunk_counts: counts,
             ..SweepOptions::default()
         };
-        sweep(&plan, &g.raster, &ldi, &options).expect("sweep")
+        let cpu = CpuOptions {
+            path,
+            chunk_counts: counts,
+            ..CpuOptions::default()
+        };
+        sweep_with(&plan, &g.raster, &ldi, &options, &cpu).expect("sweep")
     };
     let scalar = run(SweepPath::Scalar, None);
     let simd = run(SweepPath::Simd, Some(&counts));

@@ -65,7 +65,7 @@ pub enum SweepPath {
     Simd,
 }
 
-/// Options of a sweep run.
+/// Options of a sweep run that every backend shares (the CPU's own knobs are [`CpuOptions`]).
 pub struct SweepOptions<'a> {
     /// Called after every slab with the slab index.
     pub progress: &'a (dyn Fn(u32) + Sync),
@@ -73,7 +73,21 @@ pub struct SweepOptions<'a> {
     pub cancel: Option<&'a AtomicBool>,
     /// Initial light value per light and channel (`None` = 1, the unoccluded light).
     pub initial_light: Option<&'a [f32]>,
-    /// The CPU code path (the GPU port ignores it).
+}
+
+impl Default for SweepOptions<'_> {
+    fn default() -> Self {
+        SweepOptions {
+            progress: &|_| {},
+            cancel: None,
+            initial_light: None,
+        }
+    }
+}
+
+/// The CPU sweep's own knobs: code path, quiet-chunk skipping and chunk counts.
+pub struct CpuOptions<'a> {
+    /// The CPU code path.
     pub path: SweepPath,
     /// SIMD path only: skip 8-pixel chunks whose result is known exactly without computing it
     /// (unoccluded light and no mesh, or opaque pixels in the dark). On by default; off only to
@@ -83,12 +97,9 @@ pub struct SweepOptions<'a> {
     pub chunk_counts: Option<&'a ChunkCounts>,
 }
 
-impl Default for SweepOptions<'_> {
+impl Default for CpuOptions<'_> {
     fn default() -> Self {
-        SweepOptions {
-            progress: &|_| {},
-            cancel: None,
-            initial_light: None,
+        CpuOptions {
             path: SweepPath::default(),
             skip_quiet: true,
             chunk_counts: None,
@@ -96,12 +107,24 @@ impl Default for SweepOptions<'_> {
     }
 }
 
-/// Runs the sweep on the current rayon pool with the path chosen in `options`.
+/// Runs the sweep on the current rayon pool with the default [`CpuOptions`] (SIMD path,
+/// quiet chunks skipped).
 pub fn sweep(
     plan: &RenderPlan,
     raster: &RasterSetup,
     ldi: &Ldi,
     options: &SweepOptions<'_>,
+) -> Result<SweepOutput, SweepError> {
+    sweep_with(plan, raster, ldi, options, &CpuOptions::default())
+}
+
+/// Runs the sweep on the current rayon pool with the path and knobs chosen in `cpu`.
+pub fn sweep_with(
+    plan: &RenderPlan,
+    raster: &RasterSetup,
+    ldi: &Ldi,
+    options: &SweepOptions<'_>,
+    cpu: &CpuOptions<'_>,
 ) -> Result<SweepOutput, SweepError> {
     let w = plan.grid_width as usize;
     let h = plan.grid_height as usize;
@@ -125,8 +148,8 @@ pub fn sweep(
 
     // SIMD path: per-row spans of the light that is not exactly 1 / not exactly 0, and per-chunk
     // cursor summaries, so quiet chunks can be recognised without touching their pixels.
-    let quiet = (options.path == SweepPath::Simd && options.skip_quiet)
-        .then(|| QuietSetup::new(plan, ldi, &prev));
+    let quiet =
+        (cpu.path == SweepPath::Simd && cpu.skip_quiet).then(|| QuietSetup::new(plan, ldi, &prev));
     let chunks_per_row = (w / 8).max(1);
     let (mut spans_prev, mut spans_cur, mut chunk_states) = match &quiet {
         Some(q) => (
@@ -170,12 +193,12 @@ pub fn sweep(
                     },
                 )
             });
-        match (options.path, &quiet) {
+        match (cpu.path, &quiet) {
             (SweepPath::Scalar, _) => rows.for_each(|(y, row)| {
                 sweep_row_scalar(&ctx, &reach, y, prev_ref, row);
             }),
             (SweepPath::Simd, None) => rows.for_each(|(y, row)| {
-                sweep_row_simd(&ctx, &reach, y, prev_ref, row, None, options.chunk_counts);
+                sweep_row_simd(&ctx, &reach, y, prev_ref, row, None, cpu.chunk_counts);
             }),
             (SweepPath::Simd, Some(q)) => {
                 let spans_prev_ref = &spans_prev;
@@ -195,7 +218,7 @@ pub fn sweep(
                             prev_ref,
                             row,
                             Some(quiet_row),
-                            options.chunk_counts,
+                            cpu.chunk_counts,
                         );
                     });
                 std::mem::swap(&mut spans_prev, &mut spans_cur);
