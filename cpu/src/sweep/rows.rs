@@ -2,9 +2,13 @@
 //! path, the 1-lane instance of the stage) or eight at a time (the SIMD path, with quiet-chunk
 //! skipping; the row's last `width mod 8` pixels go through the 1-lane instance).
 
+use std::ops::Range;
+
 use wide::f32x8;
 
-use super::kit::{Reach, RowState, SlabContext, jitter_row_hash, light_row_hashes};
+use super::kit::{
+    MAX_LIGHT_CHANNELS, Reach, RowState, SlabContext, jitter_row_hash, light_row_hashes,
+};
 use super::quiet::{ChunkCounts, ChunkState, ChunkWork, LANES, QuietRow, RowSpans};
 use super::stage::{ChunkFn, chunk_fn};
 use crate::parity::advance;
@@ -17,26 +21,36 @@ pub(crate) fn sweep_row_scalar(
     prev: &[f32],
     mut row: RowState<'_>,
 ) {
-    let plan = ctx.plan;
-    let w = plan.grid_width as usize;
-    let h = plan.grid_height as usize;
-    let planes = plan.lights.len() * plan.channels as usize;
+    let w = ctx.plan.grid_width as usize;
     let row_hashes = light_row_hashes(ctx, y);
     let jitter_row = jitter_row_hash(ctx, y);
-    let pixel: ChunkFn = chunk_fn::<f32>(planes);
-    for x in 0..w {
+    let mut spans = RowSpans::EMPTY;
+    let hashes = (&row_hashes, jitter_row);
+    sweep_pixels(ctx, reach, y, 0..w, prev, &mut row, hashes, &mut spans);
+}
+
+/// Runs the 1-lane stage on pixels `xs` of row y (`hashes`: the row's light and jitter
+/// hashes), recording their outgoing light in `spans`.
+#[allow(clippy::too_many_arguments)]
+fn sweep_pixels(
+    ctx: &SlabContext<'_>,
+    reach: &Reach,
+    y: usize,
+    xs: Range<usize>,
+    prev: &[f32],
+    row: &mut RowState<'_>,
+    hashes: (&[u32; MAX_LIGHT_CHANNELS], u32),
+    spans: &mut RowSpans,
+) {
+    let plan = ctx.plan;
+    let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
+    let pixel: ChunkFn = chunk_fn::<f32>(plan.lights.len() * plan.channels as usize);
+    let (row_hashes, jitter_row) = hashes;
+    for x in xs {
         let interior = reach.interior(x, 1, y, w, h);
-        pixel(
-            ctx,
-            y,
-            x,
-            prev,
-            &mut row,
-            &row_hashes,
-            jitter_row,
-            interior,
-            None,
-        );
+        let (not_one, not_zero) =
+            pixel(ctx, y, x, prev, row, row_hashes, jitter_row, interior, None);
+        spans.record(x, 1, not_one, not_zero);
     }
 }
 
@@ -61,7 +75,6 @@ pub(crate) fn sweep_row_simd(
     let mut tally = [0u64; 3];
     let full_chunks = w / LANES;
     let chunk: ChunkFn = chunk_fn::<f32x8>(planes);
-    let pixel: ChunkFn = chunk_fn::<f32>(planes);
 
     for c in 0..full_chunks {
         let x0 = c * LANES;
@@ -111,21 +124,9 @@ pub(crate) fn sweep_row_simd(
         }
     }
 
-    for x in full_chunks * LANES..w {
-        let interior = reach.interior(x, 1, y, w, h);
-        let (not_one, not_zero) = pixel(
-            ctx,
-            y,
-            x,
-            prev,
-            &mut row,
-            &row_hashes,
-            jitter_row,
-            interior,
-            None,
-        );
-        spans.record(x, 1, not_one, not_zero);
-    }
+    let tail = full_chunks * LANES..w;
+    let hashes = (&row_hashes, jitter_row);
+    sweep_pixels(ctx, reach, y, tail, prev, &mut row, hashes, &mut spans);
     if let Some(q) = quiet {
         *q.span_out = spans;
     }

@@ -427,36 +427,14 @@ mod tests {
         }
     }
 
-    /// The 8-lane stage with one lane's first light value off by one bit.
-    #[allow(clippy::too_many_arguments)]
-    fn wrong_lane(
-        ctx: &SlabContext<'_>,
-        y: usize,
-        x0: usize,
-        prev: &[f32],
-        row: &mut RowState<'_>,
-        row_hashes: &[u32; MAX_LIGHT_CHANNELS],
-        jitter_row: u32,
-        interior: bool,
-        known_light: Option<f32>,
-    ) -> (bool, bool) {
-        let r = sweep_chunk::<f32x8, 6>(
-            ctx,
-            y,
-            x0,
-            prev,
-            row,
-            row_hashes,
-            jitter_row,
-            interior,
-            known_light,
-        );
-        row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
-        r
-    }
-
     #[test]
     fn a_lane_that_disagrees_fails_the_comparison() {
+        // The 8-lane stage with one lane's first light value off by one bit.
+        let wrong_lane: ChunkFn = |ctx, y, x0, prev, row, hashes, jitter, interior, known| {
+            let r = sweep_chunk::<f32x8, 6>(ctx, y, x0, prev, row, hashes, jitter, interior, known);
+            row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
+            r
+        };
         let d = compare_lanes("ellipse2", 3, wrong_lane).expect("the flipped bit is found");
         assert!(d.contains("light["), "{d}");
     }
