@@ -4,7 +4,8 @@
 //!
 //! Only exact operations are offered: add, sub, mul, div, floor, sign-bit tricks, compares and
 //! selects, saturating truncation, wrapping integer arithmetic, loads, stores and gathers. There
-//! is no `mul_add`, no `min`/`max` (they differ on ±0 between `wide` and scalar) and no libm.
+//! is no `mul_add`, no `min`/`max` (they differ on ±0 between `wide` and scalar) and no libm
+//! transcendental.
 
 use std::ops::{Add, Div, Mul, Sub};
 
@@ -354,5 +355,93 @@ impl Lane for f32x8 {
     #[inline(always)]
     fn u_store(a: u32x8, out: &mut [u32; MAX_LANES]) {
         *out = a.to_array();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Floats of every kind: ordinary, ±0, ±∞, NaN, subnormal, huge; from a `mix32` counter.
+    fn floats(seed: u32) -> [f32; MAX_LANES] {
+        let special = [
+            0.0,
+            -0.0,
+            f32::INFINITY,
+            -f32::INFINITY,
+            f32::NAN,
+            1e-40,
+            3e9,
+            -2.5,
+        ];
+        let mut out = [0.0f32; MAX_LANES];
+        for (i, v) in out.iter_mut().enumerate() {
+            let h = mix32(seed.wrapping_mul(8).wrapping_add(i as u32));
+            *v = match h % 4 {
+                0 => special[(h >> 8) as usize % special.len()],
+                1 => f32::from_bits(h),
+                _ => (h >> 8) as f32 / 65536.0 - 128.0,
+            };
+        }
+        out
+    }
+
+    /// Each lane of `eight` has the bits of `one` on that lane's inputs.
+    fn agree(eight: f32x8, one: impl Fn(usize) -> f32, what: &str) {
+        let e = eight.to_array();
+        for (i, v) in e.iter().enumerate() {
+            assert_eq!(v.to_bits(), one(i).to_bits(), "{what}, lane {i}");
+        }
+    }
+
+    #[test]
+    fn eight_lanes_give_the_bits_of_one_lane() {
+        for seed in 0..2000 {
+            let (a, b) = (floats(seed), floats(seed + 7919));
+            let (va, vb) = (f32x8::new(a), f32x8::new(b));
+            agree(va + vb, |i| a[i] + b[i], "add");
+            agree(va * vb, |i| a[i] * b[i], "mul");
+            agree(va / vb, |i| a[i] / b[i], "div");
+            agree(Lane::floor(va), |i| Lane::floor(a[i]), "floor");
+            agree(Lane::abs(va), |i| Lane::abs(a[i]), "abs");
+            let m = va.gt(vb);
+            agree(
+                <f32x8 as Lane>::select(m, va, vb),
+                |i| if a[i] > b[i] { a[i] } else { b[i] },
+                "gt",
+            );
+            let m = <f32x8 as Lane>::m_or(va.lt(vb), va.ne(vb));
+            agree(
+                <f32x8 as Lane>::select(m, va, vb),
+                |i| {
+                    <f32 as Lane>::select(
+                        <f32 as Lane>::m_or(a[i].lt(b[i]), a[i].ne(b[i])),
+                        a[i],
+                        b[i],
+                    )
+                },
+                "lt, ne, or",
+            );
+            let t = va.trunc_u32().to_array();
+            for i in 0..MAX_LANES {
+                assert_eq!(t[i], a[i].trunc_u32(), "trunc lane {i}");
+            }
+            let mut h = [0u32; MAX_LANES];
+            f32x8::u_store(f32x8::u_mix32(f32x8::u_iota(seed)), &mut h);
+            for (i, v) in h.iter().enumerate() {
+                assert_eq!(
+                    *v,
+                    f32::u_mix32(f32::u_iota(seed + i as u32)),
+                    "mix32 lane {i}"
+                );
+            }
+            let at: [usize; MAX_LANES] = std::array::from_fn(|i| (h[i] % 16) as usize);
+            let data: Vec<f32> = (0..16).map(|k| floats(seed + k)[k as usize % 8]).collect();
+            agree(
+                f32x8::gather_at(&data, &at),
+                |i| f32::gather_at(&data, &[at[i]; 8]),
+                "gather_at",
+            );
+        }
     }
 }
