@@ -34,11 +34,11 @@ fn noise(c: &mut Criterion) {
                 let mut s = f32x8::ZERO;
                 for x in xs.chunks_exact(8) {
                     let x = f32x8::new(x.try_into().expect("8"));
-                    s += detail.eval8(
+                    s += detail.eval([
                         x,
                         f32x8::splat(0.5) * x + f32x8::splat(0.25),
                         f32x8::splat(0.75) - x,
-                    );
+                    ]);
                 }
                 black_box(s)
             })

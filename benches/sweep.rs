@@ -11,7 +11,7 @@ use convshadow::common::kernel::KERNEL_NAMES;
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::{Scene, SlabSpec};
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
-use convshadow::cpu::sweep::{CpuSweepOptions, SweepOptions, SweepPath, sweep_with};
+use convshadow::cpu::sweep::{CpuOptions, SweepOptions, SweepPath, sweep_with};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
 /// A box of fog filling the view; `opacity` and `transport` set how fast the light dies.
@@ -63,21 +63,14 @@ impl Prepared {
     }
 
     fn run(&self, pool: &rayon::ThreadPool, path: SweepPath, skip_quiet: bool) {
-        let cpu = CpuSweepOptions {
+        let cpu = CpuOptions {
             path,
             skip_quiet,
-            ..CpuSweepOptions::default()
+            ..CpuOptions::default()
         };
-        pool.install(|| {
-            sweep_with(
-                &self.plan,
-                &self.geometry.raster,
-                &self.ldi,
-                &SweepOptions::default(),
-                &cpu,
-            )
-        })
-        .expect("sweep");
+        let (plan, raster, ldi) = (&self.plan, &self.geometry.raster, &self.ldi);
+        pool.install(|| sweep_with(plan, raster, ldi, &SweepOptions::default(), &cpu))
+            .expect("sweep");
     }
 }
 

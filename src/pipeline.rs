@@ -12,7 +12,7 @@ use convshadow_common::plan::RenderPlan;
 use convshadow_common::scene::{Scene, SceneError};
 use convshadow_cpu::ldi::{BuildLdi, Ldi, LdiError, LdiStats};
 use convshadow_cpu::sweep::{
-    ChunkCounts, CpuSweepOptions, SweepError, SweepOptions, SweepPath, sweep_with,
+    ChunkCounts, CpuOptions, SweepError, SweepOptions, SweepPath, sweep_with,
 };
 use convshadow_gpu::{GpuContext, GpuError};
 
@@ -406,7 +406,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
         cancel: req.cancel,
         initial_light: None,
     };
-    let cpu_options = CpuSweepOptions {
+    let cpu = CpuOptions {
         path: req.path.sweep_path(),
         skip_quiet: req.skip_quiet,
         chunk_counts: Some(&chunk_counts),
@@ -414,7 +414,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     let out = match &choice.gpu {
         Some(ctx) => convshadow_gpu::sweep::sweep(ctx, &plan, &geometry.raster, &ldi, &options)?,
         None => pool
-            .install(|| sweep_with(&plan, &geometry.raster, &ldi, &options, &cpu_options))
+            .install(|| sweep_with(&plan, &geometry.raster, &ldi, &options, &cpu))
             .map_err(|e| match e {
                 SweepError::Interrupted => RenderError::Interrupted,
             })?,

@@ -9,7 +9,7 @@ use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::Scene;
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
-use convshadow::cpu::sweep::{ChunkCounts, CpuSweepOptions, SweepOptions, SweepPath, sweep_with};
+use convshadow::cpu::sweep::{ChunkCounts, CpuOptions, SweepOptions, SweepPath, sweep_with};
 use convshadow::pipeline::image_fingerprint;
 
 mod support;
@@ -56,10 +56,10 @@ fn compare(kernel: &str, what: &str, initial_of: &dyn Fn(usize, usize, usize) ->
             initial_light: Some(&initial),
             ..SweepOptions::default()
         };
-        let cpu = CpuSweepOptions {
+        let cpu = CpuOptions {
             path,
             chunk_counts: counts,
-            ..CpuSweepOptions::default()
+            ..CpuOptions::default()
         };
         sweep_with(&plan, &g.raster, &ldi, &options, &cpu).expect("sweep")
     };

@@ -6,6 +6,7 @@ pub mod geometry;
 pub mod hash;
 pub mod image_io;
 pub mod kernel;
+pub mod lane;
 pub mod ldi;
 pub mod mesh;
 pub mod metrics;

@@ -2,7 +2,7 @@
 //! turbulence, bit-exact between the scalar path, the 8-lane SIMD path and the WGSL port.
 //!
 //! # Bit-exactness rules
-//! Every function here is written **once**, generically over the crate-private `Lane` trait, and
+//! Every function here is written **once**, generically over [`Lane`](crate::lane::Lane), and
 //! instantiated for `f32` (scalar) and `wide::f32x8` (SIMD). Both instantiations therefore run
 //! the identical sequence of IEEE operations, lane by lane. Only these operations are used:
 //! f32 add, sub, mul, floor, sign-bit clear (`abs`), sign-bit xor, compare + select, f32 → i32
@@ -30,230 +30,7 @@
 //! which is harmless (the noise is continuous there). For `|x| ≥ 2^23` every f32 is an integer, so
 //! `fx = 0`. Non-finite inputs give NaN from the raw noise functions and 0 from [`Detail`].
 
-use std::ops::{Add, Div, Mul, Sub};
-
-use wide::{f32x8, u32x8};
-
-/// Lane abstraction: one generic implementation, instantiated for scalar `f32` and `f32x8`, so
-/// the scalar and SIMD paths perform the same operations in the same order by construction.
-pub(crate) trait Lane:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
-{
-    /// Unsigned integer lanes.
-    type U: Copy;
-    /// Comparison mask.
-    type M: Copy;
-    /// Broadcasts a float.
-    fn splat(v: f32) -> Self;
-    /// Rounds towards −∞.
-    fn floor(self) -> Self;
-    /// Clears the sign bit.
-    fn abs(self) -> Self;
-    /// `self > o` (false for NaN).
-    fn gt(self, o: Self) -> Self::M;
-    /// `self < o` (false for NaN).
-    fn lt(self, o: Self) -> Self::M;
-    /// Lane-wise `if m { a } else { b }`.
-    fn select(m: Self::M, a: Self, b: Self) -> Self;
-    /// `(self as i32) as u32` with Rust's saturating conversion (NaN → 0).
-    fn trunc_u32(self) -> Self::U;
-    /// Xors `bits` into the IEEE bit pattern (used with bit 31 only: a sign flip).
-    fn xor_bits(self, bits: Self::U) -> Self;
-    /// Broadcasts an integer.
-    fn u_splat(v: u32) -> Self::U;
-    /// Wrapping add.
-    fn u_add(a: Self::U, b: Self::U) -> Self::U;
-    /// Wrapping multiply.
-    fn u_mul(a: Self::U, b: Self::U) -> Self::U;
-    /// Bitwise xor.
-    fn u_xor(a: Self::U, b: Self::U) -> Self::U;
-    /// Bitwise and.
-    fn u_and(a: Self::U, b: Self::U) -> Self::U;
-    /// Bitwise or.
-    fn u_or(a: Self::U, b: Self::U) -> Self::U;
-    /// Logical shift right by a constant.
-    fn u_shr(a: Self::U, n: u32) -> Self::U;
-    /// Shift left by a constant.
-    fn u_shl(a: Self::U, n: u32) -> Self::U;
-    /// `a == b` as a float-select mask.
-    fn u_eq(a: Self::U, b: Self::U) -> Self::M;
-    /// `table[i]` per lane (bounds-checked).
-    fn gather(table: &[f32], i: Self::U) -> Self;
-}
-
-impl Lane for f32 {
-    type U = u32;
-    type M = bool;
-    #[inline(always)]
-    fn splat(v: f32) -> Self {
-        v
-    }
-    #[inline(always)]
-    fn floor(self) -> Self {
-        f32::floor(self)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        f32::abs(self)
-    }
-    #[inline(always)]
-    fn gt(self, o: Self) -> bool {
-        self > o
-    }
-    #[inline(always)]
-    fn lt(self, o: Self) -> bool {
-        self < o
-    }
-    #[inline(always)]
-    fn select(m: bool, a: Self, b: Self) -> Self {
-        if m { a } else { b }
-    }
-    #[inline(always)]
-    fn trunc_u32(self) -> u32 {
-        self as i32 as u32
-    }
-    #[inline(always)]
-    fn xor_bits(self, bits: u32) -> Self {
-        f32::from_bits(self.to_bits() ^ bits)
-    }
-    #[inline(always)]
-    fn u_splat(v: u32) -> u32 {
-        v
-    }
-    #[inline(always)]
-    fn u_add(a: u32, b: u32) -> u32 {
-        a.wrapping_add(b)
-    }
-    #[inline(always)]
-    fn u_mul(a: u32, b: u32) -> u32 {
-        a.wrapping_mul(b)
-    }
-    #[inline(always)]
-    fn u_xor(a: u32, b: u32) -> u32 {
-        a ^ b
-    }
-    #[inline(always)]
-    fn u_and(a: u32, b: u32) -> u32 {
-        a & b
-    }
-    #[inline(always)]
-    fn u_or(a: u32, b: u32) -> u32 {
-        a | b
-    }
-    #[inline(always)]
-    fn u_shr(a: u32, n: u32) -> u32 {
-        a >> n
-    }
-    #[inline(always)]
-    fn u_shl(a: u32, n: u32) -> u32 {
-        a << n
-    }
-    #[inline(always)]
-    fn u_eq(a: u32, b: u32) -> bool {
-        a == b
-    }
-    #[inline(always)]
-    fn gather(table: &[f32], i: u32) -> Self {
-        table[i as usize]
-    }
-}
-
-impl Lane for f32x8 {
-    type U = u32x8;
-    type M = f32x8;
-    #[inline(always)]
-    fn splat(v: f32) -> Self {
-        f32x8::splat(v)
-    }
-    #[inline(always)]
-    fn floor(self) -> Self {
-        f32x8::floor(self)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        f32x8::abs(self)
-    }
-    #[inline(always)]
-    fn gt(self, o: Self) -> f32x8 {
-        self.simd_gt(o)
-    }
-    #[inline(always)]
-    fn lt(self, o: Self) -> f32x8 {
-        self.simd_lt(o)
-    }
-    #[inline(always)]
-    fn select(m: f32x8, a: Self, b: Self) -> Self {
-        m.select(a, b)
-    }
-    #[inline(always)]
-    fn trunc_u32(self) -> u32x8 {
-        self.trunc_int().cast_unsigned()
-    }
-    #[inline(always)]
-    fn xor_bits(self, bits: u32x8) -> Self {
-        f32x8::from_bits(self.to_bits() ^ bits)
-    }
-    #[inline(always)]
-    fn u_splat(v: u32) -> u32x8 {
-        u32x8::splat(v)
-    }
-    #[inline(always)]
-    fn u_add(a: u32x8, b: u32x8) -> u32x8 {
-        a + b
-    }
-    #[inline(always)]
-    fn u_mul(a: u32x8, b: u32x8) -> u32x8 {
-        a * b
-    }
-    #[inline(always)]
-    fn u_xor(a: u32x8, b: u32x8) -> u32x8 {
-        a ^ b
-    }
-    #[inline(always)]
-    fn u_and(a: u32x8, b: u32x8) -> u32x8 {
-        a & b
-    }
-    #[inline(always)]
-    fn u_or(a: u32x8, b: u32x8) -> u32x8 {
-        a | b
-    }
-    #[inline(always)]
-    fn u_shr(a: u32x8, n: u32) -> u32x8 {
-        a >> n
-    }
-    #[inline(always)]
-    fn u_shl(a: u32x8, n: u32) -> u32x8 {
-        a << n
-    }
-    #[inline(always)]
-    fn u_eq(a: u32x8, b: u32x8) -> f32x8 {
-        f32x8::from_bits(a.simd_eq(b))
-    }
-    #[inline(always)]
-    fn gather(table: &[f32], i: u32x8) -> Self {
-        let i = i.to_array();
-        f32x8::new([
-            table[i[0] as usize],
-            table[i[1] as usize],
-            table[i[2] as usize],
-            table[i[3] as usize],
-            table[i[4] as usize],
-            table[i[5] as usize],
-            table[i[6] as usize],
-            table[i[7] as usize],
-        ])
-    }
-}
-
-/// `lowbias32` (Chris Wellons): a well-mixing bijective 32-bit integer hash.
-#[inline(always)]
-fn hash<L: Lane>(k: L::U) -> L::U {
-    let k = L::u_xor(k, L::u_shr(k, 16));
-    let k = L::u_mul(k, L::u_splat(0x7feb_352d));
-    let k = L::u_xor(k, L::u_shr(k, 15));
-    let k = L::u_mul(k, L::u_splat(0x846c_a68b));
-    L::u_xor(k, L::u_shr(k, 16))
-}
+use crate::lane::Lane;
 
 /// Perlin's quintic fade `6t^5 - 15t^4 + 10t^3`, evaluated as `((t*t)*t) * (t*(t*6 - 15) + 10)`.
 #[inline(always)]
@@ -318,9 +95,9 @@ fn grad4<L: Lane>(hash: L::U, x: L, y: L, z: L, t: L) -> L {
     u.xor_bits(su) + v.xor_bits(sv) + w.xor_bits(sw)
 }
 
-/// Generic 3D improved Perlin noise.
+/// Improved Perlin noise (Perlin 2002) in 3D; 0 at lattice points, range about [-1, 1].
 #[inline(always)]
-fn perlin3<L: Lane>(x: L, y: L, z: L) -> L {
+pub fn improved_perlin3<L: Lane>(x: L, y: L, z: L) -> L {
     let one = L::splat(1.0);
     let (xi0, x0) = split(x);
     let (yi0, y0) = split(y);
@@ -336,7 +113,7 @@ fn perlin3<L: Lane>(x: L, y: L, z: L) -> L {
     let u = fade(x0);
     let v = fade(y0);
     let w = fade(z0);
-    let key = |a: L::U, b: L::U, c: L::U| hash::<L>(L::u_or(L::u_or(a, b), c));
+    let key = |a: L::U, b: L::U, c: L::U| L::u_mix32(L::u_or(L::u_or(a, b), c));
     let g000 = grad3(key(xi0, yi0s, zi0s), x0, y0, z0);
     let g100 = grad3(key(xi1, yi0s, zi0s), x1, y0, z0);
     let g010 = grad3(key(xi0, yi1s, zi0s), x0, y1, z0);
@@ -362,9 +139,10 @@ fn perlin3<L: Lane>(x: L, y: L, z: L) -> L {
 /// 3D noise is unscaled: its worst case is ±1.0364.
 pub const PERLIN4_SCALE: f32 = 0.87;
 
-/// Generic 4D improved Perlin noise (the interpolated value times [`PERLIN4_SCALE`]).
+/// Improved Perlin noise in 4D (32 hypercube-edge gradients, scaled by [`PERLIN4_SCALE`]); 0 at
+/// lattice points, range about [-1, 1].
 #[inline(always)]
-fn perlin4<L: Lane>(x: L, y: L, z: L, t: L) -> L {
+pub fn improved_perlin4<L: Lane>(x: L, y: L, z: L, t: L) -> L {
     let one = L::splat(1.0);
     let (xi0, x0) = split(x);
     let (yi0, y0) = split(y);
@@ -386,7 +164,7 @@ fn perlin4<L: Lane>(x: L, y: L, z: L, t: L) -> L {
     let corner = |c: usize| {
         let (a, b, d, e) = (c & 1, (c >> 1) & 1, (c >> 2) & 1, (c >> 3) & 1);
         let k = L::u_or(L::u_or(L::u_or(xi[a], yi[b]), zi[d]), ti[e]);
-        grad4(hash::<L>(k), xs[a], ys[b], zs[d], ts[e])
+        grad4(L::u_mix32(k), xs[a], ys[b], zs[d], ts[e])
     };
     // Interpolate along x, then y, then z, then t, always lower corner first.
     let mut ax = [one; 8];
@@ -400,27 +178,6 @@ fn perlin4<L: Lane>(x: L, y: L, z: L, t: L) -> L {
     let az0 = lerp(fz, ay[0], ay[1]);
     let az1 = lerp(fz, ay[2], ay[3]);
     lerp(ft, az0, az1) * L::splat(PERLIN4_SCALE)
-}
-
-/// Improved Perlin noise (Perlin 2002) in 3D; 0 at lattice points, range about [-1, 1].
-pub fn improved_perlin3(x: f32, y: f32, z: f32) -> f32 {
-    perlin3(x, y, z)
-}
-
-/// Improved Perlin noise in 4D (32 hypercube-edge gradients, scaled by [`PERLIN4_SCALE`]); 0 at
-/// lattice points, range about [-1, 1].
-pub fn improved_perlin4(x: f32, y: f32, z: f32, w: f32) -> f32 {
-    perlin4(x, y, z, w)
-}
-
-/// 8-lane [`improved_perlin3`], bit-identical lane by lane.
-pub fn improved_perlin3_x8(x: f32x8, y: f32x8, z: f32x8) -> f32x8 {
-    perlin3(x, y, z)
-}
-
-/// 8-lane [`improved_perlin4`], bit-identical lane by lane.
-pub fn improved_perlin4_x8(x: f32x8, y: f32x8, z: f32x8, w: f32x8) -> f32x8 {
-    perlin4(x, y, z, w)
 }
 
 /// Clamps to [0, 1] with compares and selects: NaN and −0 map to +0.
@@ -509,30 +266,10 @@ impl Detail {
         }
     }
 
-    /// Scalar evaluation at an object-space point, result in [0, 1] (clamped; NaN → 0), 3D noise
-    /// if `time` is `None`, else 4D noise at `(p, time)`.
-    pub fn eval(&self, p: [f32; 3]) -> f32 {
-        self.eval_lanes(p[0], p[1], p[2])
-    }
-
-    /// 8 lanes at once; bit-identical to [`Detail::eval`] lane by lane.
-    pub fn eval8(&self, x: f32x8, y: f32x8, z: f32x8) -> f32x8 {
-        self.eval_lanes(x, y, z)
-    }
-
-    /// Noise of octave `i`.
-    #[inline(always)]
-    fn octave<L: Lane>(&self, i: usize, x: L, y: L, z: L) -> L {
-        let f = L::splat(self.octave_frequency[i]);
-        match self.time {
-            None => perlin3(x * f, y * f, z * f),
-            Some(t) => perlin4(x * f, y * f, z * f, L::splat(t) * f),
-        }
-    }
-
-    /// The generic evaluation shared by both paths.
-    #[inline(always)]
-    fn eval_lanes<L: Lane>(&self, x: L, y: L, z: L) -> L {
+    /// Evaluation at an object-space point (per lane), result in [0, 1] (clamped; NaN → 0), 3D
+    /// noise if `time` is `None`, else 4D noise at `(p, time)`.
+    pub fn eval<L: Lane>(&self, p: [L; 3]) -> L {
+        let [x, y, z] = p;
         let n_oct = self.octave_frequency.len().min(self.octave_amplitude.len());
         if n_oct == 0 {
             return L::splat(0.0);
@@ -574,11 +311,22 @@ impl Detail {
         };
         clamp01(v)
     }
+
+    /// Noise of octave `i`.
+    #[inline(always)]
+    fn octave<L: Lane>(&self, i: usize, x: L, y: L, z: L) -> L {
+        let f = L::splat(self.octave_frequency[i]);
+        match self.time {
+            None => improved_perlin3(x * f, y * f, z * f),
+            Some(t) => improved_perlin4(x * f, y * f, z * f, L::splat(t) * f),
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use wide::f32x8;
 
     /// SplitMix64: a deterministic test generator.
     struct Rng(u64);
@@ -885,7 +633,7 @@ mod tests {
         let x = lanes(std::array::from_fn(|i| p[i][0]));
         let y = lanes(std::array::from_fn(|i| p[i][1]));
         let z = lanes(std::array::from_fn(|i| p[i][2]));
-        let v = improved_perlin3_x8(x, y, z).to_array();
+        let v = improved_perlin3(x, y, z).to_array();
         for i in 0..8 {
             let s = improved_perlin3(p[i][0], p[i][1], p[i][2]);
             assert!(
@@ -899,7 +647,7 @@ mod tests {
 
     fn check_x8_4(p: [[f32; 4]; 8]) {
         let c = |k: usize| lanes(std::array::from_fn(|i| p[i][k]));
-        let v = improved_perlin4_x8(c(0), c(1), c(2), c(3)).to_array();
+        let v = improved_perlin4(c(0), c(1), c(2), c(3)).to_array();
         for i in 0..8 {
             let s = improved_perlin4(p[i][0], p[i][1], p[i][2], p[i][3]);
             assert!(
@@ -961,7 +709,7 @@ mod tests {
             for _ in 0..(104_000 / 8 / 4) {
                 let p: [[f32; 3]; 8] = std::array::from_fn(|_| std::array::from_fn(|_| rng.hard()));
                 let c = |k: usize| lanes(std::array::from_fn(|i| p[i][k]));
-                let v = d.eval8(c(0), c(1), c(2)).to_array();
+                let v = d.eval([c(0), c(1), c(2)]).to_array();
                 for i in 0..8 {
                     let s = d.eval(p[i]);
                     assert_eq!(s.to_bits(), v[i].to_bits(), "{d:?} lane {i} at {:?}", p[i]);
@@ -971,7 +719,7 @@ mod tests {
             // Non-finite points: clamped to 0 on both paths.
             for s in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
                 let x = lanes([s, 0.5, s, 1.0, -2.0, s, 0.0, 7.0]);
-                let v = d.eval8(x, x, f32x8::splat(0.25)).to_array();
+                let v = d.eval([x, x, f32x8::splat(0.25)]).to_array();
                 for (i, &xi) in x.to_array().iter().enumerate() {
                     assert_eq!(d.eval([xi, xi, 0.25]).to_bits(), v[i].to_bits());
                 }

@@ -11,9 +11,8 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use wide::f32x8;
-
-use crate::noise::{Lane, lerp};
+use crate::lane::Lane;
+use crate::noise::lerp;
 
 /// Largest accepted voxel count (2^28, i.e. 1 GiB of f32 voxels).
 pub const MAX_VOXELS: u64 = 1 << 28;
@@ -258,20 +257,10 @@ impl Texture3d {
     }
 
     /// Trilinear sample at normalised coordinates u in [0, 1]³ (voxel centres at (i+0.5)/dim),
-    /// clamp-to-edge (NaN coordinates read the first voxel). Interpolation written as
+    /// clamp-to-edge (NaN coordinates read the first voxel), per lane. Interpolation written as
     /// a + t*(b - a) in a fixed order.
-    pub fn sample(&self, u: [f32; 3]) -> f32 {
-        self.sample_lanes(u[0], u[1], u[2])
-    }
-
-    /// 8 lanes at once; bit-identical to [`Texture3d::sample`] lane by lane (gather by lanes).
-    pub fn sample8(&self, u: f32x8, v: f32x8, w: f32x8) -> f32x8 {
-        self.sample_lanes(u, v, w)
-    }
-
-    /// The generic sampler shared by both paths.
-    #[inline(always)]
-    fn sample_lanes<L: Lane>(&self, u: L, v: L, w: L) -> L {
+    pub fn sample<L: Lane>(&self, p: [L; 3]) -> L {
+        let [u, v, w] = p;
         let [dx, dy, dz] = self.dims;
         let (x0, x1, fx) = axis(u, dx);
         let (y0, y1, fy) = axis(v, dy);
@@ -294,6 +283,7 @@ impl Texture3d {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use wide::f32x8;
 
     /// SplitMix64.
     struct Rng(u64);
@@ -594,7 +584,7 @@ mod tests {
                     })
                 });
                 let c = |k: usize| f32x8::new(std::array::from_fn(|i| p[i][k]));
-                let v = tex.sample8(c(0), c(1), c(2)).to_array();
+                let v = tex.sample([c(0), c(1), c(2)]).to_array();
                 for i in 0..8 {
                     let s = tex.sample(p[i]);
                     assert_eq!(s.to_bits(), v[i].to_bits(), "lane {i} at {:?}", p[i]);

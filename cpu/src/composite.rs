@@ -1,24 +1,27 @@
 //! Stages 4 and 5: front-to-back compositing and light attenuation with the explicit flush
 //! (DESIGN §2 steps 4–5). Mirrors `gpu/src/shaders/composite.wgsl`.
+//!
+//! Written once over [`Lane`]: the scalar path is the 1-lane instance.
 
+use convshadow_common::lane::Lane;
 use convshadow_common::plan::FLUSH_BELOW;
-use wide::f32x8;
 
-/// `C += (1 − A)·α·c`, `A += (1 − A)·α`, in that order.
+/// `C += (1 − A)·α·c`, `A += (1 − A)·α`, in that order, applied only in the lanes of `lanes`
+/// (planar colours: one lane value per channel).
 #[inline(always)]
-pub fn composite(color: &mut [f32; 3], alpha: &mut f32, c: [f32; 3], a: f32) {
-    let t = (1.0 - *alpha) * a;
-    color[0] += t * c[0];
-    color[1] += t * c[1];
-    color[2] += t * c[2];
-    *alpha += t;
+pub fn composite<L: Lane>(color: &mut [L; 3], alpha: &mut L, c: [L; 3], a: L, lanes: L::M) {
+    let t = (L::splat(1.0) - *alpha) * a;
+    for (dst, src) in color.iter_mut().zip(c) {
+        *dst = L::select(lanes, *dst + t * src, *dst);
+    }
+    *alpha = L::select(lanes, *alpha + t, *alpha);
 }
 
 /// `Iout = Iin · attenuation`, flushed to zero below [`FLUSH_BELOW`].
 #[inline(always)]
-pub fn attenuate(iin: f32, attenuation: f32) -> f32 {
+pub fn attenuate<L: Lane>(iin: L, attenuation: L) -> L {
     let v = iin * attenuation;
-    if v < FLUSH_BELOW { 0.0 } else { v }
+    L::select(v.lt(L::splat(FLUSH_BELOW)), L::splat(0.0), v)
 }
 
 /// The final `C += (1 − A)·background`.
@@ -28,27 +31,4 @@ pub fn finish(color: &mut [f32; 3], alpha: f32, background: [f32; 3]) {
     color[0] += t * background[0];
     color[1] += t * background[1];
     color[2] += t * background[2];
-}
-
-/// 8-lane [`composite`] on planar colours, applied only in the all-ones lanes of `lanes`.
-#[inline(always)]
-pub fn composite8(
-    color: &mut [f32x8; 3],
-    alpha: &mut f32x8,
-    c: [f32x8; 3],
-    a: f32x8,
-    lanes: f32x8,
-) {
-    let t = (f32x8::ONE - *alpha) * a;
-    for (dst, src) in color.iter_mut().zip(c) {
-        *dst = lanes.select(*dst + t * src, *dst);
-    }
-    *alpha = lanes.select(*alpha + t, *alpha);
-}
-
-/// 8-lane [`attenuate`].
-#[inline(always)]
-pub fn attenuate8(iin: f32x8, attenuation: f32x8) -> f32x8 {
-    let v = iin * attenuation;
-    v.simd_lt(f32x8::splat(FLUSH_BELOW)).select(f32x8::ZERO, v)
 }

@@ -2,11 +2,12 @@
 //! (DESIGN §2 "Kernels"; paper §3, eq. 7). Mirrors `gpu/src/shaders/kernels.wgsl`.
 //!
 //! The sum order is fixed — tap by tap, corners (0,0), (1,0), (0,1), (1,1) — and each term is
-//! `acc = acc + w·v` with no fused multiply-add, so every path gives the same bits.
+//! `acc = acc + w·v` with no fused multiply-add, so every path gives the same bits. Written once
+//! over [`Lane`]: the scalar path is the 1-lane instance.
 
-use convshadow_common::hash::{mix32x8, phase_index, pixel_hash, row_hash};
+use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
-use wide::{f32x8, u32x8};
+use convshadow_common::lane::{Lane, MAX_LANES};
 
 /// Value read outside the buffer: the unoccluded light.
 pub const OUTSIDE: f32 = 1.0;
@@ -54,22 +55,7 @@ pub fn light_row_hash(slab_hash: u32, y: u32) -> u32 {
     row_hash(slab_hash, y)
 }
 
-/// Gathers one channel at pixel (x, y) through `taps`, shifted by `shift`.
-#[inline(always)]
-pub fn gather(plane: &Plane<'_>, taps: &[Tap], shift: [i32; 2], x: i32, y: i32) -> f32 {
-    let mut acc = 0.0f32;
-    for t in taps {
-        let sx = x + t.dx + shift[0];
-        let sy = y + t.dy + shift[1];
-        acc += t.w[0] * plane.fetch(sx, sy);
-        acc += t.w[1] * plane.fetch(sx + 1, sy);
-        acc += t.w[2] * plane.fetch(sx, sy + 1);
-        acc += t.w[3] * plane.fetch(sx + 1, sy + 1);
-    }
-    acc
-}
-
-/// The light buffers of one light as the 8-lane gather reads them: `channels` planes of one
+/// The light buffers of one light as the gather reads them: `channels` planes of one
 /// row-major grid, interleaved by row (`[row][light][channel][x]`).
 #[derive(Clone, Copy)]
 pub struct LightPlanes<'a> {
@@ -101,40 +87,63 @@ impl LightPlanes<'_> {
     }
 }
 
-/// `acc + w0·v0 + w1·v1 + w2·v2 + w3·v3`, added left to right as the scalar [`gather`] does.
+/// `acc + w0·v0 + w1·v1 + w2·v2 + w3·v3`, added left to right (the fixed sum order).
 #[inline(always)]
-fn add_bilinear(acc: f32x8, w: &[f32x8; 4], v: &[f32x8; 4]) -> f32x8 {
+fn add_bilinear<L: Lane>(acc: L, w: &[L; 4], v: &[L; 4]) -> L {
     let mut s = acc;
     for (wk, vk) in w.iter().zip(v) {
-        s += *wk * *vk;
+        s = s + *wk * *vk;
     }
     s
 }
 
-/// Loads 8 consecutive floats.
+/// The four bilinear corners (0,0), (1,0), (0,1), (1,1) of lane i's sample at
+/// (`sx[i]`, `sy[i]`) in `plane`, with checked fetches (reads outside give [`OUTSIDE`]).
 #[inline(always)]
-fn load8(data: &[f32], at: usize) -> f32x8 {
-    let a: [f32; 8] = data[at..at + 8].try_into().expect("8 floats");
-    f32x8::new(a)
+fn fetch_corners<L: Lane>(
+    plane: &Plane<'_>,
+    sx: &[i32; MAX_LANES],
+    sy: &[i32; MAX_LANES],
+) -> [L; 4] {
+    let mut v = [[0.0f32; MAX_LANES]; 4];
+    for i in 0..L::LANES {
+        v[0][i] = plane.fetch(sx[i], sy[i]);
+        v[1][i] = plane.fetch(sx[i] + 1, sy[i]);
+        v[2][i] = plane.fetch(sx[i], sy[i] + 1);
+        v[3][i] = plane.fetch(sx[i] + 1, sy[i] + 1);
+    }
+    [
+        L::load(&v[0], 0),
+        L::load(&v[1], 0),
+        L::load(&v[2], 0),
+        L::load(&v[3], 0),
+    ]
 }
 
-/// 8-lane [`gather`] for pixels x0..x0+8 of row y when every lane uses the same `taps`
-/// (per-slab and scheduled phases): contiguous loads when `interior`, else checked fetches.
-/// Adds into `acc[c]` in the scalar order, so each lane has the scalar bits.
+/// Gathers every channel of one light at pixels x0.. (one per lane) of row y when every lane
+/// uses the same `taps` (per-slab and scheduled phases, and any 1-lane gather): contiguous loads
+/// when `interior` (every read inside the grid), else checked fetches. Adds into `acc[c]` tap by
+/// tap, corner by corner, so every lane has the bits of any other lane count.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn gather8_uniform(
+pub fn gather<L: Lane>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     shift: [i32; 2],
     x0: i32,
     y: i32,
     interior: bool,
-    acc: &mut [f32x8],
+    acc: &mut [L],
 ) {
     for t in taps {
         let sx = x0 + t.dx + shift[0];
         let sy = y + t.dy + shift[1];
-        let w = t.w.map(f32x8::splat);
+        let w = [
+            L::splat(t.w[0]),
+            L::splat(t.w[1]),
+            L::splat(t.w[2]),
+            L::splat(t.w[3]),
+        ];
         for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
             let v = if interior {
                 let at = planes.base
@@ -143,83 +152,100 @@ pub fn gather8_uniform(
                     + sx as usize;
                 let below = at + planes.row_stride;
                 [
-                    load8(planes.data, at),
-                    load8(planes.data, at + 1),
-                    load8(planes.data, below),
-                    load8(planes.data, below + 1),
+                    L::load(planes.data, at),
+                    L::load(planes.data, at + 1),
+                    L::load(planes.data, below),
+                    L::load(planes.data, below + 1),
                 ]
             } else {
-                let p = planes.plane(c);
-                let lanes = |dx: i32, dy: i32| {
-                    f32x8::new(std::array::from_fn(|i| {
-                        p.fetch(sx + i as i32 + dx, sy + dy)
-                    }))
-                };
-                [lanes(0, 0), lanes(1, 0), lanes(0, 1), lanes(1, 1)]
+                let mut xs = [0i32; MAX_LANES];
+                for (i, v) in xs.iter_mut().enumerate() {
+                    *v = sx + i as i32;
+                }
+                fetch_corners(&planes.plane(c), &xs, &[sy; MAX_LANES])
             };
             *a = add_bilinear(*a, &w, &v);
         }
     }
 }
 
-/// 8-lane [`gather`] for pixels x0..x0+8 of row y where lane i uses phase `phases[i]` of
-/// `table` (per-pixel hashed phases): per-lane loads, vector arithmetic in the scalar order.
+/// [`gather`] where lane i uses phase `phases[i]` of `table` (per-pixel hashed phases):
+/// per-lane loads, lane arithmetic in the same order.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn gather8_lanes(
+pub fn gather_per_lane<L: Lane>(
     planes: &LightPlanes<'_>,
     table: &KernelTable,
-    phases: &[u32; 8],
+    phases: &[u32; MAX_LANES],
     shift: [i32; 2],
     x0: i32,
     y: i32,
     interior: bool,
-    acc: &mut [f32x8],
+    acc: &mut [L],
 ) {
     let n = table.taps_per_phase as usize;
     for k in 0..n {
-        let taps: [&Tap; 8] = std::array::from_fn(|i| &table.taps[phases[i] as usize * n + k]);
-        let w: [f32x8; 4] = std::array::from_fn(|j| f32x8::new(taps.map(|t| t.w[j])));
-        let sx: [i32; 8] = std::array::from_fn(|i| x0 + i as i32 + taps[i].dx + shift[0]);
-        let sy: [i32; 8] = std::array::from_fn(|i| y + taps[i].dy + shift[1]);
+        let mut wl = [[0.0f32; MAX_LANES]; 4];
+        let mut sx = [0i32; MAX_LANES];
+        let mut sy = [0i32; MAX_LANES];
+        for i in 0..L::LANES {
+            let t = &table.taps[phases[i] as usize * n + k];
+            for (j, wj) in wl.iter_mut().enumerate() {
+                wj[i] = t.w[j];
+            }
+            sx[i] = x0 + i as i32 + t.dx + shift[0];
+            sy[i] = y + t.dy + shift[1];
+        }
+        let w = [
+            L::load(&wl[0], 0),
+            L::load(&wl[1], 0),
+            L::load(&wl[2], 0),
+            L::load(&wl[3], 0),
+        ];
         for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
             let v = if interior {
                 let base = planes.base + c * planes.width as usize;
-                let at: [usize; 8] = std::array::from_fn(|i| {
-                    base + sy[i] as usize * planes.row_stride + sx[i] as usize
-                });
-                // Each lane's two horizontal neighbours are one 8-byte load per row.
                 let rs = planes.row_stride;
-                let d = planes.data;
-                let top: [[f32; 2]; 8] = at.map(|i| [d[i], d[i + 1]]);
-                let bottom: [[f32; 2]; 8] = at.map(|i| [d[i + rs], d[i + rs + 1]]);
+                let mut at = [0usize; MAX_LANES];
+                for i in 0..L::LANES {
+                    at[i] = base + sy[i] as usize * rs + sx[i] as usize;
+                }
+                let mut right = [0usize; MAX_LANES];
+                let mut below = [0usize; MAX_LANES];
+                let mut below_right = [0usize; MAX_LANES];
+                for i in 0..L::LANES {
+                    right[i] = at[i] + 1;
+                    below[i] = at[i] + rs;
+                    below_right[i] = at[i] + rs + 1;
+                }
                 [
-                    f32x8::new(top.map(|p| p[0])),
-                    f32x8::new(top.map(|p| p[1])),
-                    f32x8::new(bottom.map(|p| p[0])),
-                    f32x8::new(bottom.map(|p| p[1])),
+                    L::gather_at(planes.data, &at),
+                    L::gather_at(planes.data, &right),
+                    L::gather_at(planes.data, &below),
+                    L::gather_at(planes.data, &below_right),
                 ]
             } else {
-                let p = planes.plane(c);
-                let lanes = |dx: i32, dy: i32| {
-                    f32x8::new(std::array::from_fn(|i| p.fetch(sx[i] + dx, sy[i] + dy)))
-                };
-                [lanes(0, 0), lanes(1, 0), lanes(0, 1), lanes(1, 1)]
+                fetch_corners(&planes.plane(c), &sx, &sy)
             };
             *a = add_bilinear(*a, &w, &v);
         }
     }
 }
 
-/// The per-pixel phases of 8 pixels x0..x0+8 (the 8-lane [`phase_at`] for `PerPixel` tables):
-/// the pixel hash in u32x8 lanes.
+/// The per-pixel phases of pixels x0.. (one per lane; [`phase_at`] for `PerPixel` tables): the
+/// pixel hash on integer lanes.
 #[inline(always)]
-pub fn phases8(table: &KernelTable, row_hash_v: u32, x0: u32) -> [u32; 8] {
+pub fn phases<L: Lane>(table: &KernelTable, row_hash_v: u32, x0: u32) -> [u32; MAX_LANES] {
+    let mut out = [0u32; MAX_LANES];
     let bits = table.phase_bits();
     if bits == 0 {
-        return [0; 8];
+        return out;
     }
-    let x = u32x8::new(std::array::from_fn(|i| x0 + i as u32));
-    let h = mix32x8(u32x8::splat(row_hash_v) ^ (x * u32x8::splat(0x9e37_79b9)));
-    (h >> (32 - bits)).to_array()
+    let x = L::u_iota(x0);
+    let h = L::u_mix32(L::u_xor(
+        L::u_splat(row_hash_v),
+        L::u_mul(x, L::u_splat(0x9e37_79b9)),
+    ));
+    L::u_store(L::u_shr(h, 32 - bits), &mut out);
+    out
 }

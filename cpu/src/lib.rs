@@ -10,7 +10,6 @@ pub mod parity;
 pub mod reference;
 pub mod shading;
 pub mod sweep;
-mod sweep_simd;
 
 /// The default memory budget: half the machine's physical memory where it can be read, else 4 GiB.
 pub fn default_memory_budget() -> u64 {

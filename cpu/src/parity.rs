@@ -47,23 +47,3 @@ pub fn first_mesh(inside: u32) -> Option<u32> {
         Some(inside.trailing_zeros())
     }
 }
-
-/// Per-pixel cursor state for a whole grid, as the sweep holds it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LayerCursors {
-    /// Next fragment of each pixel.
-    pub next: Vec<u32>,
-    /// Inside mask of each pixel.
-    pub inside: Vec<u32>,
-}
-
-impl LayerCursors {
-    /// Cursors at the front of every pixel, outside every mesh.
-    pub fn new(ldi: &Ldi) -> LayerCursors {
-        let n = (ldi.width * ldi.height) as usize;
-        LayerCursors {
-            next: ldi.offsets[..n].to_vec(),
-            inside: vec![0; n],
-        }
-    }
-}

@@ -38,7 +38,7 @@ use rayon::prelude::*;
 use crate::composite::{composite, finish};
 use crate::ldi::Ldi;
 use crate::parity::{NO_CROSSING, advance, first_mesh};
-use crate::shading::{detail_value, material_at, shade, shading_depth};
+use crate::shading::{Specular, detail_value, material_at, shade, shading_depth};
 
 /// Optical depth beyond which a shadow ray is treated as fully blocked (e^-40 ≈ 4e-18).
 const OPAQUE_DEPTH: f64 = 40.0;
@@ -444,7 +444,7 @@ impl<'a> Reference<'a> {
                         }
                         let jitter_row = row_hash(plan.jitter_slab_hash[slab as usize], y as u32);
                         let z = shading_depth(plan, ldi, crossed, front, jitter_row, x);
-                        let tf = material_at(plan, mesh, x, y, z);
+                        let tf = material_at(plan, mesh, x as f32, y as f32, z);
                         let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
                         let pos = [x as f64 + 0.5, y as f64 + 0.5, f64::from(z)];
                         let stream = mix32(mix32(p as u32) ^ slab);
@@ -460,12 +460,18 @@ impl<'a> Reference<'a> {
                                 let n = self.geometry.raster.triangles
                                     [ldi.triangle[crossed as usize] as usize]
                                     .normal;
-                                Some((strength, exponent, n))
+                                Some(Specular {
+                                    strength,
+                                    exponent,
+                                    normal: n,
+                                    lanes: true,
+                                })
                             }
                             _ => None,
                         };
-                        let shaded = shade(plan, tf.color, &iin[..lights * ch], spec);
-                        composite(&mut color, &mut alpha, shaded, tf.alpha);
+                        let iin = &iin[..lights * ch];
+                        let shaded = shade(plan, tf.color, iin, spec.as_ref());
+                        composite(&mut color, &mut alpha, shaded, tf.alpha, true);
                     }
                     finish(&mut color, alpha, plan.background);
                     row[3 * ix..3 * ix + 3].copy_from_slice(&color);

@@ -1,0 +1,90 @@
+//! The per-pixel kit every lane path of the sweep uses: what a slab shares ([`SlabContext`]),
+//! one row's mutable state ([`RowState`]), the row hashes and the gather's reach.
+
+use convshadow_common::hash::row_hash;
+use convshadow_common::plan::RenderPlan;
+use convshadow_common::raster::RasterSetup;
+
+use crate::kernels::light_row_hash;
+use crate::ldi::Ldi;
+
+pub use convshadow_common::sweep_io::MAX_LIGHT_CHANNELS;
+
+/// What every pixel of one slab shares.
+pub(crate) struct SlabContext<'a> {
+    pub plan: &'a RenderPlan,
+    pub raster: &'a RasterSetup,
+    pub ldi: &'a Ldi,
+    pub slab: u32,
+    /// Back face of the slab (the cursor advances past fragments in front of it).
+    pub back: f32,
+    /// Front face of the slab.
+    pub front: f32,
+}
+
+/// One row's mutable per-pixel state. Colours are planar per row: `[R…][G…][B…]`.
+pub(crate) struct RowState<'a> {
+    pub light: &'a mut [f32],
+    pub next: &'a mut [u32],
+    pub inside: &'a mut [u32],
+    pub color: &'a mut [f32],
+    pub alpha: &'a mut [f32],
+}
+
+/// Every light's row hash for row `y` of the slab (the prefix of each per-pixel phase hash).
+pub(crate) fn light_row_hashes(ctx: &SlabContext<'_>, y: usize) -> [u32; MAX_LIGHT_CHANNELS] {
+    let mut row_hashes = [0u32; MAX_LIGHT_CHANNELS];
+    for (l, light) in ctx.plan.lights.iter().enumerate() {
+        row_hashes[l] = light_row_hash(light.slab_hash[ctx.slab as usize], y as u32);
+    }
+    row_hashes
+}
+
+/// The jitter row hash of row `y` of the slab.
+pub(crate) fn jitter_row_hash(ctx: &SlabContext<'_>, y: usize) -> u32 {
+    row_hash(ctx.plan.jitter_slab_hash[ctx.slab as usize], y as u32)
+}
+
+/// How far the gather of any light, phase and slab reads from the pixel it writes (bilinear
+/// corners and mean-carry shifts included): x in `x + x0 ..= x + x1`, y in `y + y0 ..= y + y1`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Reach {
+    pub x0: i32,
+    pub x1: i32,
+    pub y0: i32,
+    pub y1: i32,
+}
+
+impl Reach {
+    /// The reach of every light's table over all its phases and slabs.
+    pub(crate) fn of(plan: &RenderPlan) -> Reach {
+        let mut r = Reach {
+            x0: 0,
+            x1: 0,
+            y0: 0,
+            y1: 0,
+        };
+        for light in &plan.lights {
+            let t = &light.table;
+            for tap in &t.taps {
+                for s in &t.slab_shift {
+                    r.x0 = r.x0.min(tap.dx + s[0]);
+                    r.x1 = r.x1.max(tap.dx + s[0] + 1);
+                    r.y0 = r.y0.min(tap.dy + s[1]);
+                    r.y1 = r.y1.max(tap.dy + s[1] + 1);
+                }
+            }
+        }
+        r
+    }
+
+    /// Whether every read of the `lanes` pixels x0.. of row y lies inside the grid.
+    #[inline(always)]
+    pub(crate) fn interior(&self, x0: usize, lanes: usize, y: usize, w: usize, h: usize) -> bool {
+        let (x0, y) = (x0 as i64, y as i64);
+        x0 + i64::from(self.x0) >= 0
+            && x0 + lanes as i64 - 1 + i64::from(self.x1) < w as i64
+            && y + i64::from(self.y0) >= 0
+            && y + i64::from(self.y1) < h as i64
+    }
+}

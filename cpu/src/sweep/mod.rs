@@ -1,0 +1,211 @@
+//! The front-to-back slab sweep (DESIGN §2 "Per slab, per pixel"; paper §4.2). Mirrors
+//! `gpu/src/shaders/sweep.wgsl`.
+//!
+//! Per slab, rows are processed in parallel; each pixel convolves every light buffer (reading
+//! the previous slab's buffer, ping-pong), advances its layer cursor, shades one point if it is
+//! inside a mesh or crossed a surface, composites front to back and attenuates its light.
+//! A pixel's result depends only on the previous slab and its own state, so the image is the
+//! same bits for any thread count.
+//!
+//! Two code paths run the same stage code: [`SweepPath::Scalar`], one pixel at a time (its 1-lane
+//! instance), and [`SweepPath::Simd`], eight pixels at a time with `wide` (its 8-lane instance),
+//! which gives the same bits and may skip provably quiet pixels.
+
+//!
+//! Modules, with imports in one direction only: this driver (the per-slab loop, ping-pong
+//! buffers, cancel and progress) → `rows` (the lane paths: a row at a time, scalar or 8 lanes with
+//! `quiet` chunk skipping) → `stage` (the per-pixel stage, generic over the lane type) → `kit`
+//! (slab context, row state, row hashes) → the stage functions in `kernels`, `parity`, `shading`
+//! and `composite`.
+
+mod kit;
+mod quiet;
+mod rows;
+mod stage;
+
+use std::sync::atomic::Ordering;
+
+use convshadow_common::plan::RenderPlan;
+use convshadow_common::raster::RasterSetup;
+use rayon::prelude::*;
+
+use crate::composite::finish;
+use crate::ldi::Ldi;
+use kit::{Reach, RowState, SlabContext};
+use quiet::{QuietRow, QuietSetup};
+use rows::{sweep_row_scalar, sweep_row_simd};
+
+pub use convshadow_common::sweep_io::{MAX_LIGHT_CHANNELS, SweepError, SweepOptions, SweepOutput};
+pub use quiet::ChunkCounts;
+
+/// Which CPU code path runs the sweep. Both give the same bits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SweepPath {
+    /// One pixel at a time: the readable reference.
+    Scalar,
+    /// Eight pixels at a time (`wide` f32x8/u32x8), with quiet-pixel skipping.
+    #[default]
+    Simd,
+}
+
+/// The CPU sweep's own knobs: code path, quiet-chunk skipping and chunk counts.
+pub struct CpuOptions<'a> {
+    /// The CPU code path.
+    pub path: SweepPath,
+    /// SIMD path only: skip 8-pixel chunks whose result is known exactly without computing it
+    /// (unoccluded light and no mesh, or opaque pixels in the dark). On by default; off only to
+    /// measure what it saves.
+    pub skip_quiet: bool,
+    /// SIMD path: counts of how 8-pixel chunks were processed, if wanted.
+    pub chunk_counts: Option<&'a ChunkCounts>,
+}
+
+impl Default for CpuOptions<'_> {
+    fn default() -> Self {
+        CpuOptions {
+            path: SweepPath::default(),
+            skip_quiet: true,
+            chunk_counts: None,
+        }
+    }
+}
+
+/// Runs the sweep on the current rayon pool with the default [`CpuOptions`] (SIMD path,
+/// quiet chunks skipped).
+pub fn sweep(
+    plan: &RenderPlan,
+    raster: &RasterSetup,
+    ldi: &Ldi,
+    options: &SweepOptions<'_>,
+) -> Result<SweepOutput, SweepError> {
+    sweep_with(plan, raster, ldi, options, &CpuOptions::default())
+}
+
+/// Runs the sweep on the current rayon pool with the path and knobs chosen in `cpu`.
+pub fn sweep_with(
+    plan: &RenderPlan,
+    raster: &RasterSetup,
+    ldi: &Ldi,
+    options: &SweepOptions<'_>,
+    cpu: &CpuOptions<'_>,
+) -> Result<SweepOutput, SweepError> {
+    let w = plan.grid_width as usize;
+    let h = plan.grid_height as usize;
+    let ch = plan.channels as usize;
+    let lights = plan.lights.len();
+    let row_len = plan.light_row_len();
+    assert!(
+        lights * ch <= MAX_LIGHT_CHANNELS,
+        "scene validation caps the light count"
+    );
+
+    let mut prev = match options.initial_light {
+        Some(v) => v.to_vec(),
+        None => vec![1.0f32; row_len * h],
+    };
+    let mut cur = vec![0.0f32; row_len * h];
+    let mut next: Vec<u32> = ldi.offsets[..w * h].to_vec();
+    let mut inside = vec![0u32; w * h];
+    let mut color = vec![0.0f32; w * h * 3];
+    let mut alpha = vec![0.0f32; w * h];
+
+    // SIMD path: per-row spans of the light that is not exactly 1 / not exactly 0, and per-chunk
+    // cursor summaries, so quiet chunks can be recognised without touching their pixels.
+    let quiet =
+        (cpu.path == SweepPath::Simd && cpu.skip_quiet).then(|| QuietSetup::new(plan, ldi, &prev));
+    let chunks_per_row = (w / 8).max(1);
+    let (mut spans_prev, mut spans_cur, mut chunk_states) = match &quiet {
+        Some(q) => (
+            q.initial_spans.clone(),
+            q.initial_spans.clone(),
+            q.chunks.clone(),
+        ),
+        None => (Vec::new(), Vec::new(), Vec::new()),
+    };
+    let reach = Reach::of(plan);
+
+    for slab in 0..plan.slabs {
+        if options.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            return Err(SweepError::Interrupted);
+        }
+        let ctx = SlabContext {
+            plan,
+            raster,
+            ldi,
+            slab,
+            back: plan.slab_back[slab as usize],
+            front: plan.slab_front[slab as usize],
+        };
+        let prev_ref = &prev;
+        let rows = cur
+            .par_chunks_mut(row_len)
+            .zip(next.par_chunks_mut(w))
+            .zip(inside.par_chunks_mut(w))
+            .zip(color.par_chunks_mut(w * 3))
+            .zip(alpha.par_chunks_mut(w))
+            .enumerate()
+            .map(|(y, ((((light, next), inside), color), alpha))| {
+                (
+                    y,
+                    RowState {
+                        light,
+                        next,
+                        inside,
+                        color,
+                        alpha,
+                    },
+                )
+            });
+        match (cpu.path, &quiet) {
+            (SweepPath::Scalar, _) => rows.for_each(|(y, row)| {
+                sweep_row_scalar(&ctx, &reach, y, prev_ref, row);
+            }),
+            (SweepPath::Simd, None) => rows.for_each(|(y, row)| {
+                sweep_row_simd(&ctx, &reach, y, prev_ref, row, None, cpu.chunk_counts);
+            }),
+            (SweepPath::Simd, Some(q)) => {
+                let spans_prev_ref = &spans_prev;
+                rows.zip(spans_cur.par_iter_mut())
+                    .zip(chunk_states.par_chunks_mut(chunks_per_row))
+                    .for_each(|(((y, row), span_out), chunks)| {
+                        let quiet_row = QuietRow {
+                            setup: q,
+                            spans_prev: spans_prev_ref,
+                            span_out,
+                            chunks,
+                        };
+                        sweep_row_simd(
+                            &ctx,
+                            &reach,
+                            y,
+                            prev_ref,
+                            row,
+                            Some(quiet_row),
+                            cpu.chunk_counts,
+                        );
+                    });
+                std::mem::swap(&mut spans_prev, &mut spans_cur);
+            }
+        }
+        std::mem::swap(&mut prev, &mut cur);
+        (options.progress)(slab);
+    }
+
+    let g = plan.guard as usize;
+    let (iw, ih) = (plan.width as usize, plan.height as usize);
+    let mut image = vec![0.0f32; iw * ih * 3];
+    image
+        .par_chunks_mut(iw * 3)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let gy = y + g;
+            let colors = &color[gy * w * 3..(gy + 1) * w * 3];
+            for x in 0..iw {
+                let gx = x + g;
+                let mut c = [colors[gx], colors[w + gx], colors[2 * w + gx]];
+                finish(&mut c, alpha[gy * w + gx], plan.background);
+                row[3 * x..3 * x + 3].copy_from_slice(&c);
+            }
+        });
+    Ok(SweepOutput { image, light: prev })
+}

@@ -1,0 +1,441 @@
+//! The per-pixel stage of the sweep, written once over [`Lane`]: all five stages for the
+//! [`Lane::LANES`] pixels x0.. of one row. The scalar path is the 1-lane instance, the SIMD path
+//! the 8-lane one, so both run the same IEEE operations in the same order, lane by lane.
+//!
+//! Lane work: the gather's arithmetic (and its loads, when a slab's phase is the same for every
+//! pixel), the phase hash, the detail function, the transfer-function interpolation, shading,
+//! compositing and attenuation. Per lane: the layer cursor (a short data-dependent loop) and
+//! table look-ups. Lanes on different meshes are shaded one lane at a time.
+
+use convshadow_common::kernel::PhaseMode;
+use convshadow_common::lane::{Lane, MAX_LANES};
+
+use super::kit::{MAX_LIGHT_CHANNELS, RowState, SlabContext};
+use crate::composite::{attenuate, composite};
+use crate::kernels::{LightPlanes, gather, gather_per_lane, phase_at, phases};
+use crate::parity::{NO_CROSSING, advance, first_mesh};
+use crate::shading::{Specular, material_at, shade, shading_depth};
+
+/// [`sweep_chunk`] for one lane type and light-channel capacity.
+pub(crate) type ChunkFn = fn(
+    &SlabContext<'_>,
+    usize,
+    usize,
+    &[f32],
+    &mut RowState<'_>,
+    &[u32; MAX_LIGHT_CHANNELS],
+    u32,
+    bool,
+    Option<f32>,
+) -> (bool, bool);
+
+/// The [`sweep_chunk`] instance for `planes` light channels: the smallest capacity that holds
+/// them (zeroing a 48-entry array per chunk costs).
+pub(crate) fn chunk_fn<L: Lane>(planes: usize) -> ChunkFn {
+    match planes {
+        0..=2 => sweep_chunk::<L, 2>,
+        3..=6 => sweep_chunk::<L, 6>,
+        7..=12 => sweep_chunk::<L, 12>,
+        _ => sweep_chunk::<L, MAX_LIGHT_CHANNELS>,
+    }
+}
+
+/// All five stages for the pixels x0..x0 + LANES of row y. `interior`: every read of the gather
+/// lies inside the grid; `known_light`: every value the gather reads is this constant (the
+/// gather is skipped). Returns whether any outgoing light value is not exactly 1, and whether
+/// any is not exactly 0.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
+    ctx: &SlabContext<'_>,
+    y: usize,
+    x0: usize,
+    prev: &[f32],
+    row: &mut RowState<'_>,
+    row_hashes: &[u32; MAX_LIGHT_CHANNELS],
+    jitter_row: u32,
+    interior: bool,
+    known_light: Option<f32>,
+) -> (bool, bool) {
+    let plan = ctx.plan;
+    let ldi = ctx.ldi;
+    let w = plan.grid_width as usize;
+    let ch = plan.channels as usize;
+    let slab = ctx.slab as usize;
+    let n = plan.lights.len() * ch;
+
+    // 1. Convolution of every light buffer.
+    let mut iin = [L::splat(0.0); N];
+    match known_light {
+        Some(v) => iin[..n].fill(L::splat(v)),
+        None => {
+            for (l, light) in plan.lights.iter().enumerate() {
+                let t = &light.table;
+                let planes = LightPlanes {
+                    data: prev,
+                    base: l * ch * w,
+                    channels: ch,
+                    row_stride: plan.light_row_len(),
+                    width: w as i32,
+                    height: plan.grid_height as i32,
+                };
+                let shift = t.slab_shift[slab];
+                let acc = &mut iin[l * ch..(l + 1) * ch];
+                let uniform = match t.phase_mode {
+                    PhaseMode::PerPixel => None,
+                    PhaseMode::PerSlab => Some(phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0)),
+                    PhaseMode::Schedule => Some(t.slab_phase[slab]),
+                };
+                let (x0, yi) = (x0 as i32, y as i32);
+                match uniform {
+                    Some(p) => gather(&planes, t.phase(p), shift, x0, yi, interior, acc),
+                    None => {
+                        let ph = phases::<L>(t, row_hashes[l], x0 as u32);
+                        gather_per_lane(&planes, t, &ph, shift, x0, yi, interior, acc);
+                    }
+                }
+            }
+        }
+    }
+
+    // 2. Intersection: every lane's cursor.
+    let mut crossed = [NO_CROSSING; MAX_LANES];
+    let mut mesh = [None; MAX_LANES];
+    for i in 0..L::LANES {
+        let x = x0 + i;
+        let end = ldi.offsets[y * w + x + 1];
+        crossed[i] = advance(ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
+        mesh[i] = if crossed[i] != NO_CROSSING {
+            Some(u32::from(ldi.mesh[crossed[i] as usize]))
+        } else {
+            first_mesh(row.inside[x])
+        };
+    }
+
+    // 3–4. Shading and compositing.
+    let mut attenuation = [L::splat(1.0); 3];
+    let lane_mesh = &mesh[..L::LANES];
+    if let Some(m) = lane_mesh.iter().flatten().next().copied() {
+        if lane_mesh.iter().all(|&k| k.is_none() || k == Some(m)) {
+            attenuation = shade_chunk(ctx, y, x0, row, &iin[..n], m, &mesh, &crossed, jitter_row);
+        } else {
+            // Lanes on different meshes: the 1-lane stage, lane by lane.
+            let mut att = [[1.0f32; MAX_LANES]; 3];
+            for (i, lm) in lane_mesh.iter().enumerate() {
+                let Some(mi) = *lm else { continue };
+                let mut lane_iin = [0.0f32; N];
+                for (dst, v) in lane_iin.iter_mut().zip(&iin[..n]) {
+                    *dst = v.lane(i);
+                }
+                let mut one_mesh = [None; MAX_LANES];
+                one_mesh[0] = Some(mi);
+                let mut one_crossed = [NO_CROSSING; MAX_LANES];
+                one_crossed[0] = crossed[i];
+                let a = shade_chunk::<f32>(
+                    ctx,
+                    y,
+                    x0 + i,
+                    row,
+                    &lane_iin[..n],
+                    mi,
+                    &one_mesh,
+                    &one_crossed,
+                    jitter_row,
+                );
+                for k in 0..3 {
+                    att[k][i] = a[k];
+                }
+            }
+            attenuation = [
+                L::load(&att[0], 0),
+                L::load(&att[1], 0),
+                L::load(&att[2], 0),
+            ];
+        }
+    }
+
+    // 5. Attenuate (and flush) into this slab's outgoing light buffer.
+    let (zero, one) = (L::splat(0.0), L::splat(1.0));
+    let mut not_one = zero.ne(zero);
+    let mut not_zero = not_one;
+    for l in 0..plan.lights.len() {
+        for c in 0..ch {
+            let out = attenuate(iin[l * ch + c], attenuation[c]);
+            not_one = L::m_or(not_one, out.ne(one));
+            not_zero = L::m_or(not_zero, out.ne(zero));
+            out.store(row.light, (l * ch + c) * w + x0);
+        }
+    }
+    (L::m_any(not_one), L::m_any(not_zero))
+}
+
+/// Stages 3–4 for lanes whose shaded pixels all lie in mesh `m` (`mesh[i]` is `None` in lanes
+/// without a mesh): shading and compositing. Returns the attenuation per channel (1 in lanes
+/// without a mesh).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn shade_chunk<L: Lane>(
+    ctx: &SlabContext<'_>,
+    y: usize,
+    x0: usize,
+    row: &mut RowState<'_>,
+    iin: &[L],
+    m: u32,
+    mesh: &[Option<u32>; MAX_LANES],
+    crossed: &[u32; MAX_LANES],
+    jitter_row: u32,
+) -> [L; 3] {
+    let plan = ctx.plan;
+    let ldi = ctx.ldi;
+    let w = plan.grid_width as usize;
+    let mut active = [false; MAX_LANES];
+    let mut any_crossed = false;
+    let mut is_crossed = [false; MAX_LANES];
+    let mut xs = [0.0f32; MAX_LANES];
+    let mut zs = [0.0f32; MAX_LANES];
+    for i in 0..L::LANES {
+        active[i] = mesh[i].is_some();
+        is_crossed[i] = crossed[i] != NO_CROSSING;
+        any_crossed |= is_crossed[i];
+        xs[i] = (x0 + i) as f32;
+        zs[i] = shading_depth(plan, ldi, crossed[i], ctx.front, jitter_row, x0 + i);
+    }
+    let active = L::m_from(&active);
+    let z = L::load(&zs, 0);
+    let tf = material_at(plan, m, L::load(&xs, 0), L::splat(y as f32), z);
+    let material = &plan.materials[plan.mesh_material[m as usize] as usize];
+    let spec = match material.specular {
+        Some((strength, exponent)) if any_crossed => {
+            let mut normal = [[0.0f32; MAX_LANES]; 3];
+            for i in 0..L::LANES {
+                let nv = if is_crossed[i] {
+                    ctx.raster.triangles[ldi.triangle[crossed[i] as usize] as usize].normal
+                } else {
+                    [0.0, 0.0, 1.0]
+                };
+                for k in 0..3 {
+                    normal[k][i] = nv[k];
+                }
+            }
+            Some(Specular {
+                strength,
+                exponent,
+                normal: [
+                    L::load(&normal[0], 0),
+                    L::load(&normal[1], 0),
+                    L::load(&normal[2], 0),
+                ],
+                lanes: L::m_from(&is_crossed),
+            })
+        }
+        _ => None,
+    };
+    let shaded = shade(plan, tf.color, iin, spec.as_ref());
+
+    let mut color = [
+        L::load(row.color, x0),
+        L::load(row.color, w + x0),
+        L::load(row.color, 2 * w + x0),
+    ];
+    let mut alpha = L::load(row.alpha, x0);
+    composite(&mut color, &mut alpha, shaded, tf.alpha, active);
+    for (k, v) in color.iter().enumerate() {
+        v.store(row.color, k * w + x0);
+    }
+    alpha.store(row.alpha, x0);
+    let one = L::splat(1.0);
+    [
+        L::select(active, tf.attenuation[0], one),
+        L::select(active, tf.attenuation[1], one),
+        L::select(active, tf.attenuation[2], one),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use convshadow_common::geometry::SceneGeometry;
+    use convshadow_common::hash::{mix32, unit_float};
+    use convshadow_common::plan::RenderPlan;
+    use convshadow_common::scene::Scene;
+    use wide::f32x8;
+
+    use super::*;
+    use crate::ldi::{BuildLdi, Ldi};
+    use crate::sweep::kit::{Reach, jitter_row_hash, light_row_hashes};
+
+    /// The test RNG: a counter through the project's `mix32`.
+    struct Rng(u32);
+
+    impl Rng {
+        fn next(&mut self) -> u32 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9);
+            mix32(self.0)
+        }
+        fn below(&mut self, n: u32) -> u32 {
+            self.next() % n
+        }
+        /// A value in [0, 1], exactly 0 or exactly 1 one time in eight each.
+        fn value(&mut self) -> f32 {
+            match self.below(8) {
+                0 => 0.0,
+                1 => 1.0,
+                _ => unit_float(self.next()),
+            }
+        }
+    }
+
+    /// One row's state, owned.
+    #[derive(Clone)]
+    struct Row {
+        light: Vec<f32>,
+        next: Vec<u32>,
+        inside: Vec<u32>,
+        color: Vec<f32>,
+        alpha: Vec<f32>,
+    }
+
+    impl Row {
+        fn state(&mut self) -> RowState<'_> {
+            RowState {
+                light: &mut self.light,
+                next: &mut self.next,
+                inside: &mut self.inside,
+                color: &mut self.color,
+                alpha: &mut self.alpha,
+            }
+        }
+    }
+
+    /// The first difference in bits between two rows' states, if any.
+    fn mismatch(a: &Row, b: &Row) -> Option<String> {
+        let floats = [
+            ("light", &a.light, &b.light),
+            ("color", &a.color, &b.color),
+            ("alpha", &a.alpha, &b.alpha),
+        ];
+        for (name, u, v) in floats {
+            if let Some(i) = (0..u.len()).find(|&i| u[i].to_bits() != v[i].to_bits()) {
+                return Some(format!("{name}[{i}]: {} vs {}", u[i], v[i]));
+            }
+        }
+        for (name, u, v) in [("next", &a.next, &b.next), ("inside", &a.inside, &b.inside)] {
+            if let Some(i) = (0..u.len()).find(|&i| u[i] != v[i]) {
+                return Some(format!("{name}[{i}]: {} vs {}", u[i], v[i]));
+            }
+        }
+        None
+    }
+
+    /// The default scene, small: two coloured lights (six light channels), noise and specular
+    /// materials, three meshes, through `kernel`.
+    fn plan_of(kernel: &str) -> (Scene, SceneGeometry, Ldi, RenderPlan) {
+        let text = include_str!("../../../scenes/default.toml")
+            .replace("width = 512\nheight = 512", "width = 37\nheight = 19")
+            .replace("slabs = 512", "slabs = 24")
+            .replace("kernel = \"ellipse2\"", &format!("kernel = \"{kernel}\""));
+        let scene = Scene::parse(&text, "lanes", Path::new(".")).expect("scene");
+        let g = SceneGeometry::build(&scene).expect("geometry");
+        let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
+        let plan = RenderPlan::new(&scene, &g).expect("plan");
+        (scene, g, ldi, plan)
+    }
+
+    /// Runs `eight` (an 8-lane stage) and the 1-lane stage eight times on the same random
+    /// inputs, at every chunk position of some rows of every slab; returns the first
+    /// difference.
+    fn compare_lanes(kernel: &str, seed: u32, eight: ChunkFn) -> Option<String> {
+        let (_scene, g, ldi, plan) = plan_of(kernel);
+        let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
+        let row_len = plan.light_row_len();
+        let meshes = plan.mesh_material.len() as u32;
+        let planes = plan.lights.len() * plan.channels as usize;
+        assert_eq!(planes, 6, "two lights, three channels");
+        let one: ChunkFn = chunk_fn::<f32>(planes);
+        let reach = Reach::of(&plan);
+        let mut rng = Rng(seed);
+        let prev: Vec<f32> = (0..row_len * h).map(|_| rng.value()).collect();
+        let mut counts = [0u32; 9];
+        for slab in 0..plan.slabs {
+            let ctx = SlabContext {
+                plan: &plan,
+                raster: &g.raster,
+                ldi: &ldi,
+                slab,
+                back: plan.slab_back[slab as usize],
+                front: plan.slab_front[slab as usize],
+            };
+            for y in [0, 1, h / 2, h - 1, rng.below(h as u32) as usize] {
+                let row_hashes = light_row_hashes(&ctx, y);
+                let jitter_row = jitter_row_hash(&ctx, y);
+                // Inside masks: none, one mesh everywhere, or mixed (lanes on different meshes).
+                let mode = rng.below(3);
+                let fixed = 1 << rng.below(meshes);
+                let row = Row {
+                    light: vec![f32::NAN; row_len],
+                    next: (0..w)
+                        .map(|x| {
+                            let (a, b) = (ldi.offsets[y * w + x], ldi.offsets[y * w + x + 1]);
+                            a + rng.below(b - a + 1)
+                        })
+                        .collect(),
+                    inside: (0..w)
+                        .map(|_| match mode {
+                            0 => 0,
+                            1 => fixed,
+                            _ => rng.next() & ((1 << meshes) - 1),
+                        })
+                        .collect(),
+                    color: (0..3 * w).map(|_| rng.value()).collect(),
+                    alpha: (0..w).map(|_| rng.value()).collect(),
+                };
+                for x0 in 0..=w - 8 {
+                    let (mut a, mut b) = (row.clone(), row.clone());
+                    let interior = reach.interior(x0, 8, y, w, h);
+                    let (rh, jr) = (&row_hashes, jitter_row);
+                    eight(&ctx, y, x0, &prev, &mut a.state(), rh, jr, interior, None);
+                    for x in x0..x0 + 8 {
+                        let interior = reach.interior(x, 1, y, w, h);
+                        one(&ctx, y, x, &prev, &mut b.state(), rh, jr, interior, None);
+                    }
+                    if let Some(d) = mismatch(&a, &b) {
+                        return Some(format!("{kernel}, slab {slab}, row {y}, x0 {x0}: {d}"));
+                    }
+                    let shaded = (0..8).filter(|&i| a.alpha[x0 + i] != row.alpha[x0 + i]);
+                    counts[shaded.count()] += 1;
+                }
+            }
+        }
+        // The inputs must reach every branch: chunks shaded in no lane, in some and in all.
+        assert!(
+            counts[0] > 0 && counts[8] > 0 && counts[1..8].iter().sum::<u32>() > 0,
+            "{kernel}: chunks by shaded lanes {counts:?}"
+        );
+        None
+    }
+
+    #[test]
+    fn eight_lanes_and_one_lane_give_the_same_bits() {
+        // Per-pixel, per-slab and scheduled phases.
+        for (k, kernel) in ["ellipse2", "ellipse2:slab", "gaussian:7", "poisson8"]
+            .iter()
+            .enumerate()
+        {
+            let eight = chunk_fn::<f32x8>(6);
+            assert_eq!(compare_lanes(kernel, 17 + k as u32, eight), None);
+        }
+    }
+
+    #[test]
+    fn a_lane_that_disagrees_fails_the_comparison() {
+        // The 8-lane stage with one lane's first light value off by one bit.
+        let wrong_lane: ChunkFn = |ctx, y, x0, prev, row, hashes, jitter, interior, known| {
+            let r = sweep_chunk::<f32x8, 6>(ctx, y, x0, prev, row, hashes, jitter, interior, known);
+            row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
+            r
+        };
+        let d = compare_lanes("ellipse2", 3, wrong_lane).expect("the flipped bit is found");
+        assert!(d.contains("light["), "{d}");
+    }
+}
