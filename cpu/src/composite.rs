@@ -1,5 +1,5 @@
 //! Stages 4 and 5: front-to-back compositing and light attenuation with the explicit flush
-//! (DESIGN §2 steps 4–5). Mirrors `gpu/src/shaders/composite.wgsl`.
+//! (steps 4–5 of the per-pixel sweep). Mirrors `gpu/src/shaders/composite.wgsl`.
 //!
 //! Written once over [`Lane`]: the scalar path is the 1-lane instance.
 

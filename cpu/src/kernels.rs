@@ -1,5 +1,5 @@
 //! Stage 1, convolution: the gather of one light buffer through a kernel's tap table
-//! (DESIGN §2 "Kernels"; paper §3, eq. 7). Mirrors `gpu/src/shaders/kernels.wgsl`.
+//! (paper §3, eq. 7; docs/how-it-works.md). Mirrors `gpu/src/shaders/kernels.wgsl`.
 //!
 //! The sum order is fixed — tap by tap, corners (0,0), (1,0), (0,1), (1,1) — and each term is
 //! `acc = acc + w·v` with no fused multiply-add, so every path gives the same bits. Written once

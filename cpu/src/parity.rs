@@ -1,4 +1,4 @@
-//! The parity test and the per-pixel layer cursor (DESIGN §2, paper §4.2 step 2).
+//! The parity test and the per-pixel layer cursor (paper §4.2 step 2).
 //!
 //! A point at depth z in pixel p is inside mesh m iff an odd number of m's fragments at p lie in
 //! front of z. The sweep does not search: each pixel keeps a cursor (the next fragment) and a

@@ -1,5 +1,5 @@
 //! Stage 3, shading: material lookup at one point per slab, detail function, transfer function,
-//! light sum and specular highlight (DESIGN §2 step 3, paper §4.2). Mirrors
+//! light sum and specular highlight (step 3 of the per-pixel sweep, paper §4.2). Mirrors
 //! `gpu/src/shaders/shading.wgsl`.
 //!
 //! Written once over [`Lane`]: the scalar path is the 1-lane instance. Table look-ups are per

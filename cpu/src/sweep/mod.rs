@@ -1,4 +1,4 @@
-//! The front-to-back slab sweep (DESIGN §2 "Per slab, per pixel"; paper §4.2). Mirrors
+//! The front-to-back slab sweep (paper §4.2; docs/ARCHITECTURE.md, stage 6). Mirrors
 //! `gpu/src/shaders/sweep.wgsl`.
 //!
 //! Per slab, rows are processed in parallel; each pixel convolves every light buffer (reading
