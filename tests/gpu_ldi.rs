@@ -208,24 +208,34 @@ fn gpu_ldi_equals_cpu_on_hard_triangles() {
     for n in 0..3000u32 {
         let v: [[i64; 2]; 3] = match n % 4 {
             // Huge triangles reaching the ±2^21 px coordinate limit: products need 60+ bits.
-            0 => std::array::from_fn(|_| [rng.range(-limit, limit), rng.range(-limit, limit)]),
+            0 => std::array::from_fn(|_| {
+                [rng.int_range(-limit, limit), rng.int_range(-limit, limit)]
+            }),
             // One far vertex, two near the grid: long slivers crossing the image.
             1 => {
-                let far = [rng.range(-limit, limit), rng.range(-limit, limit)];
-                let near = |r: &mut TestRng| [r.range(-512, 100 * 256), r.range(-512, 90 * 256)];
+                let far = [rng.int_range(-limit, limit), rng.int_range(-limit, limit)];
+                let near =
+                    |r: &mut TestRng| [r.int_range(-512, 100 * 256), r.int_range(-512, 90 * 256)];
                 [far, near(&mut rng), near(&mut rng)]
             }
             // Vertices exactly on pixel centres.
-            2 => std::array::from_fn(|_| [centre(rng.range(-4, 100)), centre(rng.range(-4, 84))]),
+            2 => std::array::from_fn(|_| {
+                [
+                    centre(rng.int_range(-4, 100)),
+                    centre(rng.int_range(-4, 84)),
+                ]
+            }),
             // Small and sub-pixel triangles anywhere on the grid.
             _ => {
-                let x = rng.range(0, 96 * 256);
-                let y = rng.range(0, 80 * 256);
-                std::array::from_fn(|_| [x + rng.range(-300, 300), y + rng.range(-300, 300)])
+                let x = rng.int_range(0, 96 * 256);
+                let y = rng.int_range(0, 80 * 256);
+                std::array::from_fn(|_| {
+                    [x + rng.int_range(-300, 300), y + rng.int_range(-300, 300)]
+                })
             }
         };
         // Depth planes with arbitrary bits, including negative and tiny slopes.
-        let d = |r: &mut TestRng| (r.range(-1_000_000, 1_000_000) as f32) * 1.37e-4;
+        let d = |r: &mut TestRng| (r.int_range(-1_000_000, 1_000_000) as f32) * 1.37e-4;
         let depth = [d(&mut rng), d(&mut rng) * 1e-3, d(&mut rng) * 1e-3];
         triangles.extend(setup_triangle(v, w, h, n % 5, depth));
     }

@@ -328,41 +328,27 @@ mod tests {
     use super::*;
     use wide::f32x8;
 
-    /// SplitMix64: a deterministic test generator.
-    struct Rng(u64);
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        }
-        /// Uniform in [lo, hi).
-        fn range(&mut self, lo: f64, hi: f64) -> f32 {
-            let u = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-            (lo + (hi - lo) * u) as f32
-        }
-        /// A coordinate from a mix of hard categories.
-        fn hard(&mut self) -> f32 {
-            match self.next_u64() % 16 {
-                0 => self.range(-300.0, 300.0).floor(),
-                1 => self.range(-300.0, 300.0).floor() + 0.5,
-                2 => [1e6, -1e6, 999_999.9, -999_999.9][(self.next_u64() % 4) as usize],
-                3 => self.range(-1e6, 1e6),
-                4 => [1e-30, -1e-30, 1e-40, -1e-40, 0.0, -0.0][(self.next_u64() % 6) as usize],
-                5 => {
-                    let k = self.range(-300.0, 300.0).floor();
-                    if self.next_u64().is_multiple_of(2) {
-                        k.next_up()
-                    } else {
-                        k.next_down()
-                    }
+    use crate::hash::TestRng;
+
+    /// A coordinate from a mix of hard categories.
+    fn hard(rng: &mut TestRng) -> f32 {
+        match rng.next_u64() % 16 {
+            0 => rng.float_range(-300.0, 300.0).floor(),
+            1 => rng.float_range(-300.0, 300.0).floor() + 0.5,
+            2 => [1e6, -1e6, 999_999.9, -999_999.9][(rng.next_u64() % 4) as usize],
+            3 => rng.float_range(-1e6, 1e6),
+            4 => [1e-30, -1e-30, 1e-40, -1e-40, 0.0, -0.0][(rng.next_u64() % 6) as usize],
+            5 => {
+                let k = rng.float_range(-300.0, 300.0).floor();
+                if rng.next_u64().is_multiple_of(2) {
+                    k.next_up()
+                } else {
+                    k.next_down()
                 }
-                6 => self.range(-3.0, 3.0),
-                7 => [255.0, 256.0, -256.0, -255.5, 255.999_98][(self.next_u64() % 5) as usize],
-                _ => self.range(-300.0, 300.0),
             }
+            6 => rng.float_range(-3.0, 3.0),
+            7 => [255.0, 256.0, -256.0, -255.5, 255.999_98][(rng.next_u64() % 5) as usize],
+            _ => rng.float_range(-300.0, 300.0),
         }
     }
 
@@ -441,10 +427,10 @@ mod tests {
 
     #[test]
     fn noise_matches_f64_reference() {
-        let mut rng = Rng(9);
+        let mut rng = TestRng::new(9);
         let mut worst = 0.0f64;
         for _ in 0..50_000 {
-            let p: [f32; 4] = std::array::from_fn(|_| rng.range(-300.0, 300.0));
+            let p: [f32; 4] = std::array::from_fn(|_| rng.float_range(-300.0, 300.0));
             let e3 = (f64::from(improved_perlin3(p[0], p[1], p[2])) - reference(&p[..3])).abs();
             let e4 = (f64::from(improved_perlin4(p[0], p[1], p[2], p[3])) - reference(&p)).abs();
             assert!(e3 < 2e-6 && e4 < 2e-6, "{p:?}: errors {e3:e} {e4:e}");
@@ -455,9 +441,9 @@ mod tests {
 
     #[test]
     fn noise_zero_at_lattice_points() {
-        let mut rng = Rng(1);
+        let mut rng = TestRng::new(1);
         for _ in 0..20_000 {
-            let p: [f32; 4] = std::array::from_fn(|_| rng.range(-1000.0, 1000.0).floor());
+            let p: [f32; 4] = std::array::from_fn(|_| rng.float_range(-1000.0, 1000.0).floor());
             assert_eq!(improved_perlin3(p[0], p[1], p[2]), 0.0, "{p:?}");
             assert_eq!(improved_perlin4(p[0], p[1], p[2], p[3]), 0.0, "{p:?}");
         }
@@ -474,7 +460,7 @@ mod tests {
     #[test]
     fn noise_gradients_at_lattice_are_edge_directions() {
         let h = 1.0f32 / 1024.0;
-        let mut rng = Rng(2);
+        let mut rng = TestRng::new(2);
         let mut seen3 = std::collections::HashMap::new();
         let mut seen4 = std::collections::HashMap::new();
         let round = |d: f32| {
@@ -487,7 +473,7 @@ mod tests {
             r as i32
         };
         for _ in 0..4000 {
-            let p: [f32; 4] = std::array::from_fn(|_| rng.range(-500.0, 500.0).floor());
+            let p: [f32; 4] = std::array::from_fn(|_| rng.float_range(-500.0, 500.0).floor());
             let g3: [i32; 3] = std::array::from_fn(|i| {
                 let mut q = [p[0], p[1], p[2]];
                 q[i] += h;
@@ -525,12 +511,12 @@ mod tests {
 
     #[test]
     fn noise_range_mean_and_variance() {
-        let mut rng = Rng(3);
+        let mut rng = TestRng::new(3);
         let n = 100_000;
         for dim4 in [false, true] {
             let (mut s, mut s2, mut lo, mut hi) = (0.0f64, 0.0f64, 0.0f32, 0.0f32);
             for _ in 0..n {
-                let p: [f32; 4] = std::array::from_fn(|_| rng.range(-1000.0, 1000.0));
+                let p: [f32; 4] = std::array::from_fn(|_| rng.float_range(-1000.0, 1000.0));
                 let v = if dim4 {
                     improved_perlin4(p[0], p[1], p[2], p[3])
                 } else {
@@ -564,17 +550,17 @@ mod tests {
     #[test]
     fn noise_lipschitz_continuous_including_cell_boundaries() {
         let (l3, l4, slack) = (8.5f32, 12.25f32 * PERLIN4_SCALE, 2e-4f32);
-        let mut rng = Rng(4);
+        let mut rng = TestRng::new(4);
         let mut max_ratio3 = 0.0f32;
         for i in 0..100_000 {
-            let mut p: [f32; 4] = std::array::from_fn(|_| rng.range(-300.0, 300.0));
+            let mut p: [f32; 4] = std::array::from_fn(|_| rng.float_range(-300.0, 300.0));
             if i % 2 == 0 {
                 // Straddle a cell boundary on one axis.
                 let a = (rng.next_u64() % 4) as usize;
                 p[a] = p[a].floor() - 0.0005;
             }
             let hmag = [1e-3, 1e-2, 0.1][i % 3];
-            let d: [f32; 4] = std::array::from_fn(|_| rng.range(-hmag, hmag));
+            let d: [f32; 4] = std::array::from_fn(|_| rng.float_range(-hmag, hmag));
             let q: [f32; 4] = std::array::from_fn(|k| p[k] + d[k]);
             let hn3: f32 = (0..3).map(|k| (q[k] - p[k]).abs()).sum();
             let hn4: f32 = (0..4).map(|k| (q[k] - p[k]).abs()).sum();
@@ -595,9 +581,10 @@ mod tests {
 
     #[test]
     fn noise_wraps_with_period_256_and_handles_huge_coordinates() {
-        let mut rng = Rng(5);
+        let mut rng = TestRng::new(5);
         for _ in 0..10_000 {
-            let p: [f32; 4] = std::array::from_fn(|_| rng.range(-100.0, 100.0).floor() + 0.25);
+            let p: [f32; 4] =
+                std::array::from_fn(|_| rng.float_range(-100.0, 100.0).floor() + 0.25);
             let a = improved_perlin3(p[0], p[1], p[2]);
             assert_eq!(
                 a,
@@ -661,11 +648,13 @@ mod tests {
 
     #[test]
     fn noise_scalar_and_simd_bit_identical() {
-        let mut rng = Rng(6);
+        let mut rng = TestRng::new(6);
         for _ in 0..(120_000 / 8) {
-            let p3: [[f32; 3]; 8] = std::array::from_fn(|_| std::array::from_fn(|_| rng.hard()));
+            let p3: [[f32; 3]; 8] =
+                std::array::from_fn(|_| std::array::from_fn(|_| hard(&mut rng)));
             check_x8_3(p3);
-            let p4: [[f32; 4]; 8] = std::array::from_fn(|_| std::array::from_fn(|_| rng.hard()));
+            let p4: [[f32; 4]; 8] =
+                std::array::from_fn(|_| std::array::from_fn(|_| hard(&mut rng)));
             check_x8_4(p4);
         }
         // Saturating conversions and non-finite inputs (NaN results compared as NaN).
@@ -704,10 +693,11 @@ mod tests {
 
     #[test]
     fn noise_detail_eval_scalar_simd_bit_identical_and_in_unit_range() {
-        let mut rng = Rng(7);
+        let mut rng = TestRng::new(7);
         for d in details() {
             for _ in 0..(104_000 / 8 / 4) {
-                let p: [[f32; 3]; 8] = std::array::from_fn(|_| std::array::from_fn(|_| rng.hard()));
+                let p: [[f32; 3]; 8] =
+                    std::array::from_fn(|_| std::array::from_fn(|_| hard(&mut rng)));
                 let c = |k: usize| lanes(std::array::from_fn(|i| p[i][k]));
                 let v = d.eval([c(0), c(1), c(2)]).to_array();
                 for i in 0..8 {
@@ -729,7 +719,7 @@ mod tests {
 
     #[test]
     fn noise_detail_mappings() {
-        let mut rng = Rng(8);
+        let mut rng = TestRng::new(8);
         let perlin = Detail::new(DetailKind::Perlin, 2.5, 7, 2.0, 0.5, None);
         assert_eq!(perlin.octave_frequency, vec![2.5]);
         assert_eq!(perlin.octave_amplitude, vec![1.0]);
@@ -742,7 +732,7 @@ mod tests {
         let fbm3 = Detail::new(DetailKind::Fbm, 0.75, 3, 2.0, 0.5, None);
         let ridged2 = Detail::new(DetailKind::Ridged, 0.75, 2, 2.0, 0.5, None);
         for _ in 0..20_000 {
-            let p: [f32; 3] = std::array::from_fn(|_| rng.range(-50.0, 50.0));
+            let p: [f32; 3] = std::array::from_fn(|_| rng.float_range(-50.0, 50.0));
             let n = improved_perlin3(p[0] * 2.5, p[1] * 2.5, p[2] * 2.5);
             let expect = 0.5 + 0.5 * n;
             assert_eq!(fbm1.eval(p).to_bits(), expect.to_bits());

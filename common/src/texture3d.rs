@@ -285,21 +285,7 @@ mod tests {
     use super::*;
     use wide::f32x8;
 
-    /// SplitMix64.
-    struct Rng(u64);
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        }
-        fn range(&mut self, lo: f64, hi: f64) -> f32 {
-            let u = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-            (lo + (hi - lo) * u) as f32
-        }
-    }
+    use crate::hash::TestRng;
 
     /// A unique temp file path for this test process.
     fn temp_path(tag: &str) -> PathBuf {
@@ -467,7 +453,7 @@ mod tests {
         let dims = [8, 16, 4];
         let (c, a) = (0.125f32, [1.0 / 64.0, 1.0 / 32.0, -1.0 / 128.0]);
         let t = linear_texture(dims, c, a);
-        let mut rng = Rng(11);
+        let mut rng = TestRng::new(11);
         for _ in 0..20_000 {
             // g in [0, dim-1] with 1/256 resolution; u = (g + 0.5)/dim exactly.
             let g: [f32; 3] = std::array::from_fn(|k| {
@@ -490,13 +476,13 @@ mod tests {
         let dims = [7, 13, 5];
         let (c, a) = (0.05f32, [0.03f32, 0.04, 0.07]);
         let t = linear_texture(dims, c, a);
-        let mut rng = Rng(12);
+        let mut rng = TestRng::new(12);
         let eps = f64::from(f32::EPSILON) / 2.0; // 2^-24
         let mut worst = 0.0f64;
         for _ in 0..100_000 {
             let u: [f32; 3] = std::array::from_fn(|k| {
                 let d = dims[k] as f64;
-                rng.range(0.5 / d, (d - 0.5) / d)
+                rng.float_range(0.5 / d, (d - 0.5) / d)
             });
             let g: [f64; 3] = std::array::from_fn(|k| f64::from(u[k]) * dims[k] as f64 - 0.5);
             let g: [f64; 3] = std::array::from_fn(|k| g[k].clamp(0.0, dims[k] as f64 - 1.0));
@@ -553,10 +539,10 @@ mod tests {
 
     #[test]
     fn texture_scalar_and_simd_bit_identical() {
-        let mut rng = Rng(13);
+        let mut rng = TestRng::new(13);
         let dims = [9, 5, 17];
         let n = (dims[0] * dims[1] * dims[2]) as usize;
-        let vox: Vec<f32> = (0..n).map(|_| rng.range(-2.0, 2.0)).collect();
+        let vox: Vec<f32> = (0..n).map(|_| rng.float_range(-2.0, 2.0)).collect();
         let t = Texture3d::from_voxels(dims, vox).unwrap();
         let flat =
             Texture3d::from_voxels([16, 1, 3], (0..48).map(|i| i as f32 / 47.0).collect()).unwrap();
@@ -579,8 +565,8 @@ mod tests {
                 let p: [[f32; 3]; 8] = std::array::from_fn(|_| {
                     std::array::from_fn(|_| match rng.next_u64() % 8 {
                         0 => specials[(rng.next_u64() % specials.len() as u64) as usize],
-                        1 => rng.range(-3.0, 4.0),
-                        _ => rng.range(0.0, 1.0),
+                        1 => rng.float_range(-3.0, 4.0),
+                        _ => rng.float_range(0.0, 1.0),
                     })
                 });
                 let c = |k: usize| f32x8::new(std::array::from_fn(|i| p[i][k]));

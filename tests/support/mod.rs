@@ -3,7 +3,6 @@
 
 use std::path::{Path, PathBuf};
 
-use convshadow::common::hash::mix32;
 use convshadow::common::kernel::KERNEL_NAMES;
 use convshadow::common::scene::Scene;
 
@@ -24,32 +23,9 @@ pub fn kernels() -> Vec<&'static str> {
     out
 }
 
-/// The one test RNG: a counter through `common::hash::mix32` (the project's only hash), so tests
-/// draw their random cases the way the renderer draws its phases.
-pub struct TestRng {
-    /// The next counter value.
-    state: u32,
-}
-
-impl TestRng {
-    /// A generator for `seed`.
-    pub fn new(seed: u32) -> TestRng {
-        TestRng { state: mix32(seed) }
-    }
-
-    /// The next 32 random bits.
-    pub fn next_u32(&mut self) -> u32 {
-        self.state = self.state.wrapping_add(0x9e37_79b9);
-        mix32(self.state)
-    }
-
-    /// A uniform integer in `lo..=hi` (`hi - lo` below 2^32; the modulo bias is irrelevant here).
-    pub fn range(&mut self, lo: i64, hi: i64) -> i64 {
-        let lo_bits = u64::from(self.next_u32());
-        let bits = (u64::from(self.next_u32()) << 32) | lo_bits;
-        lo + (bits % (hi - lo + 1) as u64) as i64
-    }
-}
+/// The one test RNG: a counter through the project's `mix32`.
+#[allow(unused_imports)] // not every test binary draws random numbers
+pub use convshadow::common::hash::TestRng;
 
 /// `../shared/models` beside the repository, or `None` (with a loud message) when it is missing.
 /// Under CI (env `CI` set) a missing folder is a failure, not a skip.

@@ -256,7 +256,7 @@ mod tests {
     use std::path::Path;
 
     use convshadow_common::geometry::SceneGeometry;
-    use convshadow_common::hash::{mix32, unit_float};
+    use convshadow_common::hash::unit_float;
     use convshadow_common::plan::RenderPlan;
     use convshadow_common::scene::Scene;
     use wide::f32x8;
@@ -265,24 +265,14 @@ mod tests {
     use crate::ldi::{BuildLdi, Ldi};
     use crate::sweep::kit::{Reach, jitter_row_hash, light_row_hashes};
 
-    /// The test RNG: a counter through the project's `mix32`.
-    struct Rng(u32);
+    use convshadow_common::hash::TestRng;
 
-    impl Rng {
-        fn next(&mut self) -> u32 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9);
-            mix32(self.0)
-        }
-        fn below(&mut self, n: u32) -> u32 {
-            self.next() % n
-        }
-        /// A value in [0, 1], exactly 0 or exactly 1 one time in eight each.
-        fn value(&mut self) -> f32 {
-            match self.below(8) {
-                0 => 0.0,
-                1 => 1.0,
-                _ => unit_float(self.next()),
-            }
+    /// A value in [0, 1], exactly 0 or exactly 1 one time in eight each.
+    fn value(rng: &mut TestRng) -> f32 {
+        match rng.below(8) {
+            0 => 0.0,
+            1 => 1.0,
+            _ => unit_float(rng.next_u32()),
         }
     }
 
@@ -354,8 +344,8 @@ mod tests {
         assert_eq!(planes, 6, "two lights, three channels");
         let one: ChunkFn = chunk_fn::<f32>(planes);
         let reach = Reach::of(&plan);
-        let mut rng = Rng(seed);
-        let prev: Vec<f32> = (0..row_len * h).map(|_| rng.value()).collect();
+        let mut rng = TestRng::new(seed);
+        let prev: Vec<f32> = (0..row_len * h).map(|_| value(&mut rng)).collect();
         let mut counts = [0u32; 9];
         for slab in 0..plan.slabs {
             let ctx = SlabContext {
@@ -384,11 +374,11 @@ mod tests {
                         .map(|_| match mode {
                             0 => 0,
                             1 => fixed,
-                            _ => rng.next() & ((1 << meshes) - 1),
+                            _ => rng.next_u32() & ((1 << meshes) - 1),
                         })
                         .collect(),
-                    color: (0..3 * w).map(|_| rng.value()).collect(),
-                    alpha: (0..w).map(|_| rng.value()).collect(),
+                    color: (0..3 * w).map(|_| value(&mut rng)).collect(),
+                    alpha: (0..w).map(|_| value(&mut rng)).collect(),
                 };
                 for x0 in 0..=w - 8 {
                     let (mut a, mut b) = (row.clone(), row.clone());
