@@ -4,31 +4,44 @@
 
 mod support;
 
+use std::path::Path;
+
 use convshadow::report::kernels;
 
-#[test]
-fn quick_report_writes_a_complete_csv_markdown_and_plot() {
-    let dir = support::temp_dir("report-quick");
-    let out = dir.join("out");
-    let out_s = out.to_string_lossy().into_owned();
-    let (code, stdout, stderr) = support::run_cli(&["report", "--quick", "--out", &out_s], &dir);
-    assert_eq!(code, 0, "stdout: {stdout}\nstderr: {stderr}");
+/// `report.csv` split into cells: the header and every row, the note (the last, quoted column,
+/// which may contain commas) unquoted.
+struct Csv<'a> {
+    header: Vec<&'a str>,
+    rows: Vec<Vec<String>>,
+}
 
-    let csv = std::fs::read_to_string(out.join("report.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let rows: Vec<Vec<String>> = lines
-        .map(|l| {
-            // The note is the last, quoted column (it may contain commas).
-            let (head, note) = l.split_once(",\"").expect("a quoted note column");
-            let mut cells: Vec<String> = head.split(',').map(str::to_string).collect();
-            cells.push(note.trim_end_matches('"').to_string());
-            cells
-        })
-        .collect();
-    assert!(rows.iter().all(|r| r.len() == header.len()));
+impl<'a> Csv<'a> {
+    /// Splits the text of `report.csv`.
+    fn parse(csv: &'a str) -> Csv<'a> {
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let rows: Vec<Vec<String>> = lines
+            .map(|l| {
+                // The note is the last, quoted column (it may contain commas).
+                let (head, note) = l.split_once(",\"").expect("a quoted note column");
+                let mut cells: Vec<String> = head.split(',').map(str::to_string).collect();
+                cells.push(note.trim_end_matches('"').to_string());
+                cells
+            })
+            .collect();
+        Csv { header, rows }
+    }
 
+    /// The index of column `name`.
+    fn col(&self, name: &str) -> usize {
+        self.header.iter().position(|h| *h == name).unwrap()
+    }
+}
+
+/// The quick subset has a row per case of each family, and every kernel in every family.
+fn check_case_counts(t: &Csv<'_>) {
+    let rows = &t.rows;
+    let col = |name: &str| t.col(name);
     // The quick subset (src/report/mod.rs, ReportOptions::describe): edge 3 distances × 2 slab
     // counts × 2 variances × 2 tilts × (7 kernels + ellipse2 without compensation) = 192; disk
     // 7 kernels; default scene 7 kernels.
@@ -45,8 +58,12 @@ fn quick_report_writes_a_complete_csv_markdown_and_plot() {
             );
         }
     }
+}
 
-    // Every numeric cell is finite, or empty with a reason in `note`; each family has its errors.
+/// Every numeric cell is finite, or empty with a reason in `note`; each family has its errors.
+fn check_cells(t: &Csv<'_>) {
+    let rows = &t.rows;
+    let col = |name: &str| t.col(name);
     let numeric = [
         "slabs",
         "variance",
@@ -64,7 +81,7 @@ fn quick_report_writes_a_complete_csv_markdown_and_plot() {
         "rmse_reference",
         "reference_self_err",
     ];
-    for r in &rows {
+    for r in rows {
         for name in numeric {
             let cell = &r[col(name)];
             if cell.is_empty() {
@@ -92,7 +109,12 @@ fn quick_report_writes_a_complete_csv_markdown_and_plot() {
         }
         assert!(r[col("time_ms")].parse::<f64>().unwrap() > 0.0);
     }
-    // The reference's own error must be well below the errors it measures.
+}
+
+/// The reference's own error must be well below the errors it measures.
+fn check_reference_self_error(t: &Csv<'_>) {
+    let rows = &t.rows;
+    let col = |name: &str| t.col(name);
     for r in rows.iter().filter(|r| r[col("family")] == "scene") {
         let own: f64 = r[col("reference_self_err")].parse().unwrap();
         let err: f64 = r[col("rmse_reference")].parse().unwrap();
@@ -101,16 +123,22 @@ fn quick_report_writes_a_complete_csv_markdown_and_plot() {
             "reference self-error {own} not below the measured {err}: {r:?}"
         );
     }
+}
 
+/// `report.md` has its table and machine line; the plot is a PNG.
+fn check_markdown_and_plot(out: &Path) {
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(md.contains("| kernel |") && md.contains("Machine:"), "{md}");
     let png = std::fs::read(out.join("speed_vs_error.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
     assert!(png.len() > 1000);
+}
 
-    // Case by case (`--case I`, for job arrays) gives the same rows as the whole report, but for
-    // the measured time. Two edge cases keep it fast (the disk and scene cases recompute their
-    // references: tens of seconds each); an index past the last case is refused.
+/// Case by case (`--case I`, for job arrays) gives the same rows as the whole report `csv`, but
+/// for the measured time. Two edge cases keep it fast (the disk and scene cases recompute their
+/// references: tens of seconds each); an index past the last case is refused.
+fn check_single_cases(dir: &Path, csv: &str, t: &Csv<'_>) {
+    let col = |name: &str| t.col(name);
     let without_time = |line: &str| {
         let mut cells: Vec<&str> = line.split(',').collect();
         cells.remove(col("time_ms"));
@@ -129,7 +157,7 @@ fn quick_report_writes_a_complete_csv_markdown_and_plot() {
                 "--out",
                 &case_s,
             ],
-            &dir,
+            dir,
         );
         assert_eq!(code, 0, "stdout: {stdout}\nstderr: {stderr}");
         let one = std::fs::read_to_string(case_out.join("report.csv")).unwrap();
@@ -139,7 +167,25 @@ fn quick_report_writes_a_complete_csv_markdown_and_plot() {
         assert_eq!(without_time(lines[1]), without_time(whole[i]), "case {i}");
     }
     let past = whole.len().to_string();
-    let (code, _, stderr) = support::run_cli(&["report", "--quick", "--case", &past], &dir);
+    let (code, _, stderr) = support::run_cli(&["report", "--quick", "--case", &past], dir);
     assert_eq!(code, 2, "{stderr}");
+}
+
+#[test]
+fn quick_report_writes_a_complete_csv_markdown_and_plot() {
+    let dir = support::temp_dir("report-quick");
+    let out = dir.join("out");
+    let out_s = out.to_string_lossy().into_owned();
+    let (code, stdout, stderr) = support::run_cli(&["report", "--quick", "--out", &out_s], &dir);
+    assert_eq!(code, 0, "stdout: {stdout}\nstderr: {stderr}");
+
+    let csv = std::fs::read_to_string(out.join("report.csv")).unwrap();
+    let table = Csv::parse(&csv);
+    assert!(table.rows.iter().all(|r| r.len() == table.header.len()));
+    check_case_counts(&table);
+    check_cells(&table);
+    check_reference_self_error(&table);
+    check_markdown_and_plot(&out);
+    check_single_cases(&dir, &csv, &table);
     let _ = std::fs::remove_dir_all(&dir);
 }

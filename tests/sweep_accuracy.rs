@@ -56,11 +56,169 @@ fn per_pixel_random(kernel: &str) -> bool {
     }
 }
 const SEEDS: u32 = 12;
+/// Slabs of the impulse-response scenes.
+const IMPULSE_SLABS: u32 = 24;
+/// Grid edge of the impulse-response scenes (the impulse is at its centre).
+const IMPULSE_GRID: u32 = 256;
+
+/// One impulse-response case: the light's (tilt, variance, rotation), the kernel and whether its
+/// variance is compensated.
+struct ImpulseCase<'a> {
+    tilt: [f64; 2],
+    variance: [f64; 2],
+    rotation: f64,
+    kernel: &'a str,
+    compensate: bool,
+}
+
+/// How many seeds a kernel's response is averaged over: 12 for per-pixel random phases, 64 for
+/// `:slab` (exact mass, but its covariance is right only in expectation over the slab phases),
+/// else 1.
+fn seed_count(random: bool, per_slab: bool) -> u32 {
+    if random {
+        SEEDS
+    } else if per_slab {
+        64
+    } else {
+        1
+    }
+}
+
+/// The final light of a unit impulse at pixel (`c`, `c`), averaged over `seeds` seeds.
+fn averaged_impulse_response(
+    case: &ImpulseCase<'_>,
+    seeds: u32,
+    c: usize,
+) -> (RenderPlan, SweepOutput) {
+    let mut scene = empty_scene(
+        IMPULSE_SLABS,
+        IMPULSE_GRID,
+        case.tilt,
+        case.variance,
+        case.rotation,
+        case.kernel,
+        case.compensate,
+    );
+    let impulse = |plan: &RenderPlan| {
+        let mut v = vec![0.0f32; plan.light_row_len() * plan.grid_height as usize];
+        v[c * plan.light_row_len() + c] = 1.0;
+        v
+    };
+    let mut avg: Option<(RenderPlan, SweepOutput)> = None;
+    for seed in 0..seeds {
+        scene.sweep.seed = seed;
+        let (plan, out) = run(&scene, Some(&impulse));
+        match &mut avg {
+            None => avg = Some((plan, out)),
+            Some((_, acc)) => {
+                for (a, b) in acc.light.iter_mut().zip(&out.light) {
+                    *a += *b;
+                }
+            }
+        }
+    }
+    let (plan, mut out) = avg.unwrap();
+    for v in &mut out.light {
+        *v /= seeds as f32;
+    }
+    (plan, out)
+}
+
+/// Stated (mass, mean, relative covariance) tolerances: deterministic kernels are exact up to
+/// rounding and the 1/4 px² bilinear bound; per-pixel random ones carry the sampling noise of
+/// 12 seeds.
+fn tolerances(random: bool, per_slab: bool) -> (f64, f64, f64) {
+    if random {
+        (0.15, 0.5, 0.08)
+    } else if per_slab {
+        (2e-4, 0.02, 0.08)
+    } else {
+        (2e-4, 0.02, 0.02)
+    }
+}
+
+/// Checks the measured covariance `cov` against `target` = n·Σκ for the case's compensation.
+fn check_covariance(
+    case: &ImpulseCase<'_>,
+    what: &str,
+    cov: [[f64; 2]; 2],
+    target: [[f64; 2]; 2],
+    slack: f64,
+    trace: f64,
+    n: f64,
+) {
+    let (compensate, kernel, variance) = (case.compensate, case.kernel, case.variance);
+    let min_axis = variance[0].min(variance[1]);
+    if compensate && kernel != "box" && min_axis > 0.25 {
+        // Compensated: pattern + bilinear = Σκ.
+        for a in 0..2 {
+            for b in 0..2 {
+                assert!(
+                    (cov[a][b] - target[a][b]).abs() < slack,
+                    "{what}: {cov:?} vs {target:?}"
+                );
+            }
+        }
+    } else if compensate && kernel == "box" {
+        // The box's width carry keeps each axis within 10 % (stated bound for `box`).
+        for a in 0..2 {
+            assert!(
+                (cov[a][a] - target[a][a]).abs() < 0.10 * trace + 0.25 * n,
+                "{what}: {cov:?} vs {target:?}"
+            );
+        }
+    } else {
+        // Uncompensated (or a zero-variance principal axis that no pattern can undo):
+        // bilinear reads add f(1−f) ≤ 1/4 px² per axis and slab on top of n·Σκ.
+        for a in 0..2 {
+            let extra = cov[a][a] - target[a][a];
+            assert!(
+                extra > -slack && extra < 0.25 * n + slack,
+                "{what}: {cov:?} vs {target:?}"
+            );
+        }
+        assert!(
+            (cov[0][1] - target[0][1]).abs() < 0.25 * n + slack,
+            "{what}: {cov:?} vs {target:?}"
+        );
+    }
+}
+
+/// Checks one case's impulse response: mass 1, mean c + n·μκ, covariance n·Σκ (`mu`, `sigma`).
+fn check_impulse_case(case: &ImpulseCase<'_>, mu: [f64; 2], sigma: [[f64; 2]; 2]) {
+    let (kernel, compensate) = (case.kernel, case.compensate);
+    let (tilt, variance, rotation) = (case.tilt, case.variance, case.rotation);
+    let n = f64::from(IMPULSE_SLABS);
+    let random = per_pixel_random(kernel);
+    let c = (IMPULSE_GRID / 2) as usize;
+    let per_slab = kernel.ends_with(":slab");
+    let (plan, out) = averaged_impulse_response(case, seed_count(random, per_slab), c);
+    let expect_mean = [c as f64 + n * mu[0], c as f64 + n * mu[1]];
+    let (mass, mean, cov) = moments(&plan, &out, expect_mean, 75.0);
+    let what =
+        format!("{kernel} compensate={compensate} tilt {tilt:?} var {variance:?} rot {rotation}");
+    let target = [
+        [n * sigma[0][0], n * sigma[0][1]],
+        [n * sigma[1][0], n * sigma[1][1]],
+    ];
+    let trace = target[0][0] + target[1][1];
+    eprintln!(
+        "{what}: mass {mass:.4}, mean {mean:.3?} vs {expect_mean:.3?}, covariance {cov:.3?} vs n·Σκ {target:.3?}"
+    );
+    let (mass_tol, mean_tol, rel) = tolerances(random, per_slab);
+    assert!((mass - 1.0).abs() < mass_tol, "{what}: mass {mass}");
+    for a in 0..2 {
+        assert!(
+            (mean[a] - expect_mean[a]).abs() < mean_tol,
+            "{what}: mean {mean:?} vs {expect_mean:?}"
+        );
+    }
+    let slack = rel * trace;
+    check_covariance(case, &what, cov, target, slack, trace, n);
+}
 
 #[test]
 fn impulse_response_has_the_kernel_moments_for_every_kernel() {
-    const N: u32 = 24;
-    const GRID: u32 = 256;
     let cases = [
         // (tilt, variance, rotation): a rotated anisotropic light, ratio 0, ratio 1e6.
         ([20.0, -10.0], [4.0, 1.0], 30.0),
@@ -69,108 +227,16 @@ fn impulse_response_has_the_kernel_moments_for_every_kernel() {
     ];
     for (tilt, variance, rotation) in cases {
         let (mu, sigma) = design_moments(tilt, variance, rotation);
-        let n = f64::from(N);
         for kernel in KERNELS {
-            let random = per_pixel_random(kernel);
             for compensate in [false, true] {
-                let mut scene = empty_scene(N, GRID, tilt, variance, rotation, kernel, compensate);
-                let c = (GRID / 2) as usize;
-                let impulse = |plan: &RenderPlan| {
-                    let mut v = vec![0.0f32; plan.light_row_len() * plan.grid_height as usize];
-                    v[c * plan.light_row_len() + c] = 1.0;
-                    v
+                let case = ImpulseCase {
+                    tilt,
+                    variance,
+                    rotation,
+                    kernel,
+                    compensate,
                 };
-                // `:slab` draws one phase per slab: exact mass, but its covariance is right only
-                // in expectation over the slab phases, so it is averaged over more seeds.
-                let per_slab = kernel.ends_with(":slab");
-                let seeds = if random {
-                    SEEDS
-                } else if per_slab {
-                    64
-                } else {
-                    1
-                };
-                let mut avg: Option<(RenderPlan, SweepOutput)> = None;
-                for seed in 0..seeds {
-                    scene.sweep.seed = seed;
-                    let (plan, out) = run(&scene, Some(&impulse));
-                    match &mut avg {
-                        None => avg = Some((plan, out)),
-                        Some((_, acc)) => {
-                            for (a, b) in acc.light.iter_mut().zip(&out.light) {
-                                *a += *b;
-                            }
-                        }
-                    }
-                }
-                let (plan, mut out) = avg.unwrap();
-                for v in &mut out.light {
-                    *v /= seeds as f32;
-                }
-                let expect_mean = [c as f64 + n * mu[0], c as f64 + n * mu[1]];
-                let (mass, mean, cov) = moments(&plan, &out, expect_mean, 75.0);
-                let what = format!(
-                    "{kernel} compensate={compensate} tilt {tilt:?} var {variance:?} rot {rotation}"
-                );
-                let target = [
-                    [n * sigma[0][0], n * sigma[0][1]],
-                    [n * sigma[1][0], n * sigma[1][1]],
-                ];
-                let trace = target[0][0] + target[1][1];
-                eprintln!(
-                    "{what}: mass {mass:.4}, mean {mean:.3?} vs {expect_mean:.3?}, covariance {cov:.3?} vs n·Σκ {target:.3?}"
-                );
-                // Stated tolerances: deterministic kernels are exact up to rounding and the 1/4 px²
-                // bilinear bound; per-pixel random ones carry the sampling noise of 12 seeds.
-                let (mass_tol, mean_tol, rel) = if random {
-                    (0.15, 0.5, 0.08)
-                } else if per_slab {
-                    (2e-4, 0.02, 0.08)
-                } else {
-                    (2e-4, 0.02, 0.02)
-                };
-                assert!((mass - 1.0).abs() < mass_tol, "{what}: mass {mass}");
-                for a in 0..2 {
-                    assert!(
-                        (mean[a] - expect_mean[a]).abs() < mean_tol,
-                        "{what}: mean {mean:?} vs {expect_mean:?}"
-                    );
-                }
-                let slack = rel * trace;
-                let min_axis = variance[0].min(variance[1]);
-                if compensate && kernel != "box" && min_axis > 0.25 {
-                    // Compensated: pattern + bilinear = Σκ.
-                    for a in 0..2 {
-                        for b in 0..2 {
-                            assert!(
-                                (cov[a][b] - target[a][b]).abs() < slack,
-                                "{what}: {cov:?} vs {target:?}"
-                            );
-                        }
-                    }
-                } else if compensate && kernel == "box" {
-                    // The box's width carry keeps each axis within 10 % (stated bound for `box`).
-                    for a in 0..2 {
-                        assert!(
-                            (cov[a][a] - target[a][a]).abs() < 0.10 * trace + 0.25 * n,
-                            "{what}: {cov:?} vs {target:?}"
-                        );
-                    }
-                } else {
-                    // Uncompensated (or a zero-variance principal axis that no pattern can undo):
-                    // bilinear reads add f(1−f) ≤ 1/4 px² per axis and slab on top of n·Σκ.
-                    for a in 0..2 {
-                        let extra = cov[a][a] - target[a][a];
-                        assert!(
-                            extra > -slack && extra < 0.25 * n + slack,
-                            "{what}: {cov:?} vs {target:?}"
-                        );
-                    }
-                    assert!(
-                        (cov[0][1] - target[0][1]).abs() < 0.25 * n + slack,
-                        "{what}: {cov:?} vs {target:?}"
-                    );
-                }
+                check_impulse_case(&case, mu, sigma);
             }
         }
     }

@@ -206,16 +206,16 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
     Ok(t)
 }
 
-/// Runs the sweep on the GPU: the same image and final light buffers as
-/// `convshadow_cpu::sweep::sweep` (bit for bit on lavapipe; docs/gpu.md lists every source of
-/// difference on other adapters).
-pub fn sweep(
-    ctx: &GpuContext,
-    plan: &RenderPlan,
-    raster: &RasterSetup,
-    ldi: &Ldi,
-    options: &SweepOptions<'_>,
-) -> Result<SweepOutput, GpuError> {
+/// The grid's pixel and light-word counts, refused where they exceed 32-bit indices.
+struct GridSize {
+    w: u32,
+    h: u32,
+    pixels: u64,
+    light_words: u64,
+}
+
+/// Sizes the grid of `plan`, refusing one whose indices do not fit in 32 bits.
+fn grid_size(plan: &RenderPlan) -> Result<GridSize, GpuError> {
     let (w, h) = (plan.grid_width, plan.grid_height);
     let pixels = u64::from(w) * u64::from(h);
     let light_words = plan.light_row_len() as u64 * u64::from(h);
@@ -225,10 +225,50 @@ pub fn sweep(
             plan.light_row_len() / w.max(1) as usize
         )));
     }
-    let tables = build_tables(plan, raster)?;
-    check_size(ctx, "light", light_words * 4)?;
-    check_size(ctx, "per-pixel colour", pixels * 16)?;
+    Ok(GridSize {
+        w,
+        h,
+        pixels,
+        light_words,
+    })
+}
 
+/// Every device buffer the sweep binds or copies from.
+struct SweepBuffers {
+    light_a: wgpu::Buffer,
+    light_b: wgpu::Buffer,
+    cursors: wgpu::Buffer,
+    accum: wgpu::Buffer,
+    offsets: wgpu::Buffer,
+    frag_depth: wgpu::Buffer,
+    frag_meta: wgpu::Buffer,
+    slabs: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    light_slabs: wgpu::Buffer,
+    taps: wgpu::Buffer,
+    materials: wgpu::Buffer,
+    tf_entries: wgpu::Buffer,
+    octaves: wgpu::Buffer,
+    voxels: wgpu::Buffer,
+    meshes: wgpu::Buffer,
+    normals: wgpu::Buffer,
+    image: wgpu::Buffer,
+    image_words: u64,
+    globals: wgpu::Buffer,
+    slab_param: wgpu::Buffer,
+    all_params: wgpu::Buffer,
+}
+
+/// Uploads the light, LDI and plan tables and creates the image and uniform buffers.
+fn upload_buffers(
+    ctx: &GpuContext,
+    plan: &RenderPlan,
+    ldi: &Ldi,
+    options: &SweepOptions<'_>,
+    tables: &Tables,
+    grid: &GridSize,
+) -> Result<SweepBuffers, GpuError> {
+    let (pixels, light_words) = (grid.pixels, grid.light_words);
     let initial: Vec<u32> = match options.initial_light {
         Some(v) => v.iter().map(|x| x.to_bits()).collect(),
         None => vec![1.0f32.to_bits(); light_words as usize],
@@ -266,22 +306,52 @@ pub fn sweep(
     let image = zeroed(ctx, "image", image_words)?;
     let globals = uniform(ctx, "globals", &tables.globals);
     let slab_param = uniform(ctx, "slab", &SlabParams::default());
-    let all_params: Vec<SlabParams> = (0..plan.slabs)
+    let all_params = slab_params_buffer(ctx, plan.slabs);
+    Ok(SweepBuffers {
+        light_a,
+        light_b,
+        cursors,
+        accum,
+        offsets,
+        frag_depth,
+        frag_meta,
+        slabs,
+        lights,
+        light_slabs,
+        taps,
+        materials,
+        tf_entries,
+        octaves,
+        voxels,
+        meshes,
+        normals,
+        image,
+        image_words,
+        globals,
+        slab_param,
+        all_params,
+    })
+}
+
+/// Every slab's [`SlabParams`] in one copy-source buffer, copied into the uniform per dispatch.
+fn slab_params_buffer(ctx: &GpuContext, slabs: u32) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    let all_params: Vec<SlabParams> = (0..slabs)
         .map(|slab| SlabParams {
             slab,
             ..SlabParams::default()
         })
         .collect();
-    let all_params = {
-        use wgpu::util::DeviceExt;
-        ctx.device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("slab params"),
-                contents: bytemuck::cast_slice(&all_params),
-                usage: wgpu::BufferUsages::COPY_SRC,
-            })
-    };
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("slab params"),
+            contents: bytemuck::cast_slice(&all_params),
+            usage: wgpu::BufferUsages::COPY_SRC,
+        })
+}
 
+/// The sweep's two pipelines from `sweep.wgsl`: the per-slab step and the image finish.
+fn sweep_pipelines(ctx: &GpuContext) -> (wgpu::ComputePipeline, wgpu::ComputePipeline) {
     let module = ctx
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -290,35 +360,57 @@ pub fn sweep(
         });
     let slab_pipe = pipeline(ctx, &module, "sweep_slab");
     let finish_pipe = pipeline(ctx, &module, "finish_image");
+    (slab_pipe, finish_pipe)
+}
+
+/// The per-slab bind groups, `[even, odd]`: each reads one light buffer and writes the other.
+fn slab_groups(
+    ctx: &GpuContext,
+    slab_pipe: &wgpu::ComputePipeline,
+    b: &SweepBuffers,
+) -> [wgpu::BindGroup; 2] {
     let common: [(u32, &wgpu::Buffer); 17] = [
-        (slot::SLAB_PARAMS, &slab_param),
-        (slot::GLOBALS, &globals),
-        (slot::CURSORS, &cursors),
-        (slot::ACCUM, &accum),
-        (slot::OFFSETS, &offsets),
-        (slot::FRAG_DEPTH, &frag_depth),
-        (slot::FRAG_META, &frag_meta),
-        (slot::SLABS, &slabs),
-        (slot::LIGHTS, &lights),
-        (slot::LIGHT_SLABS, &light_slabs),
-        (slot::TAPS, &taps),
-        (slot::MATERIALS, &materials),
-        (slot::TF_ENTRIES, &tf_entries),
-        (slot::OCTAVES, &octaves),
-        (slot::VOXELS, &voxels),
-        (slot::MESHES, &meshes),
-        (slot::NORMALS, &normals),
+        (slot::SLAB_PARAMS, &b.slab_param),
+        (slot::GLOBALS, &b.globals),
+        (slot::CURSORS, &b.cursors),
+        (slot::ACCUM, &b.accum),
+        (slot::OFFSETS, &b.offsets),
+        (slot::FRAG_DEPTH, &b.frag_depth),
+        (slot::FRAG_META, &b.frag_meta),
+        (slot::SLABS, &b.slabs),
+        (slot::LIGHTS, &b.lights),
+        (slot::LIGHT_SLABS, &b.light_slabs),
+        (slot::TAPS, &b.taps),
+        (slot::MATERIALS, &b.materials),
+        (slot::TF_ENTRIES, &b.tf_entries),
+        (slot::OCTAVES, &b.octaves),
+        (slot::VOXELS, &b.voxels),
+        (slot::MESHES, &b.meshes),
+        (slot::NORMALS, &b.normals),
     ];
     let group_for = |prev: &wgpu::Buffer, cur: &wgpu::Buffer| {
         let mut e: Vec<(u32, &wgpu::Buffer)> = common.to_vec();
         e.push((slot::LIGHT_PREV, prev));
         e.push((slot::LIGHT_CUR, cur));
-        bind(ctx, &slab_pipe, &e)
+        bind(ctx, slab_pipe, &e)
     };
-    let even = group_for(&light_a, &light_b);
-    let odd = group_for(&light_b, &light_a);
-    let groups = (w.div_ceil(TILE), h.div_ceil(TILE));
+    let even = group_for(&b.light_a, &b.light_b);
+    let odd = group_for(&b.light_b, &b.light_a);
+    [even, odd]
+}
 
+/// Dispatches every slab, [`SLABS_PER_SUBMIT`] per submission, checking cancel before each
+/// submission and reporting progress after it.
+fn dispatch_slabs(
+    ctx: &GpuContext,
+    plan: &RenderPlan,
+    options: &SweepOptions<'_>,
+    b: &SweepBuffers,
+    slab_pipe: &wgpu::ComputePipeline,
+    groups: &[wgpu::BindGroup; 2],
+    workgroups: (u32, u32),
+) -> Result<(), GpuError> {
+    let [even, odd] = groups;
     let mut slab = 0;
     while slab < plan.slabs {
         if options
@@ -331,14 +423,20 @@ pub fn sweep(
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         for k in slab..end {
             let size = std::mem::size_of::<SlabParams>() as u64;
-            encoder.copy_buffer_to_buffer(&all_params, u64::from(k) * size, &slab_param, 0, size);
+            encoder.copy_buffer_to_buffer(
+                &b.all_params,
+                u64::from(k) * size,
+                &b.slab_param,
+                0,
+                size,
+            );
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("slab"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&slab_pipe);
-            pass.set_bind_group(0, if k % 2 == 0 { &even } else { &odd }, &[]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
+            pass.set_pipeline(slab_pipe);
+            pass.set_bind_group(0, if k % 2 == 0 { even } else { odd }, &[]);
+            pass.dispatch_workgroups(workgroups.0, workgroups.1, 1);
         }
         ctx.queue.submit([encoder.finish()]);
         wait(ctx)?;
@@ -347,14 +445,23 @@ pub fn sweep(
         }
         slab = end;
     }
+    Ok(())
+}
 
+/// Submits the pass that turns the accumulated per-pixel colour into the image.
+fn dispatch_finish(
+    ctx: &GpuContext,
+    plan: &RenderPlan,
+    b: &SweepBuffers,
+    finish_pipe: &wgpu::ComputePipeline,
+) {
     let finish_group = bind(
         ctx,
-        &finish_pipe,
+        finish_pipe,
         &[
-            (slot::GLOBALS, &globals),
-            (slot::ACCUM, &accum),
-            (slot::IMAGE, &image),
+            (slot::GLOBALS, &b.globals),
+            (slot::ACCUM, &b.accum),
+            (slot::IMAGE, &b.image),
         ],
     );
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -363,20 +470,54 @@ pub fn sweep(
             label: Some("finish"),
             timestamp_writes: None,
         });
-        pass.set_pipeline(&finish_pipe);
+        pass.set_pipeline(finish_pipe);
         pass.set_bind_group(0, &finish_group, &[]);
         pass.dispatch_workgroups(plan.width.div_ceil(TILE), plan.height.div_ceil(TILE), 1);
     }
     ctx.queue.submit([encoder.finish()]);
-    let image = read_back(ctx, &image, image_words)?;
+}
+
+/// Reads back the image and the last slab's light buffer as floats.
+fn read_output(
+    ctx: &GpuContext,
+    plan: &RenderPlan,
+    b: &SweepBuffers,
+    light_words: u64,
+) -> Result<SweepOutput, GpuError> {
+    let image = read_back(ctx, &b.image, b.image_words)?;
     let last = if plan.slabs % 2 == 1 {
-        &light_b
+        &b.light_b
     } else {
-        &light_a
+        &b.light_a
     };
     let light = read_back(ctx, last, light_words)?;
     Ok(SweepOutput {
         image: image.into_iter().map(f32::from_bits).collect(),
         light: light.into_iter().map(f32::from_bits).collect(),
     })
+}
+
+/// Runs the sweep on the GPU: the same image and final light buffers as
+/// `convshadow_cpu::sweep::sweep` (bit for bit on lavapipe; docs/gpu.md lists every source of
+/// difference on other adapters).
+pub fn sweep(
+    ctx: &GpuContext,
+    plan: &RenderPlan,
+    raster: &RasterSetup,
+    ldi: &Ldi,
+    options: &SweepOptions<'_>,
+) -> Result<SweepOutput, GpuError> {
+    let grid = grid_size(plan)?;
+    let tables = build_tables(plan, raster)?;
+    check_size(ctx, "light", grid.light_words * 4)?;
+    check_size(ctx, "per-pixel colour", grid.pixels * 16)?;
+    let buffers = upload_buffers(ctx, plan, ldi, options, &tables, &grid)?;
+    let (slab_pipe, finish_pipe) = sweep_pipelines(ctx);
+    let groups = slab_groups(ctx, &slab_pipe, &buffers);
+    let workgroups = (grid.w.div_ceil(TILE), grid.h.div_ceil(TILE));
+    dispatch_slabs(
+        ctx, plan, options, &buffers, &slab_pipe, &groups, workgroups,
+    )?;
+    dispatch_finish(ctx, plan, &buffers, &finish_pipe);
+    read_output(ctx, plan, &buffers, grid.light_words)
 }

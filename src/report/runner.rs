@@ -250,36 +250,51 @@ fn scene_rows(size: u32, slabs: u32, samples: u32, verbose: bool) -> Vec<Row> {
         .collect()
 }
 
-/// Runs the report and writes its files.
-pub fn run(options: &ReportOptions) -> Result<Report, String> {
-    let start = Instant::now();
-    std::fs::create_dir_all(&options.out)
-        .map_err(|e| format!("{}: cannot create: {e}", options.out.display()))?;
-    let mut rows = Vec::new();
-    let log = |r: &Row| {
-        if options.verbose {
-            eprintln!(
-                "{} {} n={} var={} tilt={:?} d/d1={:?} comp={} {:.1} ms rmse_c={:?} rmse_i={:?} ref={:?}",
-                r.family,
-                r.kernel,
-                r.slabs,
-                r.variance_level,
-                r.tilt_deg,
-                r.distance_over_d1,
-                r.compensation,
-                r.time_ms,
-                r.rmse_correct,
-                r.rmse_iterated,
-                r.rmse_reference
-            );
-        }
-    };
-    let quick = options.quick;
-    // Cases are numbered in row order; with `options.case` only that one is computed.
-    let want = |i: usize| options.case.is_none_or(|c| c == i);
-    let mut next = 0usize;
-    let kernel_count = kernels().count();
-    // Edge.
+/// The rows computed so far and the case numbering: cases are numbered in row order; with
+/// `options.case` only that one is computed.
+struct Cases<'a> {
+    options: &'a ReportOptions,
+    /// The index the next case gets (after all families: the case count).
+    next: usize,
+    rows: Vec<Row>,
+}
+
+impl Cases<'_> {
+    /// Whether case `i` is computed.
+    fn want(&self, i: usize) -> bool {
+        self.options.case.is_none_or(|c| c == i)
+    }
+
+    /// Logs `row` (when verbose) and keeps it.
+    fn push(&mut self, row: Row) {
+        log_row(self.options, &row);
+        self.rows.push(row);
+    }
+}
+
+/// One line per case on stderr, when verbose.
+fn log_row(options: &ReportOptions, r: &Row) {
+    if options.verbose {
+        eprintln!(
+            "{} {} n={} var={} tilt={:?} d/d1={:?} comp={} {:.1} ms rmse_c={:?} rmse_i={:?} ref={:?}",
+            r.family,
+            r.kernel,
+            r.slabs,
+            r.variance_level,
+            r.tilt_deg,
+            r.distance_over_d1,
+            r.compensation,
+            r.time_ms,
+            r.rmse_correct,
+            r.rmse_iterated,
+            r.rmse_reference
+        );
+    }
+}
+
+/// The edge family: distance × slabs × variance × tilt × kernel × compensation.
+fn edge_cases(cases: &mut Cases<'_>) {
+    let quick = cases.options.quick;
     let slab_counts: &[u32] = if quick { &[64, 128] } else { &SLAB_COUNTS };
     let variances: Vec<(&str, f64)> = if quick {
         vec![VARIANCES[0], VARIANCES[2]]
@@ -295,21 +310,23 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
                             if !comp && quick && kernel != "ellipse2" {
                                 continue;
                             }
-                            next += 1;
-                            if !want(next - 1) {
+                            cases.next += 1;
+                            if !cases.want(cases.next - 1) {
                                 continue;
                             }
                             let row = edge_row(&edge_setup(k, n, tilt, var, kernel, comp), level);
-                            log(&row);
-                            rows.push(row);
+                            cases.push(row);
                         }
                     }
                 }
             }
         }
     }
-    // Disk.
-    let disk_grid: Vec<(f64, u32, &str, f64, f64)> = if quick {
+}
+
+/// The disk family's (distance, slabs, variance level, variance, tilt) points, in case order.
+fn disk_grid(quick: bool) -> Vec<(f64, u32, &'static str, f64, f64)> {
+    if quick {
         vec![(4.0, 128, "high", 0.05, 45.0)]
     } else {
         let mut v = Vec::new();
@@ -323,12 +340,18 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
             }
         }
         v
-    };
+    }
+}
+
+/// The disk family: one case per kernel at each [`disk_grid`] point, the reference shared
+/// while d, σ² and tilt stay the same.
+fn disk_cases(cases: &mut Cases<'_>) -> Result<(), String> {
+    let kernel_count = kernels().count();
     let mut cached: Option<((u64, u64, u64), DiskReference)> = None;
-    for (k, n, level, var, tilt) in disk_grid {
-        let group = next..next + kernel_count;
-        if !group.clone().any(want) {
-            next = group.end;
+    for (k, n, level, var, tilt) in disk_grid(cases.options.quick) {
+        let group = cases.next..cases.next + kernel_count;
+        if !group.clone().any(|i| cases.want(i)) {
+            cases.next = group.end;
             continue;
         }
         let key = (k.to_bits(), var.to_bits(), tilt.to_bits());
@@ -341,45 +364,55 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
         }
         let reference = &cached.as_ref().map(|c| &c.1).ok_or("no disk reference")?;
         for kernel in kernels() {
-            next += 1;
-            if !want(next - 1) {
+            cases.next += 1;
+            if !cases.want(cases.next - 1) {
                 continue;
             }
             let row = disk_row(&disk_setup(k, n, tilt, var, kernel), level, reference);
-            log(&row);
-            rows.push(row);
+            cases.push(row);
         }
     }
-    // Full scene.
-    let (size, scene_slabs): (u32, &[u32]) = if quick {
+    Ok(())
+}
+
+/// The full-scene family: one case per kernel at each slab count.
+fn scene_cases(cases: &mut Cases<'_>) {
+    let kernel_count = kernels().count();
+    let (size, scene_slabs): (u32, &[u32]) = if cases.options.quick {
         (24, &[64])
     } else {
         (24, &SLAB_COUNTS)
     };
     for &n in scene_slabs {
-        let group = next..next + kernel_count;
-        next = group.end;
-        if !group.clone().any(want) {
+        let group = cases.next..cases.next + kernel_count;
+        cases.next = group.end;
+        if !group.clone().any(|i| cases.want(i)) {
             continue;
         }
-        for (i, row) in group.zip(scene_rows(size, n, 16, options.verbose)) {
-            if want(i) {
-                log(&row);
-                rows.push(row);
+        for (i, row) in group.zip(scene_rows(size, n, 16, cases.options.verbose)) {
+            if cases.want(i) {
+                cases.push(row);
             }
         }
     }
+}
+
+/// Refuses an `options.case` past the last of the `count` cases.
+fn check_case(options: &ReportOptions, count: usize) -> Result<(), String> {
     if let Some(c) = options.case
-        && c >= next
+        && c >= count
     {
         return Err(format!(
-            "--case {c}: the {} report has {next} cases, 0 to {}",
-            if quick { "quick" } else { "full" },
-            next - 1
+            "--case {c}: the {} report has {count} cases, 0 to {}",
+            if options.quick { "quick" } else { "full" },
+            count - 1
         ));
     }
+    Ok(())
+}
 
-    // Files.
+/// Writes `report.csv` and, for the whole report, the plot and `report.md`.
+fn write_files(options: &ReportOptions, rows: Vec<Row>, start: Instant) -> Result<Report, String> {
     let write = |name: &str, text: &str| {
         let p = options.out.join(name);
         std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))
@@ -402,6 +435,23 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
     };
     write("report.md", &markdown::markdown(&report, options))?;
     Ok(report)
+}
+
+/// Runs the report and writes its files.
+pub fn run(options: &ReportOptions) -> Result<Report, String> {
+    let start = Instant::now();
+    std::fs::create_dir_all(&options.out)
+        .map_err(|e| format!("{}: cannot create: {e}", options.out.display()))?;
+    let mut cases = Cases {
+        options,
+        next: 0,
+        rows: Vec::new(),
+    };
+    edge_cases(&mut cases);
+    disk_cases(&mut cases)?;
+    scene_cases(&mut cases);
+    check_case(options, cases.next)?;
+    write_files(options, cases.rows, start)
 }
 
 /// The mean of `v`, NaN when empty.

@@ -81,116 +81,135 @@ pub fn sweep(
     sweep_with(plan, raster, ldi, options, &CpuOptions::default())
 }
 
-/// Runs the sweep on the current rayon pool with the path and knobs chosen in `cpu`.
-pub fn sweep_with(
-    plan: &RenderPlan,
-    raster: &RasterSetup,
-    ldi: &Ldi,
-    options: &SweepOptions<'_>,
-    cpu: &CpuOptions<'_>,
-) -> Result<SweepOutput, SweepError> {
-    let w = plan.grid_width as usize;
-    let h = plan.grid_height as usize;
-    let ch = plan.channels as usize;
-    let lights = plan.lights.len();
-    let row_len = plan.light_row_len();
-    assert!(
-        lights * ch <= MAX_LIGHT_CHANNELS,
-        "scene validation caps the light count"
-    );
+/// The sweep's per-pixel state: the two light buffers (ping-pong: `prev` is read, `cur` written),
+/// the layer cursors and the composited colour (planar per row) and alpha.
+struct PixelState {
+    prev: Vec<f32>,
+    cur: Vec<f32>,
+    next: Vec<u32>,
+    inside: Vec<u32>,
+    color: Vec<f32>,
+    alpha: Vec<f32>,
+}
 
-    let mut prev = match options.initial_light {
-        Some(v) => v.to_vec(),
-        None => vec![1.0f32; row_len * h],
-    };
-    let mut cur = vec![0.0f32; row_len * h];
-    let mut next: Vec<u32> = ldi.offsets[..w * h].to_vec();
-    let mut inside = vec![0u32; w * h];
-    let mut color = vec![0.0f32; w * h * 3];
-    let mut alpha = vec![0.0f32; w * h];
-
-    // SIMD path: per-row spans of the light that is not exactly 1 / not exactly 0, and per-chunk
-    // cursor summaries, so quiet chunks can be recognised without touching their pixels.
-    let quiet =
-        (cpu.path == SweepPath::Simd && cpu.skip_quiet).then(|| QuietSetup::new(plan, ldi, &prev));
-    let chunks_per_row = (w / 8).max(1);
-    let (mut spans_prev, mut spans_cur, mut chunk_states) = match &quiet {
-        Some(q) => (
-            q.initial_spans.clone(),
-            q.initial_spans.clone(),
-            q.chunks.clone(),
-        ),
-        None => (Vec::new(), Vec::new(), Vec::new()),
-    };
-    let reach = Reach::of(plan);
-
-    for slab in 0..plan.slabs {
-        if options.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-            return Err(SweepError::Interrupted);
-        }
-        let ctx = SlabContext {
-            plan,
-            raster,
-            ldi,
-            slab,
-            back: plan.slab_back[slab as usize],
-            front: plan.slab_front[slab as usize],
+impl PixelState {
+    /// The state before the first slab: the initial light (1 unless given), each cursor at its
+    /// pixel's first fragment, nothing composited.
+    fn new(plan: &RenderPlan, ldi: &Ldi, options: &SweepOptions<'_>) -> PixelState {
+        let w = plan.grid_width as usize;
+        let h = plan.grid_height as usize;
+        let row_len = plan.light_row_len();
+        let prev = match options.initial_light {
+            Some(v) => v.to_vec(),
+            None => vec![1.0f32; row_len * h],
         };
-        let prev_ref = &prev;
-        let rows = cur
-            .par_chunks_mut(row_len)
-            .zip(next.par_chunks_mut(w))
-            .zip(inside.par_chunks_mut(w))
-            .zip(color.par_chunks_mut(w * 3))
-            .zip(alpha.par_chunks_mut(w))
-            .enumerate()
-            .map(|(y, ((((light, next), inside), color), alpha))| {
-                (
-                    y,
-                    RowState {
-                        light,
-                        next,
-                        inside,
-                        color,
-                        alpha,
-                    },
-                )
-            });
-        match (cpu.path, &quiet) {
-            (SweepPath::Scalar, _) => rows.for_each(|(y, row)| {
-                sweep_row_scalar(&ctx, &reach, y, prev_ref, row);
-            }),
-            (SweepPath::Simd, None) => rows.for_each(|(y, row)| {
-                sweep_row_simd(&ctx, &reach, y, prev_ref, row, None, cpu.chunk_counts);
-            }),
-            (SweepPath::Simd, Some(q)) => {
-                let spans_prev_ref = &spans_prev;
-                rows.zip(spans_cur.par_iter_mut())
-                    .zip(chunk_states.par_chunks_mut(chunks_per_row))
-                    .for_each(|(((y, row), span_out), chunks)| {
-                        let quiet_row = QuietRow {
-                            setup: q,
-                            spans_prev: spans_prev_ref,
-                            span_out,
-                            chunks,
-                        };
-                        sweep_row_simd(
-                            &ctx,
-                            &reach,
-                            y,
-                            prev_ref,
-                            row,
-                            Some(quiet_row),
-                            cpu.chunk_counts,
-                        );
-                    });
-                std::mem::swap(&mut spans_prev, &mut spans_cur);
-            }
+        PixelState {
+            prev,
+            cur: vec![0.0f32; row_len * h],
+            next: ldi.offsets[..w * h].to_vec(),
+            inside: vec![0u32; w * h],
+            color: vec![0.0f32; w * h * 3],
+            alpha: vec![0.0f32; w * h],
         }
-        std::mem::swap(&mut prev, &mut cur);
-        (options.progress)(slab);
     }
+}
 
+/// SIMD path: per-row spans of the light that is not exactly 1 / not exactly 0, and per-chunk
+/// cursor summaries, so quiet chunks can be recognised without touching their pixels.
+struct QuietState {
+    setup: QuietSetup,
+    spans_prev: Vec<quiet::RowSpans>,
+    spans_cur: Vec<quiet::RowSpans>,
+    chunk_states: Vec<quiet::ChunkState>,
+    chunks_per_row: usize,
+}
+
+impl QuietState {
+    /// The quiet-chunk state for the initial light `prev`, when `cpu` asks for skipping on the
+    /// SIMD path.
+    fn new(plan: &RenderPlan, ldi: &Ldi, prev: &[f32], cpu: &CpuOptions<'_>) -> Option<QuietState> {
+        (cpu.path == SweepPath::Simd && cpu.skip_quiet).then(|| {
+            let setup = QuietSetup::new(plan, ldi, prev);
+            QuietState {
+                spans_prev: setup.initial_spans.clone(),
+                spans_cur: setup.initial_spans.clone(),
+                chunk_states: setup.chunks.clone(),
+                chunks_per_row: (plan.grid_width as usize / 8).max(1),
+                setup,
+            }
+        })
+    }
+}
+
+/// Sweeps one slab over every row in parallel on the chosen path, then swaps the light buffers.
+fn sweep_slab(
+    ctx: &SlabContext<'_>,
+    reach: &Reach,
+    cpu: &CpuOptions<'_>,
+    state: &mut PixelState,
+    quiet: Option<&mut QuietState>,
+) {
+    let w = ctx.plan.grid_width as usize;
+    let row_len = ctx.plan.light_row_len();
+    let prev_ref = &state.prev;
+    let rows = state
+        .cur
+        .par_chunks_mut(row_len)
+        .zip(state.next.par_chunks_mut(w))
+        .zip(state.inside.par_chunks_mut(w))
+        .zip(state.color.par_chunks_mut(w * 3))
+        .zip(state.alpha.par_chunks_mut(w))
+        .enumerate()
+        .map(|(y, ((((light, next), inside), color), alpha))| {
+            (
+                y,
+                RowState {
+                    light,
+                    next,
+                    inside,
+                    color,
+                    alpha,
+                },
+            )
+        });
+    match (cpu.path, quiet) {
+        (SweepPath::Scalar, _) => rows.for_each(|(y, row)| {
+            sweep_row_scalar(ctx, reach, y, prev_ref, row);
+        }),
+        (SweepPath::Simd, None) => rows.for_each(|(y, row)| {
+            sweep_row_simd(ctx, reach, y, prev_ref, row, None, cpu.chunk_counts);
+        }),
+        (SweepPath::Simd, Some(q)) => {
+            let spans_prev_ref = &q.spans_prev;
+            let setup = &q.setup;
+            rows.zip(q.spans_cur.par_iter_mut())
+                .zip(q.chunk_states.par_chunks_mut(q.chunks_per_row))
+                .for_each(|(((y, row), span_out), chunks)| {
+                    let quiet_row = QuietRow {
+                        setup,
+                        spans_prev: spans_prev_ref,
+                        span_out,
+                        chunks,
+                    };
+                    sweep_row_simd(
+                        ctx,
+                        reach,
+                        y,
+                        prev_ref,
+                        row,
+                        Some(quiet_row),
+                        cpu.chunk_counts,
+                    );
+                });
+            std::mem::swap(&mut q.spans_prev, &mut q.spans_cur);
+        }
+    }
+    std::mem::swap(&mut state.prev, &mut state.cur);
+}
+
+/// The image: each pixel inside the guard band composited over the background by [`finish`].
+fn finish_image(plan: &RenderPlan, color: &[f32], alpha: &[f32]) -> Vec<f32> {
+    let w = plan.grid_width as usize;
     let g = plan.guard as usize;
     let (iw, ih) = (plan.width as usize, plan.height as usize);
     let mut image = vec![0.0f32; iw * ih * 3];
@@ -207,5 +226,47 @@ pub fn sweep_with(
                 row[3 * x..3 * x + 3].copy_from_slice(&c);
             }
         });
-    Ok(SweepOutput { image, light: prev })
+    image
+}
+
+/// Runs the sweep on the current rayon pool with the path and knobs chosen in `cpu`.
+pub fn sweep_with(
+    plan: &RenderPlan,
+    raster: &RasterSetup,
+    ldi: &Ldi,
+    options: &SweepOptions<'_>,
+    cpu: &CpuOptions<'_>,
+) -> Result<SweepOutput, SweepError> {
+    let ch = plan.channels as usize;
+    let lights = plan.lights.len();
+    assert!(
+        lights * ch <= MAX_LIGHT_CHANNELS,
+        "scene validation caps the light count"
+    );
+
+    let mut state = PixelState::new(plan, ldi, options);
+    let mut quiet = QuietState::new(plan, ldi, &state.prev, cpu);
+    let reach = Reach::of(plan);
+
+    for slab in 0..plan.slabs {
+        if options.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            return Err(SweepError::Interrupted);
+        }
+        let ctx = SlabContext {
+            plan,
+            raster,
+            ldi,
+            slab,
+            back: plan.slab_back[slab as usize],
+            front: plan.slab_front[slab as usize],
+        };
+        sweep_slab(&ctx, &reach, cpu, &mut state, quiet.as_mut());
+        (options.progress)(slab);
+    }
+
+    let image = finish_image(plan, &state.color, &state.alpha);
+    Ok(SweepOutput {
+        image,
+        light: state.prev,
+    })
 }
