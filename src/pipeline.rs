@@ -49,8 +49,18 @@ pub enum RenderError {
     Threads(String),
 }
 
-/// A thread pool with `threads` workers (0 = rayon's default: one per core).
+/// Most worker threads a render may ask for: far above any core count, and low enough that
+/// starting (and, on a signal, stopping) the pool stays quick.
+pub const MAX_THREADS: usize = 1024;
+
+/// A thread pool with `threads` workers (0 = rayon's default: one per core), at most
+/// [`MAX_THREADS`].
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, RenderError> {
+    if threads > MAX_THREADS {
+        return Err(RenderError::Threads(format!(
+            "expected at most {MAX_THREADS} worker threads, got {threads}"
+        )));
+    }
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()

@@ -489,3 +489,116 @@ fn sigterm_mid_sweep_exits_130_and_leaves_no_file() {
 fn sigint_mid_sweep_exits_130_and_leaves_no_file() {
     interrupt_mid_sweep(libc::SIGINT, "rel-sigint");
 }
+
+// ---------------------------------------------------------------------------------------------
+// Hardening: arguments and input files that used to hang, grow without bound or blame the scene.
+
+/// Exit code of bad command-line arguments (docs/errors.md).
+const BAD_ARGUMENTS: i32 = 2;
+
+/// Runs `args` in `dir`, asserting it finishes within `limit` seconds.
+fn run_quickly(args: &[&str], dir: &Path, limit: f64) -> (i32, String, String) {
+    let start = std::time::Instant::now();
+    let r = support::run_cli(args, dir);
+    let took = start.elapsed().as_secs_f64();
+    assert!(took < limit, "{args:?} took {took:.1} s");
+    r
+}
+
+#[test]
+fn huge_thread_counts_image_sides_and_sample_counts_are_bad_arguments() {
+    let dir = support::temp_dir("rel-args");
+    std::fs::write(dir.join("base.toml"), BASE_SCENE).unwrap();
+    for (args, names) in [
+        (
+            &["render", "base.toml", "-o", "o.png", "--threads", "100000"][..],
+            "--threads",
+        ),
+        (
+            &["render", "base.toml", "-o", "o.png", "--threads", "5000"][..],
+            "--threads",
+        ),
+        (
+            &["ldi", "base.toml", "--threads", "100000"][..],
+            "--threads",
+        ),
+        (
+            &["render", "base.toml", "-o", "o.png", "--width", "0"][..],
+            "--width",
+        ),
+        (
+            &["render", "base.toml", "-o", "o.png", "--width", "16385"][..],
+            "--width",
+        ),
+        (&["ldi", "base.toml", "--height", "0"][..], "--height"),
+        (
+            &[
+                "render",
+                "base.toml",
+                "-o",
+                "o.png",
+                "--backend",
+                "reference",
+                "--width",
+                "1",
+                "--height",
+                "1",
+                "--reference-samples",
+                "4294967295",
+            ][..],
+            "--reference-samples",
+        ),
+    ] {
+        let (code, _, err) = run_quickly(args, &dir, 10.0);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert_eq!(code, BAD_ARGUMENTS, "{args:?}: {err}");
+        assert!(err.contains(names), "{args:?}: must name {names}: {err}");
+        assert_eq!(files_in(&dir), ["base.toml"], "{args:?}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn devices_fifos_and_folders_are_refused_as_inputs_without_reading_them() {
+    let dir = support::temp_dir("rel-nonregular");
+    let fifo = dir.join("pipe.obj");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path; mkfifo only creates a file system node.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let obj_scene = |path: &str| {
+        BASE_SCENE.replace(
+            "shape = \"box\"\nsize = [1.0, 1.0, 1.0]",
+            &format!("shape = \"obj\"\npath = {path:?}"),
+        )
+    };
+    std::fs::write(dir.join("zero.toml"), obj_scene("/dev/zero")).unwrap();
+    std::fs::write(dir.join("fifo.toml"), obj_scene("pipe.obj")).unwrap();
+    std::fs::write(dir.join("dir.toml"), obj_scene(".")).unwrap();
+    for (scene, names) in [
+        ("zero.toml", "not a regular file"),
+        ("fifo.toml", "not a regular file"),
+        ("dir.toml", "folder"),
+        ("/dev/zero", "not a regular file"),
+        ("pipe.obj", "not a regular file"),
+    ] {
+        for cmd in ["render", "ldi"] {
+            let (code, _, err) = run_quickly(
+                &[cmd, scene, "-o", "o.png"][..if cmd == "ldi" { 2 } else { 4 }],
+                &dir,
+                10.0,
+            );
+            assert_refused(&format!("{cmd} {scene}"), code, BAD_INPUT, &err, &[names]);
+        }
+    }
+    // A raw texture path that is a folder is named as a folder, not by its size.
+    let tex = BASE_SCENE.replace(
+        "[material.m]\nopacity = 0.5",
+        "[material.m]\ntexture = { path = \".\", dims = [2, 2, 2], type = \"u8\" }\n\
+         gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 1.0]]",
+    );
+    std::fs::write(dir.join("tex.toml"), tex).unwrap();
+    let (code, _, err) = run_quickly(&["render", "tex.toml", "-o", "o.png"], &dir, 10.0);
+    assert_refused("texture folder", code, BAD_INPUT, &err, &["folder"]);
+    assert!(!err.contains("4096"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

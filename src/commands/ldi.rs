@@ -13,13 +13,13 @@ pub struct LdiArgs {
     /// Scene file (TOML); without it, the embedded default scene.
     pub scene: Option<PathBuf>,
     /// Override the image width.
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_side)]
     pub width: Option<u32>,
     /// Override the image height.
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_side)]
     pub height: Option<u32>,
     /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = super::parse_threads)]
     pub threads: usize,
     /// Write the numbers as JSON.
     #[arg(long)]

@@ -36,6 +36,26 @@ pub fn override_size(
     Ok(())
 }
 
+/// Parses `--threads`: 0 (one per core) to [`crate::pipeline::MAX_THREADS`].
+pub fn parse_threads(s: &str) -> Result<usize, String> {
+    let max = crate::pipeline::MAX_THREADS;
+    match s.parse::<usize>() {
+        Ok(n) if n <= max => Ok(n),
+        _ => Err(format!(
+            "expected 0 (one per core) to {max} worker threads, got {s:?}"
+        )),
+    }
+}
+
+/// Parses `--width` / `--height`: 1 to the scene format's largest image side.
+pub fn parse_side(s: &str) -> Result<u32, String> {
+    let max = convshadow_common::scene::MAX_IMAGE_SIDE;
+    match s.parse::<u32>() {
+        Ok(n) if (1..=max).contains(&n) => Ok(n),
+        _ => Err(format!("expected an integer from 1 to {max}, got {s:?}")),
+    }
+}
+
 /// The pipeline's thread pool with `threads` workers (0 = one per core), its error as a failure.
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, Failure> {
     Ok(crate::pipeline::thread_pool(threads)?)

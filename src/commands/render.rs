@@ -20,6 +20,10 @@ use crate::pipeline::{
     Backend, CpuPath, MemoryNeed, RenderRequest, Rendered, image_fingerprint, render,
 };
 
+/// Most light directions `--reference-samples` takes (256²: seconds per pixel at most, so even
+/// a 1×1 image cannot run for minutes).
+pub const MAX_REFERENCE_SAMPLES: u32 = 65536;
+
 /// `--backend` of `convshadow render`: the pipeline's devices, or the ground-truth reference.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum RenderBackend {
@@ -59,10 +63,10 @@ pub struct RenderArgs {
     pub outputs: Vec<PathBuf>,
     /// Override the image width (the height stays, and so does camera.view_width: a wider image
     /// shows the same width of the scene, a taller one more of it; use --size to keep the view).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_side)]
     pub width: Option<u32>,
     /// Override the image height (the width and camera.view_width stay).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_side)]
     pub height: Option<u32>,
     /// Image size WxH; when the aspect changes, camera.view_width grows so the scene's whole
     /// view stays in frame (and says so).
@@ -104,7 +108,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub seed: Option<u32>,
     /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = super::parse_threads)]
     pub threads: usize,
     /// CPU code path: `simd` (8 pixels at a time) or `scalar` (the readable reference); both
     /// give the same bits.
@@ -322,6 +326,14 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             return Err(Failure::new(
                 exit::BAD_ARGUMENTS,
                 "--reference-samples: expected at least 1 light direction, got 0",
+            ));
+        }
+        (RenderBackend::Reference, Some(m)) if m > MAX_REFERENCE_SAMPLES => {
+            return Err(Failure::new(
+                exit::BAD_ARGUMENTS,
+                format!(
+                    "--reference-samples: expected 1 to {MAX_REFERENCE_SAMPLES} light directions, got {m}"
+                ),
             ));
         }
         (RenderBackend::Reference, Some(m)) => m,
