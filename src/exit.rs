@@ -142,3 +142,22 @@ impl From<convshadow_gpu::GpuError> for Failure {
         Failure::new(gpu_code(&e), e.to_string())
     }
 }
+
+/// `text` with every control character but newline (ESC, BEL, NUL, CR, …) written as a Rust
+/// escape (`\u{1b}`), so a message quoting a file or a path cannot drive the terminal.
+pub fn escape_controls(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() && c != '\n' {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// [`escape_controls`], newlines included: for one-line messages.
+pub fn escape_line(text: &str) -> String {
+    escape_controls(text).replace('\n', "\\n")
+}

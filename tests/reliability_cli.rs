@@ -602,3 +602,95 @@ fn devices_fifos_and_folders_are_refused_as_inputs_without_reading_them() {
     assert!(!err.contains("4096"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn output_paths_long_names_collisions_misnamed_formats_and_devices() {
+    let dir = support::temp_dir("rel-outpaths");
+    std::fs::write(dir.join("base.toml"), BASE_SCENE).unwrap();
+    // A 250-character name: the temporary name must stay within 255 bytes.
+    let long = format!("{}.png", "n".repeat(246));
+    let (code, _, err) = support::run_cli(&["render", "base.toml", "-o", &long], &dir);
+    assert_eq!(code, 0, "{err}");
+    assert!(dir.join(&long).is_file());
+    std::fs::remove_file(dir.join(&long)).unwrap();
+    for (args, names) in [
+        (
+            &[
+                "render",
+                "base.toml",
+                "-o",
+                "x.png",
+                "--stats-json",
+                "x.png",
+            ][..],
+            "same file",
+        ),
+        (
+            &[
+                "render",
+                "base.toml",
+                "-o",
+                "x.png",
+                "--stats-json",
+                "./x.png",
+            ][..],
+            "same file",
+        ),
+        (
+            &["ldi", "base.toml", "--layers-png", "l.jpg"][..],
+            "--layers-png",
+        ),
+        (
+            &["diff", "a.exr", "b.exr", "--heatmap", "h.exr"][..],
+            "--heatmap",
+        ),
+    ] {
+        let (code, _, err) = support::run_cli(args, &dir);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains(names), "{args:?}: must name {names}: {err}");
+        assert_eq!(files_in(&dir), ["base.toml"], "{args:?}");
+    }
+    // A FIFO named like an output is not replaced.
+    let fifo = dir.join("dev.png");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path; mkfifo only creates a file system node.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let (code, _, err) = support::run_cli(&["render", "base.toml", "-o", "dev.png"], &dir);
+    assert_refused(
+        "fifo output",
+        code,
+        OUTPUT_FAILED,
+        &err,
+        &["not a regular file"],
+    );
+    assert!(!std::fs::metadata(&fifo).unwrap().is_file());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn control_characters_in_messages_are_escaped() {
+    let dir = support::temp_dir("rel-escape");
+    std::fs::write(
+        dir.join("evil.obj"),
+        b"v 0 0 0\nv 1 0 0\x1b[31m\x07\nf 1 2 3\n",
+    )
+    .unwrap();
+    let scene = BASE_SCENE.replace(
+        "shape = \"box\"\nsize = [1.0, 1.0, 1.0]",
+        "shape = \"obj\"\npath = \"evil.obj\"",
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    std::fs::write(dir.join("t.toml"), "[image]\nwidth = \"\u{1b}[31m\u{7}\"\n").unwrap();
+    for scene in ["s.toml", "t.toml"] {
+        let (code, _, err) = support::run_cli(&["ldi", scene], &dir);
+        assert_eq!(code, BAD_INPUT, "{err}");
+        assert!(
+            !err.chars().any(|c| c.is_control() && c != '\n'),
+            "{scene}: raw control characters: {err:?}"
+        );
+    }
+    let (code, _, err) = support::run_cli(&["render", "s.toml", "--threads", "\u{1b}[31m"], &dir);
+    assert_eq!(code, 2);
+    assert!(!err.contains('\u{1b}'), "{err:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

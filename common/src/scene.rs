@@ -956,11 +956,11 @@ impl Validator<'_> {
             }
             Ok(s)
         };
-        let whole = |v: f64, k: &str, max: u32| -> Result<u32, SceneError> {
-            if v.fract() != 0.0 || v < 0.0 || v > f64::from(max) {
+        let whole = |v: f64, k: &str, min: u32, max: u32| -> Result<u32, SceneError> {
+            if v.fract() != 0.0 || v < f64::from(min) || v > f64::from(max) {
                 return Err(self.err(
                     key(k),
-                    format!("expected a whole number from 0 to {max}, got {v}"),
+                    format!("expected a whole number from {min} to {max}, got {v}"),
                 ));
             }
             Ok(v as u32)
@@ -983,7 +983,7 @@ impl Validator<'_> {
                 self.length(&format!("mesh[{i}].size[0]"), s[0])?;
                 ShapeSpec::Sphere {
                     radius: s[0],
-                    subdivisions: whole(s[1], "size[1]", MAX_SPHERE_SUBDIVISIONS)?,
+                    subdivisions: whole(s[1], "size[1]", 0, MAX_SPHERE_SUBDIVISIONS)?,
                 }
             }
             "torus" => {
@@ -999,10 +999,7 @@ impl Validator<'_> {
                         ),
                     ));
                 }
-                let segments = whole(s[2], "size[2]", MAX_TORUS_SEGMENTS)?;
-                if segments < 3 {
-                    return Err(self.err(key("size[2]"), "expected at least 3 segments"));
-                }
+                let segments = whole(s[2], "size[2]", 3, MAX_TORUS_SEGMENTS)?;
                 ShapeSpec::Torus {
                     major: s[0],
                     minor: s[1],
@@ -1013,10 +1010,7 @@ impl Validator<'_> {
                 let s = size(3, "[radius, height, segments]")?;
                 self.length(&format!("mesh[{i}].size[0]"), s[0])?;
                 self.length(&format!("mesh[{i}].size[1]"), s[1])?;
-                let segments = whole(s[2], "size[2]", MAX_TORUS_SEGMENTS)?;
-                if segments < 3 {
-                    return Err(self.err(key("size[2]"), "expected at least 3 segments"));
-                }
+                let segments = whole(s[2], "size[2]", 3, MAX_TORUS_SEGMENTS)?;
                 ShapeSpec::Cylinder {
                     radius: s[0],
                     height: s[1],

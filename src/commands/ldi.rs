@@ -40,6 +40,8 @@ pub struct LdiArgs {
 pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
     let mut scene = super::load_scene(args.scene.as_deref())?;
     super::override_size(&mut scene, args.width, args.height)?;
+    super::require_png("--layers-png", args.layers_png.as_ref())?;
+    super::refuse_collisions(args.stats_json.iter().chain(&args.layers_png))?;
     for p in args.stats_json.iter().chain(&args.layers_png) {
         convshadow_common::image_io::check_writable(p)?;
     }
@@ -60,7 +62,7 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         seconds_total,
     } = build_ldi(&scene, args.backend, args.threads, budget)?;
     if let Some(note) = &backend_note {
-        eprintln!("note: {note}");
+        eprintln!("note: {}", crate::exit::escape_line(note));
     }
     let hash = ldi.fingerprint();
 

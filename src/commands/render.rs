@@ -165,7 +165,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         if let Some(note) = frames::apply_size(&mut scene, w, h)?
             && !args.quiet
         {
-            eprintln!("note: {note}");
+            eprintln!("note: {}", crate::exit::escape_line(&note));
         }
     }
     let direction = args
@@ -262,6 +262,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             .collect(),
         None => outputs.clone(),
     };
+    super::refuse_collisions(first_outputs.iter().chain(&args.stats_json))?;
     for p in first_outputs.iter().chain(&args.stats_json) {
         convshadow_common::image_io::check_writable(p)?;
         let ext = p
@@ -368,7 +369,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     let Some(list) = frame_list else {
         let r = render(&scene, &request)?;
         if let Some(note) = &r.backend_note {
-            eprintln!("note: {note}");
+            eprintln!("note: {}", crate::exit::escape_line(note));
         }
         return finish(&scene, args, &outputs, &r, bar.as_ref(), 0);
     };
@@ -384,7 +385,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         let r = render(&frame_scene, &request)?;
         if i == 0 {
             if let Some(note) = &r.backend_note {
-                eprintln!("note: {note}");
+                eprintln!("note: {}", crate::exit::escape_line(note));
             }
             slab_count.store(u64::from(r.plan.slabs), Relaxed);
             if let Some(b) = &bar {
