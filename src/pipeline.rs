@@ -215,6 +215,8 @@ pub struct Rendered {
     pub adapter: Option<String>,
     /// Why `--backend auto` fell back to the CPU, if it did.
     pub backend_note: Option<String>,
+    /// Warnings about accepted meshes (closed non-manifold edges), one line each.
+    pub mesh_warnings: Vec<String>,
 }
 
 /// Fingerprint of a float image's bits.
@@ -432,6 +434,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     let seconds_sweep = t_sweep.elapsed().as_secs_f64();
     let image_hash = image_fingerprint(&out.image);
     Ok(Rendered {
+        mesh_warnings: geometry.mesh_warnings(),
         image: RgbImage {
             width: scene.image.width,
             height: scene.image.height,

@@ -694,3 +694,72 @@ fn control_characters_in_messages_are_escaped() {
     assert!(!err.contains('\u{1b}'), "{err:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// OBJ text of unit cubes translated by `offsets` (outward winding); `flip` reverses the first
+/// triangle of the last cube.
+fn cubes_obj(offsets: &[[f64; 3]], flip: bool) -> String {
+    use convshadow::common::mesh::TriMesh;
+    let mut text = String::new();
+    let mut base = 0;
+    for (k, o) in offsets.iter().enumerate() {
+        let cube = TriMesh::unit_box(glam::DVec3::ONE);
+        for p in &cube.positions {
+            text += &format!("v {} {} {}\n", p.x + o[0], p.y + o[1], p.z + o[2]);
+        }
+        for (j, t) in cube.triangles.iter().enumerate() {
+            let [a, b, c] = t.map(|i| i + 1 + base);
+            if flip && k + 1 == offsets.len() && j == 0 {
+                text += &format!("f {a} {c} {b}\n");
+            } else {
+                text += &format!("f {a} {b} {c}\n");
+            }
+        }
+        base += cube.positions.len() as u32;
+    }
+    text
+}
+
+#[test]
+fn two_cubes_sharing_one_edge_are_closed_with_a_warning_and_broken_pairs_are_refused() {
+    let dir = support::temp_dir("rel-two-cubes");
+    let scene = BASE_SCENE.replace(
+        "shape = \"box\"\nsize = [1.0, 1.0, 1.0]",
+        "shape = \"obj\"\npath = \"m.obj\"",
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    // The cubes [-0.5, 0.5]³ and [0.5, 1.5]² × [-0.5, 0.5] share the edge x = y = 0.5.
+    std::fs::write(
+        dir.join("m.obj"),
+        cubes_obj(&[[0.0; 3], [1.0, 1.0, 0.0]], false),
+    )
+    .unwrap();
+    let (code, out, err) = support::run_cli(&["ldi", "s.toml"], &dir);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains(" 0 odd pixels"), "{out}");
+    assert!(
+        err.contains(
+            "warning: mesh[0] has 1 non-manifold edges, each used as often in each direction"
+        ),
+        "{err}"
+    );
+    let (code, _, err) = support::run_cli(&["render", "s.toml", "-o", "o.png"], &dir);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("1 non-manifold edges"), "{err}");
+    // One triangle of the second cube flipped: inconsistent winding, refused.
+    std::fs::write(
+        dir.join("m.obj"),
+        cubes_obj(&[[0.0; 3], [1.0, 1.0, 0.0]], true),
+    )
+    .unwrap();
+    let (code, _, err) = support::run_cli(&["ldi", "s.toml"], &dir);
+    assert_eq!(code, MESH_DEFECT, "{err}");
+    let (code, _, err) = support::run_cli(&["render", "s.toml", "-o", "o2.png"], &dir);
+    assert_refused("flipped pair", code, MESH_DEFECT, &err, &["mesh[0]"]);
+    // A lone extra triangle on the shared edge: odd incidence (5), refused.
+    let mut text = cubes_obj(&[[0.0; 3], [1.0, 1.0, 0.0]], false);
+    text += "v 0.5 0.5 -0.5\nv 0.5 0.5 0.5\nv 3 3 0\nf 17 18 19\n";
+    std::fs::write(dir.join("m.obj"), text).unwrap();
+    let (code, _, err) = support::run_cli(&["ldi", "s.toml"], &dir);
+    assert_eq!(code, MESH_DEFECT, "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -153,6 +153,9 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         super::write_json(path, &value)?;
     }
 
+    for w in geometry.mesh_warnings() {
+        eprintln!("warning: {}", crate::exit::escape_line(&w));
+    }
     if geometry.defect_edges() > 0 || stats.odd_pixels > 0 {
         eprintln!(
             "error: the meshes are not closed ({} defective edges, {} pixels with an odd fragment \

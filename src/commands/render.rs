@@ -507,6 +507,9 @@ fn finish(
     if let Some(p) = &args.stats_json {
         super::write_json(p, &stats_value(scene, args, r, samples, outputs))?;
     }
+    for w in &r.mesh_warnings {
+        eprintln!("warning: {}", crate::exit::escape_line(w));
+    }
     if r.ldi.odd_pixels > 0 {
         eprintln!(
             "warning: {} pixels have an odd fragment count (open meshes, rendered with --allow-open)",
@@ -642,6 +645,7 @@ fn render_reference(
     };
     let seconds_sweep = t_render.elapsed().as_secs_f64();
     Ok(Rendered {
+        mesh_warnings: geometry.mesh_warnings(),
         image_hash: image_fingerprint(&data),
         image: RgbImage {
             width: scene.image.width,
