@@ -281,10 +281,23 @@ impl MemoryNeed {
     /// the budget for the LDI's fragments.
     pub fn check(&self, scene: &Scene, budget: u64) -> Result<u64, RenderError> {
         let need = self.total();
+        let mib = |b: u64| b.div_ceil(1 << 20);
         if need <= budget {
+            // A budget above what the machine has must not end in an allocation abort: probe
+            // the whole need once, fallibly (untouched, so it costs no memory), before any buffer.
+            let mut probe: Vec<u8> = Vec::new();
+            if usize::try_from(need).map_or(true, |n| probe.try_reserve_exact(n).is_err()) {
+                return Err(RenderError::OutOfMemory(format!(
+                    "{}: the render needs {} MiB before any fragment, within the memory budget of \
+                     {} MiB, but the machine cannot allocate them; lower the image size, \
+                     sweep.guard_band or the light count, or --max-memory",
+                    scene.source,
+                    mib(need),
+                    budget >> 20
+                )));
+            }
             return Ok(budget - need);
         }
-        let mib = |b: u64| b.div_ceil(1 << 20);
         Err(RenderError::OutOfMemory(format!(
             "{}: the render needs {} MiB before any fragment ({} grid pixels: LDI arrays {} \
                  MiB, light buffers {} MiB for {} lights, sweep state {} MiB, output {} MiB), \

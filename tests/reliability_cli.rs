@@ -763,3 +763,52 @@ fn two_cubes_sharing_one_edge_are_closed_with_a_warning_and_broken_pairs_are_ref
     assert_eq!(code, MESH_DEFECT, "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// MiB of physical memory (`MemTotal`), and whether the kernel refuses allocations beyond it
+/// (overcommit mode 0 or 2).
+fn machine_memory() -> Option<(u64, bool)> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let kib = number_after(&info, "MemTotal:");
+    let mode = std::fs::read_to_string("/proc/sys/vm/overcommit_memory").ok()?;
+    Some((kib / 1024, mode.trim() != "1"))
+}
+
+#[test]
+fn a_budget_above_the_machine_is_an_error_not_an_allocation_abort() {
+    let dir = support::temp_dir("rel-budget-huge");
+    let args = |mem: &'static str| {
+        [
+            "render",
+            "--width",
+            "16384",
+            "--height",
+            "16384",
+            "--max-memory",
+            mem,
+            "-o",
+            "big.png",
+        ]
+    };
+    let (code, err, _) = run_measured(&args("256"), &dir);
+    assert_eq!(code, RESOURCE_LIMIT, "{err}");
+    let need_mib = number_after(&err, "needs");
+    let Some((total_mib, refuses)) = machine_memory() else {
+        return;
+    };
+    if need_mib <= total_mib || !refuses {
+        // This machine could really allocate the render: running it here would be no test.
+        eprintln!("skipped: the need ({need_mib} MiB) fits this machine ({total_mib} MiB)");
+        return;
+    }
+    let (code, err, kib) = run_measured(&args("100000000"), &dir);
+    assert_refused(
+        "over the machine",
+        code,
+        RESOURCE_LIMIT,
+        &err,
+        &["cannot allocate"],
+    );
+    assert!(kib / 1024 < 256, "peak RSS {} MiB", kib / 1024);
+    assert_eq!(files_in(&dir), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
