@@ -812,3 +812,80 @@ fn a_budget_above_the_machine_is_an_error_not_an_allocation_abort() {
     assert_eq!(files_in(&dir), Vec::<String>::new());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Spawns `args` in `dir`, sends `signal` after `delay_ms`, and returns (exit code, stderr,
+/// seconds from the signal to the exit).
+fn signal_after(
+    args: &[&str],
+    dir: &Path,
+    delay_ms: u64,
+    signal: i32,
+) -> (Option<i32>, String, f64) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_convshadow"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "{args:?} ended before the signal"
+    );
+    let sent = std::time::Instant::now();
+    // SAFETY: sending a signal to our own child.
+    assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, signal) }, 0);
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    let status = child.wait().unwrap();
+    (status.code(), err, sent.elapsed().as_secs_f64())
+}
+
+#[test]
+fn signals_stop_the_reference_and_report_with_130_and_leave_nothing() {
+    let dir = support::temp_dir("rel-signals-more");
+    std::fs::write(dir.join("base.toml"), BASE_SCENE).unwrap();
+    let reference = [
+        "render",
+        "base.toml",
+        "-o",
+        "o.png",
+        "--backend",
+        "reference",
+        "--reference-samples",
+        "65536",
+    ];
+    for signal in [libc::SIGTERM, libc::SIGINT] {
+        let (code, err, took) = signal_after(&reference, &dir, 300, signal);
+        assert_eq!(code, Some(INTERRUPTED), "reference: {err}");
+        assert!(err.contains("interrupted"), "{err}");
+        assert!(took < 2.0, "reference took {took:.1} s to stop");
+        assert_eq!(files_in(&dir), ["base.toml"]);
+    }
+    let (code, err, took) = signal_after(
+        &["report", "--quick", "--out", "rep"],
+        &dir,
+        300,
+        libc::SIGTERM,
+    );
+    assert_eq!(code, Some(INTERRUPTED), "report: {err}");
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(took < 2.0, "report took {took:.1} s to stop");
+    assert_eq!(files_in(&dir), ["base.toml"], "no empty report folder");
+    // A file as --out is named as such, not "File exists (os error 17)".
+    let (code, _, err) = support::run_cli(&["report", "--quick", "--out", "base.toml"], &dir);
+    assert_refused(
+        "report --out FILE",
+        code,
+        OUTPUT_FAILED,
+        &err,
+        &["expected a folder"],
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

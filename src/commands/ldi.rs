@@ -38,6 +38,8 @@ pub struct LdiArgs {
 
 /// Runs `convshadow ldi`; exit code 6 when a mesh is not closed or a pixel has an odd count.
 pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
+    // The LDI build has no cancel point: a signal ends the run at once, before any output.
+    crate::exit::install_exit_on_signal(None);
     let mut scene = super::load_scene(args.scene.as_deref())?;
     super::override_size(&mut scene, args.width, args.height)?;
     super::require_png("--layers-png", args.layers_png.as_ref())?;

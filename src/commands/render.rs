@@ -352,6 +352,8 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             m.saturating_mul(1 << 20)
         });
     let Some(backend) = args.backend.device() else {
+        // The reference has no cancel point: a signal ends the run at once, before any output.
+        exit::install_exit_on_signal(None);
         let r = render_reference(&scene, args.threads, samples, budget, args.allow_open)?;
         return finish(&scene, args, &outputs, &r, bar.as_ref(), samples);
     };
