@@ -243,6 +243,41 @@ pub struct MemoryNeed {
     pub sweep_state: u64,
     /// The output image as floats, its 8-bit encoding and the encoded file (estimate).
     pub output: u64,
+    /// Input data held while rendering, from the files' sizes: 3D textures (the file and its
+    /// f32 voxels while loading; rendering only) and OBJ files (twice the text: the parsed mesh).
+    pub inputs: u64,
+}
+
+/// Bytes the scene's input files need in memory (see [`MemoryNeed::inputs`]); a file that cannot
+/// be inspected counts 0 here and is reported when it is loaded.
+fn input_bytes(scene: &Scene, textures: bool) -> u64 {
+    use convshadow_common::scene::{ShapeSpec, TextureFormat};
+    let size = |p: &std::path::Path| std::fs::metadata(p).map_or(0, |m| m.len());
+    let meshes: u64 = scene
+        .meshes
+        .iter()
+        .filter_map(|m| match &m.shape {
+            ShapeSpec::Obj { path } => Some(2 * size(path)),
+            _ => None,
+        })
+        .sum();
+    if !textures {
+        return meshes;
+    }
+    let texture_bytes: u64 = scene
+        .materials
+        .iter()
+        .filter_map(|m| m.texture.as_ref())
+        .map(|t| match t.format {
+            TextureFormat::Raw { dims, voxel } => {
+                let n = dims.iter().map(|&d| u64::from(d)).product::<u64>();
+                n.saturating_mul(voxel.bytes() + 4)
+            }
+            // NIfTI: the file, and its voxels as f32 (at most 4 bytes per stored byte).
+            TextureFormat::Nifti { .. } => 5 * size(&t.path),
+        })
+        .fold(0u64, u64::saturating_add);
+    meshes.saturating_add(texture_bytes)
 }
 
 impl MemoryNeed {
@@ -269,12 +304,14 @@ impl MemoryNeed {
             light_buffers,
             sweep_state,
             output,
+            inputs: input_bytes(scene, sweep),
         }
     }
 
     /// Everything but the fragments.
     pub fn total(&self) -> u64 {
-        self.ldi_pixels + self.light_buffers + self.sweep_state + self.output
+        (self.ldi_pixels + self.light_buffers + self.sweep_state + self.output)
+            .saturating_add(self.inputs)
     }
 
     /// Refuses (with the numbers) when the need exceeds `budget`; else returns what is left of
@@ -300,9 +337,10 @@ impl MemoryNeed {
         }
         Err(RenderError::OutOfMemory(format!(
             "{}: the render needs {} MiB before any fragment ({} grid pixels: LDI arrays {} \
-                 MiB, light buffers {} MiB for {} lights, sweep state {} MiB, output {} MiB), \
-                 more than the memory budget of {} MiB; lower image.width/image.height, \
-                 sweep.guard_band or the light count, or raise --max-memory",
+                 MiB, light buffers {} MiB for {} lights, sweep state {} MiB, output {} MiB, \
+                 textures and meshes {} MiB), more than the memory budget of {} MiB; lower \
+                 image.width/image.height, sweep.guard_band, the light count or the input \
+                 sizes, or raise --max-memory",
             scene.source,
             mib(need),
             self.grid_pixels,
@@ -311,6 +349,7 @@ impl MemoryNeed {
             scene.lights.len(),
             mib(self.sweep_state),
             mib(self.output),
+            mib(self.inputs),
             budget >> 20
         )))
     }

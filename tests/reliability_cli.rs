@@ -889,3 +889,36 @@ fn signals_stop_the_reference_and_report_with_130_and_leave_nothing() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn textures_count_in_the_memory_budget_before_they_are_read() {
+    let dir = support::temp_dir("rel-texture-budget");
+    // Two sparse 1 GiB f32 textures (nothing on disk, 1 GiB each if read).
+    let mut scene = BASE_SCENE.replace("[material.m]\nopacity = 0.5", "");
+    for (i, name) in ["a.raw", "b.raw"].iter().enumerate() {
+        let f = std::fs::File::create(dir.join(name)).unwrap();
+        f.set_len(1 << 30).unwrap();
+        scene += &format!(
+            "[material.t{i}]\ntexture = {{ path = \"{name}\", dims = [1024, 1024, 256], type = \"f32\" }}\n\
+             gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 0.5]]\n"
+        );
+    }
+    scene = scene.replace("material = \"m\"", "material = \"t0\"");
+    scene += "[[mesh]]\nshape = \"box\"\nsize = [0.5, 0.5, 0.5]\nmaterial = \"t1\"\n";
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let start = std::time::Instant::now();
+    let (code, err, kib) = run_measured(
+        &["render", "s.toml", "-o", "o.png", "--max-memory", "64"],
+        &dir,
+    );
+    assert_refused(
+        "two 1 GiB textures",
+        code,
+        RESOURCE_LIMIT,
+        &err,
+        &["textures and meshes 4096 MiB", "64 MiB"],
+    );
+    assert!(start.elapsed().as_secs_f64() < 5.0);
+    assert!(kib / 1024 < 64, "peak RSS {} MiB", kib / 1024);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
