@@ -203,6 +203,8 @@ pub struct Rendered {
     pub threads: usize,
     /// Seconds building geometry and the LDI.
     pub seconds_ldi: f64,
+    /// Seconds building the render plan: its tables and the 3D textures it loads.
+    pub seconds_plan: f64,
     /// Seconds in the sweep.
     pub seconds_sweep: f64,
     /// Seconds in all.
@@ -460,9 +462,13 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
             stats.odd_pixels
         )));
     }
+    let seconds_ldi = start.elapsed().as_secs_f64();
+    let t_plan = Instant::now();
     let plan =
         RenderPlan::new(scene, &geometry).map_err(|e| RenderError::BadPlan(e.to_string()))?;
-    let seconds_ldi = start.elapsed().as_secs_f64();
+    let seconds_plan = t_plan.elapsed().as_secs_f64();
+    // Texture loading has no cancel point of its own: stop right after it.
+    check_cancel(req.cancel)?;
     let t_sweep = Instant::now();
     let chunk_counts = ChunkCounts::default();
     let options = SweepOptions {
@@ -499,6 +505,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
         light: out.light,
         threads: pool.current_num_threads(),
         seconds_ldi,
+        seconds_plan,
         seconds_sweep,
         chunks: chunk_counts.snapshot(),
         seconds_total: start.elapsed().as_secs_f64(),

@@ -922,3 +922,34 @@ fn textures_count_in_the_memory_budget_before_they_are_read() {
     assert!(kib / 1024 < 64, "peak RSS {} MiB", kib / 1024);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn texture_loading_is_timed_apart_from_the_ldi() {
+    let dir = support::temp_dir("rel-texture-time");
+    // A 32 MiB f32 texture: its loading dominates the plan time.
+    std::fs::write(dir.join("t.raw"), vec![0u8; 32 << 20]).unwrap();
+    let scene = BASE_SCENE.replace(
+        "[material.m]\nopacity = 0.5",
+        "[material.m]\ntexture = { path = \"t.raw\", dims = [256, 256, 128], type = \"f32\" }\n\
+         gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 0.5]]",
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let (code, _, err) = support::run_cli(
+        &["render", "s.toml", "-o", "o.png", "--stats-json", "s.json"],
+        &dir,
+    );
+    assert_eq!(code, 0, "{err}");
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    let secs = |k: &str| {
+        stats[k]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{k} in {stats}"))
+    };
+    assert!(secs("seconds_plan") > 0.0);
+    assert!(
+        secs("seconds_ldi") + secs("seconds_plan") + secs("seconds_sweep")
+            <= secs("seconds_total") + 1e-3
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -590,6 +590,7 @@ fn stats_value(
             "adapter": r.adapter,
             "reference_samples": (samples > 0).then_some(samples),
             "seconds_ldi": r.seconds_ldi,
+            "seconds_plan": r.seconds_plan,
             "seconds_sweep": r.seconds_sweep,
             "seconds_total": r.seconds_total,
             "pixel_slab_lights_per_second": throughput,
@@ -632,9 +633,11 @@ fn render_reference(
             ),
         ));
     }
+    let seconds_ldi = start.elapsed().as_secs_f64();
+    let t_plan = Instant::now();
     let plan = RenderPlan::new(scene, &geometry)
         .map_err(|e| Failure::new(exit::BAD_INPUT, e.to_string()))?;
-    let seconds_ldi = start.elapsed().as_secs_f64();
+    let seconds_plan = t_plan.elapsed().as_secs_f64();
     exit::check_interrupt()?;
     let t_render = Instant::now();
     let data = {
@@ -660,6 +663,7 @@ fn render_reference(
         light: Vec::new(),
         threads: pool.current_num_threads(),
         seconds_ldi,
+        seconds_plan,
         seconds_sweep,
         chunks: [0; 3],
         seconds_total: start.elapsed().as_secs_f64(),
