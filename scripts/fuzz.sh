@@ -14,7 +14,7 @@ set -euo pipefail
 
 SECONDS_PER_TARGET="${1:-60}"
 JOBS="${JOBS:-1}"
-TARGETS="${TARGETS:-scene_parse obj_load ldi_build}"
+TARGETS="${TARGETS:-scene_parse obj_load ldi_build shapes}"
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$ROOT/fuzz"
 
@@ -31,7 +31,7 @@ else
 fi
 
 # Seed corpora (kept out of git; see fuzz/.gitignore).
-mkdir -p corpus/scene_parse corpus/obj_load corpus/ldi_build
+mkdir -p corpus/scene_parse corpus/obj_load corpus/ldi_build corpus/shapes
 cp -n "$ROOT"/scenes/*.toml corpus/scene_parse/ 2>/dev/null || true
 cp -n "$ROOT"/tests/data/bad/*.toml corpus/scene_parse/ 2>/dev/null || true
 MODELS="$ROOT/../shared/models"

@@ -41,6 +41,25 @@ pub fn install_interrupt_handler() -> &'static AtomicBool {
     &INTERRUPT
 }
 
+/// Installs a SIGINT/SIGTERM/SIGHUP handler (once) for commands without a cancellable stage
+/// (`ldi`, `report`, `render --backend reference`): the first signal prints the interrupted
+/// message and exits with [`INTERRUPTED`] at once. Outputs are only ever renamed into place
+/// complete, so nothing partial is left; `cleanup`, a folder this run created, is removed if
+/// it is still empty.
+pub fn install_exit_on_signal(cleanup: Option<std::path::PathBuf>) {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let _ = ctrlc::set_handler(move || {
+            if let Some(dir) = &cleanup {
+                // Only an empty folder: remove_dir refuses one with files in it.
+                let _ = std::fs::remove_dir(dir);
+            }
+            eprintln!("error: interrupted; no output written");
+            std::process::exit(INTERRUPTED);
+        });
+    });
+}
+
 /// The interrupted failure (exit code 130) if a signal has raised [`INTERRUPT`].
 pub fn check_interrupt() -> Result<(), Failure> {
     if INTERRUPT.load(Ordering::SeqCst) {
@@ -141,4 +160,23 @@ impl From<convshadow_gpu::GpuError> for Failure {
     fn from(e: convshadow_gpu::GpuError) -> Self {
         Failure::new(gpu_code(&e), e.to_string())
     }
+}
+
+/// `text` with every control character but newline (ESC, BEL, NUL, CR, …) written as a Rust
+/// escape (`\u{1b}`), so a message quoting a file or a path cannot drive the terminal.
+pub fn escape_controls(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() && c != '\n' {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// [`escape_controls`], newlines included: for one-line messages.
+pub fn escape_line(text: &str) -> String {
+    escape_controls(text).replace('\n', "\\n")
 }

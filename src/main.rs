@@ -57,7 +57,13 @@ fn main() {
             } else {
                 exit::OK
             };
-            let _ = e.print();
+            // Arguments may hold control characters: print them escaped.
+            let text = exit::escape_controls(&e.render().to_string());
+            if e.use_stderr() {
+                eprint!("{text}");
+            } else {
+                print!("{text}");
+            }
             std::process::exit(code);
         }
     };
@@ -70,7 +76,7 @@ fn main() {
     match result {
         Ok(code) => std::process::exit(code),
         Err(f) => {
-            eprintln!("error: {}", f.message);
+            eprintln!("error: {}", exit::escape_line(&f.message));
             std::process::exit(f.code);
         }
     }

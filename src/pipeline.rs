@@ -49,8 +49,18 @@ pub enum RenderError {
     Threads(String),
 }
 
-/// A thread pool with `threads` workers (0 = rayon's default: one per core).
+/// Most worker threads a render may ask for: far above any core count, and low enough that
+/// starting (and, on a signal, stopping) the pool stays quick.
+pub const MAX_THREADS: usize = 1024;
+
+/// A thread pool with `threads` workers (0 = rayon's default: one per core), at most
+/// [`MAX_THREADS`].
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, RenderError> {
+    if threads > MAX_THREADS {
+        return Err(RenderError::Threads(format!(
+            "expected at most {MAX_THREADS} worker threads, got {threads}"
+        )));
+    }
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -193,6 +203,8 @@ pub struct Rendered {
     pub threads: usize,
     /// Seconds building geometry and the LDI.
     pub seconds_ldi: f64,
+    /// Seconds building the render plan: its tables and the 3D textures it loads.
+    pub seconds_plan: f64,
     /// Seconds in the sweep.
     pub seconds_sweep: f64,
     /// Seconds in all.
@@ -205,6 +217,8 @@ pub struct Rendered {
     pub adapter: Option<String>,
     /// Why `--backend auto` fell back to the CPU, if it did.
     pub backend_note: Option<String>,
+    /// Warnings about accepted meshes (closed non-manifold edges), one line each.
+    pub mesh_warnings: Vec<String>,
 }
 
 /// Fingerprint of a float image's bits.
@@ -231,6 +245,41 @@ pub struct MemoryNeed {
     pub sweep_state: u64,
     /// The output image as floats, its 8-bit encoding and the encoded file (estimate).
     pub output: u64,
+    /// Input data held while rendering, from the files' sizes: 3D textures (the file and its
+    /// f32 voxels while loading; rendering only) and OBJ files (twice the text: the parsed mesh).
+    pub inputs: u64,
+}
+
+/// Bytes the scene's input files need in memory (see [`MemoryNeed::inputs`]); a file that cannot
+/// be inspected counts 0 here and is reported when it is loaded.
+fn input_bytes(scene: &Scene, textures: bool) -> u64 {
+    use convshadow_common::scene::{ShapeSpec, TextureFormat};
+    let size = |p: &std::path::Path| std::fs::metadata(p).map_or(0, |m| m.len());
+    let meshes: u64 = scene
+        .meshes
+        .iter()
+        .filter_map(|m| match &m.shape {
+            ShapeSpec::Obj { path } => Some(2 * size(path)),
+            _ => None,
+        })
+        .sum();
+    if !textures {
+        return meshes;
+    }
+    let texture_bytes: u64 = scene
+        .materials
+        .iter()
+        .filter_map(|m| m.texture.as_ref())
+        .map(|t| match t.format {
+            TextureFormat::Raw { dims, voxel } => {
+                let n = dims.iter().map(|&d| u64::from(d)).product::<u64>();
+                n.saturating_mul(voxel.bytes() + 4)
+            }
+            // NIfTI: the file, and its voxels as f32 (at most 4 bytes per stored byte).
+            TextureFormat::Nifti { .. } => 5 * size(&t.path),
+        })
+        .fold(0u64, u64::saturating_add);
+    meshes.saturating_add(texture_bytes)
 }
 
 impl MemoryNeed {
@@ -257,27 +306,43 @@ impl MemoryNeed {
             light_buffers,
             sweep_state,
             output,
+            inputs: input_bytes(scene, sweep),
         }
     }
 
     /// Everything but the fragments.
     pub fn total(&self) -> u64 {
-        self.ldi_pixels + self.light_buffers + self.sweep_state + self.output
+        (self.ldi_pixels + self.light_buffers + self.sweep_state + self.output)
+            .saturating_add(self.inputs)
     }
 
     /// Refuses (with the numbers) when the need exceeds `budget`; else returns what is left of
     /// the budget for the LDI's fragments.
     pub fn check(&self, scene: &Scene, budget: u64) -> Result<u64, RenderError> {
         let need = self.total();
+        let mib = |b: u64| b.div_ceil(1 << 20);
         if need <= budget {
+            // A budget above what the machine has must not end in an allocation abort: probe
+            // the whole need once, fallibly (untouched, so it costs no memory), before any buffer.
+            let mut probe: Vec<u8> = Vec::new();
+            if usize::try_from(need).map_or(true, |n| probe.try_reserve_exact(n).is_err()) {
+                return Err(RenderError::OutOfMemory(format!(
+                    "{}: the render needs {} MiB before any fragment, within the memory budget of \
+                     {} MiB, but the machine cannot allocate them; lower the image size, \
+                     sweep.guard_band or the light count, or --max-memory",
+                    scene.source,
+                    mib(need),
+                    budget >> 20
+                )));
+            }
             return Ok(budget - need);
         }
-        let mib = |b: u64| b.div_ceil(1 << 20);
         Err(RenderError::OutOfMemory(format!(
             "{}: the render needs {} MiB before any fragment ({} grid pixels: LDI arrays {} \
-                 MiB, light buffers {} MiB for {} lights, sweep state {} MiB, output {} MiB), \
-                 more than the memory budget of {} MiB; lower image.width/image.height, \
-                 sweep.guard_band or the light count, or raise --max-memory",
+                 MiB, light buffers {} MiB for {} lights, sweep state {} MiB, output {} MiB, \
+                 textures and meshes {} MiB), more than the memory budget of {} MiB; lower \
+                 image.width/image.height, sweep.guard_band, the light count or the input \
+                 sizes, or raise --max-memory",
             scene.source,
             mib(need),
             self.grid_pixels,
@@ -286,6 +351,7 @@ impl MemoryNeed {
             scene.lights.len(),
             mib(self.sweep_state),
             mib(self.output),
+            mib(self.inputs),
             budget >> 20
         )))
     }
@@ -396,9 +462,13 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
             stats.odd_pixels
         )));
     }
+    let seconds_ldi = start.elapsed().as_secs_f64();
+    let t_plan = Instant::now();
     let plan =
         RenderPlan::new(scene, &geometry).map_err(|e| RenderError::BadPlan(e.to_string()))?;
-    let seconds_ldi = start.elapsed().as_secs_f64();
+    let seconds_plan = t_plan.elapsed().as_secs_f64();
+    // Texture loading has no cancel point of its own: stop right after it.
+    check_cancel(req.cancel)?;
     let t_sweep = Instant::now();
     let chunk_counts = ChunkCounts::default();
     let options = SweepOptions {
@@ -422,6 +492,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     let seconds_sweep = t_sweep.elapsed().as_secs_f64();
     let image_hash = image_fingerprint(&out.image);
     Ok(Rendered {
+        mesh_warnings: geometry.mesh_warnings(),
         image: RgbImage {
             width: scene.image.width,
             height: scene.image.height,
@@ -434,6 +505,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
         light: out.light,
         threads: pool.current_num_threads(),
         seconds_ldi,
+        seconds_plan,
         seconds_sweep,
         chunks: chunk_counts.snapshot(),
         seconds_total: start.elapsed().as_secs_f64(),

@@ -489,3 +489,467 @@ fn sigterm_mid_sweep_exits_130_and_leaves_no_file() {
 fn sigint_mid_sweep_exits_130_and_leaves_no_file() {
     interrupt_mid_sweep(libc::SIGINT, "rel-sigint");
 }
+
+// ---------------------------------------------------------------------------------------------
+// Hardening: arguments and input files that used to hang, grow without bound or blame the scene.
+
+/// Exit code of bad command-line arguments (docs/errors.md).
+const BAD_ARGUMENTS: i32 = 2;
+
+/// Runs `args` in `dir`, asserting it finishes within `limit` seconds.
+fn run_quickly(args: &[&str], dir: &Path, limit: f64) -> (i32, String, String) {
+    let start = std::time::Instant::now();
+    let r = support::run_cli(args, dir);
+    let took = start.elapsed().as_secs_f64();
+    assert!(took < limit, "{args:?} took {took:.1} s");
+    r
+}
+
+#[test]
+fn huge_thread_counts_image_sides_and_sample_counts_are_bad_arguments() {
+    let dir = support::temp_dir("rel-args");
+    std::fs::write(dir.join("base.toml"), BASE_SCENE).unwrap();
+    for (args, names) in [
+        (
+            &["render", "base.toml", "-o", "o.png", "--threads", "100000"][..],
+            "--threads",
+        ),
+        (
+            &["render", "base.toml", "-o", "o.png", "--threads", "5000"][..],
+            "--threads",
+        ),
+        (
+            &["ldi", "base.toml", "--threads", "100000"][..],
+            "--threads",
+        ),
+        (
+            &["render", "base.toml", "-o", "o.png", "--width", "0"][..],
+            "--width",
+        ),
+        (
+            &["render", "base.toml", "-o", "o.png", "--width", "16385"][..],
+            "--width",
+        ),
+        (&["ldi", "base.toml", "--height", "0"][..], "--height"),
+        (
+            &[
+                "render",
+                "base.toml",
+                "-o",
+                "o.png",
+                "--backend",
+                "reference",
+                "--width",
+                "1",
+                "--height",
+                "1",
+                "--reference-samples",
+                "4294967295",
+            ][..],
+            "--reference-samples",
+        ),
+    ] {
+        let (code, _, err) = run_quickly(args, &dir, 10.0);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert_eq!(code, BAD_ARGUMENTS, "{args:?}: {err}");
+        assert!(err.contains(names), "{args:?}: must name {names}: {err}");
+        assert_eq!(files_in(&dir), ["base.toml"], "{args:?}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn devices_fifos_and_folders_are_refused_as_inputs_without_reading_them() {
+    let dir = support::temp_dir("rel-nonregular");
+    let fifo = dir.join("pipe.obj");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path; mkfifo only creates a file system node.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let obj_scene = |path: &str| {
+        BASE_SCENE.replace(
+            "shape = \"box\"\nsize = [1.0, 1.0, 1.0]",
+            &format!("shape = \"obj\"\npath = {path:?}"),
+        )
+    };
+    std::fs::write(dir.join("zero.toml"), obj_scene("/dev/zero")).unwrap();
+    std::fs::write(dir.join("fifo.toml"), obj_scene("pipe.obj")).unwrap();
+    std::fs::write(dir.join("dir.toml"), obj_scene(".")).unwrap();
+    for (scene, names) in [
+        ("zero.toml", "not a regular file"),
+        ("fifo.toml", "not a regular file"),
+        ("dir.toml", "folder"),
+        ("/dev/zero", "not a regular file"),
+        ("pipe.obj", "not a regular file"),
+    ] {
+        for cmd in ["render", "ldi"] {
+            let (code, _, err) = run_quickly(
+                &[cmd, scene, "-o", "o.png"][..if cmd == "ldi" { 2 } else { 4 }],
+                &dir,
+                10.0,
+            );
+            assert_refused(&format!("{cmd} {scene}"), code, BAD_INPUT, &err, &[names]);
+        }
+    }
+    // A raw texture path that is a folder is named as a folder, not by its size.
+    let tex = BASE_SCENE.replace(
+        "[material.m]\nopacity = 0.5",
+        "[material.m]\ntexture = { path = \".\", dims = [2, 2, 2], type = \"u8\" }\n\
+         gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 1.0]]",
+    );
+    std::fs::write(dir.join("tex.toml"), tex).unwrap();
+    let (code, _, err) = run_quickly(&["render", "tex.toml", "-o", "o.png"], &dir, 10.0);
+    assert_refused("texture folder", code, BAD_INPUT, &err, &["folder"]);
+    assert!(!err.contains("4096"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn output_paths_long_names_collisions_misnamed_formats_and_devices() {
+    let dir = support::temp_dir("rel-outpaths");
+    std::fs::write(dir.join("base.toml"), BASE_SCENE).unwrap();
+    // A 250-character name: the temporary name must stay within 255 bytes.
+    let long = format!("{}.png", "n".repeat(246));
+    let (code, _, err) = support::run_cli(&["render", "base.toml", "-o", &long], &dir);
+    assert_eq!(code, 0, "{err}");
+    assert!(dir.join(&long).is_file());
+    std::fs::remove_file(dir.join(&long)).unwrap();
+    for (args, names) in [
+        (
+            &[
+                "render",
+                "base.toml",
+                "-o",
+                "x.png",
+                "--stats-json",
+                "x.png",
+            ][..],
+            "same file",
+        ),
+        (
+            &[
+                "render",
+                "base.toml",
+                "-o",
+                "x.png",
+                "--stats-json",
+                "./x.png",
+            ][..],
+            "same file",
+        ),
+        (
+            &["ldi", "base.toml", "--layers-png", "l.jpg"][..],
+            "--layers-png",
+        ),
+        (
+            &["diff", "a.exr", "b.exr", "--heatmap", "h.exr"][..],
+            "--heatmap",
+        ),
+    ] {
+        let (code, _, err) = support::run_cli(args, &dir);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains(names), "{args:?}: must name {names}: {err}");
+        assert_eq!(files_in(&dir), ["base.toml"], "{args:?}");
+    }
+    // A FIFO named like an output is not replaced.
+    let fifo = dir.join("dev.png");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path; mkfifo only creates a file system node.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let (code, _, err) = support::run_cli(&["render", "base.toml", "-o", "dev.png"], &dir);
+    assert_refused(
+        "fifo output",
+        code,
+        OUTPUT_FAILED,
+        &err,
+        &["not a regular file"],
+    );
+    assert!(!std::fs::metadata(&fifo).unwrap().is_file());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn control_characters_in_messages_are_escaped() {
+    let dir = support::temp_dir("rel-escape");
+    std::fs::write(
+        dir.join("evil.obj"),
+        b"v 0 0 0\nv 1 0 0\x1b[31m\x07\nf 1 2 3\n",
+    )
+    .unwrap();
+    let scene = BASE_SCENE.replace(
+        "shape = \"box\"\nsize = [1.0, 1.0, 1.0]",
+        "shape = \"obj\"\npath = \"evil.obj\"",
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    std::fs::write(dir.join("t.toml"), "[image]\nwidth = \"\u{1b}[31m\u{7}\"\n").unwrap();
+    for scene in ["s.toml", "t.toml"] {
+        let (code, _, err) = support::run_cli(&["ldi", scene], &dir);
+        assert_eq!(code, BAD_INPUT, "{err}");
+        assert!(
+            !err.chars().any(|c| c.is_control() && c != '\n'),
+            "{scene}: raw control characters: {err:?}"
+        );
+    }
+    let (code, _, err) = support::run_cli(&["render", "s.toml", "--threads", "\u{1b}[31m"], &dir);
+    assert_eq!(code, 2);
+    assert!(!err.contains('\u{1b}'), "{err:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// OBJ text of unit cubes translated by `offsets` (outward winding); `flip` reverses the first
+/// triangle of the last cube.
+fn cubes_obj(offsets: &[[f64; 3]], flip: bool) -> String {
+    use convshadow::common::mesh::TriMesh;
+    let mut text = String::new();
+    let mut base = 0;
+    for (k, o) in offsets.iter().enumerate() {
+        let cube = TriMesh::unit_box(glam::DVec3::ONE);
+        for p in &cube.positions {
+            text += &format!("v {} {} {}\n", p.x + o[0], p.y + o[1], p.z + o[2]);
+        }
+        for (j, t) in cube.triangles.iter().enumerate() {
+            let [a, b, c] = t.map(|i| i + 1 + base);
+            if flip && k + 1 == offsets.len() && j == 0 {
+                text += &format!("f {a} {c} {b}\n");
+            } else {
+                text += &format!("f {a} {b} {c}\n");
+            }
+        }
+        base += cube.positions.len() as u32;
+    }
+    text
+}
+
+#[test]
+fn two_cubes_sharing_one_edge_are_closed_with_a_warning_and_broken_pairs_are_refused() {
+    let dir = support::temp_dir("rel-two-cubes");
+    let scene = BASE_SCENE.replace(
+        "shape = \"box\"\nsize = [1.0, 1.0, 1.0]",
+        "shape = \"obj\"\npath = \"m.obj\"",
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    // The cubes [-0.5, 0.5]³ and [0.5, 1.5]² × [-0.5, 0.5] share the edge x = y = 0.5.
+    std::fs::write(
+        dir.join("m.obj"),
+        cubes_obj(&[[0.0; 3], [1.0, 1.0, 0.0]], false),
+    )
+    .unwrap();
+    let (code, out, err) = support::run_cli(&["ldi", "s.toml"], &dir);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains(" 0 odd pixels"), "{out}");
+    assert!(
+        err.contains(
+            "warning: mesh[0] has 1 non-manifold edges, each used as often in each direction"
+        ),
+        "{err}"
+    );
+    let (code, _, err) = support::run_cli(&["render", "s.toml", "-o", "o.png"], &dir);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("1 non-manifold edges"), "{err}");
+    // One triangle of the second cube flipped: inconsistent winding, refused.
+    std::fs::write(
+        dir.join("m.obj"),
+        cubes_obj(&[[0.0; 3], [1.0, 1.0, 0.0]], true),
+    )
+    .unwrap();
+    let (code, _, err) = support::run_cli(&["ldi", "s.toml"], &dir);
+    assert_eq!(code, MESH_DEFECT, "{err}");
+    let (code, _, err) = support::run_cli(&["render", "s.toml", "-o", "o2.png"], &dir);
+    assert_refused("flipped pair", code, MESH_DEFECT, &err, &["mesh[0]"]);
+    // A lone extra triangle on the shared edge: odd incidence (5), refused.
+    let mut text = cubes_obj(&[[0.0; 3], [1.0, 1.0, 0.0]], false);
+    text += "v 0.5 0.5 -0.5\nv 0.5 0.5 0.5\nv 3 3 0\nf 17 18 19\n";
+    std::fs::write(dir.join("m.obj"), text).unwrap();
+    let (code, _, err) = support::run_cli(&["ldi", "s.toml"], &dir);
+    assert_eq!(code, MESH_DEFECT, "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// MiB of physical memory (`MemTotal`), and whether the kernel refuses allocations beyond it
+/// (overcommit mode 0 or 2).
+fn machine_memory() -> Option<(u64, bool)> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let kib = number_after(&info, "MemTotal:");
+    let mode = std::fs::read_to_string("/proc/sys/vm/overcommit_memory").ok()?;
+    Some((kib / 1024, mode.trim() != "1"))
+}
+
+#[test]
+fn a_budget_above_the_machine_is_an_error_not_an_allocation_abort() {
+    let dir = support::temp_dir("rel-budget-huge");
+    let args = |mem: &'static str| {
+        [
+            "render",
+            "--width",
+            "16384",
+            "--height",
+            "16384",
+            "--max-memory",
+            mem,
+            "-o",
+            "big.png",
+        ]
+    };
+    let (code, err, _) = run_measured(&args("256"), &dir);
+    assert_eq!(code, RESOURCE_LIMIT, "{err}");
+    let need_mib = number_after(&err, "needs");
+    let Some((total_mib, refuses)) = machine_memory() else {
+        return;
+    };
+    if need_mib <= total_mib || !refuses {
+        // This machine could really allocate the render: running it here would be no test.
+        eprintln!("skipped: the need ({need_mib} MiB) fits this machine ({total_mib} MiB)");
+        return;
+    }
+    let (code, err, kib) = run_measured(&args("100000000"), &dir);
+    assert_refused(
+        "over the machine",
+        code,
+        RESOURCE_LIMIT,
+        &err,
+        &["cannot allocate"],
+    );
+    assert!(kib / 1024 < 256, "peak RSS {} MiB", kib / 1024);
+    assert_eq!(files_in(&dir), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Spawns `args` in `dir`, sends `signal` after `delay_ms`, and returns (exit code, stderr,
+/// seconds from the signal to the exit).
+fn signal_after(
+    args: &[&str],
+    dir: &Path,
+    delay_ms: u64,
+    signal: i32,
+) -> (Option<i32>, String, f64) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_convshadow"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "{args:?} ended before the signal"
+    );
+    let sent = std::time::Instant::now();
+    // SAFETY: sending a signal to our own child.
+    assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, signal) }, 0);
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    let status = child.wait().unwrap();
+    (status.code(), err, sent.elapsed().as_secs_f64())
+}
+
+#[test]
+fn signals_stop_the_reference_and_report_with_130_and_leave_nothing() {
+    let dir = support::temp_dir("rel-signals-more");
+    std::fs::write(dir.join("base.toml"), BASE_SCENE).unwrap();
+    let reference = [
+        "render",
+        "base.toml",
+        "-o",
+        "o.png",
+        "--backend",
+        "reference",
+        "--reference-samples",
+        "65536",
+    ];
+    for signal in [libc::SIGTERM, libc::SIGINT] {
+        let (code, err, took) = signal_after(&reference, &dir, 300, signal);
+        assert_eq!(code, Some(INTERRUPTED), "reference: {err}");
+        assert!(err.contains("interrupted"), "{err}");
+        assert!(took < 2.0, "reference took {took:.1} s to stop");
+        assert_eq!(files_in(&dir), ["base.toml"]);
+    }
+    let (code, err, took) = signal_after(
+        &["report", "--quick", "--out", "rep"],
+        &dir,
+        300,
+        libc::SIGTERM,
+    );
+    assert_eq!(code, Some(INTERRUPTED), "report: {err}");
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(took < 2.0, "report took {took:.1} s to stop");
+    assert_eq!(files_in(&dir), ["base.toml"], "no empty report folder");
+    // A file as --out is named as such, not "File exists (os error 17)".
+    let (code, _, err) = support::run_cli(&["report", "--quick", "--out", "base.toml"], &dir);
+    assert_refused(
+        "report --out FILE",
+        code,
+        OUTPUT_FAILED,
+        &err,
+        &["expected a folder"],
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn textures_count_in_the_memory_budget_before_they_are_read() {
+    let dir = support::temp_dir("rel-texture-budget");
+    // Two sparse 1 GiB f32 textures (nothing on disk, 1 GiB each if read).
+    let mut scene = BASE_SCENE.replace("[material.m]\nopacity = 0.5", "");
+    for (i, name) in ["a.raw", "b.raw"].iter().enumerate() {
+        let f = std::fs::File::create(dir.join(name)).unwrap();
+        f.set_len(1 << 30).unwrap();
+        scene += &format!(
+            "[material.t{i}]\ntexture = {{ path = \"{name}\", dims = [1024, 1024, 256], type = \"f32\" }}\n\
+             gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 0.5]]\n"
+        );
+    }
+    scene = scene.replace("material = \"m\"", "material = \"t0\"");
+    scene += "[[mesh]]\nshape = \"box\"\nsize = [0.5, 0.5, 0.5]\nmaterial = \"t1\"\n";
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let start = std::time::Instant::now();
+    let (code, err, kib) = run_measured(
+        &["render", "s.toml", "-o", "o.png", "--max-memory", "64"],
+        &dir,
+    );
+    assert_refused(
+        "two 1 GiB textures",
+        code,
+        RESOURCE_LIMIT,
+        &err,
+        &["textures and meshes 4096 MiB", "64 MiB"],
+    );
+    assert!(start.elapsed().as_secs_f64() < 5.0);
+    assert!(kib / 1024 < 64, "peak RSS {} MiB", kib / 1024);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn texture_loading_is_timed_apart_from_the_ldi() {
+    let dir = support::temp_dir("rel-texture-time");
+    // A 32 MiB f32 texture: its loading dominates the plan time.
+    std::fs::write(dir.join("t.raw"), vec![0u8; 32 << 20]).unwrap();
+    let scene = BASE_SCENE.replace(
+        "[material.m]\nopacity = 0.5",
+        "[material.m]\ntexture = { path = \"t.raw\", dims = [256, 256, 128], type = \"f32\" }\n\
+         gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 0.5]]",
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let (code, _, err) = support::run_cli(
+        &["render", "s.toml", "-o", "o.png", "--stats-json", "s.json"],
+        &dir,
+    );
+    assert_eq!(code, 0, "{err}");
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    let secs = |k: &str| {
+        stats[k]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{k} in {stats}"))
+    };
+    assert!(secs("seconds_plan") > 0.0);
+    assert!(
+        secs("seconds_ldi") + secs("seconds_plan") + secs("seconds_sweep")
+            <= secs("seconds_total") + 1e-3
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -197,6 +197,23 @@ impl SceneGeometry {
             .collect()
     }
 
+    /// One warning per mesh with closed non-manifold edges (used as often in each direction:
+    /// accepted, since the parity test holds, but worth knowing).
+    pub fn mesh_warnings(&self) -> Vec<String> {
+        self.meshes
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.report.paired_nonmanifold_edges > 0)
+            .map(|(i, m)| {
+                format!(
+                    "mesh[{i}] has {} non-manifold edges, each used as often in each direction \
+                     (closed for the parity test; accepted)",
+                    m.report.paired_nonmanifold_edges
+                )
+            })
+            .collect()
+    }
+
     /// Boundary + non-manifold + flipped edges summed over meshes.
     pub fn defect_edges(&self) -> usize {
         self.meshes

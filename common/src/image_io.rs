@@ -27,7 +27,16 @@ pub fn temp_path_for(path: &Path) -> PathBuf {
         || "output".to_string(),
         |n| n.to_string_lossy().into_owned(),
     );
-    path.with_file_name(format!(".{name}.{}.partial", std::process::id()))
+    let pid = std::process::id();
+    let long = format!(".{name}.{pid}.partial");
+    // File names are at most 255 bytes: a long name gets a short one (a hash of the name).
+    if long.len() <= 255 {
+        return path.with_file_name(long);
+    }
+    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    path.with_file_name(format!(".cs-{hash:016x}.{pid}.partial"))
 }
 
 /// Checks that `path` can be written: not a folder, its folder exists and is a folder, and a
@@ -36,6 +45,15 @@ pub fn temp_path_for(path: &Path) -> PathBuf {
 pub fn check_writable(path: &Path) -> Result<(), OutputError> {
     if path.is_dir() {
         return Err(out_err(path, "is a folder; expected a file path"));
+    }
+    // A device, FIFO or socket is never replaced by a regular file.
+    if let Ok(meta) = std::fs::metadata(path)
+        && !meta.is_file()
+    {
+        return Err(out_err(
+            path,
+            "exists and is not a regular file (a device, FIFO or socket); refusing to replace it",
+        ));
     }
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,

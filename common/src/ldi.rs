@@ -30,6 +30,19 @@ pub enum LdiError {
         /// MiB allowed.
         budget_mib: u64,
     },
+    /// The fragments fit the budget, but the machine cannot allocate them (a budget above its
+    /// memory): an error, never an allocation abort.
+    #[error(
+        "the LDI needs {fragments} fragments ({need_mib} MiB), within the memory budget, but the \
+         machine cannot allocate them; lower the resolution, simplify the meshes or lower \
+         --max-memory"
+    )]
+    Unallocatable {
+        /// Fragments counted.
+        fragments: u64,
+        /// MiB needed.
+        need_mib: u64,
+    },
 }
 
 /// The layered depth image.

@@ -5,6 +5,7 @@ pub mod camera;
 pub mod geometry;
 pub mod hash;
 pub mod image_io;
+pub mod input;
 pub mod kernel;
 pub mod lane;
 pub mod ldi;

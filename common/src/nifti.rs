@@ -58,6 +58,10 @@ fn nifti_err(path: &Path, message: impl Into<String>) -> TextureError {
 /// Checks the 348-byte header's size field and magic before the crate parses it, so a file that
 /// is not NIfTI-1 gets that message rather than a parse error.
 fn check_header(path: &Path) -> Result<(), TextureError> {
+    crate::input::check_regular(path).map_err(|source| TextureError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let file = std::fs::File::open(path).map_err(|source| TextureError::Io {
         path: path.to_path_buf(),
         source,

@@ -302,10 +302,17 @@ fn material_plan(m: &MaterialSpec, e: f64) -> Result<MaterialPlan, TextureError>
         Some(TextureSpec {
             path,
             format: TextureFormat::Raw { dims, voxel },
-        }) => (
-            Some(Arc::new(Texture3d::load_raw(path, *dims, *voxel)?)),
-            None,
-        ),
+        }) => {
+            // A folder or device is refused by name, not by its size ("file is 4096 bytes").
+            crate::input::check_regular(path).map_err(|source| TextureError::Io {
+                path: path.clone(),
+                source,
+            })?;
+            (
+                Some(Arc::new(Texture3d::load_raw(path, *dims, *voxel)?)),
+                None,
+            )
+        }
         Some(TextureSpec {
             path,
             format: TextureFormat::Nifti { window },

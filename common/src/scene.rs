@@ -8,7 +8,8 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use serde::Deserialize;
+use serde::de::Error as _;
+use serde::{Deserialize, Deserializer};
 
 use crate::kernel::KernelSpec;
 use crate::noise::DetailKind;
@@ -31,6 +32,22 @@ pub const MAX_SPHERE_SUBDIVISIONS: u32 = 7;
 pub const MAX_TORUS_SEGMENTS: u32 = 1024;
 /// Largest guard band in pixels.
 pub const MAX_GUARD_BAND: u32 = 4096;
+/// Largest magnitude of a world-space length, position or scale (the f32 stages keep 7 digits,
+/// so a scene spanning more than this collapses; it also keeps squares and products finite).
+pub const MAX_WORLD: f64 = 1e9;
+/// Smallest positive world-space length (lengths, distances, sizes, scales, view width).
+pub const MIN_WORLD: f64 = 1e-9;
+/// Largest colour component (light, material, background, gradient) and specular strength: with
+/// 16 lights, a specular highlight and 64 stops of exposure the f32 image stays finite.
+pub const MAX_COLOR: f64 = 1e4;
+/// Largest light variance σ² per unit distance (σ = 100: a light wider than a hemisphere).
+pub const MAX_VARIANCE: f64 = 1e4;
+/// Largest magnitude of an angle in degrees (a rotation of more turns than this has no meaning
+/// left in f64).
+pub const MAX_ANGLE_DEG: f64 = 1e6;
+/// Largest detail frequency ratio per octave (`lacunarity`) and amplitude ratio (`gain`): 16
+/// octaves of ratio 16 stay within f32.
+pub const MAX_OCTAVE_RATIO: f64 = 16.0;
 
 /// The embedded default scene (procedural meshes only, so it needs no file).
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/default.toml");
@@ -63,6 +80,34 @@ impl std::error::Error for SceneError {}
 // ---------------------------------------------------------------------------------------------
 // Raw (serde) form: exactly the file's keys, strictly typed.
 
+/// An array of exactly `N` elements (serde's fixed-size arrays would ignore extra ones).
+fn exact<'de, D, T, const N: usize>(d: D) -> Result<Option<[T; N]>, D::Error>
+where
+    D: Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    let v = Vec::<T>::deserialize(d)?;
+    let len = v.len();
+    <[T; N]>::try_from(v)
+        .map(Some)
+        .map_err(|_| D::Error::custom(format!("expected an array of {N} numbers, got {len}")))
+}
+
+/// Gradient stops, each exactly `[value, r, g, b, opacity]`.
+fn exact_stops<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<[f64; 5]>>, D::Error> {
+    let stops = Vec::<Vec<f64>>::deserialize(d)?;
+    let mut out = Vec::with_capacity(stops.len());
+    for (j, s) in stops.into_iter().enumerate() {
+        let len = s.len();
+        out.push(<[f64; 5]>::try_from(s).map_err(|_| {
+            D::Error::custom(format!(
+                "gradient stop {j}: expected 5 numbers [value, r, g, b, opacity], got {len}"
+            ))
+        })?);
+    }
+    Ok(Some(out))
+}
+
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 struct RawScene {
@@ -82,6 +127,7 @@ struct RawScene {
 struct RawImage {
     width: u32,
     height: u32,
+    #[serde(default, deserialize_with = "exact")]
     background: Option<[f64; 3]>,
     exposure: Option<f64>,
     tonemap: Option<Tonemap>,
@@ -90,8 +136,11 @@ struct RawImage {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 struct RawCamera {
+    #[serde(default, deserialize_with = "exact")]
     direction: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "exact")]
     up: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "exact")]
     center: Option<[f64; 3]>,
     view_width: f64,
 }
@@ -112,8 +161,11 @@ struct RawSweep {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 struct RawLight {
+    #[serde(default, deserialize_with = "exact")]
     color: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "exact")]
     tilt_deg: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "exact")]
     variance: Option<[f64; 2]>,
     rotation_deg: Option<f64>,
 }
@@ -124,7 +176,9 @@ struct RawMesh {
     shape: String,
     size: Option<Vec<f64>>,
     path: Option<String>,
+    #[serde(default, deserialize_with = "exact")]
     translate: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "exact")]
     rotate_deg: Option<[f64; 3]>,
     scale: Option<f64>,
     material: String,
@@ -133,12 +187,15 @@ struct RawMesh {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 struct RawMaterial {
+    #[serde(default, deserialize_with = "exact")]
     color: Option<[f64; 3]>,
     opacity: Option<f64>,
+    #[serde(default, deserialize_with = "exact")]
     transport: Option<[f64; 3]>,
     reference_length: Option<f64>,
     detail: Option<RawDetail>,
     texture: Option<RawTexture>,
+    #[serde(default, deserialize_with = "exact_stops")]
     gradient: Option<Vec<[f64; 5]>>,
     specular: Option<RawSpecular>,
 }
@@ -158,9 +215,11 @@ struct RawDetail {
 #[serde(deny_unknown_fields)]
 struct RawTexture {
     path: String,
+    #[serde(default, deserialize_with = "exact")]
     dims: Option<[u32; 3]>,
     #[serde(rename = "type")]
     voxel: Option<VoxelType>,
+    #[serde(default, deserialize_with = "exact")]
     window: Option<[f64; 2]>,
 }
 
@@ -420,11 +479,14 @@ impl Scene {
     /// Parses and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let source = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            file: source.clone(),
-            key: String::new(),
-            message: format!("cannot read scene file: {e}"),
-        })?;
+        let text =
+            crate::input::read_text_limited(path, crate::input::MAX_SCENE_BYTES).map_err(|e| {
+                SceneError {
+                    file: source.clone(),
+                    key: String::new(),
+                    message: format!("cannot read scene file: {e}"),
+                }
+            })?;
         let base = path
             .parent()
             .map(Path::to_path_buf)
@@ -477,10 +539,10 @@ impl Scene {
             self.camera.direction = d;
         }
         if let Some(c) = center {
-            self.camera.center = v.finite3("--camera-center", c)?;
+            self.camera.center = v.bounded3("--camera-center", c, MAX_WORLD)?;
         }
         if let Some(w) = view_width {
-            self.camera.view_width = v.positive("--view-width", w)?;
+            self.camera.view_width = v.length("--view-width", w)?;
         }
         Ok(())
     }
@@ -493,7 +555,7 @@ impl Scene {
         match self.sweep.slabs {
             SlabSpec::Count(n) => v.slab_count(n)?,
             SlabSpec::Distance(d) => {
-                v.positive("sweep.slab_distance", d)?;
+                v.length("sweep.slab_distance", d)?;
             }
         }
         Ok(())
@@ -568,6 +630,46 @@ impl Validator<'_> {
         }
     }
 
+    /// A finite number with |v| <= `max`.
+    fn bounded(&self, key: &str, v: f64, max: f64) -> Result<f64, SceneError> {
+        self.finite(key, v)?;
+        if v.abs() <= max {
+            Ok(v)
+        } else {
+            Err(self.err(
+                key,
+                format!("expected a number from -{max:e} to {max:e}, got {v:e}"),
+            ))
+        }
+    }
+
+    /// Three numbers, each with |v| <= `max`.
+    fn bounded3(&self, key: &str, v: [f64; 3], max: f64) -> Result<[f64; 3], SceneError> {
+        for (i, c) in v.iter().enumerate() {
+            self.bounded(&format!("{key}[{i}]"), *c, max)?;
+        }
+        Ok(v)
+    }
+
+    /// A positive world-space length in [`MIN_WORLD`, `MAX_WORLD`].
+    fn length(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        self.positive(key, v)?;
+        self.in_range(key, v, MIN_WORLD, MAX_WORLD)
+    }
+
+    /// A positive number in [`lo`, `hi`], the message giving the range.
+    fn in_range(&self, key: &str, v: f64, lo: f64, hi: f64) -> Result<f64, SceneError> {
+        self.finite(key, v)?;
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(self.err(
+                key,
+                format!("expected a number from {lo:e} to {hi:e}, got {v:e}"),
+            ))
+        }
+    }
+
     fn unit_interval(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         self.finite(key, v)?;
         if (0.0..=1.0).contains(&v) {
@@ -586,16 +688,38 @@ impl Validator<'_> {
                     format!("expected a colour component >= 0, got {c}"),
                 ));
             }
+            if *c > MAX_COLOR {
+                return Err(self.err(
+                    format!("{key}[{i}]"),
+                    format!("expected a colour component from 0 to {MAX_COLOR:e}, got {c:e}"),
+                ));
+            }
         }
         Ok(v)
     }
 
+    /// One colour component in [0, [`MAX_COLOR`]], the key naming its exact index.
+    fn color_component(&self, key: &str, c: f64) -> Result<f64, SceneError> {
+        self.finite(key, c)?;
+        if (0.0..=MAX_COLOR).contains(&c) {
+            Ok(c)
+        } else {
+            Err(self.err(
+                key,
+                format!("expected a colour component from 0 to {MAX_COLOR:e}, got {c:e}"),
+            ))
+        }
+    }
+
     fn unit_vector(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
         self.finite3(key, v)?;
-        let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        if len.is_nan() || len <= 1e-12 || !len.is_finite() {
-            return Err(self.err(key, "expected a non-zero direction vector"));
+        // Divided by the largest component first, so that 1e308 or 1e-300 do not overflow.
+        let big = v[0].abs().max(v[1].abs()).max(v[2].abs());
+        if big == 0.0 {
+            return Err(self.err(key, "expected a non-zero direction vector, got [0, 0, 0]"));
         }
+        let v = v.map(|c| c / big);
+        let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         Ok([v[0] / len, v[1] / len, v[2] / len])
     }
 
@@ -665,8 +789,12 @@ impl Validator<'_> {
         let camera = CameraSpec {
             direction,
             up,
-            center: self.finite3("camera.center", raw.camera.center.unwrap_or([0.0; 3]))?,
-            view_width: self.positive("camera.view_width", raw.camera.view_width)?,
+            center: self.bounded3(
+                "camera.center",
+                raw.camera.center.unwrap_or([0.0; 3]),
+                MAX_WORLD,
+            )?,
+            view_width: self.length("camera.view_width", raw.camera.view_width)?,
         };
 
         let sweep = self.sweep(raw.sweep)?;
@@ -746,7 +874,7 @@ impl Validator<'_> {
                 self.slab_count(n)?;
                 SlabSpec::Count(n)
             }
-            (None, Some(d)) => SlabSpec::Distance(self.positive("sweep.slab_distance", d)?),
+            (None, Some(d)) => SlabSpec::Distance(self.length("sweep.slab_distance", d)?),
         };
         let kernel_text = raw.kernel.unwrap_or_else(|| "ellipse2".to_string());
         let kernel = kernel_text
@@ -761,7 +889,7 @@ impl Validator<'_> {
         }
         Ok(SweepSpec {
             slabs,
-            optimal_distance: self.positive("sweep.optimal_distance", raw.optimal_distance)?,
+            optimal_distance: self.length("sweep.optimal_distance", raw.optimal_distance)?,
             kernel,
             jitter: raw.jitter.unwrap_or(true),
             seed: raw.seed.unwrap_or(0),
@@ -788,12 +916,22 @@ impl Validator<'_> {
             if *v < 0.0 {
                 return Err(self.err(k, format!("expected a variance >= 0, got {v}")));
             }
+            if *v > MAX_VARIANCE {
+                return Err(self.err(
+                    k,
+                    format!("expected a variance from 0 to {MAX_VARIANCE:e}, got {v:e}"),
+                ));
+            }
         }
         Ok(LightSpec {
             color: color.map(|c| c as f32),
             tilt_deg: tilt,
             variance,
-            rotation_deg: self.finite(&key("rotation_deg"), raw.rotation_deg.unwrap_or(0.0))?,
+            rotation_deg: self.bounded(
+                &key("rotation_deg"),
+                raw.rotation_deg.unwrap_or(0.0),
+                MAX_ANGLE_DEG,
+            )?,
         })
     }
 
@@ -814,15 +952,15 @@ impl Validator<'_> {
                 ));
             }
             for (j, v) in s.iter().enumerate() {
-                self.finite(&format!("mesh[{i}].size[{j}]"), *v)?;
+                self.bounded(&format!("mesh[{i}].size[{j}]"), *v, MAX_WORLD)?;
             }
             Ok(s)
         };
-        let whole = |v: f64, k: &str, max: u32| -> Result<u32, SceneError> {
-            if v.fract() != 0.0 || v < 0.0 || v > f64::from(max) {
+        let whole = |v: f64, k: &str, min: u32, max: u32| -> Result<u32, SceneError> {
+            if v.fract() != 0.0 || v < f64::from(min) || v > f64::from(max) {
                 return Err(self.err(
                     key(k),
-                    format!("expected a whole number from 0 to {max}, got {v}"),
+                    format!("expected a whole number from {min} to {max}, got {v}"),
                 ));
             }
             Ok(v as u32)
@@ -834,7 +972,7 @@ impl Validator<'_> {
             "box" => {
                 let s = size(3, "[x, y, z] full extents")?;
                 for (j, v) in s.iter().enumerate() {
-                    self.positive(&format!("mesh[{i}].size[{j}]"), *v)?;
+                    self.length(&format!("mesh[{i}].size[{j}]"), *v)?;
                 }
                 ShapeSpec::Box {
                     size: [s[0], s[1], s[2]],
@@ -842,16 +980,16 @@ impl Validator<'_> {
             }
             "sphere" => {
                 let s = size(2, "[radius, subdivisions]")?;
-                self.positive(&format!("mesh[{i}].size[0]"), s[0])?;
+                self.length(&format!("mesh[{i}].size[0]"), s[0])?;
                 ShapeSpec::Sphere {
                     radius: s[0],
-                    subdivisions: whole(s[1], "size[1]", MAX_SPHERE_SUBDIVISIONS)?,
+                    subdivisions: whole(s[1], "size[1]", 0, MAX_SPHERE_SUBDIVISIONS)?,
                 }
             }
             "torus" => {
                 let s = size(3, "[major radius, minor radius, segments]")?;
-                self.positive(&format!("mesh[{i}].size[0]"), s[0])?;
-                self.positive(&format!("mesh[{i}].size[1]"), s[1])?;
+                self.length(&format!("mesh[{i}].size[0]"), s[0])?;
+                self.length(&format!("mesh[{i}].size[1]"), s[1])?;
                 if s[1] >= s[0] {
                     return Err(self.err(
                         key("size"),
@@ -861,10 +999,7 @@ impl Validator<'_> {
                         ),
                     ));
                 }
-                let segments = whole(s[2], "size[2]", MAX_TORUS_SEGMENTS)?;
-                if segments < 3 {
-                    return Err(self.err(key("size[2]"), "expected at least 3 segments"));
-                }
+                let segments = whole(s[2], "size[2]", 3, MAX_TORUS_SEGMENTS)?;
                 ShapeSpec::Torus {
                     major: s[0],
                     minor: s[1],
@@ -873,12 +1008,9 @@ impl Validator<'_> {
             }
             "cylinder" => {
                 let s = size(3, "[radius, height, segments]")?;
-                self.positive(&format!("mesh[{i}].size[0]"), s[0])?;
-                self.positive(&format!("mesh[{i}].size[1]"), s[1])?;
-                let segments = whole(s[2], "size[2]", MAX_TORUS_SEGMENTS)?;
-                if segments < 3 {
-                    return Err(self.err(key("size[2]"), "expected at least 3 segments"));
-                }
+                self.length(&format!("mesh[{i}].size[0]"), s[0])?;
+                self.length(&format!("mesh[{i}].size[1]"), s[1])?;
+                let segments = whole(s[2], "size[2]", 3, MAX_TORUS_SEGMENTS)?;
                 ShapeSpec::Cylinder {
                     radius: s[0],
                     height: s[1],
@@ -930,14 +1062,25 @@ impl Validator<'_> {
                     ),
                 )
             })?;
-        let scale = self.finite(&key("scale"), raw.scale.unwrap_or(1.0))?;
-        if scale == 0.0 {
-            return Err(self.err(key("scale"), "expected a non-zero scale"));
+        let scale = self.bounded(&key("scale"), raw.scale.unwrap_or(1.0), MAX_WORLD)?;
+        if scale.abs() < MIN_WORLD {
+            return Err(self.err(
+                key("scale"),
+                format!("expected a non-zero scale with |scale| >= {MIN_WORLD:e}, got {scale:e}"),
+            ));
         }
         Ok(MeshSpec {
             shape,
-            translate: self.finite3(&key("translate"), raw.translate.unwrap_or([0.0; 3]))?,
-            rotate_deg: self.finite3(&key("rotate_deg"), raw.rotate_deg.unwrap_or([0.0; 3]))?,
+            translate: self.bounded3(
+                &key("translate"),
+                raw.translate.unwrap_or([0.0; 3]),
+                MAX_WORLD,
+            )?,
+            rotate_deg: self.bounded3(
+                &key("rotate_deg"),
+                raw.rotate_deg.unwrap_or([0.0; 3]),
+                MAX_ANGLE_DEG,
+            )?,
             scale,
             material,
         })
@@ -959,11 +1102,13 @@ impl Validator<'_> {
             }
             for (j, s) in g.iter().enumerate() {
                 let k = format!("material.{name}.gradient[{j}]");
-                for v in s {
-                    self.finite(&k, *v)?;
+                for (c, v) in s.iter().enumerate() {
+                    self.finite(&format!("{k}[{c}]"), *v)?;
                 }
                 self.unit_interval(&format!("{k}[0]"), s[0])?;
-                self.color(&k, [s[1], s[2], s[3]])?;
+                for (c, v) in s.iter().enumerate().take(4).skip(1) {
+                    self.color_component(&format!("{k}[{c}]"), *v)?;
+                }
                 self.unit_interval(&format!("{k}[4]"), s[4])?;
                 if let Some(prev) = gradient.last().map(|p: &GradientStop| p.value)
                     && s[0] < prev
@@ -1000,7 +1145,7 @@ impl Validator<'_> {
         }
         let reference_length = raw
             .reference_length
-            .map(|r| self.positive(&key("reference_length"), r))
+            .map(|r| self.length(&key("reference_length"), r))
             .transpose()?;
         let detail = match raw.detail {
             None => None,
@@ -1014,15 +1159,23 @@ impl Validator<'_> {
                 }
                 Some(DetailSpec {
                     kind: d.kind,
-                    frequency: self
-                        .positive(&key("detail.frequency"), d.frequency.unwrap_or(1.0))?,
+                    frequency: self.length(&key("detail.frequency"), d.frequency.unwrap_or(1.0))?,
                     octaves,
-                    lacunarity: self
-                        .positive(&key("detail.lacunarity"), d.lacunarity.unwrap_or(2.0))?,
-                    gain: self.positive(&key("detail.gain"), d.gain.unwrap_or(0.5))?,
+                    lacunarity: self.in_range(
+                        &key("detail.lacunarity"),
+                        d.lacunarity.unwrap_or(2.0),
+                        1.0 / MAX_OCTAVE_RATIO,
+                        MAX_OCTAVE_RATIO,
+                    )?,
+                    gain: self.in_range(
+                        &key("detail.gain"),
+                        d.gain.unwrap_or(0.5),
+                        1.0 / MAX_OCTAVE_RATIO,
+                        MAX_OCTAVE_RATIO,
+                    )?,
                     time: d
                         .time
-                        .map(|t| self.finite(&key("detail.time"), t))
+                        .map(|t| self.bounded(&key("detail.time"), t, MAX_WORLD))
                         .transpose()?,
                 })
             }
@@ -1087,8 +1240,14 @@ impl Validator<'_> {
             .specular
             .map(|s| -> Result<SpecularSpec, SceneError> {
                 self.finite(&key("specular.strength"), s.strength)?;
-                if s.strength < 0.0 {
-                    return Err(self.err(key("specular.strength"), "expected a strength >= 0"));
+                if !(0.0..=MAX_COLOR).contains(&s.strength) {
+                    return Err(self.err(
+                        key("specular.strength"),
+                        format!(
+                            "expected a strength from 0 to {MAX_COLOR:e}, got {:e}",
+                            s.strength
+                        ),
+                    ));
                 }
                 if s.exponent == 0 || s.exponent > 4096 {
                     return Err(self.err(key("specular.exponent"), "expected 1 to 4096"));

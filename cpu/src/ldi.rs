@@ -91,6 +91,15 @@ pub fn build(setup: &RasterSetup, budget_bytes: u64) -> Result<Ldi, LdiError> {
         });
     }
     drop(counts);
+    // Probe the fragment arrays once, fallibly (untouched, so free), before allocating them.
+    let mut probe: Vec<u8> = Vec::new();
+    if usize::try_from(need).map_or(true, |n| probe.try_reserve_exact(n).is_err()) {
+        return Err(LdiError::Unallocatable {
+            fragments: total,
+            need_mib: need.div_ceil(1 << 20),
+        });
+    }
+    drop(probe);
 
     let cursor: Vec<AtomicU32> = offsets[..w * h]
         .iter()

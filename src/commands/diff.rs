@@ -115,6 +115,8 @@ pub fn metrics_json(m: &DiffMetrics, flip: f64) -> serde_json::Value {
 
 /// Runs `convshadow diff`.
 pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
+    super::require_png("--heatmap", args.heatmap.as_ref())?;
+    super::refuse_collisions(args.json.iter().chain(&args.heatmap))?;
     for p in args.json.iter().chain(&args.heatmap) {
         convshadow_common::image_io::check_writable(p)?;
     }

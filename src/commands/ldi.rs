@@ -13,13 +13,13 @@ pub struct LdiArgs {
     /// Scene file (TOML); without it, the embedded default scene.
     pub scene: Option<PathBuf>,
     /// Override the image width.
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_side)]
     pub width: Option<u32>,
     /// Override the image height.
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_side)]
     pub height: Option<u32>,
     /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = super::parse_threads)]
     pub threads: usize,
     /// Write the numbers as JSON.
     #[arg(long)]
@@ -38,8 +38,12 @@ pub struct LdiArgs {
 
 /// Runs `convshadow ldi`; exit code 6 when a mesh is not closed or a pixel has an odd count.
 pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
+    // The LDI build has no cancel point: a signal ends the run at once, before any output.
+    crate::exit::install_exit_on_signal(None);
     let mut scene = super::load_scene(args.scene.as_deref())?;
     super::override_size(&mut scene, args.width, args.height)?;
+    super::require_png("--layers-png", args.layers_png.as_ref())?;
+    super::refuse_collisions(args.stats_json.iter().chain(&args.layers_png))?;
     for p in args.stats_json.iter().chain(&args.layers_png) {
         convshadow_common::image_io::check_writable(p)?;
     }
@@ -60,7 +64,7 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         seconds_total,
     } = build_ldi(&scene, args.backend, args.threads, budget)?;
     if let Some(note) = &backend_note {
-        eprintln!("note: {note}");
+        eprintln!("note: {}", crate::exit::escape_line(note));
     }
     let hash = ldi.fingerprint();
 
@@ -151,6 +155,9 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         super::write_json(path, &value)?;
     }
 
+    for w in geometry.mesh_warnings() {
+        eprintln!("warning: {}", crate::exit::escape_line(&w));
+    }
     if geometry.defect_edges() > 0 || stats.odd_pixels > 0 {
         eprintln!(
             "error: the meshes are not closed ({} defective edges, {} pixels with an odd fragment \

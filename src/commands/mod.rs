@@ -36,6 +36,73 @@ pub fn override_size(
     Ok(())
 }
 
+/// Refuses two outputs of one run that name the same file (the later write would silently
+/// replace the earlier one: `-o x.png --stats-json x.png`).
+pub fn refuse_collisions<'a>(
+    paths: impl IntoIterator<Item = &'a std::path::PathBuf>,
+) -> Result<(), Failure> {
+    // The folder resolved where it exists, so `x.png` and `./x.png` are the same file.
+    let key = |p: &Path| {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
+        let dir = dir.map_or_else(|| Path::new(".").to_path_buf(), Path::to_path_buf);
+        let dir = std::fs::canonicalize(&dir).unwrap_or(dir);
+        dir.join(p.file_name().unwrap_or_default())
+    };
+    let mut seen: Vec<(std::path::PathBuf, &Path)> = Vec::new();
+    for p in paths {
+        let k = key(p);
+        if let Some((_, first)) = seen.iter().find(|(s, _)| *s == k) {
+            return Err(Failure::new(
+                crate::exit::BAD_ARGUMENTS,
+                format!(
+                    "{} and {} are the same file: give each output its own path",
+                    first.display(),
+                    p.display()
+                ),
+            ));
+        }
+        seen.push((k, p));
+    }
+    Ok(())
+}
+
+/// Refuses a PNG-only output (`flag`) whose name ends in another extension: the file would hold
+/// PNG data under a misleading name.
+pub fn require_png(flag: &str, path: Option<&std::path::PathBuf>) -> Result<(), Failure> {
+    if let Some(p) = path {
+        let ext = p
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        if ext.as_deref() != Some("png") {
+            return Err(Failure::new(
+                crate::exit::BAD_ARGUMENTS,
+                format!("{flag} {}: writes PNG; expected a .png name", p.display()),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Parses `--threads`: 0 (one per core) to [`crate::pipeline::MAX_THREADS`].
+pub fn parse_threads(s: &str) -> Result<usize, String> {
+    let max = crate::pipeline::MAX_THREADS;
+    match s.parse::<usize>() {
+        Ok(n) if n <= max => Ok(n),
+        _ => Err(format!(
+            "expected 0 (one per core) to {max} worker threads, got {s:?}"
+        )),
+    }
+}
+
+/// Parses `--width` / `--height`: 1 to the scene format's largest image side.
+pub fn parse_side(s: &str) -> Result<u32, String> {
+    let max = convshadow_common::scene::MAX_IMAGE_SIDE;
+    match s.parse::<u32>() {
+        Ok(n) if (1..=max).contains(&n) => Ok(n),
+        _ => Err(format!("expected an integer from 1 to {max}, got {s:?}")),
+    }
+}
+
 /// The pipeline's thread pool with `threads` workers (0 = one per core), its error as a failure.
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, Failure> {
     Ok(crate::pipeline::thread_pool(threads)?)

@@ -20,6 +20,10 @@ use crate::pipeline::{
     Backend, CpuPath, MemoryNeed, RenderRequest, Rendered, image_fingerprint, render,
 };
 
+/// Most light directions `--reference-samples` takes (256²: seconds per pixel at most, so even
+/// a 1×1 image cannot run for minutes).
+pub const MAX_REFERENCE_SAMPLES: u32 = 65536;
+
 /// `--backend` of `convshadow render`: the pipeline's devices, or the ground-truth reference.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum RenderBackend {
@@ -59,10 +63,10 @@ pub struct RenderArgs {
     pub outputs: Vec<PathBuf>,
     /// Override the image width (the height stays, and so does camera.view_width: a wider image
     /// shows the same width of the scene, a taller one more of it; use --size to keep the view).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_side)]
     pub width: Option<u32>,
     /// Override the image height (the width and camera.view_width stay).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_side)]
     pub height: Option<u32>,
     /// Image size WxH; when the aspect changes, camera.view_width grows so the scene's whole
     /// view stays in frame (and says so).
@@ -104,7 +108,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub seed: Option<u32>,
     /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = super::parse_threads)]
     pub threads: usize,
     /// CPU code path: `simd` (8 pixels at a time) or `scalar` (the readable reference); both
     /// give the same bits.
@@ -161,7 +165,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         if let Some(note) = frames::apply_size(&mut scene, w, h)?
             && !args.quiet
         {
-            eprintln!("note: {note}");
+            eprintln!("note: {}", crate::exit::escape_line(&note));
         }
     }
     let direction = args
@@ -258,6 +262,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             .collect(),
         None => outputs.clone(),
     };
+    super::refuse_collisions(first_outputs.iter().chain(&args.stats_json))?;
     for p in first_outputs.iter().chain(&args.stats_json) {
         convshadow_common::image_io::check_writable(p)?;
         let ext = p
@@ -324,6 +329,14 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
                 "--reference-samples: expected at least 1 light direction, got 0",
             ));
         }
+        (RenderBackend::Reference, Some(m)) if m > MAX_REFERENCE_SAMPLES => {
+            return Err(Failure::new(
+                exit::BAD_ARGUMENTS,
+                format!(
+                    "--reference-samples: expected 1 to {MAX_REFERENCE_SAMPLES} light directions, got {m}"
+                ),
+            ));
+        }
         (RenderBackend::Reference, Some(m)) => m,
         (_, Some(_)) => {
             return Err(Failure::new(
@@ -339,6 +352,8 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             m.saturating_mul(1 << 20)
         });
     let Some(backend) = args.backend.device() else {
+        // The reference has no cancel point: a signal ends the run at once, before any output.
+        exit::install_exit_on_signal(None);
         let r = render_reference(&scene, args.threads, samples, budget, args.allow_open)?;
         return finish(&scene, args, &outputs, &r, bar.as_ref(), samples);
     };
@@ -356,7 +371,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     let Some(list) = frame_list else {
         let r = render(&scene, &request)?;
         if let Some(note) = &r.backend_note {
-            eprintln!("note: {note}");
+            eprintln!("note: {}", crate::exit::escape_line(note));
         }
         return finish(&scene, args, &outputs, &r, bar.as_ref(), 0);
     };
@@ -372,7 +387,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         let r = render(&frame_scene, &request)?;
         if i == 0 {
             if let Some(note) = &r.backend_note {
-                eprintln!("note: {note}");
+                eprintln!("note: {}", crate::exit::escape_line(note));
             }
             slab_count.store(u64::from(r.plan.slabs), Relaxed);
             if let Some(b) = &bar {
@@ -494,6 +509,9 @@ fn finish(
     if let Some(p) = &args.stats_json {
         super::write_json(p, &stats_value(scene, args, r, samples, outputs))?;
     }
+    for w in &r.mesh_warnings {
+        eprintln!("warning: {}", crate::exit::escape_line(w));
+    }
     if r.ldi.odd_pixels > 0 {
         eprintln!(
             "warning: {} pixels have an odd fragment count (open meshes, rendered with --allow-open)",
@@ -572,6 +590,7 @@ fn stats_value(
             "adapter": r.adapter,
             "reference_samples": (samples > 0).then_some(samples),
             "seconds_ldi": r.seconds_ldi,
+            "seconds_plan": r.seconds_plan,
             "seconds_sweep": r.seconds_sweep,
             "seconds_total": r.seconds_total,
             "pixel_slab_lights_per_second": throughput,
@@ -614,9 +633,11 @@ fn render_reference(
             ),
         ));
     }
+    let seconds_ldi = start.elapsed().as_secs_f64();
+    let t_plan = Instant::now();
     let plan = RenderPlan::new(scene, &geometry)
         .map_err(|e| Failure::new(exit::BAD_INPUT, e.to_string()))?;
-    let seconds_ldi = start.elapsed().as_secs_f64();
+    let seconds_plan = t_plan.elapsed().as_secs_f64();
     exit::check_interrupt()?;
     let t_render = Instant::now();
     let data = {
@@ -629,6 +650,7 @@ fn render_reference(
     };
     let seconds_sweep = t_render.elapsed().as_secs_f64();
     Ok(Rendered {
+        mesh_warnings: geometry.mesh_warnings(),
         image_hash: image_fingerprint(&data),
         image: RgbImage {
             width: scene.image.width,
@@ -641,6 +663,7 @@ fn render_reference(
         light: Vec::new(),
         threads: pool.current_num_threads(),
         seconds_ldi,
+        seconds_plan,
         seconds_sweep,
         chunks: [0; 3],
         seconds_total: start.elapsed().as_secs_f64(),

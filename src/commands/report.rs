@@ -16,7 +16,7 @@ pub struct ReportArgs {
     #[arg(long, default_value = "report")]
     pub out: PathBuf,
     /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = super::parse_threads)]
     pub threads: usize,
     /// One line per case on stderr.
     #[arg(long, short)]
@@ -29,6 +29,17 @@ pub struct ReportArgs {
 
 /// Runs `convshadow report`.
 pub fn run(args: &ReportArgs) -> Result<i32, Failure> {
+    if args.out.exists() && !args.out.is_dir() {
+        return Err(Failure::new(
+            exit::OUTPUT_FAILED,
+            format!(
+                "{}: --out names an existing file; expected a folder (created if missing)",
+                args.out.display()
+            ),
+        ));
+    }
+    // A signal ends the run at once; a folder this run created is removed while still empty.
+    exit::install_exit_on_signal((!args.out.exists()).then(|| args.out.clone()));
     let pool = super::thread_pool(args.threads)?;
     let options = ReportOptions {
         quick: args.quick,

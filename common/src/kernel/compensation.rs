@@ -55,7 +55,12 @@ pub(crate) fn compensated_pattern(
             break;
         }
         let limit = (shape[0][0] * shape[1][1]).sqrt();
-        let want = (target[0][1] / both).clamp(-limit, limit);
+        let want = target[0][1] / both;
+        // Total for any input: a non-finite shape or ratio keeps the last pattern (no clamp panic).
+        if !(limit.is_finite() && want.is_finite()) {
+            break;
+        }
+        let want = want.clamp(-limit, limit);
         if (want - shape[0][1]).abs() <= 1e-12 * limit {
             break;
         }

@@ -84,18 +84,28 @@ impl FromStr for KernelSpec {
 
     fn from_str(s: &str) -> Result<Self, String> {
         let bad = || format!("unknown kernel {s:?}: {UNKNOWN_KERNEL_HINT}");
+        // Canonical decimal only: `u32::from_str` also takes "+3" and "02".
+        let number = |t: &str| -> Result<u32, String> {
+            let canonical = !t.is_empty()
+                && t.bytes().all(|b| b.is_ascii_digit())
+                && !(t.len() > 1 && t.starts_with('0'));
+            if !canonical {
+                return Err(bad());
+            }
+            t.parse().map_err(|_| bad())
+        };
         let (base, per_slab_phase) = match s.strip_suffix(":slab") {
             Some(b) => (b, true),
             None => (s, false),
         };
         let kind = if let Some(n) = base.strip_prefix("ellipse") {
-            let n: u32 = n.parse().map_err(|_| bad())?;
+            let n = number(n)?;
             if !(2..=MAX_ELLIPSE_SAMPLES).contains(&n) {
                 return Err(bad());
             }
             KernelKind::Ellipse(n)
         } else if let Some(k) = base.strip_prefix("gaussian:") {
-            let k: u32 = k.parse().map_err(|_| bad())?;
+            let k = number(k)?;
             if k.is_multiple_of(2) || !(3..=MAX_GAUSSIAN_WIDTH).contains(&k) {
                 return Err(bad());
             }

@@ -283,10 +283,13 @@ pub(crate) fn without_polylines(bytes: &[u8]) -> Vec<u8> {
 /// Polylines (`l`) are ignored; materials are not read. Degenerate triangles are kept here and
 /// dropped by [`TriMesh::analyze`]. Polygons are triangulated by tobj as fans.
 pub fn load_obj(path: &Path) -> Result<TriMesh, MeshError> {
-    let bytes = std::fs::read(path).map_err(|source| MeshError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes =
+        crate::input::read_limited(path, crate::input::MAX_OBJ_BYTES).map_err(|source| {
+            MeshError::Io {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
     // The empty Vec only tells the scan which float type tobj parses into.
     let summary = scan_obj(path, &bytes, &tobj::Mesh::default().positions)?;
     if summary.faces == 0 {

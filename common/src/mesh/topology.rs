@@ -15,14 +15,20 @@ pub struct MeshReport {
     pub degenerate_triangles: usize,
     /// Undirected edges used by exactly 1 triangle.
     pub boundary_edges: usize,
-    /// Undirected edges used by 3 or more triangles.
+    /// Undirected edges used by 3 or more triangles, not as often in each direction (odd
+    /// incidence, or inconsistent winding): the inside/outside parity breaks there.
     pub nonmanifold_edges: usize,
+    /// Undirected edges used by 4 or more triangles, as often in each direction (a closed
+    /// 2-cycle, such as two cubes sharing an edge): closed for the parity test, so accepted, but
+    /// counted for a warning.
+    pub paired_nonmanifold_edges: usize,
     /// Manifold edges whose two triangles traverse them in the same direction (inconsistent winding).
     pub flipped_edges: usize,
 }
 
 impl MeshReport {
-    /// True when there are no boundary, non-manifold or flipped edges.
+    /// True when there are no boundary, flipped or unpaired non-manifold edges (paired ones, used
+    /// as often in each direction, keep the mesh closed).
     pub fn is_closed(&self) -> bool {
         self.boundary_edges == 0 && self.nonmanifold_edges == 0 && self.flipped_edges == 0
     }
@@ -38,7 +44,15 @@ impl fmt::Display for MeshReport {
             self.boundary_edges,
             self.nonmanifold_edges,
             self.flipped_edges
-        )
+        )?;
+        if self.paired_nonmanifold_edges > 0 {
+            write!(
+                f,
+                ", {} closed non-manifold edges (used as often in each direction)",
+                self.paired_nonmanifold_edges
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -72,7 +86,14 @@ impl TriMesh {
                         report.flipped_edges += 1;
                     }
                 }
-                _ => report.nonmanifold_edges += 1,
+                n => {
+                    let forward = run.iter().filter(|e| e.2).count();
+                    if 2 * forward == n {
+                        report.paired_nonmanifold_edges += 1;
+                    } else {
+                        report.nonmanifold_edges += 1;
+                    }
+                }
             }
         }
         (
