@@ -159,140 +159,11 @@ struct FrameStats {
 pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     let mut scene = super::load_scene(args.scene.as_deref())?;
     super::override_size(&mut scene, args.width, args.height)?;
-    let bad = |flag: &str, e: String| Failure::new(exit::BAD_ARGUMENTS, format!("{flag}: {e}"));
-    if let Some(text) = &args.size {
-        let (w, h) = frames::parse_size(text).map_err(|e| bad("--size", e))?;
-        if let Some(note) = frames::apply_size(&mut scene, w, h)?
-            && !args.quiet
-        {
-            eprintln!("note: {}", crate::exit::escape_line(&note));
-        }
-    }
-    let direction = args
-        .camera_direction
-        .as_deref()
-        .map(frames::parse_vec3)
-        .transpose()
-        .map_err(|e| bad("--camera-direction", e))?;
-    let center = args
-        .camera_center
-        .as_deref()
-        .map(frames::parse_vec3)
-        .transpose()
-        .map_err(|e| bad("--camera-center", e))?;
-    scene
-        .override_camera(direction, center, args.view_width)
-        .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, e.to_string()))?;
-    if let Some(x) = args.exposure {
-        scene.image.exposure = x;
-    }
-    if let Some(t) = &args.tonemap {
-        scene.image.tonemap = t.parse::<Tonemap>().map_err(|e| bad("--tonemap", e))?;
-    }
-    let frame_list: Option<Vec<u32>> = match (&args.frames, args.frame) {
-        (Some(text), _) => {
-            let r = frames::FrameRange::parse(text).map_err(|e| bad("--frames", e))?;
-            Some((r.start..r.end).collect())
-        }
-        (None, Some(k)) => Some(vec![k]),
-        (None, None) => None,
-    };
-    let time_step = args.time_step.unwrap_or(frames::DEFAULT_TIME_STEP);
-    if !time_step.is_finite() {
-        return Err(bad(
-            "--time-step",
-            format!("expected a finite number, got {time_step}"),
-        ));
-    }
-    if args.time_step.is_some() && frame_list.is_none() {
-        return Err(Failure::new(
-            exit::BAD_ARGUMENTS,
-            "--time-step only applies with --frames or --frame",
-        ));
-    }
-    if let Some(n) = args.slabs {
-        scene.sweep.slabs = SlabSpec::Count(n);
-    }
-    if let Some(k) = &args.kernel {
-        scene.sweep.kernel = k
-            .parse::<KernelSpec>()
-            .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, format!("--kernel: {e}")))?;
-    }
-    if let Some(s) = args.seed {
-        scene.sweep.seed = s;
-    }
-    if let Some(v) = args.variance_compensation {
-        scene.sweep.variance_compensation = v;
-    }
-    scene
-        .revalidate()
-        .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, format!("command-line override: {e}")))?;
-    let outputs = if args.outputs.is_empty() {
-        match &frame_list {
-            Some(_) => vec![PathBuf::from("render_%04d.png")],
-            None => vec![PathBuf::from("render.png")],
-        }
-    } else {
-        args.outputs.clone()
-    };
-    if let Some(list) = &frame_list
-        && list.len() > 1
-        && let Some(p) = outputs.iter().find(|p| !frames::has_frame_pattern(p))
-    {
-        return Err(Failure::new(
-            exit::BAD_ARGUMENTS,
-            format!(
-                "{}: {} frames would overwrite one file; put a frame number pattern in the \
-                 name, such as out_%04d.png",
-                p.display(),
-                list.len()
-            ),
-        ));
-    }
-    if args.backend == RenderBackend::Reference && frame_list.is_some() {
-        return Err(Failure::new(
-            exit::BAD_ARGUMENTS,
-            "--frames/--frame do not apply to --backend reference",
-        ));
-    }
-    let first_outputs: Vec<PathBuf> = match &frame_list {
-        Some(list) => outputs
-            .iter()
-            .map(|p| frames::frame_path(p, list[0]))
-            .collect(),
-        None => outputs.clone(),
-    };
-    super::refuse_collisions(first_outputs.iter().chain(&args.stats_json))?;
-    for p in first_outputs.iter().chain(&args.stats_json) {
-        convshadow_common::image_io::check_writable(p)?;
-        let ext = p
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        if args.stats_json.as_ref() != Some(p) && !matches!(ext.as_deref(), Some("png" | "exr")) {
-            return Err(Failure::new(
-                exit::BAD_ARGUMENTS,
-                format!(
-                    "{}: unknown image extension; expected .png or .exr",
-                    p.display()
-                ),
-            ));
-        }
-    }
-
-    // The reference has no per-slab progress to show.
-    let bar = if !args.quiet
-        && std::io::stderr().is_terminal()
-        && args.backend != RenderBackend::Reference
-    {
-        let b = indicatif::ProgressBar::new(0);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} slab {pos}/{len} {wide_bar} {eta}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        Some(b)
-    } else {
-        None
-    };
+    apply_view_overrides(&mut scene, args)?;
+    let (frame_list, time_step) = frame_list(args)?;
+    apply_sweep_overrides(&mut scene, args)?;
+    let outputs = output_paths(args, frame_list.as_deref())?;
+    let bar = progress_bar(args);
     // One bar over all frames: frame i's slab s is at i·slabs + s + 1.
     let frame_index = std::sync::atomic::AtomicU64::new(0);
     let frame_count = frame_list.as_ref().map_or(1, Vec::len) as u64;
@@ -321,31 +192,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
             );
         }
     }
-    let samples = match (args.backend, args.reference_samples) {
-        (RenderBackend::Reference, None) => ReferenceOptions::default().samples,
-        (RenderBackend::Reference, Some(0)) => {
-            return Err(Failure::new(
-                exit::BAD_ARGUMENTS,
-                "--reference-samples: expected at least 1 light direction, got 0",
-            ));
-        }
-        (RenderBackend::Reference, Some(m)) if m > MAX_REFERENCE_SAMPLES => {
-            return Err(Failure::new(
-                exit::BAD_ARGUMENTS,
-                format!(
-                    "--reference-samples: expected 1 to {MAX_REFERENCE_SAMPLES} light directions, got {m}"
-                ),
-            ));
-        }
-        (RenderBackend::Reference, Some(m)) => m,
-        (_, Some(_)) => {
-            return Err(Failure::new(
-                exit::BAD_ARGUMENTS,
-                "--reference-samples only applies to --backend reference",
-            ));
-        }
-        (_, None) => 0,
-    };
+    let samples = reference_samples(args)?;
     let budget = args
         .max_memory
         .map_or_else(convshadow_cpu::default_memory_budget, |m| {
@@ -375,42 +222,265 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         }
         return finish(&scene, args, &outputs, &r, bar.as_ref(), 0);
     };
-    let mut done: Vec<FrameStats> = Vec::new();
-    let mut last = None;
-    for (i, &k) in list.iter().enumerate() {
-        use std::sync::atomic::Ordering::Relaxed;
-        frame_index.store(i as u64, Relaxed);
-        if let Some(b) = &bar {
-            b.set_message(format!("frame {}/{}", i + 1, list.len()));
-        }
-        let frame_scene = frames::scene_at_frame(&scene, k, time_step);
-        let r = render(&frame_scene, &request)?;
-        if i == 0 {
-            if let Some(note) = &r.backend_note {
-                eprintln!("note: {}", crate::exit::escape_line(note));
-            }
-            slab_count.store(u64::from(r.plan.slabs), Relaxed);
-            if let Some(b) = &bar {
-                b.set_length(u64::from(r.plan.slabs) * frame_count);
-            }
-        }
-        exit::check_interrupt()?;
-        let paths: Vec<PathBuf> = outputs.iter().map(|p| frames::frame_path(p, k)).collect();
-        for p in &paths {
-            r.image.save_mapped(p, &scene.image.display_map())?;
-        }
-        done.push(FrameStats {
-            frame: k,
-            time: frames::frame_time(&scene, k, time_step),
-            image_hash: r.image_hash,
-            ldi_hash: r.ldi_hash,
-            seconds_total: r.seconds_total,
-            outputs: paths,
-        });
-        last = Some(r);
-    }
-    let r = last.expect("a parsed frame list is not empty");
+    let sequence = Sequence {
+        scene: &scene,
+        request: &request,
+        outputs: &outputs,
+        bar: bar.as_ref(),
+        frame_index: &frame_index,
+        slab_count: &slab_count,
+        time_step,
+    };
+    let (r, done) = sequence.render(&list)?;
     finish_frames(&scene, args, &r, bar.as_ref(), &done, time_step)
+}
+
+/// The error of a bad value for `flag`.
+fn bad_flag(flag: &str, e: String) -> Failure {
+    Failure::new(exit::BAD_ARGUMENTS, format!("{flag}: {e}"))
+}
+
+/// `--size`, the camera overrides, `--exposure` and `--tonemap`.
+fn apply_view_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Failure> {
+    let bad = bad_flag;
+    if let Some(text) = &args.size {
+        let (w, h) = frames::parse_size(text).map_err(|e| bad("--size", e))?;
+        if let Some(note) = frames::apply_size(scene, w, h)?
+            && !args.quiet
+        {
+            eprintln!("note: {}", crate::exit::escape_line(&note));
+        }
+    }
+    let direction = args
+        .camera_direction
+        .as_deref()
+        .map(frames::parse_vec3)
+        .transpose()
+        .map_err(|e| bad("--camera-direction", e))?;
+    let center = args
+        .camera_center
+        .as_deref()
+        .map(frames::parse_vec3)
+        .transpose()
+        .map_err(|e| bad("--camera-center", e))?;
+    scene
+        .override_camera(direction, center, args.view_width)
+        .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, e.to_string()))?;
+    if let Some(x) = args.exposure {
+        scene.image.exposure = x;
+    }
+    if let Some(t) = &args.tonemap {
+        scene.image.tonemap = t.parse::<Tonemap>().map_err(|e| bad("--tonemap", e))?;
+    }
+    Ok(())
+}
+
+/// The frames to render (`--frames`/`--frame`, `None` for a single image) and the time step.
+fn frame_list(args: &RenderArgs) -> Result<(Option<Vec<u32>>, f64), Failure> {
+    let bad = bad_flag;
+    let frame_list: Option<Vec<u32>> = match (&args.frames, args.frame) {
+        (Some(text), _) => {
+            let r = frames::FrameRange::parse(text).map_err(|e| bad("--frames", e))?;
+            Some((r.start..r.end).collect())
+        }
+        (None, Some(k)) => Some(vec![k]),
+        (None, None) => None,
+    };
+    let time_step = args.time_step.unwrap_or(frames::DEFAULT_TIME_STEP);
+    if !time_step.is_finite() {
+        return Err(bad(
+            "--time-step",
+            format!("expected a finite number, got {time_step}"),
+        ));
+    }
+    if args.time_step.is_some() && frame_list.is_none() {
+        return Err(Failure::new(
+            exit::BAD_ARGUMENTS,
+            "--time-step only applies with --frames or --frame",
+        ));
+    }
+    Ok((frame_list, time_step))
+}
+
+/// `--slabs`, `--kernel`, `--seed` and `--variance-compensation`, then the scene re-validated.
+fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Failure> {
+    if let Some(n) = args.slabs {
+        scene.sweep.slabs = SlabSpec::Count(n);
+    }
+    if let Some(k) = &args.kernel {
+        scene.sweep.kernel = k
+            .parse::<KernelSpec>()
+            .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, format!("--kernel: {e}")))?;
+    }
+    if let Some(s) = args.seed {
+        scene.sweep.seed = s;
+    }
+    if let Some(v) = args.variance_compensation {
+        scene.sweep.variance_compensation = v;
+    }
+    scene
+        .revalidate()
+        .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, format!("command-line override: {e}")))?;
+    Ok(())
+}
+
+/// The output files (defaults, frame patterns), checked before any work: writable, not colliding,
+/// with an image extension.
+fn output_paths(args: &RenderArgs, frame_list: Option<&[u32]>) -> Result<Vec<PathBuf>, Failure> {
+    let outputs = if args.outputs.is_empty() {
+        match frame_list {
+            Some(_) => vec![PathBuf::from("render_%04d.png")],
+            None => vec![PathBuf::from("render.png")],
+        }
+    } else {
+        args.outputs.clone()
+    };
+    if let Some(list) = frame_list
+        && list.len() > 1
+        && let Some(p) = outputs.iter().find(|p| !frames::has_frame_pattern(p))
+    {
+        return Err(Failure::new(
+            exit::BAD_ARGUMENTS,
+            format!(
+                "{}: {} frames would overwrite one file; put a frame number pattern in the \
+                 name, such as out_%04d.png",
+                p.display(),
+                list.len()
+            ),
+        ));
+    }
+    if args.backend == RenderBackend::Reference && frame_list.is_some() {
+        return Err(Failure::new(
+            exit::BAD_ARGUMENTS,
+            "--frames/--frame do not apply to --backend reference",
+        ));
+    }
+    let first_outputs: Vec<PathBuf> = match frame_list {
+        Some(list) => outputs
+            .iter()
+            .map(|p| frames::frame_path(p, list[0]))
+            .collect(),
+        None => outputs.clone(),
+    };
+    super::refuse_collisions(first_outputs.iter().chain(&args.stats_json))?;
+    for p in first_outputs.iter().chain(&args.stats_json) {
+        convshadow_common::image_io::check_writable(p)?;
+        let ext = p
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        if args.stats_json.as_ref() != Some(p) && !matches!(ext.as_deref(), Some("png" | "exr")) {
+            return Err(Failure::new(
+                exit::BAD_ARGUMENTS,
+                format!(
+                    "{}: unknown image extension; expected .png or .exr",
+                    p.display()
+                ),
+            ));
+        }
+    }
+
+    Ok(outputs)
+}
+
+/// The slab progress bar on a terminal (none when quiet, redirected, or for the reference).
+fn progress_bar(args: &RenderArgs) -> Option<indicatif::ProgressBar> {
+    // The reference has no per-slab progress to show.
+    if !args.quiet && std::io::stderr().is_terminal() && args.backend != RenderBackend::Reference {
+        let b = indicatif::ProgressBar::new(0);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} slab {pos}/{len} {wide_bar} {eta}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        Some(b)
+    } else {
+        None
+    }
+}
+
+/// `--reference-samples`: the light directions of the reference (0 for the other backends).
+fn reference_samples(args: &RenderArgs) -> Result<u32, Failure> {
+    Ok(match (args.backend, args.reference_samples) {
+        (RenderBackend::Reference, None) => ReferenceOptions::default().samples,
+        (RenderBackend::Reference, Some(0)) => {
+            return Err(Failure::new(
+                exit::BAD_ARGUMENTS,
+                "--reference-samples: expected at least 1 light direction, got 0",
+            ));
+        }
+        (RenderBackend::Reference, Some(m)) if m > MAX_REFERENCE_SAMPLES => {
+            return Err(Failure::new(
+                exit::BAD_ARGUMENTS,
+                format!(
+                    "--reference-samples: expected 1 to {MAX_REFERENCE_SAMPLES} light directions, got {m}"
+                ),
+            ));
+        }
+        (RenderBackend::Reference, Some(m)) => m,
+        (_, Some(_)) => {
+            return Err(Failure::new(
+                exit::BAD_ARGUMENTS,
+                "--reference-samples only applies to --backend reference",
+            ));
+        }
+        (_, None) => 0,
+    })
+}
+
+/// A frame sequence being rendered under one progress bar.
+struct Sequence<'a> {
+    scene: &'a Scene,
+    request: &'a RenderRequest<'a>,
+    outputs: &'a [PathBuf],
+    bar: Option<&'a indicatif::ProgressBar>,
+    frame_index: &'a std::sync::atomic::AtomicU64,
+    slab_count: &'a std::sync::atomic::AtomicU64,
+    time_step: f64,
+}
+
+impl Sequence<'_> {
+    /// Renders and writes every frame of `list`; returns the last render and each frame's numbers.
+    fn render(&self, list: &[u32]) -> Result<(Rendered, Vec<FrameStats>), Failure> {
+        let (scene, request, outputs, bar) = (self.scene, self.request, self.outputs, self.bar);
+        let (frame_index, slab_count, time_step) =
+            (self.frame_index, self.slab_count, self.time_step);
+        let frame_count = list.len() as u64;
+        let mut done: Vec<FrameStats> = Vec::new();
+        let mut last = None;
+        for (i, &k) in list.iter().enumerate() {
+            use std::sync::atomic::Ordering::Relaxed;
+            frame_index.store(i as u64, Relaxed);
+            if let Some(b) = &bar {
+                b.set_message(format!("frame {}/{}", i + 1, list.len()));
+            }
+            let frame_scene = frames::scene_at_frame(scene, k, time_step);
+            let r = render(&frame_scene, request)?;
+            if i == 0 {
+                if let Some(note) = &r.backend_note {
+                    eprintln!("note: {}", crate::exit::escape_line(note));
+                }
+                slab_count.store(u64::from(r.plan.slabs), Relaxed);
+                if let Some(b) = &bar {
+                    b.set_length(u64::from(r.plan.slabs) * frame_count);
+                }
+            }
+            exit::check_interrupt()?;
+            let paths: Vec<PathBuf> = outputs.iter().map(|p| frames::frame_path(p, k)).collect();
+            for p in &paths {
+                r.image.save_mapped(p, &scene.image.display_map())?;
+            }
+            done.push(FrameStats {
+                frame: k,
+                time: frames::frame_time(scene, k, time_step),
+                image_hash: r.image_hash,
+                ldi_hash: r.ldi_hash,
+                seconds_total: r.seconds_total,
+                outputs: paths,
+            });
+            last = Some(r);
+        }
+        let r = last.expect("a parsed frame list is not empty");
+        Ok((r, done))
+    }
 }
 
 /// Stats and summary of a sequence (each frame is already written).
