@@ -1147,82 +1147,11 @@ impl Validator<'_> {
             .reference_length
             .map(|r| self.length(&key("reference_length"), r))
             .transpose()?;
-        let detail = match raw.detail {
-            None => None,
-            Some(d) => {
-                let octaves = d.octaves.unwrap_or(4);
-                if octaves == 0 || octaves > 16 {
-                    return Err(self.err(
-                        key("detail.octaves"),
-                        format!("expected 1 to 16 octaves, got {octaves}"),
-                    ));
-                }
-                Some(DetailSpec {
-                    kind: d.kind,
-                    frequency: self.length(&key("detail.frequency"), d.frequency.unwrap_or(1.0))?,
-                    octaves,
-                    lacunarity: self.in_range(
-                        &key("detail.lacunarity"),
-                        d.lacunarity.unwrap_or(2.0),
-                        1.0 / MAX_OCTAVE_RATIO,
-                        MAX_OCTAVE_RATIO,
-                    )?,
-                    gain: self.in_range(
-                        &key("detail.gain"),
-                        d.gain.unwrap_or(0.5),
-                        1.0 / MAX_OCTAVE_RATIO,
-                        MAX_OCTAVE_RATIO,
-                    )?,
-                    time: d
-                        .time
-                        .map(|t| self.bounded(&key("detail.time"), t, MAX_WORLD))
-                        .transpose()?,
-                })
-            }
-        };
-        let texture = match raw.texture {
-            None => None,
-            Some(t) => {
-                let path = base_dir.join(&t.path);
-                let format = if crate::nifti::is_nifti_path(&path) {
-                    if t.dims.is_some() || t.voxel.is_some() {
-                        return Err(self.err(
-                            key("texture"),
-                            "a NIfTI texture (.nii, .nii.gz) takes dims and type from its header; \
-                             remove `dims` and `type`",
-                        ));
-                    }
-                    if let Some([lo, hi]) = t.window
-                        && !(lo.is_finite() && hi.is_finite() && lo < hi)
-                    {
-                        return Err(self.err(
-                            key("texture.window"),
-                            format!("expected [lo, hi] with finite lo < hi, got [{lo}, {hi}]"),
-                        ));
-                    }
-                    TextureFormat::Nifti { window: t.window }
-                } else {
-                    let (Some(dims), Some(voxel)) = (t.dims, t.voxel) else {
-                        return Err(self.err(
-                            key("texture"),
-                            "a raw texture needs `dims = [x, y, z]` and `type` (u8, u16, f32); \
-                             NIfTI files end in .nii or .nii.gz",
-                        ));
-                    };
-                    if dims.contains(&0) {
-                        return Err(self.err(key("texture.dims"), "expected three dimensions >= 1"));
-                    }
-                    if t.window.is_some() {
-                        return Err(self.err(
-                            key("texture.window"),
-                            "`window` applies to NIfTI textures only (raw ones are normalised by type)",
-                        ));
-                    }
-                    TextureFormat::Raw { dims, voxel }
-                };
-                Some(TextureSpec { path, format })
-            }
-        };
+        let detail = raw.detail.map(|d| self.detail(&key, d)).transpose()?;
+        let texture = raw
+            .texture
+            .map(|t| self.texture(&key, t, base_dir))
+            .transpose()?;
         if detail.is_some() && texture.is_some() {
             return Err(self.err(
                 key("texture"),
@@ -1236,28 +1165,7 @@ impl Validator<'_> {
                 "a gradient material takes its opacity from the gradient; remove `opacity`",
             ));
         }
-        let specular = raw
-            .specular
-            .map(|s| -> Result<SpecularSpec, SceneError> {
-                self.finite(&key("specular.strength"), s.strength)?;
-                if !(0.0..=MAX_COLOR).contains(&s.strength) {
-                    return Err(self.err(
-                        key("specular.strength"),
-                        format!(
-                            "expected a strength from 0 to {MAX_COLOR:e}, got {:e}",
-                            s.strength
-                        ),
-                    ));
-                }
-                if s.exponent == 0 || s.exponent > 4096 {
-                    return Err(self.err(key("specular.exponent"), "expected 1 to 4096"));
-                }
-                Ok(SpecularSpec {
-                    strength: s.strength as f32,
-                    exponent: s.exponent,
-                })
-            })
-            .transpose()?;
+        let specular = raw.specular.map(|s| self.specular(&key, s)).transpose()?;
         Ok(MaterialSpec {
             name: name.to_string(),
             color,
@@ -1268,6 +1176,110 @@ impl Validator<'_> {
             texture,
             gradient,
             specular,
+        })
+    }
+
+    /// A material's procedural detail (`material.NAME.detail`).
+    fn detail(&self, key: &dyn Fn(&str) -> String, d: RawDetail) -> Result<DetailSpec, SceneError> {
+        let octaves = d.octaves.unwrap_or(4);
+        if octaves == 0 || octaves > 16 {
+            return Err(self.err(
+                key("detail.octaves"),
+                format!("expected 1 to 16 octaves, got {octaves}"),
+            ));
+        }
+        Ok(DetailSpec {
+            kind: d.kind,
+            frequency: self.length(&key("detail.frequency"), d.frequency.unwrap_or(1.0))?,
+            octaves,
+            lacunarity: self.in_range(
+                &key("detail.lacunarity"),
+                d.lacunarity.unwrap_or(2.0),
+                1.0 / MAX_OCTAVE_RATIO,
+                MAX_OCTAVE_RATIO,
+            )?,
+            gain: self.in_range(
+                &key("detail.gain"),
+                d.gain.unwrap_or(0.5),
+                1.0 / MAX_OCTAVE_RATIO,
+                MAX_OCTAVE_RATIO,
+            )?,
+            time: d
+                .time
+                .map(|t| self.bounded(&key("detail.time"), t, MAX_WORLD))
+                .transpose()?,
+        })
+    }
+
+    /// A material's 3D texture (`material.NAME.texture`): NIfTI by extension, else raw.
+    fn texture(
+        &self,
+        key: &dyn Fn(&str) -> String,
+        t: RawTexture,
+        base_dir: &Path,
+    ) -> Result<TextureSpec, SceneError> {
+        let path = base_dir.join(&t.path);
+        let format = if crate::nifti::is_nifti_path(&path) {
+            if t.dims.is_some() || t.voxel.is_some() {
+                return Err(self.err(
+                    key("texture"),
+                    "a NIfTI texture (.nii, .nii.gz) takes dims and type from its header; \
+                     remove `dims` and `type`",
+                ));
+            }
+            if let Some([lo, hi]) = t.window
+                && !(lo.is_finite() && hi.is_finite() && lo < hi)
+            {
+                return Err(self.err(
+                    key("texture.window"),
+                    format!("expected [lo, hi] with finite lo < hi, got [{lo}, {hi}]"),
+                ));
+            }
+            TextureFormat::Nifti { window: t.window }
+        } else {
+            let (Some(dims), Some(voxel)) = (t.dims, t.voxel) else {
+                return Err(self.err(
+                    key("texture"),
+                    "a raw texture needs `dims = [x, y, z]` and `type` (u8, u16, f32); \
+                     NIfTI files end in .nii or .nii.gz",
+                ));
+            };
+            if dims.contains(&0) {
+                return Err(self.err(key("texture.dims"), "expected three dimensions >= 1"));
+            }
+            if t.window.is_some() {
+                return Err(self.err(
+                    key("texture.window"),
+                    "`window` applies to NIfTI textures only (raw ones are normalised by type)",
+                ));
+            }
+            TextureFormat::Raw { dims, voxel }
+        };
+        Ok(TextureSpec { path, format })
+    }
+
+    /// A material's specular highlight (`material.NAME.specular`).
+    fn specular(
+        &self,
+        key: &dyn Fn(&str) -> String,
+        s: RawSpecular,
+    ) -> Result<SpecularSpec, SceneError> {
+        self.finite(&key("specular.strength"), s.strength)?;
+        if !(0.0..=MAX_COLOR).contains(&s.strength) {
+            return Err(self.err(
+                key("specular.strength"),
+                format!(
+                    "expected a strength from 0 to {MAX_COLOR:e}, got {:e}",
+                    s.strength
+                ),
+            ));
+        }
+        if s.exponent == 0 || s.exponent > 4096 {
+            return Err(self.err(key("specular.exponent"), "expected 1 to 4096"));
+        }
+        Ok(SpecularSpec {
+            strength: s.strength as f32,
+            exponent: s.exponent,
         })
     }
 }
