@@ -52,22 +52,37 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         .map_or_else(convshadow_cpu::default_memory_budget, |m| {
             m.saturating_mul(1 << 20)
         });
-    let BuiltLdi {
-        geometry,
-        ldi,
-        stats,
-        threads,
-        backend,
-        adapter,
-        backend_note,
-        seconds_ldi,
-        seconds_total,
-    } = build_ldi(&scene, args.backend, args.threads, budget)?;
-    if let Some(note) = &backend_note {
+    let built = build_ldi(&scene, args.backend, args.threads, budget)?;
+    if let Some(note) = &built.backend_note {
         eprintln!("note: {}", crate::exit::escape_line(note));
     }
-    let hash = ldi.fingerprint();
+    let hash = built.ldi.fingerprint();
+    print_summary(&built, hash);
+    if let Some(path) = &args.layers_png {
+        write_layers_png(path, &built)?;
+    }
+    if let Some(path) = &args.stats_json {
+        write_stats(path, &built, hash)?;
+    }
+    let (geometry, stats) = (&built.geometry, &built.stats);
+    for w in geometry.mesh_warnings() {
+        eprintln!("warning: {}", crate::exit::escape_line(&w));
+    }
+    if geometry.defect_edges() > 0 || stats.odd_pixels > 0 {
+        eprintln!(
+            "error: the meshes are not closed ({} defective edges, {} pixels with an odd fragment \
+             count): the inside/outside parity test needs closed, consistently wound meshes",
+            geometry.defect_edges(),
+            stats.odd_pixels
+        );
+        return Ok(exit::MESH_DEFECT);
+    }
+    Ok(exit::OK)
+}
 
+/// Per mesh: (boundary, non-manifold, flipped) edge counts, and the degenerate triangles dropped.
+fn defect_counts(built: &BuiltLdi) -> (Vec<usize>, Vec<usize>, Vec<usize>, usize) {
+    let geometry = &built.geometry;
     let degenerate: usize = geometry
         .meshes
         .iter()
@@ -88,6 +103,20 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         .iter()
         .map(|m| m.report.flipped_edges)
         .collect();
+    (boundary, nonmanifold, flipped, degenerate)
+}
+
+/// The summary lines on stdout.
+fn print_summary(built: &BuiltLdi, hash: u64) {
+    let BuiltLdi {
+        geometry,
+        ldi,
+        stats,
+        adapter,
+        seconds_ldi,
+        ..
+    } = built;
+    let (_, _, _, degenerate) = defect_counts(built);
     println!(
         "ldi: {}x{} px, {} triangles rasterized of {}, {} fragments, max {} layers, {} odd \
          pixels, {} degenerate triangles dropped, {:.3} s build ({:.1} M fragments/s)",
@@ -124,48 +153,52 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
     if let Some(a) = &adapter {
         println!("  backend gpu: {a}");
     }
+}
 
-    if let Some(path) = &args.layers_png {
-        let max = stats.max_layers.max(1);
-        let n = (ldi.width * ldi.height) as usize;
-        let data = (0..n)
-            .map(|p| ((ldi.offsets[p + 1] - ldi.offsets[p]) * 255 / max) as u8)
-            .collect();
-        convshadow_common::image_io::save_gray_png(path, ldi.width, ldi.height, data)?;
-    }
-    if let Some(path) = &args.stats_json {
-        let value = json!({
-            "width": ldi.width,
-            "height": ldi.height,
-            "triangles": geometry.raster.triangles.len(),
-            "fragments": stats.fragments,
-            "max_layers": stats.max_layers,
-            "odd_pixels": stats.odd_pixels,
-            "degenerate_triangles": degenerate,
-            "boundary_edges": boundary,
-            "nonmanifold_edges": nonmanifold,
-            "flipped_edges": flipped,
-            "threads": threads,
-            "backend": backend,
-            "adapter": adapter,
-            "seconds_ldi": seconds_ldi,
-            "seconds_total": seconds_total,
-            "ldi_hash": format!("{hash:016x}"),
-        });
-        super::write_json(path, &value)?;
-    }
+/// `--layers-png`: the layer count per pixel as an 8-bit image, scaled to the maximum.
+fn write_layers_png(path: &std::path::Path, built: &BuiltLdi) -> Result<(), Failure> {
+    let (ldi, stats) = (&built.ldi, &built.stats);
+    let max = stats.max_layers.max(1);
+    let n = (ldi.width * ldi.height) as usize;
+    let data = (0..n)
+        .map(|p| ((ldi.offsets[p + 1] - ldi.offsets[p]) * 255 / max) as u8)
+        .collect();
+    convshadow_common::image_io::save_gray_png(path, ldi.width, ldi.height, data)?;
+    Ok(())
+}
 
-    for w in geometry.mesh_warnings() {
-        eprintln!("warning: {}", crate::exit::escape_line(&w));
-    }
-    if geometry.defect_edges() > 0 || stats.odd_pixels > 0 {
-        eprintln!(
-            "error: the meshes are not closed ({} defective edges, {} pixels with an odd fragment \
-             count): the inside/outside parity test needs closed, consistently wound meshes",
-            geometry.defect_edges(),
-            stats.odd_pixels
-        );
-        return Ok(exit::MESH_DEFECT);
-    }
-    Ok(exit::OK)
+/// `--stats-json`: the LDI's numbers.
+fn write_stats(path: &std::path::Path, built: &BuiltLdi, hash: u64) -> Result<(), Failure> {
+    let BuiltLdi {
+        geometry,
+        ldi,
+        stats,
+        threads,
+        backend,
+        adapter,
+        seconds_ldi,
+        seconds_total,
+        ..
+    } = built;
+    let (boundary, nonmanifold, flipped, degenerate) = defect_counts(built);
+    let value = json!({
+        "width": ldi.width,
+        "height": ldi.height,
+        "triangles": geometry.raster.triangles.len(),
+        "fragments": stats.fragments,
+        "max_layers": stats.max_layers,
+        "odd_pixels": stats.odd_pixels,
+        "degenerate_triangles": degenerate,
+        "boundary_edges": boundary,
+        "nonmanifold_edges": nonmanifold,
+        "flipped_edges": flipped,
+        "threads": threads,
+        "backend": backend,
+        "adapter": adapter,
+        "seconds_ldi": seconds_ldi,
+        "seconds_total": seconds_total,
+        "ldi_hash": format!("{hash:016x}"),
+    });
+    super::write_json(path, &value)?;
+    Ok(())
 }
