@@ -40,8 +40,9 @@ pub const MIN_WORLD: f64 = 1e-9;
 /// Largest colour component (light, material, background, gradient) and specular strength: with
 /// 16 lights, a specular highlight and 64 stops of exposure the f32 image stays finite.
 pub const MAX_COLOR: f64 = 1e4;
-/// Largest light variance σ² per unit distance (σ = 100: a light wider than a hemisphere).
-pub const MAX_VARIANCE: f64 = 1e4;
+/// Largest light variance σ² per unit distance (σ = 10⁴: far wider than a hemisphere; the sweep
+/// and its tables stay finite up to it, tested at 2e6 in `sweep_accuracy` and at the bound here).
+pub const MAX_VARIANCE: f64 = 1e8;
 /// Largest magnitude of an angle in degrees (a rotation of more turns than this has no meaning
 /// left in f64).
 pub const MAX_ANGLE_DEG: f64 = 1e6;
