@@ -953,3 +953,24 @@ fn texture_loading_is_timed_apart_from_the_ldi() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn sigterm_stops_ldi_with_130_and_leaves_no_stats() {
+    let dir = support::temp_dir("rel-signals-ldi");
+    // The default scene at 8192² takes seconds to build: still running when signalled.
+    let args = [
+        "ldi",
+        "--width",
+        "8192",
+        "--height",
+        "8192",
+        "--stats-json",
+        "l.json",
+    ];
+    let (code, err, took) = signal_after(&args, &dir, 300, libc::SIGTERM);
+    assert_eq!(code, Some(INTERRUPTED), "ldi: {err}");
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(took < 2.0, "ldi took {took:.1} s to stop");
+    assert_eq!(files_in(&dir), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
