@@ -515,10 +515,15 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     }
     let seconds_ldi = start.elapsed().as_secs_f64();
     let t_plan = Instant::now();
+    // Raw 3D textures load in chunks and stop once the cancel flag is raised.
     let plan =
-        RenderPlan::new(scene, &geometry).map_err(|e| RenderError::BadPlan(e.to_string()))?;
+        RenderPlan::new_cancellable(scene, &geometry, req.cancel).map_err(|e| match e.source {
+            convshadow_common::texture3d::TextureError::Interrupted { .. } => {
+                RenderError::Interrupted
+            }
+            _ => RenderError::BadPlan(e.to_string()),
+        })?;
     let seconds_plan = t_plan.elapsed().as_secs_f64();
-    // Texture loading has no cancel point of its own: stop right after it.
     check_cancel(req.cancel)?;
     let t_sweep = Instant::now();
     let chunk_counts = ChunkCounts::default();

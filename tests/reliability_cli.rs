@@ -974,3 +974,25 @@ fn sigterm_stops_ldi_with_130_and_leaves_no_stats() {
     assert_eq!(files_in(&dir), Vec::<String>::new());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_signal_during_texture_loading_stops_the_render_promptly() {
+    let dir = support::temp_dir("rel-texture-signal");
+    // A sparse 256 MiB u8 texture: seconds to read and convert, nothing on disk.
+    let f = std::fs::File::create(dir.join("t.raw")).unwrap();
+    f.set_len(256 << 20).unwrap();
+    drop(f);
+    let scene = BASE_SCENE.replace(
+        "[material.m]\nopacity = 0.5",
+        "[material.m]\ntexture = { path = \"t.raw\", dims = [1024, 1024, 256], type = \"u8\" }\n\
+         gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 0.5]]",
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let args = ["render", "s.toml", "-o", "o.png", "--max-memory", "16384"];
+    let (code, err, took) = signal_after(&args, &dir, 300, libc::SIGINT);
+    assert_eq!(code, Some(INTERRUPTED), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(took < 1.0, "the render took {took:.1} s to stop");
+    assert_eq!(files_in(&dir), ["s.toml", "t.raw"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
