@@ -248,6 +248,13 @@ pub struct MemoryNeed {
     /// Input data held while rendering, from the files' sizes: 3D textures (the file and its
     /// f32 voxels while loading; rendering only) and OBJ files (twice the text: the parsed mesh).
     pub inputs: u64,
+    /// Device buffers of the GPU backend before any fragment (0 on the CPU, see
+    /// [`MemoryNeed::on_gpu`]): its two light buffers per light and channel, layer cursors,
+    /// per-pixel colour, LDI offsets, the image and its read-back copy, and the texture voxels.
+    pub gpu_buffers: u64,
+    /// Whether the LDI's fragments are also held on the device (the GPU backend): the
+    /// fragment budget left by [`MemoryNeed::check`] is then split between host and device.
+    pub gpu_fragments: bool,
 }
 
 /// Bytes the scene's input files need in memory (see [`MemoryNeed::inputs`]); a file that cannot
@@ -307,13 +314,46 @@ impl MemoryNeed {
             sweep_state,
             output,
             inputs: input_bytes(scene, sweep),
+            gpu_buffers: 0,
+            gpu_fragments: false,
         }
+    }
+
+    /// The need on `backend`: [`MemoryNeed::of`], with the device buffers for `--backend gpu`
+    /// ([`MemoryNeed::on_gpu`]; `auto` is counted as the CPU, its backend is not known yet).
+    pub fn for_backend(scene: &Scene, sweep: bool, backend: Backend) -> MemoryNeed {
+        let need = MemoryNeed::of(scene, sweep);
+        if matches!(backend, Backend::Gpu) {
+            need.on_gpu(scene, sweep)
+        } else {
+            need
+        }
+    }
+
+    /// Adds the GPU backend's device buffers, estimated from the sizes `convshadow-gpu`
+    /// allocates (gpu/src/sweep.rs `upload_buffers`, gpu/src/ldi.rs): for a render, the light
+    /// ping-pong pair (as on the CPU), 8-byte layer cursors, 16-byte per-pixel colour, 4-byte LDI
+    /// offsets, the image (12 bytes per pixel) and its read-back copy, and the 3D textures' f32
+    /// voxels; for an LDI alone, its per-pixel counts and offsets. Fragments are then held on
+    /// the host and on the device.
+    pub fn on_gpu(mut self, scene: &Scene, sweep: bool) -> MemoryNeed {
+        let image_pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
+        self.gpu_buffers = if sweep {
+            let textures = input_bytes(scene, true).saturating_sub(input_bytes(scene, false));
+            (self.light_buffers + (8 + 16 + 4) * self.grid_pixels + 2 * 12 * image_pixels)
+                .saturating_add(textures / 2)
+        } else {
+            (4 + 4) * self.grid_pixels
+        };
+        self.gpu_fragments = true;
+        self
     }
 
     /// Everything but the fragments.
     pub fn total(&self) -> u64 {
         (self.ldi_pixels + self.light_buffers + self.sweep_state + self.output)
             .saturating_add(self.inputs)
+            .saturating_add(self.gpu_buffers)
     }
 
     /// Refuses (with the numbers) when the need exceeds `budget`; else returns what is left of
@@ -335,12 +375,13 @@ impl MemoryNeed {
                     budget >> 20
                 )));
             }
-            return Ok(budget - need);
+            let left = budget - need;
+            return Ok(if self.gpu_fragments { left / 2 } else { left });
         }
         Err(RenderError::OutOfMemory(format!(
             "{}: the render needs {} MiB before any fragment ({} grid pixels: LDI arrays {} \
                  MiB, light buffers {} MiB for {} lights, sweep state {} MiB, output {} MiB, \
-                 textures and meshes {} MiB), more than the memory budget of {} MiB; lower \
+                 textures and meshes {} MiB{}), more than the memory budget of {} MiB; lower \
                  image.width/image.height, sweep.guard_band, the light count or the input \
                  sizes, or raise --max-memory",
             scene.source,
@@ -352,6 +393,15 @@ impl MemoryNeed {
             mib(self.sweep_state),
             mib(self.output),
             mib(self.inputs),
+            if self.gpu_fragments {
+                format!(
+                    ", GPU buffers {} MiB (light buffers, layer cursors, colour, LDI offsets, \
+                     image, textures) with the LDI's fragments also on the device",
+                    mib(self.gpu_buffers)
+                )
+            } else {
+                String::new()
+            },
             budget >> 20
         )))
     }
@@ -396,7 +446,7 @@ pub fn build_ldi(
     memory_budget: u64,
 ) -> Result<BuiltLdi, RenderError> {
     // Refuse before allocating: the per-pixel arrays here, the fragments in `Ldi::build`.
-    let budget = MemoryNeed::of(scene, false).check(scene, memory_budget)?;
+    let budget = MemoryNeed::for_backend(scene, false, backend).check(scene, memory_budget)?;
     let pool = thread_pool(threads)?;
     let choice = BackendChoice::open(backend)?;
     let start = Instant::now();
@@ -425,7 +475,8 @@ pub fn build_ldi(
 pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, RenderError> {
     let start = Instant::now();
     // Refuse before allocating: the per-pixel buffers first, the fragments in `Ldi::build`.
-    let fragment_budget = MemoryNeed::of(scene, true).check(scene, req.memory_budget)?;
+    let fragment_budget =
+        MemoryNeed::for_backend(scene, true, req.backend).check(scene, req.memory_budget)?;
     let pool = thread_pool(req.threads)?;
     let choice = BackendChoice::open(req.backend)?;
     let geometry = SceneGeometry::build(scene)?;
@@ -464,10 +515,15 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     }
     let seconds_ldi = start.elapsed().as_secs_f64();
     let t_plan = Instant::now();
+    // Raw 3D textures load in chunks and stop once the cancel flag is raised.
     let plan =
-        RenderPlan::new(scene, &geometry).map_err(|e| RenderError::BadPlan(e.to_string()))?;
+        RenderPlan::new_cancellable(scene, &geometry, req.cancel).map_err(|e| match e.source {
+            convshadow_common::texture3d::TextureError::Interrupted { .. } => {
+                RenderError::Interrupted
+            }
+            _ => RenderError::BadPlan(e.to_string()),
+        })?;
     let seconds_plan = t_plan.elapsed().as_secs_f64();
-    // Texture loading has no cancel point of its own: stop right after it.
     check_cancel(req.cancel)?;
     let t_sweep = Instant::now();
     let chunk_counts = ChunkCounts::default();
@@ -513,4 +569,31 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
         adapter: choice.adapter(),
         backend_note: choice.note,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpu_buffers_count_in_the_memory_need_and_are_named() {
+        let scene = Scene::default_scene();
+        let cpu = MemoryNeed::for_backend(&scene, true, Backend::Cpu);
+        let gpu = MemoryNeed::for_backend(&scene, true, Backend::Gpu);
+        assert_eq!(cpu.gpu_buffers, 0);
+        // At least the light pair, cursors, colour and offsets, and the image twice.
+        let image = u64::from(scene.image.width) * u64::from(scene.image.height);
+        assert!(gpu.gpu_buffers >= cpu.light_buffers + 28 * cpu.grid_pixels + 24 * image);
+        assert_eq!(gpu.total(), cpu.total() + gpu.gpu_buffers);
+        // The LDI alone on the GPU holds its per-pixel arrays on the device too.
+        assert!(MemoryNeed::for_backend(&scene, false, Backend::Gpu).gpu_buffers > 0);
+        // A budget between the two needs: the CPU fits, the GPU is refused naming its buffers,
+        // and what is left for fragments on the GPU is split between host and device.
+        let budget = cpu.total() + gpu.gpu_buffers / 2;
+        assert!(cpu.check(&scene, budget).is_ok());
+        let err = gpu.check(&scene, budget).unwrap_err().to_string();
+        assert!(err.contains("GPU buffers"), "{err}");
+        let roomy = 4 * gpu.total();
+        assert_eq!(gpu.check(&scene, roomy).unwrap(), (roomy - gpu.total()) / 2);
+    }
 }

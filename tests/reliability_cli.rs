@@ -953,3 +953,46 @@ fn texture_loading_is_timed_apart_from_the_ldi() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn sigterm_stops_ldi_with_130_and_leaves_no_stats() {
+    let dir = support::temp_dir("rel-signals-ldi");
+    // The default scene at 8192² takes seconds to build: still running when signalled.
+    let args = [
+        "ldi",
+        "--width",
+        "8192",
+        "--height",
+        "8192",
+        "--stats-json",
+        "l.json",
+    ];
+    let (code, err, took) = signal_after(&args, &dir, 300, libc::SIGTERM);
+    assert_eq!(code, Some(INTERRUPTED), "ldi: {err}");
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(took < 2.0, "ldi took {took:.1} s to stop");
+    assert_eq!(files_in(&dir), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_signal_during_texture_loading_stops_the_render_promptly() {
+    let dir = support::temp_dir("rel-texture-signal");
+    // A sparse 256 MiB u8 texture: seconds to read and convert, nothing on disk.
+    let f = std::fs::File::create(dir.join("t.raw")).unwrap();
+    f.set_len(256 << 20).unwrap();
+    drop(f);
+    let scene = BASE_SCENE.replace(
+        "[material.m]\nopacity = 0.5",
+        "[material.m]\ntexture = { path = \"t.raw\", dims = [1024, 1024, 256], type = \"u8\" }\n\
+         gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 0.5]]",
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let args = ["render", "s.toml", "-o", "o.png", "--max-memory", "16384"];
+    let (code, err, took) = signal_after(&args, &dir, 300, libc::SIGINT);
+    assert_eq!(code, Some(INTERRUPTED), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(took < 1.0, "the render took {took:.1} s to stop");
+    assert_eq!(files_in(&dir), ["s.toml", "t.raw"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

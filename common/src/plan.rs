@@ -118,6 +118,16 @@ pub struct RenderPlan {
 impl RenderPlan {
     /// Builds all tables for a scene whose geometry is already set up.
     pub fn new(scene: &Scene, geometry: &SceneGeometry) -> Result<RenderPlan, PlanError> {
+        RenderPlan::new_cancellable(scene, geometry, None)
+    }
+
+    /// [`RenderPlan::new`], with raw 3D textures loaded in chunks that stop with
+    /// [`TextureError::Interrupted`] once `cancel` is raised.
+    pub fn new_cancellable(
+        scene: &Scene,
+        geometry: &SceneGeometry,
+        cancel: Option<&std::sync::atomic::AtomicBool>,
+    ) -> Result<RenderPlan, PlanError> {
         let slabs = geometry.slabs;
         let e = geometry.slab_distance;
         let px = geometry.camera.pixel_size;
@@ -156,7 +166,7 @@ impl RenderPlan {
         let materials = scene
             .materials
             .iter()
-            .map(|m| material_plan(m, e))
+            .map(|m| material_plan(m, e, cancel))
             .collect::<Result<Vec<_>, TextureError>>()
             .map_err(|source| PlanError {
                 scene: scene.source.clone(),
@@ -275,7 +285,11 @@ fn tf_entry(c: [f64; 3], a: f64, tau: [f64; 3], ratio: f64) -> TfEntry {
 }
 
 /// Builds a material's tables for slab thickness `e`.
-fn material_plan(m: &MaterialSpec, e: f64) -> Result<MaterialPlan, TextureError> {
+fn material_plan(
+    m: &MaterialSpec,
+    e: f64,
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<MaterialPlan, TextureError> {
     let ratio = e / m.reference_length.unwrap_or(e);
     let tf = if m.gradient.is_empty() {
         vec![tf_entry(m.color, m.opacity, m.transport, ratio)]
@@ -309,7 +323,9 @@ fn material_plan(m: &MaterialSpec, e: f64) -> Result<MaterialPlan, TextureError>
                 source,
             })?;
             (
-                Some(Arc::new(Texture3d::load_raw(path, *dims, *voxel)?)),
+                Some(Arc::new(Texture3d::load_raw_cancellable(
+                    path, *dims, *voxel, cancel,
+                )?)),
                 None,
             )
         }

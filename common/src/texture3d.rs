@@ -57,6 +57,12 @@ impl fmt::Display for VoxelType {
 /// Errors from loading or building a 3D texture; every message names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum TextureError {
+    /// Loading was cancelled (a signal raised the cancel flag).
+    #[error("{}: interrupted while loading the 3D texture", .path.display())]
+    Interrupted {
+        /// The file.
+        path: PathBuf,
+    },
     /// The file could not be read.
     #[error("{}: cannot read 3D texture: {source}", .path.display())]
     Io {
@@ -216,6 +222,17 @@ impl Texture3d {
         dims: [u32; 3],
         voxel: VoxelType,
     ) -> Result<Texture3d, TextureError> {
+        Texture3d::load_raw_cancellable(path, dims, voxel, None)
+    }
+
+    /// [`Texture3d::load_raw`], read and converted in chunks of 4 MiB, stopping with
+    /// [`TextureError::Interrupted`] when `cancel` is raised between two chunks.
+    pub fn load_raw_cancellable(
+        path: &Path,
+        dims: [u32; 3],
+        voxel: VoxelType,
+        cancel: Option<&std::sync::atomic::AtomicBool>,
+    ) -> Result<Texture3d, TextureError> {
         let io = |source| TextureError::Io {
             path: path.to_path_buf(),
             source,
@@ -237,21 +254,47 @@ impl Texture3d {
         if actual != expected {
             return Err(size_error(actual));
         }
-        let bytes = std::fs::read(path).map_err(io)?;
-        if bytes.len() as u64 != expected {
-            return Err(size_error(bytes.len() as u64));
+        let mut file = std::fs::File::open(path).map_err(io)?;
+        let mut voxels: Vec<f32> = Vec::new();
+        voxels.try_reserve_exact(n as usize).map_err(|_| {
+            io(std::io::Error::new(
+                std::io::ErrorKind::OutOfMemory,
+                format!("cannot allocate {n} voxels"),
+            ))
+        })?;
+        // A multiple of every voxel size: no voxel straddles two chunks.
+        const CHUNK: u64 = 4 << 20;
+        let mut chunk = vec![0u8; CHUNK.min(expected) as usize];
+        let mut left = expected;
+        while left > 0 {
+            if cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+                return Err(TextureError::Interrupted {
+                    path: path.to_path_buf(),
+                });
+            }
+            let bytes = &mut chunk[..CHUNK.min(left) as usize];
+            std::io::Read::read_exact(&mut file, bytes).map_err(|e| {
+                if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                    size_error(expected - left)
+                } else {
+                    io(e)
+                }
+            })?;
+            left -= bytes.len() as u64;
+            match voxel {
+                VoxelType::U8 => voxels.extend(bytes.iter().map(|&b| f32::from(b) / 255.0)),
+                VoxelType::U16 => voxels.extend(
+                    bytes
+                        .chunks_exact(2)
+                        .map(|c| f32::from(u16::from_le_bytes([c[0], c[1]])) / 65535.0),
+                ),
+                VoxelType::F32 => voxels.extend(
+                    bytes
+                        .chunks_exact(4)
+                        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+                ),
+            }
         }
-        let voxels: Vec<f32> = match voxel {
-            VoxelType::U8 => bytes.iter().map(|&b| f32::from(b) / 255.0).collect(),
-            VoxelType::U16 => bytes
-                .chunks_exact(2)
-                .map(|c| f32::from(u16::from_le_bytes([c[0], c[1]])) / 65535.0)
-                .collect(),
-            VoxelType::F32 => bytes
-                .chunks_exact(4)
-                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                .collect(),
-        };
         check_voxels(path, dims, &voxels)?;
         Ok(Texture3d { dims, voxels })
     }
