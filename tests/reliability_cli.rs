@@ -454,21 +454,8 @@ fn interrupt_mid_sweep(signal: libc::c_int, name: &str) {
         );
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    // SAFETY: sending a signal to our own child.
-    assert_eq!(unsafe { libc::kill(pid as libc::pid_t, signal) }, 0);
-    let mut err = String::new();
-    child
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut err)
-        .unwrap();
-    let status = child.wait().unwrap();
-    assert_eq!(
-        status.code(),
-        Some(INTERRUPTED),
-        "{name}: {status:?}: {err}"
-    );
+    let (code, err, _) = signal_and_wait(&mut child, signal);
+    assert_eq!(code, Some(INTERRUPTED), "{name}: {code:?}: {err}");
     assert!(!err.contains("panicked"), "{err}");
     assert!(err.contains("interrupted"), "{err}");
     let left = files_in(&dir);
@@ -833,6 +820,12 @@ fn signal_after(
         child.try_wait().unwrap().is_none(),
         "{args:?} ended before the signal"
     );
+    signal_and_wait(&mut child, signal)
+}
+
+/// Sends `signal` to a running child and waits: (exit code, stderr, seconds from the signal to
+/// the exit).
+fn signal_and_wait(child: &mut std::process::Child, signal: i32) -> (Option<i32>, String, f64) {
     let sent = std::time::Instant::now();
     // SAFETY: sending a signal to our own child.
     assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, signal) }, 0);
