@@ -273,17 +273,22 @@ fn bad_output_paths_are_refused_before_rendering_and_leave_nothing() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Runs the binary and reaps it with `wait4`: (exit code, stderr, peak RSS in KiB of that child
-/// alone; `getrusage(RUSAGE_CHILDREN)` would mix in the children of tests running in parallel).
-#[allow(clippy::zombie_processes)] // reaped by `wait4`, which `Child::wait` cannot replace
-fn run_measured(args: &[&str], cwd: &Path) -> (i32, String, u64) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_convshadow"))
+/// Starts the binary in `cwd` with stdout discarded and stderr piped.
+fn spawn_cli(args: &[&str], cwd: &Path) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_convshadow"))
         .args(args)
         .current_dir(cwd)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
-        .unwrap();
+        .unwrap()
+}
+
+/// Runs the binary and reaps it with `wait4`: (exit code, stderr, peak RSS in KiB of that child
+/// alone; `getrusage(RUSAGE_CHILDREN)` would mix in the children of tests running in parallel).
+#[allow(clippy::zombie_processes)] // reaped by `wait4`, which `Child::wait` cannot replace
+fn run_measured(args: &[&str], cwd: &Path) -> (i32, String, u64) {
+    let mut child = spawn_cli(args, cwd);
     let mut err = String::new();
     child
         .stderr
@@ -424,8 +429,8 @@ fn interrupt_mid_sweep(signal: libc::c_int, name: &str) {
     let dir = support::temp_dir(name);
     let lights = "[[light]]\ntilt_deg = [30.0, 10.0]\nvariance = [0.02, 0.01]\n".repeat(16);
     std::fs::write(dir.join("slow.toml"), format!("{SLOW_SCENE}{lights}")).unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_convshadow"))
-        .args([
+    let mut child = spawn_cli(
+        &[
             "render",
             "slow.toml",
             "-o",
@@ -434,12 +439,9 @@ fn interrupt_mid_sweep(signal: libc::c_int, name: &str) {
             "out.exr",
             "--stats-json",
             "s.json",
-        ])
-        .current_dir(&dir)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+        ],
+        &dir,
+    );
     let pid = child.id();
     // In the sweep: both light buffers are resident (the second is written by the first slab).
     // Geometry and LDI of one box take a few MiB, so 300 MiB is only reached inside the sweep.
@@ -808,13 +810,7 @@ fn signal_after(
     delay_ms: u64,
     signal: i32,
 ) -> (Option<i32>, String, f64) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_convshadow"))
-        .args(args)
-        .current_dir(dir)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = spawn_cli(args, dir);
     std::thread::sleep(std::time::Duration::from_millis(delay_ms));
     assert!(
         child.try_wait().unwrap().is_none(),

@@ -18,20 +18,6 @@ fn run(scene: &Scene, initial: Option<InitialLight<'_>>) -> (RenderPlan, SweepOu
     (plan, out)
 }
 
-/// The shared pure-convolution scene (`convshadow::cpu::reference::impulse::empty_scene`).
-fn empty_scene(
-    n: u32,
-    grid: u32,
-    tilt: [f64; 2],
-    variance: [f64; 2],
-    rotation: f64,
-    kernel: &str,
-    compensate: bool,
-) -> Scene {
-    impulse::empty_scene(n, grid, tilt, variance, rotation, kernel, compensate)
-        .unwrap_or_else(|e| panic!("{e}"))
-}
-
 /// The kernel moments in pixel units with e = d1 = pixel size = 1: μκ = −tan ω, Σκ = R diag(σ²) Rᵀ.
 fn design_moments(tilt: [f64; 2], variance: [f64; 2], rotation: f64) -> ([f64; 2], [[f64; 2]; 2]) {
     let mean = [-tilt[0].to_radians().tan(), -tilt[1].to_radians().tan()];
@@ -90,7 +76,7 @@ fn averaged_impulse_response(
     seeds: u32,
     c: usize,
 ) -> (RenderPlan, SweepOutput) {
-    let mut scene = empty_scene(
+    let mut scene = impulse::empty_scene(
         IMPULSE_SLABS,
         IMPULSE_GRID,
         case.tilt,
@@ -98,7 +84,8 @@ fn averaged_impulse_response(
         case.rotation,
         case.kernel,
         case.compensate,
-    );
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     let impulse = |plan: &RenderPlan| {
         let mut v = vec![0.0f32; plan.light_row_len() * plan.grid_height as usize];
         v[c * plan.light_row_len() + c] = 1.0;
@@ -305,7 +292,8 @@ fn penumbra_matches_the_correct_shadow_at_d1_and_the_iterated_model_elsewhere() 
 #[test]
 fn a_constant_unoccluded_light_stays_exactly_one_over_4096_slabs() {
     for kernel in KERNELS {
-        let scene = empty_scene(4096, 24, [30.0, -20.0], [0.3, 0.1], 25.0, kernel, true);
+        let scene = impulse::empty_scene(4096, 24, [30.0, -20.0], [0.3, 0.1], 25.0, kernel, true)
+            .unwrap_or_else(|e| panic!("{e}"));
         let (plan, out) = run(&scene, None);
         assert_eq!(plan.slabs, 4096);
         // Exact: each phase's f32 weights sum to exactly 1 in the gather's order, and reads
