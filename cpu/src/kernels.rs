@@ -169,14 +169,47 @@ pub fn gather<L: Lane>(
     }
 }
 
-/// [`gather`] where lane i uses phase `phases[i]` of `table` (per-pixel hashed phases):
-/// per-lane loads, lane arithmetic in the same order.
+/// A light's tap table by tap, as structure-of-arrays for the per-lane gather: tap k of phase p
+/// at `k * phase_count + p`, so that one gather by the lanes' phases reads a tap's column. Built
+/// once per sweep from the plan's [`KernelTable`] (same values, another layout).
+pub struct TapColumns {
+    /// Phases of the table.
+    pub phase_count: usize,
+    /// The four corner weights of each tap, one column per tap.
+    pub weights: Vec<[f32; 4]>,
+    /// `dy · row_stride + dx` (wrapping: an `i32` offset in the light buffer).
+    pub offset: Vec<u32>,
+}
+
+impl TapColumns {
+    /// The columns of `table` for light buffers with rows `row_stride` apart.
+    pub fn new(table: &KernelTable, row_stride: usize) -> TapColumns {
+        let (pc, n) = (table.phase_count as usize, table.taps_per_phase as usize);
+        TapColumns {
+            phase_count: pc,
+            weights: (0..n * pc)
+                .map(|j| table.taps[(j % pc) * n + j / pc].w)
+                .collect(),
+            offset: (0..n * pc)
+                .map(|j| {
+                    let t = &table.taps[(j % pc) * n + j / pc];
+                    (t.dy as i64 * row_stride as i64 + t.dx as i64) as i32 as u32
+                })
+                .collect(),
+        }
+    }
+}
+
+/// [`gather`] where lane i uses phase `phases[i]` of `table` (per-pixel hashed phases; `columns`
+/// is the same table by tap): gathered weights and, inside the grid, gathered loads; lane
+/// arithmetic in the same order.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn gather_per_lane<L: Lane>(
     planes: &LightPlanes<'_>,
     table: &KernelTable,
-    phases: &[u32; MAX_LANES],
+    columns: &TapColumns,
+    phases: L::U,
     shift: [i32; 2],
     x0: i32,
     y: i32,
@@ -184,68 +217,67 @@ pub fn gather_per_lane<L: Lane>(
     acc: &mut [L],
 ) {
     let n = table.taps_per_phase as usize;
+    let pc = columns.phase_count;
+    let rs = planes.row_stride;
+    // Lane i's pixel, and its offset to the slab's shifted origin.
+    let pixel = planes.base + y as usize * rs + x0 as usize;
+    let lane_shift = L::u_add(
+        L::u_iota(0),
+        L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
+    );
+    let mut lane_phase = [0u32; MAX_LANES];
+    if !interior {
+        L::u_store(phases, &mut lane_phase);
+    }
+    if interior {
+        let mut sums = [L::acc_from(L::splat(0.0)); 3];
+        assert!(planes.channels <= sums.len(), "a light has 1 or 3 channels");
+        for (sum, a) in sums.iter_mut().zip(acc.iter()) {
+            *sum = L::acc_from(*a);
+        }
+        for k in 0..n {
+            let col = k * pc..(k + 1) * pc;
+            let w = L::weights4(&columns.weights[col.clone()], phases);
+            let rel = L::u_add(L::u_gather(&columns.offset[col], phases), lane_shift);
+            for (c, sum) in sums.iter_mut().enumerate().take(planes.channels) {
+                let at = pixel + c * planes.width as usize;
+                *sum = L::acc_block(*sum, &w, planes.data, at, rel, rs);
+            }
+        }
+        for (a, sum) in acc.iter_mut().zip(sums).take(planes.channels) {
+            *a = L::acc_finish(sum);
+        }
+        return;
+    }
     for k in 0..n {
-        let mut wl = [[0.0f32; MAX_LANES]; 4];
+        let col = k * pc..(k + 1) * pc;
+        let w = L::gather4(&columns.weights[col], phases);
         let mut sx = [0i32; MAX_LANES];
         let mut sy = [0i32; MAX_LANES];
         for i in 0..L::LANES {
-            let t = &table.taps[phases[i] as usize * n + k];
-            for (j, wj) in wl.iter_mut().enumerate() {
-                wj[i] = t.w[j];
-            }
+            let t = &table.taps[lane_phase[i] as usize * n + k];
             sx[i] = x0 + i as i32 + t.dx + shift[0];
             sy[i] = y + t.dy + shift[1];
         }
-        let w = [
-            L::load(&wl[0], 0),
-            L::load(&wl[1], 0),
-            L::load(&wl[2], 0),
-            L::load(&wl[3], 0),
-        ];
         for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
-            let v = if interior {
-                let base = planes.base + c * planes.width as usize;
-                let rs = planes.row_stride;
-                let mut at = [0usize; MAX_LANES];
-                for i in 0..L::LANES {
-                    at[i] = base + sy[i] as usize * rs + sx[i] as usize;
-                }
-                let mut right = [0usize; MAX_LANES];
-                let mut below = [0usize; MAX_LANES];
-                let mut below_right = [0usize; MAX_LANES];
-                for i in 0..L::LANES {
-                    right[i] = at[i] + 1;
-                    below[i] = at[i] + rs;
-                    below_right[i] = at[i] + rs + 1;
-                }
-                [
-                    L::gather_at(planes.data, &at),
-                    L::gather_at(planes.data, &right),
-                    L::gather_at(planes.data, &below),
-                    L::gather_at(planes.data, &below_right),
-                ]
-            } else {
-                fetch_corners(&planes.plane(c), &sx, &sy)
-            };
+            let v = fetch_corners(&planes.plane(c), &sx, &sy);
             *a = add_bilinear(*a, &w, &v);
         }
     }
 }
 
-/// The per-pixel phases of pixels x0.. (one per lane; [`phase_at`] for `PerPixel` tables): the
+/// The per-pixel phases of pixels x0.. as integer lanes ([`phase_at`] for `PerPixel` tables): the
 /// pixel hash on integer lanes.
 #[inline(always)]
-pub fn phases<L: Lane>(table: &KernelTable, row_hash_v: u32, x0: u32) -> [u32; MAX_LANES] {
-    let mut out = [0u32; MAX_LANES];
+pub fn phases<L: Lane>(table: &KernelTable, row_hash_v: u32, x0: u32) -> L::U {
     let bits = table.phase_bits();
     if bits == 0 {
-        return out;
+        return L::u_splat(0);
     }
     let x = L::u_iota(x0);
     let h = L::u_mix32(L::u_xor(
         L::u_splat(row_hash_v),
         L::u_mul(x, L::u_splat(0x9e37_79b9)),
     ));
-    L::u_store(L::u_shr(h, 32 - bits), &mut out);
-    out
+    L::u_shr(h, 32 - bits)
 }

@@ -1,17 +1,45 @@
 //! `ellipseN`: N points equally spaced in arc length on an ellipse.
 
 use std::f64::consts::PI;
+use std::sync::OnceLock;
 
 use super::*;
+
+/// `(sin t, cos t)` at the midpoints of equal angle steps, computed once per process: the moment
+/// integrals and the arc-length tables below are built for every light and every bisection
+/// step, and their `sin_cos` calls dominated building the plan. Each table keeps its loop's own
+/// expression for `t`, so the values are the same bits as computing them in place.
+fn moment_sin_cos() -> &'static [(f64, f64)] {
+    static TABLE: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        (0..MOMENT_STEPS)
+            .map(|i| ((i as f64 + 0.5) * 2.0 * PI / MOMENT_STEPS as f64).sin_cos())
+            .collect()
+    })
+}
+
+/// [`moment_sin_cos`] for the arc-length table of [`ellipse_point_sets`].
+fn arc_sin_cos() -> &'static [(f64, f64)] {
+    static TABLE: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let dt = 2.0 * PI / ARC_STEPS as f64;
+        (0..ARC_STEPS)
+            .map(|i| ((i as f64 + 0.5) * dt).sin_cos())
+            .collect()
+    })
+}
+
+/// Angle steps of [`ellipse_second_moments`].
+const MOMENT_STEPS: usize = 4096;
+/// Angle steps of the arc-length table of [`ellipse_point_sets`].
+const ARC_STEPS: usize = 8192;
 
 /// Arc-length statistics of an ellipse with semi-axes (1, r): (∮x² ds, ∮y² ds, L), by the
 /// midpoint rule in the angle parameter (the integrand is smooth and periodic: converges fast).
 pub(crate) fn ellipse_second_moments(r: f64) -> (f64, f64, f64) {
-    const STEPS: usize = 4096;
+    const STEPS: usize = MOMENT_STEPS;
     let (mut sx, mut sy, mut len) = (0.0, 0.0, 0.0);
-    for i in 0..STEPS {
-        let t = (i as f64 + 0.5) * 2.0 * PI / STEPS as f64;
-        let (s, c) = t.sin_cos();
+    for &(s, c) in moment_sin_cos() {
         let ds = (s * s + r * r * c * c).sqrt();
         sx += c * c * ds;
         sy += r * r * s * s * ds;
@@ -48,22 +76,20 @@ pub(crate) fn ellipse_points(a: f64, b: f64, start: f64, count: usize) -> Vec<[f
     ellipse_point_sets(a, b, &[start], count).remove(0)
 }
 
-/// [`ellipse_points`] for several start fractions, sharing one arc-length table (building the
-/// table dominates: 8192 `sin_cos` per call).
+/// [`ellipse_points`] for several start fractions, sharing one arc-length table (the angle
+/// samples' `sin_cos` come from a table computed once).
 pub(crate) fn ellipse_point_sets(
     a: f64,
     b: f64,
     starts: &[f64],
     count: usize,
 ) -> Vec<Vec<[f64; 2]>> {
-    const STEPS: usize = 8192;
+    const STEPS: usize = ARC_STEPS;
     // Cumulative arc length at angle samples, for inverting s(t).
     let mut cum = Vec::with_capacity(STEPS + 1);
     cum.push(0.0);
     let dt = 2.0 * PI / STEPS as f64;
-    for i in 0..STEPS {
-        let t = (i as f64 + 0.5) * dt;
-        let (s, c) = t.sin_cos();
+    for (i, &(s, c)) in arc_sin_cos().iter().enumerate() {
         let ds = (a * a * s * s + b * b * c * c).sqrt() * dt;
         cum.push(cum[i] + ds);
     }

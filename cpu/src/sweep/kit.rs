@@ -5,7 +5,7 @@ use convshadow_common::hash::row_hash;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::raster::RasterSetup;
 
-use crate::kernels::light_row_hash;
+use crate::kernels::{TapColumns, light_row_hash};
 use crate::ldi::Ldi;
 
 pub use convshadow_common::sweep_io::MAX_LIGHT_CHANNELS;
@@ -15,6 +15,8 @@ pub(crate) struct SlabContext<'a> {
     pub plan: &'a RenderPlan,
     pub raster: &'a RasterSetup,
     pub ldi: &'a Ldi,
+    /// Every light's tap table by tap (for per-pixel phases).
+    pub columns: &'a [TapColumns],
     pub slab: u32,
     /// Back face of the slab (the cursor advances past fragments in front of it).
     pub back: f32,

@@ -30,6 +30,7 @@ use convshadow_common::raster::RasterSetup;
 use rayon::prelude::*;
 
 use crate::composite::finish;
+use crate::kernels::TapColumns;
 use crate::ldi::Ldi;
 use kit::{Reach, RowState, SlabContext};
 use quiet::{QuietRow, QuietSetup};
@@ -247,6 +248,11 @@ pub fn sweep_with(
     let mut state = PixelState::new(plan, ldi, options);
     let mut quiet = QuietState::new(plan, ldi, &state.prev, cpu);
     let reach = Reach::of(plan);
+    let columns: Vec<TapColumns> = plan
+        .lights
+        .iter()
+        .map(|l| TapColumns::new(&l.table, plan.light_row_len()))
+        .collect();
 
     for slab in 0..plan.slabs {
         if options.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
@@ -256,6 +262,7 @@ pub fn sweep_with(
             plan,
             raster,
             ldi,
+            columns: &columns,
             slab,
             back: plan.slab_back[slab as usize],
             front: plan.slab_front[slab as usize],

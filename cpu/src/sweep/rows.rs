@@ -11,7 +11,7 @@ use super::kit::{
 };
 use super::quiet::{ChunkCounts, ChunkState, ChunkWork, LANES, QuietRow, RowSpans};
 use super::stage::{ChunkFn, chunk_fn};
-use crate::parity::advance;
+use crate::parity::{NO_CROSSING, advance};
 
 /// Processes one row of one slab, one pixel at a time.
 pub(crate) fn sweep_row_scalar(
@@ -48,9 +48,8 @@ fn sweep_pixels(
     let (row_hashes, jitter_row) = hashes;
     for x in xs {
         let interior = reach.interior(x, 1, y, w, h);
-        let (not_one, not_zero) =
-            pixel(ctx, y, x, prev, row, row_hashes, jitter_row, interior, None);
-        spans.record(x, 1, not_one, not_zero);
+        let out = pixel(ctx, y, x, prev, row, row_hashes, jitter_row, interior, None);
+        spans.record(x, 1, out.not_one, out.not_zero);
     }
 }
 
@@ -82,7 +81,7 @@ pub(crate) fn sweep_row_simd(
             Some(q) => q.classify(ctx, reach, y, c),
             None => ChunkWork::Full(None),
         };
-        match work {
+        let moved = match work {
             ChunkWork::Unoccluded => {
                 tally[1] += 1;
                 for p in 0..planes {
@@ -93,19 +92,23 @@ pub(crate) fn sweep_row_simd(
             }
             ChunkWork::Dark => {
                 tally[2] += 1;
+                let mut moved = false;
                 for x in x0..x0 + LANES {
                     let end = ctx.ldi.offsets[y * w + x + 1];
-                    advance(ctx.ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
+                    let first =
+                        advance(ctx.ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
+                    moved |= first != NO_CROSSING;
                 }
                 for p in 0..planes {
                     row.light[p * w + x0..][..LANES].fill(0.0);
                 }
                 spans.record(x0, LANES, true, false);
+                moved
             }
             ChunkWork::Full(known_light) => {
                 tally[0] += 1;
                 let interior = reach.interior(x0, LANES, y, w, h);
-                let (not_one, not_zero) = chunk(
+                let out = chunk(
                     ctx,
                     y,
                     x0,
@@ -116,10 +119,12 @@ pub(crate) fn sweep_row_simd(
                     interior,
                     known_light,
                 );
-                spans.record(x0, LANES, not_one, not_zero);
+                spans.record(x0, LANES, out.not_one, out.not_zero);
+                out.moved
             }
-        }
-        if let Some(q) = &mut quiet {
+        };
+        // A chunk whose cursors, masks and alphas did not change keeps its summary.
+        if let (Some(q), true) = (&mut quiet, moved) {
             q.chunks[c] = ChunkState::of(ctx.ldi, y, x0, row.next, row.inside, row.alpha);
         }
     }

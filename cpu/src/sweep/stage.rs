@@ -27,7 +27,19 @@ pub(crate) type ChunkFn = fn(
     u32,
     bool,
     Option<f32>,
-) -> (bool, bool);
+) -> ChunkOutcome;
+
+/// What one chunk's stages tell the lane path about their lanes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct ChunkOutcome {
+    /// Some outgoing light value is not exactly 1.
+    pub not_one: bool,
+    /// Some outgoing light value is not exactly 0.
+    pub not_zero: bool,
+    /// Some lane crossed a fragment or was shaded: its cursor, inside mask or alpha may have
+    /// changed, so the chunk's quiet summary must be refreshed.
+    pub moved: bool,
+}
 
 /// The [`sweep_chunk`] instance for `planes` light channels: the smallest capacity that holds
 /// them (zeroing a 48-entry array per chunk costs).
@@ -42,8 +54,7 @@ pub(crate) fn chunk_fn<L: Lane>(planes: usize) -> ChunkFn {
 
 /// All five stages for the pixels x0..x0 + LANES of row y. `interior`: every read of the gather
 /// lies inside the grid; `known_light`: every value the gather reads is this constant (the
-/// gather is skipped). Returns whether any outgoing light value is not exactly 1, and whether
-/// any is not exactly 0.
+/// gather is skipped).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
@@ -56,7 +67,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     jitter_row: u32,
     interior: bool,
     known_light: Option<f32>,
-) -> (bool, bool) {
+) -> ChunkOutcome {
     let plan = ctx.plan;
     let ldi = ctx.ldi;
     let w = plan.grid_width as usize;
@@ -91,7 +102,8 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                     Some(p) => gather(&planes, t.phase(p), shift, x0, yi, interior, acc),
                     None => {
                         let ph = phases::<L>(t, row_hashes[l], x0 as u32);
-                        gather_per_lane(&planes, t, &ph, shift, x0, yi, interior, acc);
+                        let columns = &ctx.columns[l];
+                        gather_per_lane(&planes, t, columns, ph, shift, x0, yi, interior, acc);
                     }
                 }
             }
@@ -115,6 +127,8 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     // 3–4. Shading and compositing.
     let mut attenuation = [L::splat(1.0); 3];
     let lane_mesh = &mesh[..L::LANES];
+    let moved = lane_mesh.iter().any(Option::is_some)
+        || crossed[..L::LANES].iter().any(|&c| c != NO_CROSSING);
     if let Some(m) = lane_mesh.iter().flatten().next().copied() {
         if lane_mesh.iter().all(|&k| k.is_none() || k == Some(m)) {
             attenuation = shade_chunk(ctx, y, x0, row, &iin[..n], m, &mesh, &crossed, jitter_row);
@@ -166,7 +180,11 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
             out.store(row.light, (l * ch + c) * w + x0);
         }
     }
-    (L::m_any(not_one), L::m_any(not_zero))
+    ChunkOutcome {
+        not_one: L::m_any(not_one),
+        not_zero: L::m_any(not_zero),
+        moved,
+    }
 }
 
 /// Stages 3–4 for lanes whose shaded pixels all lie in mesh `m` (`mesh[i]` is `None` in lanes
@@ -262,6 +280,7 @@ mod tests {
     use wide::f32x8;
 
     use super::*;
+    use crate::kernels::TapColumns;
     use crate::ldi::{BuildLdi, Ldi};
     use crate::sweep::kit::{Reach, jitter_row_hash, light_row_hashes};
 
@@ -347,11 +366,17 @@ mod tests {
         let mut rng = TestRng::new(seed);
         let prev: Vec<f32> = (0..row_len * h).map(|_| value(&mut rng)).collect();
         let mut counts = [0u32; 9];
+        let columns: Vec<TapColumns> = plan
+            .lights
+            .iter()
+            .map(|l| TapColumns::new(&l.table, row_len))
+            .collect();
         for slab in 0..plan.slabs {
             let ctx = SlabContext {
                 plan: &plan,
                 raster: &g.raster,
                 ldi: &ldi,
+                columns: &columns,
                 slab,
                 back: plan.slab_back[slab as usize],
                 front: plan.slab_front[slab as usize],
@@ -422,6 +447,7 @@ mod tests {
         // The 8-lane stage with one lane's first light value off by one bit.
         let wrong_lane: ChunkFn = |ctx, y, x0, prev, row, hashes, jitter, interior, known| {
             let r = sweep_chunk::<f32x8, 6>(ctx, y, x0, prev, row, hashes, jitter, interior, known);
+            // (the outcome is returned unchanged: only the light is wrong)
             row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
             r
         };
