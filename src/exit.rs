@@ -18,6 +18,9 @@ pub const GPU_UNAVAILABLE: i32 = 5;
 pub const MESH_DEFECT: i32 = 6;
 /// The output could not be written.
 pub const OUTPUT_FAILED: i32 = 7;
+/// This build uses instructions (x86-64-v3: AVX2, FMA, BMI) the processor lacks; checked
+/// before `main` (`src/cpu_check.rs`).
+pub const UNSUPPORTED_CPU: i32 = 8;
 /// Interrupted by SIGINT or SIGTERM (no output was written).
 pub const INTERRUPTED: i32 = 130;
 

@@ -4,6 +4,8 @@ use clap::{Parser, Subcommand};
 use convshadow::commands;
 use convshadow::exit;
 
+mod cpu_check;
+
 /// Iterative convolution shadows for closed meshes filled with volumetric detail.
 #[derive(Parser, Debug)]
 #[command(name = "convshadow", version, about)]

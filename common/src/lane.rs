@@ -26,9 +26,9 @@ pub trait Lane:
     type U: Copy;
     /// Comparison mask.
     type M: Copy;
-    /// The per-lane gather's accumulator, in the lane type's own layout (see [`Lane::acc_block`]).
+    /// The per-lane gather's accumulator, in the lane type's own layout (see [`Lane::acc_blocks`]).
     type Acc: Copy;
-    /// A tap's four corner weights per lane, in the layout [`Lane::acc_block`] reads.
+    /// A tap's four corner weights per lane, in the layout [`Lane::acc_blocks`] reads.
     type W4: Copy;
     /// Broadcasts a float.
     fn splat(v: f32) -> Self;
@@ -70,21 +70,23 @@ pub trait Lane:
     fn u_gather(table: &[u32], i: Self::U) -> Self::U;
     /// The four floats of `table[i]` per lane, as four values (a transposed gather).
     fn gather4(table: &[[f32; 4]], i: Self::U) -> [Self; 4];
-    /// The weights `table[i]` of every lane, for [`Lane::acc_block`].
+    /// The weights `table[i]` of every lane, for [`Lane::acc_blocks`].
     fn weights4(table: &[[f32; 4]], i: Self::U) -> Self::W4;
     /// An accumulator holding `v`'s lanes.
     fn acc_from(v: Self) -> Self::Acc;
-    /// Adds lane i's bilinear tap: `acc + w0·v00 + w1·v10 + w2·v01 + w3·v11`, left to right,
-    /// where `v00, v10` are `data[at], data[at + 1]` and `v01, v11` the same `stride` further,
-    /// `at = origin + rel[i]` (`rel` signed); panics outside `data`.
-    fn acc_block(
-        acc: Self::Acc,
+    /// Adds lane i's bilinear tap to each plane's accumulator `sums[c]`: `acc + w0·v00 + w1·v10
+    /// + w2·v01 + w3·v11`, left to right, where `v00, v10` are `data[at], data[at + 1]` and
+    /// `v01, v11` the same `stride` further, `at = origin + c·plane_step + rel[i]` (`rel`
+    /// signed); one bounds check for all planes and lanes, panicking outside `data`.
+    fn acc_blocks(
+        sums: &mut [Self::Acc],
         w: &Self::W4,
         data: &[f32],
         origin: usize,
+        plane_step: usize,
         rel: Self::U,
         stride: usize,
-    ) -> Self::Acc;
+    );
     /// The accumulated values.
     fn acc_finish(acc: Self::Acc) -> Self;
     /// `self != o` (true for NaN).
@@ -97,6 +99,11 @@ pub trait Lane:
     fn m_from(flags: &[bool; MAX_LANES]) -> Self::M;
     /// `data[at..at + LANES]`.
     fn load(data: &[f32], at: usize) -> Self;
+    /// `data[at..at + LANES]` without a bounds check.
+    ///
+    /// # Safety
+    /// `at + LANES <= data.len()`.
+    unsafe fn load_unchecked(data: &[f32], at: usize) -> Self;
     /// Writes the lanes to `data[at..at + LANES]`.
     fn store(self, data: &mut [f32], at: usize);
     /// Lane `i`.
@@ -204,22 +211,26 @@ impl Lane for f32 {
         v
     }
     #[inline(always)]
-    fn acc_block(
-        acc: f32,
+    fn acc_blocks(
+        sums: &mut [f32],
         w: &[f32; 4],
         data: &[f32],
         origin: usize,
+        plane_step: usize,
         rel: u32,
         stride: usize,
-    ) -> f32 {
-        let at = origin.wrapping_add_signed(rel as i32 as isize);
-        let v = [
-            data[at],
-            data[at + 1],
-            data[at + stride],
-            data[at + stride + 1],
-        ];
-        ((acc + w[0] * v[0]) + w[1] * v[1] + w[2] * v[2]) + w[3] * v[3]
+    ) {
+        let first = origin.wrapping_add_signed(rel as i32 as isize);
+        for (c, acc) in sums.iter_mut().enumerate() {
+            let at = first + c * plane_step;
+            let v = [
+                data[at],
+                data[at + 1],
+                data[at + stride],
+                data[at + stride + 1],
+            ];
+            *acc = (((*acc + w[0] * v[0]) + w[1] * v[1]) + w[2] * v[2]) + w[3] * v[3];
+        }
     }
     #[inline(always)]
     fn acc_finish(acc: f32) -> f32 {
@@ -244,6 +255,11 @@ impl Lane for f32 {
     #[inline(always)]
     fn load(data: &[f32], at: usize) -> Self {
         data[at]
+    }
+    #[inline(always)]
+    unsafe fn load_unchecked(data: &[f32], at: usize) -> Self {
+        // SAFETY: the caller guarantees `at < data.len()`.
+        unsafe { *data.get_unchecked(at) }
     }
     #[inline(always)]
     fn store(self, data: &mut [f32], at: usize) {
@@ -362,15 +378,16 @@ impl Lane for f32x8 {
         avx2::acc_from(v)
     }
     #[inline(always)]
-    fn acc_block(
-        acc: [f32x8; 2],
+    fn acc_blocks(
+        sums: &mut [[f32x8; 2]],
         w: &[f32x8; 4],
         data: &[f32],
         origin: usize,
+        plane_step: usize,
         rel: u32x8,
         stride: usize,
-    ) -> [f32x8; 2] {
-        avx2::acc_block(acc, w, data, origin, rel, stride)
+    ) {
+        avx2::acc_blocks(sums, w, data, origin, plane_step, rel, stride)
     }
     #[inline(always)]
     fn acc_finish(acc: [f32x8; 2]) -> Self {
@@ -403,6 +420,11 @@ impl Lane for f32x8 {
     fn load(data: &[f32], at: usize) -> Self {
         let a: [f32; 8] = data[at..at + 8].try_into().expect("8 floats");
         f32x8::new(a)
+    }
+    #[inline(always)]
+    unsafe fn load_unchecked(data: &[f32], at: usize) -> Self {
+        // SAFETY: the caller guarantees `at + 8 <= data.len()`; an unaligned read.
+        f32x8::new(unsafe { data.as_ptr().add(at).cast::<[f32; 8]>().read_unaligned() })
     }
     #[inline(always)]
     fn store(self, data: &mut [f32], at: usize) {
@@ -519,7 +541,7 @@ mod avx2 {
     }
 
     /// Per half (lanes 0–3, 4–7), the weights interleaved by pairs: `[w0 w1]` of each lane in
-    /// one value, `[w2 w3]` in another — the layout of [`acc_block`]'s pixel pairs. Order:
+    /// one value, `[w2 w3]` in another — the layout of [`acc_blocks`]'s pixel pairs. Order:
     /// `[w01 of lanes 0–3, w01 of lanes 4–7, w23 of lanes 0–3, w23 of lanes 4–7]`.
     #[inline(always)]
     pub(super) fn weights4(table: &[[f32; 4]], i: u32x8) -> [f32x8; 4] {
@@ -596,32 +618,35 @@ mod avx2 {
         }
     }
 
-    /// [`Lane::acc_block`](super::Lane::acc_block) on pixel pairs: per half, the top row's
+    /// [`Lane::acc_blocks`](super::Lane::acc_blocks) on pixel pairs: per half, the top row's
     /// pairs times the interleaved weights `[w0 w1]` are added to the accumulator's even slots
     /// as they are (`+ w0·v00`), then moved down one slot (`+ w1·v10`); the bottom row likewise.
     /// Each lane gets its four terms in the fixed order without a shuffle to split the pairs
     /// (the odd slots hold values nobody reads).
     #[inline(always)]
-    pub(super) fn acc_block(
-        acc: [f32x8; 2],
+    pub(super) fn acc_blocks(
+        sums: &mut [[f32x8; 2]],
         w: &[f32x8; 4],
         data: &[f32],
         origin: usize,
+        plane_step: usize,
         rel: u32x8,
         stride: usize,
-    ) -> [f32x8; 2] {
+    ) {
         let (lo, hi) = lane_range(rel, true);
         let o = origin as i64;
-        check(o + lo, o + hi + stride as i64 + 1, data.len());
+        let last_plane = (sums.len().max(1) as i64 - 1) * plane_step as i64;
+        check(o + lo, o + last_plane + hi + stride as i64 + 1, data.len());
         let rel = rel.to_array();
-        let mut out = acc;
-        for (h, sum) in out.iter_mut().enumerate() {
-            for (row, weights) in [(0, w[h]), (stride, w[2 + h])] {
-                let p = pairs(data, origin + row, &rel, h) * weights;
-                *sum = (*sum + p) + odd_to_even(p);
+        for (c, sum) in sums.iter_mut().enumerate() {
+            let at = origin + c * plane_step;
+            for (h, half) in sum.iter_mut().enumerate() {
+                for (row, weights) in [(0, w[h]), (stride, w[2 + h])] {
+                    let p = pairs(data, at + row, &rel, h) * weights;
+                    *half = (*half + p) + odd_to_even(p);
+                }
             }
         }
-        out
     }
 
     /// Lanes 0–3 and 4–7 of `v` in the even slots of two values (odd slots get copies).
@@ -803,13 +828,17 @@ mod tests {
                 let rel: [u32; MAX_LANES] =
                     std::array::from_fn(|i| ((mix32(h[i] + tap) % 1500) as i32 - 750) as u32);
                 let w8 = f32x8::weights4(&table, phase + u32x8::splat(0));
-                eight = f32x8::acc_block(eight, &w8, &data, origin, u32x8::new(rel), stride);
+                let mut sums = [eight];
+                f32x8::acc_blocks(&mut sums, &w8, &data, origin, 0, u32x8::new(rel), stride);
+                eight = sums[0];
                 for i in 0..MAX_LANES {
                     let w1 = f32::weights4(&table, ph[i]);
-                    one[i] = f32::acc_block(one[i], &w1, &data, origin, rel[i], stride);
+                    let mut s1 = [one[i]];
+                    f32::acc_blocks(&mut s1, &w1, &data, origin, 0, rel[i], stride);
+                    one[i] = s1[0];
                 }
             }
-            agree(f32x8::acc_finish(eight), |i| one[i], "acc_block");
+            agree(f32x8::acc_finish(eight), |i| one[i], "acc_blocks");
         }
     }
 
@@ -820,6 +849,7 @@ mod tests {
         let w = f32x8::weights4(&[[0.25; 4]], u32x8::splat(0));
         let rel = u32x8::new([0, 1, 2, 3, 4, 5, 6, 90]);
         // Lane 7's bottom-right corner is 90 + 10 + 1 = 101.
-        f32x8::acc_block(f32x8::acc_from(f32x8::splat(0.0)), &w, &data, 0, rel, 10);
+        let mut sums = [f32x8::acc_from(f32x8::splat(0.0))];
+        f32x8::acc_blocks(&mut sums, &w, &data, 0, 0, rel, 10);
     }
 }

@@ -122,19 +122,55 @@ fn fetch_corners<L: Lane>(
 
 /// Gathers every channel of one light at pixels x0.. (one per lane) of row y when every lane
 /// uses the same `taps` (per-slab and scheduled phases, and any 1-lane gather): contiguous loads
-/// when `interior` (every read inside the grid), else checked fetches. Adds into `acc[c]` tap by
-/// tap, corner by corner, so every lane has the bits of any other lane count.
+/// when `interior` (every read inside the grid; one bounds check for the taps' whole
+/// `extent`, see [`TapColumns::extent`]), else checked fetches. Adds into `acc[c]` tap by tap,
+/// corner by corner, so every lane has the bits of any other lane count.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn gather<L: Lane>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
+    extent: [i32; 4],
     shift: [i32; 2],
     x0: i32,
     y: i32,
     interior: bool,
     acc: &mut [L],
 ) {
+    if interior {
+        // The lowest index any tap's top-left corner reads, and the highest bottom-right corner
+        // index less one, over every channel; lane loads then end at hi + LANES.
+        let rs = planes.row_stride as i64;
+        let (x, y) = (i64::from(x0 + shift[0]), i64::from(y + shift[1]));
+        let base = planes.base as i64;
+        let lo = base + (y + i64::from(extent[2])) * rs + x + i64::from(extent[0]);
+        let last_plane = (planes.channels as i64 - 1) * i64::from(planes.width);
+        let hi = base + last_plane + (y + i64::from(extent[3]) + 1) * rs + x + i64::from(extent[1]);
+        assert!(
+            lo >= 0 && hi + (L::LANES as i64) < planes.data.len() as i64,
+            "gather footprint {lo}..={hi} outside the light buffer"
+        );
+        for t in taps {
+            let w = [t.w[0], t.w[1], t.w[2], t.w[3]].map(L::splat);
+            let at0 = planes.base as i64 + (y + i64::from(t.dy)) * rs + x + i64::from(t.dx);
+            for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
+                let at = (at0 + c as i64 * i64::from(planes.width)) as usize;
+                let below = at + planes.row_stride;
+                // SAFETY: every load starts at or after lo ≥ 0 and ends at or before
+                // hi + LANES < data.len() (checked above).
+                let v = unsafe {
+                    [
+                        L::load_unchecked(planes.data, at),
+                        L::load_unchecked(planes.data, at + 1),
+                        L::load_unchecked(planes.data, below),
+                        L::load_unchecked(planes.data, below + 1),
+                    ]
+                };
+                *a = add_bilinear(*a, &w, &v);
+            }
+        }
+        return;
+    }
     for t in taps {
         let sx = x0 + t.dx + shift[0];
         let sy = y + t.dy + shift[1];
@@ -145,25 +181,11 @@ pub fn gather<L: Lane>(
             L::splat(t.w[3]),
         ];
         for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
-            let v = if interior {
-                let at = planes.base
-                    + c * planes.width as usize
-                    + sy as usize * planes.row_stride
-                    + sx as usize;
-                let below = at + planes.row_stride;
-                [
-                    L::load(planes.data, at),
-                    L::load(planes.data, at + 1),
-                    L::load(planes.data, below),
-                    L::load(planes.data, below + 1),
-                ]
-            } else {
-                let mut xs = [0i32; MAX_LANES];
-                for (i, v) in xs.iter_mut().enumerate() {
-                    *v = sx + i as i32;
-                }
-                fetch_corners(&planes.plane(c), &xs, &[sy; MAX_LANES])
-            };
+            let mut xs = [0i32; MAX_LANES];
+            for (i, v) in xs.iter_mut().enumerate() {
+                *v = sx + i as i32;
+            }
+            let v = fetch_corners(&planes.plane(c), &xs, &[sy; MAX_LANES]);
             *a = add_bilinear(*a, &w, &v);
         }
     }
@@ -179,6 +201,8 @@ pub struct TapColumns {
     pub weights: Vec<[f32; 4]>,
     /// `dy · row_stride + dx` (wrapping: an `i32` offset in the light buffer).
     pub offset: Vec<u32>,
+    /// Per phase, the taps' `[min dx, max dx, min dy, max dy]` (the top-left corners' extent).
+    pub extent: Vec<[i32; 4]>,
 }
 
 impl TapColumns {
@@ -194,6 +218,18 @@ impl TapColumns {
                 .map(|j| {
                     let t = &table.taps[(j % pc) * n + j / pc];
                     (t.dy as i64 * row_stride as i64 + t.dx as i64) as i32 as u32
+                })
+                .collect(),
+            extent: (0..pc as u32)
+                .map(|p| {
+                    let taps = table.phase(p);
+                    let (dx, dy) = (taps.iter().map(|t| t.dx), taps.iter().map(|t| t.dy));
+                    [
+                        dx.clone().min().unwrap_or(0),
+                        dx.max().unwrap_or(0),
+                        dy.clone().min().unwrap_or(0),
+                        dy.max().unwrap_or(0),
+                    ]
                 })
                 .collect(),
         }
@@ -225,30 +261,28 @@ pub fn gather_per_lane<L: Lane>(
         L::u_iota(0),
         L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
     );
-    let mut lane_phase = [0u32; MAX_LANES];
-    if !interior {
-        L::u_store(phases, &mut lane_phase);
-    }
     if interior {
+        // Every channel's accumulator, in the lane type's layout for pixel-pair loads.
         let mut sums = [L::acc_from(L::splat(0.0)); 3];
         assert!(planes.channels <= sums.len(), "a light has 1 or 3 channels");
+        let sums = &mut sums[..planes.channels];
         for (sum, a) in sums.iter_mut().zip(acc.iter()) {
             *sum = L::acc_from(*a);
         }
+        let plane_step = planes.width as usize;
         for k in 0..n {
             let col = k * pc..(k + 1) * pc;
             let w = L::weights4(&columns.weights[col.clone()], phases);
             let rel = L::u_add(L::u_gather(&columns.offset[col], phases), lane_shift);
-            for (c, sum) in sums.iter_mut().enumerate().take(planes.channels) {
-                let at = pixel + c * planes.width as usize;
-                *sum = L::acc_block(*sum, &w, planes.data, at, rel, rs);
-            }
+            L::acc_blocks(sums, &w, planes.data, pixel, plane_step, rel, rs);
         }
-        for (a, sum) in acc.iter_mut().zip(sums).take(planes.channels) {
-            *a = L::acc_finish(sum);
+        for (a, sum) in acc.iter_mut().zip(sums.iter()) {
+            *a = L::acc_finish(*sum);
         }
         return;
     }
+    let mut lane_phase = [0u32; MAX_LANES];
+    L::u_store(phases, &mut lane_phase);
     for k in 0..n {
         let col = k * pc..(k + 1) * pc;
         let w = L::gather4(&columns.weights[col], phases);

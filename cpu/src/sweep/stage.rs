@@ -99,7 +99,10 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                 };
                 let (x0, yi) = (x0 as i32, y as i32);
                 match uniform {
-                    Some(p) => gather(&planes, t.phase(p), shift, x0, yi, interior, acc),
+                    Some(p) => {
+                        let extent = ctx.columns[l].extent[p as usize];
+                        gather(&planes, t.phase(p), extent, shift, x0, yi, interior, acc);
+                    }
                     None => {
                         let ph = phases::<L>(t, row_hashes[l], x0 as u32);
                         let columns = &ctx.columns[l];
