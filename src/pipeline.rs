@@ -282,8 +282,12 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
                 let n = dims.iter().map(|&d| u64::from(d)).product::<u64>();
                 n.saturating_mul(voxel.bytes() + 4)
             }
-            // NIfTI: the file, and its voxels as f32 (at most 4 bytes per stored byte).
-            TextureFormat::Nifti { .. } => 5 * size(&t.path),
+            // NIfTI: the first volume as stored and its f32 voxels, from the header (so a
+            // gzip file or a 4D series counts what it holds); from the file's size (at most 4
+            // f32 bytes per stored byte) when the header cannot be read.
+            TextureFormat::Nifti { .. } => {
+                convshadow_common::nifti::memory_need(&t.path).unwrap_or_else(|| 5 * size(&t.path))
+            }
         })
         .fold(0u64, u64::saturating_add);
     meshes.saturating_add(texture_bytes)
@@ -515,7 +519,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     }
     let seconds_ldi = start.elapsed().as_secs_f64();
     let t_plan = Instant::now();
-    // Raw 3D textures load in chunks and stop once the cancel flag is raised.
+    // 3D textures (raw and NIfTI) load in chunks and stop once the cancel flag is raised.
     let plan =
         RenderPlan::new_cancellable(scene, &geometry, req.cancel).map_err(|e| match e.source {
             convshadow_common::texture3d::TextureError::Interrupted { .. } => {
