@@ -266,8 +266,8 @@ impl Shape {
                 format!("unknown NIfTI datatype code {}", header.datatype),
             )
         })?;
-        // The crate sizes the data by `bitpix` but indexes it by the datatype: a mismatch would
-        // read past the data (a panic), so it is refused here.
+        // NIfTI-1 requires `bitpix` to agree with the datatype. (The crate's own file reader
+        // sizes the data by `bitpix` but indexes it by the datatype: such a file panicked there.)
         let bits = 8 * datatype.size_of() as i64;
         if i64::from(header.bitpix) != bits {
             return Err(nifti_err(
