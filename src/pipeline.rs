@@ -282,8 +282,12 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
                 let n = dims.iter().map(|&d| u64::from(d)).product::<u64>();
                 n.saturating_mul(voxel.bytes() + 4)
             }
-            // NIfTI: the file, and its voxels as f32 (at most 4 bytes per stored byte).
-            TextureFormat::Nifti { .. } => 5 * size(&t.path),
+            // NIfTI: the first volume as stored and its f32 voxels, from the header (so a
+            // gzip file or a 4D series counts what it holds); from the file's size (at most 4
+            // f32 bytes per stored byte) when the header cannot be read.
+            TextureFormat::Nifti { .. } => {
+                convshadow_common::nifti::memory_need(&t.path).unwrap_or_else(|| 5 * size(&t.path))
+            }
         })
         .fold(0u64, u64::saturating_add);
     meshes.saturating_add(texture_bytes)
@@ -320,7 +324,8 @@ impl MemoryNeed {
     }
 
     /// The need on `backend`: [`MemoryNeed::of`], with the device buffers for `--backend gpu`
-    /// ([`MemoryNeed::on_gpu`]; `auto` is counted as the CPU, its backend is not known yet).
+    /// ([`MemoryNeed::on_gpu`]). `auto` is counted here as the CPU, the smaller need: the
+    /// pipeline checks `auto` again on the backend it opened ([`open_within_budget`]).
     pub fn for_backend(scene: &Scene, sweep: bool, backend: Backend) -> MemoryNeed {
         let need = MemoryNeed::of(scene, sweep);
         if matches!(backend, Backend::Gpu) {
@@ -407,6 +412,43 @@ impl MemoryNeed {
     }
 }
 
+/// Opens `backend` and checks the memory need (with `sweep = false`: of the LDI alone) on the
+/// backend that will run, returning the choice and what the budget leaves for fragments. A
+/// named backend is checked before it is opened, so a refusal costs no adapter start-up; `auto`
+/// is opened first and then counted as what it picked: the GPU's device buffers when it found an
+/// adapter, the CPU's need when it fell back.
+pub fn open_within_budget(
+    scene: &Scene,
+    sweep: bool,
+    backend: Backend,
+    budget: u64,
+) -> Result<(BackendChoice, u64), RenderError> {
+    if backend != Backend::Auto {
+        let left = MemoryNeed::for_backend(scene, sweep, backend).check(scene, budget)?;
+        return Ok((BackendChoice::open(backend)?, left));
+    }
+    let choice = BackendChoice::open(backend)?;
+    if choice.gpu.is_none() {
+        let left = MemoryNeed::for_backend(scene, sweep, Backend::Cpu).check(scene, budget)?;
+        return Ok((choice, left));
+    }
+    // No silent fall-back to the CPU by memory: `auto` means the GPU where there is one. The
+    // refusal says what the CPU would need instead.
+    let left = MemoryNeed::for_backend(scene, sweep, Backend::Gpu)
+        .check(scene, budget)
+        .map_err(|e| match e {
+            RenderError::OutOfMemory(m) => RenderError::OutOfMemory(format!(
+                "{m} (--backend auto opened the GPU, so its buffers count; --backend cpu needs \
+                 {} MiB before any fragment)",
+                MemoryNeed::for_backend(scene, sweep, Backend::Cpu)
+                    .total()
+                    .div_ceil(1 << 20)
+            )),
+            other => other,
+        })?;
+    Ok((choice, left))
+}
+
 /// Stops with [`RenderError::Interrupted`] when the cancel flag is raised.
 fn check_cancel(cancel: Option<&AtomicBool>) -> Result<(), RenderError> {
     if cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
@@ -446,9 +488,8 @@ pub fn build_ldi(
     memory_budget: u64,
 ) -> Result<BuiltLdi, RenderError> {
     // Refuse before allocating: the per-pixel arrays here, the fragments in `Ldi::build`.
-    let budget = MemoryNeed::for_backend(scene, false, backend).check(scene, memory_budget)?;
+    let (choice, budget) = open_within_budget(scene, false, backend, memory_budget)?;
     let pool = thread_pool(threads)?;
-    let choice = BackendChoice::open(backend)?;
     let start = Instant::now();
     let geometry = SceneGeometry::build(scene)?;
     let t_ldi = Instant::now();
@@ -475,10 +516,9 @@ pub fn build_ldi(
 pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, RenderError> {
     let start = Instant::now();
     // Refuse before allocating: the per-pixel buffers first, the fragments in `Ldi::build`.
-    let fragment_budget =
-        MemoryNeed::for_backend(scene, true, req.backend).check(scene, req.memory_budget)?;
+    let (choice, fragment_budget) =
+        open_within_budget(scene, true, req.backend, req.memory_budget)?;
     let pool = thread_pool(req.threads)?;
-    let choice = BackendChoice::open(req.backend)?;
     let geometry = SceneGeometry::build(scene)?;
     check_cancel(req.cancel)?;
     let ldi = match &choice.gpu {
@@ -515,7 +555,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     }
     let seconds_ldi = start.elapsed().as_secs_f64();
     let t_plan = Instant::now();
-    // Raw 3D textures load in chunks and stop once the cancel flag is raised.
+    // 3D textures (raw and NIfTI) load in chunks and stop once the cancel flag is raised.
     let plan =
         RenderPlan::new_cancellable(scene, &geometry, req.cancel).map_err(|e| match e.source {
             convshadow_common::texture3d::TextureError::Interrupted { .. } => {

@@ -280,3 +280,80 @@ fn render_backend_gpu_without_scene_names_the_adapter() {
     assert_eq!(stats["backend"], "gpu");
     assert!(stats["ldi_hash"].as_str().is_some_and(|h| h.len() == 16));
 }
+
+#[test]
+fn auto_counts_the_memory_of_the_backend_it_picks() {
+    use convshadow::pipeline::MemoryNeed;
+    let Some(_ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-auto-budget");
+    let text = "[image]\nwidth = 512\nheight = 512\n[camera]\nview_width = 3.0\n[sweep]\n\
+                slabs = 8\noptimal_distance = 0.5\n[[mesh]]\nshape = \"box\"\n\
+                size = [1.0, 1.0, 1.0]\nmaterial = \"m\"\n[material.m]\nopacity = 0.5\n";
+    std::fs::write(dir.join("s.toml"), text).unwrap();
+    let scene = Scene::load(&dir.join("s.toml")).unwrap();
+    let cpu = MemoryNeed::for_backend(&scene, true, Backend::Cpu).total();
+    let gpu = MemoryNeed::for_backend(&scene, true, Backend::Gpu).total();
+    // A budget (whole MiB, as --max-memory takes it) between the two needs, leaving the CPU
+    // several MiB for the box's fragments (about 60k of 17 bytes).
+    let mib = (cpu + (gpu - cpu) / 2) >> 20;
+    assert!(
+        cpu + (4 << 20) <= mib << 20 && mib << 20 < gpu,
+        "{cpu} {mib} MiB {gpu}"
+    );
+    let budget = mib.to_string();
+    let args = |backend: &'static str| {
+        [
+            "render",
+            "s.toml",
+            "-o",
+            "o.png",
+            "-q",
+            "--backend",
+            backend,
+            "--max-memory",
+        ]
+        .into_iter()
+        .map(String::from)
+        .chain([budget.clone()])
+        .collect::<Vec<_>>()
+    };
+    let run = |backend: &'static str, adapter: Option<&str>| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_convshadow"));
+        cmd.args(args(backend)).current_dir(&dir);
+        if let Some(a) = adapter {
+            cmd.env(convshadow_gpu::device::ADAPTER_ENV, a);
+        }
+        let out = cmd.output().unwrap();
+        let _ = std::fs::remove_file(dir.join("o.png"));
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    // The CPU fits, the GPU is refused naming its device buffers.
+    assert_eq!(run("cpu", None).0, Some(0));
+    let (code, err) = run("gpu", None);
+    assert_eq!(code, Some(4), "{err}");
+    assert!(err.contains("GPU buffers"), "{err}");
+    // `auto` with an adapter runs on the GPU, so it is counted (and refused) as the GPU.
+    let (code, err) = run("auto", None);
+    assert_eq!(code, Some(4), "auto picked the GPU: {err}");
+    assert!(
+        err.contains("GPU buffers") && err.contains("--backend auto opened the GPU"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!(
+            "--backend cpu needs {} MiB",
+            cpu.div_ceil(1 << 20)
+        )),
+        "{err}"
+    );
+    // `auto` without one (no adapter has this name) falls back to the CPU, and fits as the CPU.
+    let (code, err) = run("auto", Some("no adapter is called this"));
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("rendering on the CPU"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -985,3 +985,43 @@ fn a_signal_during_texture_loading_stops_the_render_promptly() {
     assert_eq!(files_in(&dir), ["s.toml", "t.raw"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_signal_during_nifti_loading_stops_the_render_promptly() {
+    let dir = support::temp_dir("rel-nifti-signal");
+    // A sparse NIfTI-1 file of 1024×1024×256 u8 voxels (256 MiB of zeros after the 352-byte
+    // header: NIfTI-1 layout, dim at byte 40, datatype 70, bitpix 72, pixdim 76, vox_offset 108,
+    // magic 344): seconds to read and convert, nothing on disk.
+    let mut h = vec![0u8; 352];
+    h[0..4].copy_from_slice(&348i32.to_le_bytes());
+    for (i, d) in [3i16, 1024, 1024, 256, 1, 1, 1, 1].iter().enumerate() {
+        h[40 + 2 * i..42 + 2 * i].copy_from_slice(&d.to_le_bytes());
+    }
+    h[70..72].copy_from_slice(&2i16.to_le_bytes());
+    h[72..74].copy_from_slice(&8i16.to_le_bytes());
+    for i in 0..8 {
+        h[76 + 4 * i..80 + 4 * i].copy_from_slice(&1f32.to_le_bytes());
+    }
+    h[108..112].copy_from_slice(&352f32.to_le_bytes());
+    h[344..348].copy_from_slice(b"n+1\0");
+    std::fs::write(dir.join("t.nii"), &h).unwrap();
+    let f = std::fs::OpenOptions::new()
+        .write(true)
+        .open(dir.join("t.nii"))
+        .unwrap();
+    f.set_len(352 + (256 << 20)).unwrap();
+    drop(f);
+    let scene = BASE_SCENE.replace(
+        "[material.m]\nopacity = 0.5",
+        "[material.m]\ntexture = { path = \"t.nii\" }\n\
+         gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 0.5]]",
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let args = ["render", "s.toml", "-o", "o.png", "--max-memory", "16384"];
+    let (code, err, took) = signal_after(&args, &dir, 300, libc::SIGINT);
+    assert_eq!(code, Some(INTERRUPTED), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(took < 1.0, "the render took {took:.1} s to stop");
+    assert_eq!(files_in(&dir), ["s.toml", "t.nii"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -45,6 +45,42 @@ pub enum LdiError {
     },
 }
 
+/// Checks, after counting, that `total` fragments can be stored: within `budget_bytes` at
+/// [`BYTES_PER_FRAGMENT`] each and addressable by 32-bit offsets, else [`LdiError::OverBudget`];
+/// and that the machine can allocate them, probed once with a fallible reservation (untouched,
+/// so it costs no memory) before any fragment array, else [`LdiError::Unallocatable`]: a budget
+/// above the machine's memory is an error, never an allocation abort. Both builders (CPU and the
+/// GPU's host read-back) call it.
+pub fn check_fragment_storage(total: u64, budget_bytes: u64) -> Result<(), LdiError> {
+    fragment_storage(total, BYTES_PER_FRAGMENT, budget_bytes)
+}
+
+/// [`check_fragment_storage`] with the bytes per fragment as a parameter, so a test can ask for
+/// more than any machine has without counting that many fragments.
+fn fragment_storage(
+    total: u64,
+    bytes_per_fragment: u64,
+    budget_bytes: u64,
+) -> Result<(), LdiError> {
+    let need = total.saturating_mul(bytes_per_fragment);
+    let need_mib = need.div_ceil(1 << 20);
+    if need > budget_bytes || total > u64::from(u32::MAX) {
+        return Err(LdiError::OverBudget {
+            fragments: total,
+            need_mib,
+            budget_mib: budget_bytes >> 20,
+        });
+    }
+    let mut probe: Vec<u8> = Vec::new();
+    if usize::try_from(need).map_or(true, |n| probe.try_reserve_exact(n).is_err()) {
+        return Err(LdiError::Unallocatable {
+            fragments: total,
+            need_mib,
+        });
+    }
+    Ok(())
+}
+
 /// The layered depth image.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Ldi {
@@ -166,6 +202,47 @@ impl Ldi {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fragment_storage_is_refused_over_the_budget_and_when_the_machine_cannot_allocate_it() {
+        // Within the budget: 1000 fragments of 17 bytes fit exactly 17000 bytes, not 16999.
+        assert_eq!(check_fragment_storage(1000, 17_000), Ok(()));
+        assert_eq!(
+            check_fragment_storage(1000, 16_999),
+            Err(LdiError::OverBudget {
+                fragments: 1000,
+                need_mib: 1,
+                budget_mib: 0
+            })
+        );
+        // More fragments than 32-bit offsets address, whatever the budget.
+        let too_many = u64::from(u32::MAX) + 1;
+        assert!(matches!(
+            check_fragment_storage(too_many, u64::MAX),
+            Err(LdiError::OverBudget { .. })
+        ));
+        // 2^31 fragments of 2^31 bytes: 2^62 bytes (4 EiB) fit a budget of u64::MAX but no
+        // machine's address space, so the probe's reservation fails: an error, not an abort.
+        assert_eq!(
+            fragment_storage(1 << 31, 1 << 31, u64::MAX),
+            Err(LdiError::Unallocatable {
+                fragments: 1 << 31,
+                need_mib: 1 << 42
+            })
+        );
+        // Beyond u64: the need saturates and is still refused.
+        assert!(matches!(
+            fragment_storage(1 << 31, u64::MAX, u64::MAX),
+            Err(LdiError::Unallocatable { .. })
+        ));
+        let msg = fragment_storage(1 << 31, 1 << 31, u64::MAX)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("2147483648 fragments") && msg.contains("cannot allocate"),
+            "{msg}"
+        );
+    }
 
     #[test]
     fn sortable_bits_orders_like_floats() {

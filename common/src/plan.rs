@@ -333,7 +333,7 @@ fn material_plan(
             path,
             format: TextureFormat::Nifti { window },
         }) => {
-            let n = crate::nifti::load_nifti(path, *window)?;
+            let n = crate::nifti::load_nifti_cancellable(path, *window, cancel)?;
             let extent = n.extent();
             (Some(Arc::new(n.texture)), Some(extent))
         }

@@ -13,7 +13,8 @@ use rayon::prelude::*;
 
 // The LDI type and its contract live in `convshadow-common`, shared with the GPU builder.
 pub use convshadow_common::ldi::{
-    BYTES_PER_FRAGMENT, Ldi, LdiError, LdiStats, from_sortable_bits, sortable_bits,
+    BYTES_PER_FRAGMENT, Ldi, LdiError, LdiStats, check_fragment_storage, from_sortable_bits,
+    sortable_bits,
 };
 
 /// Rows per work item when splitting triangles into bands.
@@ -82,24 +83,9 @@ pub fn build(setup: &RasterSetup, budget_bytes: u64) -> Result<Ldi, LdiError> {
         total += u64::from(c.load(Ordering::Relaxed));
         offsets.push(total.min(u64::from(u32::MAX)) as u32);
     }
-    let need = total * BYTES_PER_FRAGMENT;
-    if need > budget_bytes || total > u64::from(u32::MAX) {
-        return Err(LdiError::OverBudget {
-            fragments: total,
-            need_mib: need.div_ceil(1 << 20),
-            budget_mib: budget_bytes >> 20,
-        });
-    }
     drop(counts);
-    // Probe the fragment arrays once, fallibly (untouched, so free), before allocating them.
-    let mut probe: Vec<u8> = Vec::new();
-    if usize::try_from(need).map_or(true, |n| probe.try_reserve_exact(n).is_err()) {
-        return Err(LdiError::Unallocatable {
-            fragments: total,
-            need_mib: need.div_ceil(1 << 20),
-        });
-    }
-    drop(probe);
+    // Refuse over the budget, or when the machine cannot allocate the fragment arrays.
+    check_fragment_storage(total, budget_bytes)?;
 
     let cursor: Vec<AtomicU32> = offsets[..w * h]
         .iter()

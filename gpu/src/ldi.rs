@@ -15,7 +15,7 @@
 //! The result is read back into the shared [`Ldi`] type, so `ldi_hash`, statistics and the sweep
 //! input are the same code on both backends.
 
-use convshadow_common::ldi::{BYTES_PER_FRAGMENT, Ldi, LdiError, from_sortable_bits};
+use convshadow_common::ldi::{Ldi, check_fragment_storage, from_sortable_bits};
 use convshadow_common::raster::RasterSetup;
 
 use crate::buffers::{bind, check_size, groups_1d, pipeline, read_back, uniform, upload, zeroed};
@@ -145,14 +145,8 @@ pub fn build_ldi(
         total += u64::from(c);
         offsets.push(total.min(u64::from(u32::MAX)) as u32);
     }
-    let need = total * BYTES_PER_FRAGMENT;
-    if need > budget_bytes || total > u64::from(u32::MAX) {
-        return Err(GpuError::Ldi(LdiError::OverBudget {
-            fragments: total,
-            need_mib: need.div_ceil(1 << 20),
-            budget_mib: budget_bytes >> 20,
-        }));
-    }
+    // The CPU builder's rule: within the budget, and allocatable on the host for the read-back.
+    check_fragment_storage(total, budget_bytes).map_err(GpuError::Ldi)?;
     check_size(ctx, "LDI fragment key", total * 4)?;
 
     // 3. Fill and 4. sort.
