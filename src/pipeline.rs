@@ -6,6 +6,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use convshadow_common::geometry::{GeometryError, SceneGeometry};
+use convshadow_common::guard::GuardBand;
 use convshadow_common::hash::Fingerprint;
 use convshadow_common::image_io::RgbImage;
 use convshadow_common::plan::RenderPlan;
@@ -115,6 +116,15 @@ pub struct BackendChoice {
 }
 
 impl BackendChoice {
+    /// The backend this choice runs on (never `auto`).
+    pub fn opened(&self) -> Backend {
+        if self.gpu.is_some() {
+            Backend::Gpu
+        } else {
+            Backend::Cpu
+        }
+    }
+
     /// Opens the backend: `gpu` fails without an adapter, `auto` falls back to the CPU.
     pub fn open(backend: Backend) -> Result<BackendChoice, RenderError> {
         match backend {
@@ -235,6 +245,8 @@ pub const LDI_BYTES_PER_PIXEL: u64 = 4 + 4 + 4;
 /// anything large is allocated; the LDI then gets the rest of the budget for its fragments).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemoryNeed {
+    /// The guard band the grid is sized for.
+    pub guard: GuardBand,
     /// Grid pixels (image plus guard band on every side).
     pub grid_pixels: u64,
     /// The LDI's per-pixel arrays.
@@ -294,11 +306,12 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
 }
 
 impl MemoryNeed {
-    /// The need of rendering `scene` (with `sweep = false`: of building its LDI only).
-    pub fn of(scene: &Scene, sweep: bool) -> MemoryNeed {
-        let g = u64::from(scene.sweep.guard_band);
-        let grid_pixels =
-            (u64::from(scene.image.width) + 2 * g) * (u64::from(scene.image.height) + 2 * g);
+    /// The need of rendering `scene` on a grid of the image plus `guard` (with `sweep = false`:
+    /// of building its LDI only). The automatic band is known once the geometry is built
+    /// (`geometry.raster.guard`); before that, `scene.sweep.guard_band.lower_bound()` gives a
+    /// need the render cannot fall below.
+    pub fn of(scene: &Scene, guard: GuardBand, sweep: bool) -> MemoryNeed {
+        let grid_pixels = guard.grid_pixels(scene.image.width, scene.image.height);
         let image_pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
         let channels: u64 = if scene.is_monochrome() { 1 } else { 3 };
         let lights = scene.lights.len() as u64;
@@ -312,6 +325,7 @@ impl MemoryNeed {
             (0, 0, image_pixels)
         };
         MemoryNeed {
+            guard,
             grid_pixels,
             ldi_pixels: LDI_BYTES_PER_PIXEL * grid_pixels,
             light_buffers,
@@ -326,8 +340,13 @@ impl MemoryNeed {
     /// The need on `backend`: [`MemoryNeed::of`], with the device buffers for `--backend gpu`
     /// ([`MemoryNeed::on_gpu`]). `auto` is counted here as the CPU, the smaller need: the
     /// pipeline checks `auto` again on the backend it opened ([`open_within_budget`]).
-    pub fn for_backend(scene: &Scene, sweep: bool, backend: Backend) -> MemoryNeed {
-        let need = MemoryNeed::of(scene, sweep);
+    pub fn for_backend(
+        scene: &Scene,
+        guard: GuardBand,
+        sweep: bool,
+        backend: Backend,
+    ) -> MemoryNeed {
+        let need = MemoryNeed::of(scene, guard, sweep);
         if matches!(backend, Backend::Gpu) {
             need.on_gpu(scene, sweep)
         } else {
@@ -384,14 +403,15 @@ impl MemoryNeed {
             return Ok(if self.gpu_fragments { left / 2 } else { left });
         }
         Err(RenderError::OutOfMemory(format!(
-            "{}: the render needs {} MiB before any fragment ({} grid pixels: LDI arrays {} \
-                 MiB, light buffers {} MiB for {} lights, sweep state {} MiB, output {} MiB, \
+            "{}: the render needs {} MiB before any fragment ({} grid pixels with a guard band \
+                 of {}: LDI arrays {} MiB, light buffers {} MiB for {} lights, sweep state {} MiB, output {} MiB, \
                  textures and meshes {} MiB{}), more than the memory budget of {} MiB; lower \
                  image.width/image.height, sweep.guard_band, the light count or the input \
                  sizes, or raise --max-memory",
             scene.source,
             mib(need),
             self.grid_pixels,
+            self.guard,
             mib(self.ldi_pixels),
             mib(self.light_buffers),
             scene.lights.len(),
@@ -416,31 +436,33 @@ impl MemoryNeed {
 /// backend that will run, returning the choice and what the budget leaves for fragments. A
 /// named backend is checked before it is opened, so a refusal costs no adapter start-up; `auto`
 /// is opened first and then counted as what it picked: the GPU's device buffers when it found an
-/// adapter, the CPU's need when it fell back.
+/// adapter, the CPU's need when it fell back. `guard` is the band counted (before the geometry,
+/// its lower bound; callers check again once the band is resolved).
 pub fn open_within_budget(
     scene: &Scene,
+    guard: GuardBand,
     sweep: bool,
     backend: Backend,
     budget: u64,
 ) -> Result<(BackendChoice, u64), RenderError> {
     if backend != Backend::Auto {
-        let left = MemoryNeed::for_backend(scene, sweep, backend).check(scene, budget)?;
+        let left = MemoryNeed::for_backend(scene, guard, sweep, backend).check(scene, budget)?;
         return Ok((BackendChoice::open(backend)?, left));
     }
     let choice = BackendChoice::open(backend)?;
     if choice.gpu.is_none() {
-        let left = MemoryNeed::for_backend(scene, sweep, Backend::Cpu).check(scene, budget)?;
+        let left = MemoryNeed::for_backend(scene, guard, sweep, Backend::Cpu).check(scene, budget)?;
         return Ok((choice, left));
     }
     // No silent fall-back to the CPU by memory: `auto` means the GPU where there is one. The
     // refusal says what the CPU would need instead.
-    let left = MemoryNeed::for_backend(scene, sweep, Backend::Gpu)
+    let left = MemoryNeed::for_backend(scene, guard, sweep, Backend::Gpu)
         .check(scene, budget)
         .map_err(|e| match e {
             RenderError::OutOfMemory(m) => RenderError::OutOfMemory(format!(
                 "{m} (--backend auto opened the GPU, so its buffers count; --backend cpu needs \
                  {} MiB before any fragment)",
-                MemoryNeed::for_backend(scene, sweep, Backend::Cpu)
+                MemoryNeed::for_backend(scene, guard, sweep, Backend::Cpu)
                     .total()
                     .div_ceil(1 << 20)
             )),
@@ -487,11 +509,15 @@ pub fn build_ldi(
     threads: usize,
     memory_budget: u64,
 ) -> Result<BuiltLdi, RenderError> {
-    // Refuse before allocating: the per-pixel arrays here, the fragments in `Ldi::build`.
-    let (choice, budget) = open_within_budget(scene, false, backend, memory_budget)?;
+    // Refuse before allocating: the per-pixel arrays here (with the band known before the
+    // geometry, then with the band it resolves), the fragments in `Ldi::build`.
+    let least = scene.sweep.guard_band.lower_bound();
+    let (choice, _) = open_within_budget(scene, least, false, backend, memory_budget)?;
     let pool = thread_pool(threads)?;
     let start = Instant::now();
     let geometry = SceneGeometry::build(scene)?;
+    let budget = MemoryNeed::for_backend(scene, geometry.raster.guard, false, choice.opened())
+        .check(scene, memory_budget)?;
     let t_ldi = Instant::now();
     let ldi = match &choice.gpu {
         Some(ctx) => convshadow_gpu::ldi::build_ldi(ctx, &geometry.raster, budget)?,
@@ -515,11 +541,15 @@ pub fn build_ldi(
 /// Renders a scene on the CPU or, with `req.backend`, on the GPU.
 pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, RenderError> {
     let start = Instant::now();
-    // Refuse before allocating: the per-pixel buffers first, the fragments in `Ldi::build`.
-    let (choice, fragment_budget) =
-        open_within_budget(scene, true, req.backend, req.memory_budget)?;
+    // Refuse before allocating: the per-pixel buffers first (with the band known before the
+    // geometry, then with the band it resolves), the fragments in `Ldi::build`.
+    let least = scene.sweep.guard_band.lower_bound();
+    let (choice, _) = open_within_budget(scene, least, true, req.backend, req.memory_budget)?;
     let pool = thread_pool(req.threads)?;
     let geometry = SceneGeometry::build(scene)?;
+    let fragment_budget =
+        MemoryNeed::for_backend(scene, geometry.raster.guard, true, choice.opened())
+            .check(scene, req.memory_budget)?;
     check_cancel(req.cancel)?;
     let ldi = match &choice.gpu {
         Some(ctx) => convshadow_gpu::ldi::build_ldi(ctx, &geometry.raster, fragment_budget)?,
@@ -618,15 +648,16 @@ mod tests {
     #[test]
     fn gpu_buffers_count_in_the_memory_need_and_are_named() {
         let scene = Scene::default_scene();
-        let cpu = MemoryNeed::for_backend(&scene, true, Backend::Cpu);
-        let gpu = MemoryNeed::for_backend(&scene, true, Backend::Gpu);
+        let g = GuardBand::default();
+        let cpu = MemoryNeed::for_backend(&scene, g, true, Backend::Cpu);
+        let gpu = MemoryNeed::for_backend(&scene, g, true, Backend::Gpu);
         assert_eq!(cpu.gpu_buffers, 0);
         // At least the light pair, cursors, colour and offsets, and the image twice.
         let image = u64::from(scene.image.width) * u64::from(scene.image.height);
         assert!(gpu.gpu_buffers >= cpu.light_buffers + 28 * cpu.grid_pixels + 24 * image);
         assert_eq!(gpu.total(), cpu.total() + gpu.gpu_buffers);
         // The LDI alone on the GPU holds its per-pixel arrays on the device too.
-        assert!(MemoryNeed::for_backend(&scene, false, Backend::Gpu).gpu_buffers > 0);
+        assert!(MemoryNeed::for_backend(&scene, g, false, Backend::Gpu).gpu_buffers > 0);
         // A budget between the two needs: the CPU fits, the GPU is refused naming its buffers,
         // and what is left for fragments on the GPU is split between host and device.
         let budget = cpu.total() + gpu.gpu_buffers / 2;

@@ -208,7 +208,7 @@ fn the_texture_keeps_the_voxel_spacings_aspect() {
     assert_eq!(extent[0], 256.0);
     assert_eq!(extent[1], 192.0);
     assert!((extent[2] - 24.0 * 2.2).abs() < 1e-3);
-    // Texture coordinates per grid pixel (x) and per depth unit (z): the scale along x is
+    // Texture coordinates per image pixel (x) and per depth unit (z): the scale along x is
     // 1/2 per world unit, along z 256/52.8 times that (the box is 2 wide).
     let m = plan.mesh_to_detail[0];
     let du_dx = f64::from(m[0])

@@ -1,12 +1,17 @@
 //! The image bits are a contract: every example scene × every kernel renders to the `image_hash`
-//! and `ldi_hash` recorded in `tests/data/golden_hashes.tsv`, on the scalar and the SIMD path and
-//! for 1 and 3 threads, and every example scene at its own full size renders to its recorded hash.
+//! and `ldi_hash` recorded for it, on the scalar and the SIMD path and for 1 and 3 threads, and
+//! every example scene at its own full size renders to its recorded hash. Two tables:
 //!
-//! The recorded values were written by the commit before the structure and speed work began
-//! (2934191), through the command line, so they do not come from the code they now check. A change
-//! that is meant to change an image (a new default) re-records with
-//! `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test golden_hashes` and says why in its
-//! commit.
+//! - `tests/data/golden_hashes_band0.tsv`: the bits of commit 2934191, before the structure, speed
+//!   and guard-band work, written through the command line by that commit (so they do not come
+//!   from the code they now check), checked with `--guard-band 0` (the default then). Never
+//!   re-recorded: the sweep's rewrites for speed must keep these bits. (The `shaft` rows were
+//!   added with that scene, before the guard band.)
+//! - `tests/data/golden_hashes.tsv`: the same cases with the default automatic guard band,
+//!   recorded when it became the default. A change that is meant to change an image (a new
+//!   default) re-records this table with
+//!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test golden_hashes` and says why in its
+//!   commit.
 
 mod support;
 
@@ -14,6 +19,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 const GOLDEN: &str = "tests/data/golden_hashes.tsv";
+/// The pre-guard-band bits, checked with `--guard-band 0`.
+const GOLDEN_BAND0: &str = "tests/data/golden_hashes_band0.tsv";
 
 /// One render through the CLI: `(image_hash, ldi_hash)` from `--stats-json`.
 fn hashes(scene: &Path, extra: &[&str], dir: &Path) -> (String, String) {
@@ -65,13 +72,13 @@ fn example_scenes() -> Vec<PathBuf> {
     paths
 }
 
-fn golden_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(GOLDEN)
+fn golden_path(file: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(file)
 }
 
-/// `key → (image_hash, ldi_hash)` from the golden file.
-fn read_golden() -> BTreeMap<String, (String, String)> {
-    let text = std::fs::read_to_string(golden_path()).expect("tests/data/golden_hashes.tsv");
+/// `key → (image_hash, ldi_hash)` from a golden file.
+fn read_golden(file: &str) -> BTreeMap<String, (String, String)> {
+    let text = std::fs::read_to_string(golden_path(file)).expect(file);
     text.lines()
         .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
         .map(|l| {
@@ -107,6 +114,7 @@ fn every_example_scene_and_kernel_keeps_its_recorded_bits() {
     let dir = support::temp_dir("golden");
     let record = std::env::var_os("CONVSHADOW_RECORD_GOLDEN").is_some();
     if record {
+        // Only the default-band table: the band-0 table is the starting commit's bits.
         let mut text = String::from(
             "# key\timage_hash\tldi_hash — written by CONVSHADOW_RECORD_GOLDEN=1 (see \
              tests/golden_hashes.rs)\n",
@@ -116,16 +124,29 @@ fn every_example_scene_and_kernel_keeps_its_recorded_bits() {
             let (image, ldi) = hashes(&scene, &args, &dir);
             text += &format!("{key}\t{image}\t{ldi}\n");
         }
-        std::fs::write(golden_path(), text).unwrap();
+        std::fs::write(golden_path(GOLDEN), text).unwrap();
         return;
     }
-    let golden = read_golden();
+    let checked = check_table(GOLDEN, &[], &dir);
+    assert!(checked > 100, "only {checked} cases checked");
+}
+
+#[test]
+fn every_example_scene_and_kernel_keeps_the_starting_bits_without_a_guard_band() {
+    let dir = support::temp_dir("golden-band0");
+    let checked = check_table(GOLDEN_BAND0, &["--guard-band", "0"], &dir);
+    assert!(checked > 100, "only {checked} cases checked");
+}
+
+/// Renders every case with `extra` arguments and compares with `file`; returns the count.
+fn check_table(file: &str, extra: &[&str], dir: &Path) -> usize {
+    let golden = read_golden(file);
     let mut checked = 0;
     for (key, scene, args) in cases() {
         let want = golden
             .get(&key)
-            .unwrap_or_else(|| panic!("{key} is not in {GOLDEN}"));
-        let base: Vec<&str> = args.iter().map(String::as_str).collect();
+            .unwrap_or_else(|| panic!("{key} is not in {file}"));
+        let base: Vec<&str> = args.iter().map(String::as_str).chain(extra.iter().copied()).collect();
         // The full-size scenes once on the default path; the small grid on both paths and
         // thread counts.
         let variants: &[&[&str]] = if key.ends_with("/full") {
@@ -138,22 +159,22 @@ fn every_example_scene_and_kernel_keeps_its_recorded_bits() {
         };
         for variant in variants {
             let all: Vec<&str> = base.iter().chain(variant.iter()).copied().collect();
-            let got = hashes(&scene, &all, &dir);
+            let got = hashes(&scene, &all, dir);
             assert_eq!(
                 &got, want,
-                "{key} {variant:?}: (image_hash, ldi_hash) changed"
+                "{file}: {key} {variant:?}: (image_hash, ldi_hash) changed"
             );
             checked += 1;
         }
     }
-    assert!(checked > 100, "only {checked} cases checked");
+    checked
 }
 
 #[test]
 fn the_golden_check_can_fail() {
     // Guards the guard: another seed is another image, so a changed image cannot pass.
     let dir = support::temp_dir("golden-fail");
-    let golden = read_golden();
+    let golden = read_golden(GOLDEN);
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/default.toml");
     let args = [
         "--width", "53", "--height", "40", "--slabs", "24", "--kernel", "ellipse2", "--seed", "7",

@@ -6,6 +6,7 @@ mod gpu_common;
 mod support;
 
 use convshadow::common::geometry::SceneGeometry;
+use convshadow::common::guard::GuardBand;
 use convshadow::common::raster::{FIXED_ONE, RasterSetup, TriangleSetup};
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow_gpu::GpuContext;
@@ -242,7 +243,7 @@ fn gpu_ldi_equals_cpu_on_hard_triangles() {
     let setup = RasterSetup {
         width: w,
         height: h,
-        guard: 0,
+        guard: GuardBand::default(),
         triangles,
         zero_area: 0,
     };

@@ -1,11 +1,12 @@
 //! On lavapipe the GPU image is bit-identical to the CPU image (same `image_hash`, same final
 //! light buffers) for every example scene, every kernel, and scenes that reach every shader path
-//! (3D and 4D noise of every kind, 3D textures, specular, jitter off, monochrome light, guard
-//! band). On other adapters the images must stay within the thresholds of docs/gpu.md.
+//! (3D and 4D noise of every kind, 3D textures, specular, jitter off, monochrome light, a fixed
+//! guard band and an automatic one, different on each side). On other adapters the images must stay within the thresholds of docs/gpu.md.
 
 mod gpu_common;
 mod support;
 
+use convshadow::common::guard::GuardBandSpec;
 use convshadow::common::metrics::compare;
 use convshadow::common::scene::Scene;
 use convshadow::pipeline::{Backend, RenderRequest, Rendered, render};
@@ -216,12 +217,26 @@ fn gpu_image_equals_cpu_on_every_shader_path() {
     };
     let dir = support::temp_dir("gpu-paths");
     for (monochrome, jitter) in [(false, true), (true, false)] {
-        let scene = path_scene(&dir, monochrome, jitter);
+        let mut scene = path_scene(&dir, monochrome, jitter);
         assert_eq!(scene.is_monochrome(), monochrome);
         check(
             &ctx,
             &scene,
             &format!("shader paths, monochrome {monochrome}, jitter {jitter}"),
+        );
+        // The automatic band: a different width on each side (the wall reaches beyond every
+        // edge, the lights shift shadows unequally), so the grid origin and the image-keyed
+        // hashes are offset differently in x and y.
+        scene.sweep.guard_band = GuardBandSpec::Auto;
+        let band = run(&scene, Backend::Cpu).plan.guard;
+        assert!(
+            band.left != band.right && band.top != band.bottom,
+            "expected an asymmetric band, got {band}"
+        );
+        check(
+            &ctx,
+            &scene,
+            &format!("shader paths, monochrome {monochrome}, jitter {jitter}, band {band}"),
         );
     }
 }

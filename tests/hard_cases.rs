@@ -149,6 +149,7 @@ height = 32
 [camera]
 view_width = {}
 [sweep]
+guard_band = 0
 slab_distance = 0.25
 optimal_distance = 0.5
 [[light]]

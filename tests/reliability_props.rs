@@ -8,6 +8,7 @@ use std::path::Path;
 
 use convshadow::common::camera::Camera;
 use convshadow::common::geometry::SceneGeometry;
+use convshadow::common::guard::GuardBand;
 use convshadow::common::mesh::TriMesh;
 use convshadow::common::raster::RasterSetup;
 use convshadow::common::scene::{CameraSpec, ImageSpec, Scene};
@@ -129,7 +130,7 @@ fn odd_pixels(cam: &Camera, meshes: &[(&[DVec3], &[[u32; 3]])]) -> (u64, u64) {
         .flat_map(|m| m.0.iter())
         .map(|p| cam.to_camera(*p).z)
         .fold(f64::INFINITY, f64::min);
-    let setup = RasterSetup::new(cam, 1, meshes, z0).unwrap();
+    let setup = RasterSetup::new(cam, GuardBand::uniform(1), meshes, z0).unwrap();
     let ldi = Ldi::build(&setup, 1 << 30).unwrap();
     let stats = ldi.stats();
     (stats.odd_pixels, stats.fragments)

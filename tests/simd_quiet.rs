@@ -18,7 +18,7 @@ mod support;
 /// the sweep goes on for slabs after the wall.
 fn scene(kernel: &str) -> Scene {
     let text = format!(
-        "[image]\nwidth = 75\nheight = 36\n[camera]\nview_width = 4.0\n[sweep]\nslabs = 20\n\
+        "[image]\nwidth = 75\nheight = 36\n[camera]\nview_width = 4.0\n[sweep]\nguard_band = 0\nslabs = 20\n\
          optimal_distance = 0.5\nkernel = \"{kernel}\"\n[[light]]\ntilt_deg = [20.0, 10.0]\n\
          variance = [0.04, 0.02]\nrotation_deg = 25.0\n\
          [[mesh]]\nshape = \"box\"\nsize = [2.0, 5.0, 0.05]\ntranslate = [1.0, 0.0, 0.0]\n\

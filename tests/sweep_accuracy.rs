@@ -315,6 +315,7 @@ height = 32
 [camera]
 view_width = 4.0
 [sweep]
+guard_band = 0
 slabs = 24
 optimal_distance = 0.5
 kernel = "{kernel}"
@@ -377,6 +378,7 @@ height = 48
 [camera]
 view_width = 4.0
 [sweep]
+guard_band = 0
 slabs = 400
 optimal_distance = 0.5
 [[light]]

@@ -3,6 +3,7 @@
 use glam::{DAffine3, DMat3, DVec3};
 
 use crate::camera::Camera;
+use crate::guard::{AutoGuardInput, GuardBand};
 use crate::mesh::{MeshError, MeshReport, TriMesh};
 use crate::raster::{RasterError, RasterSetup};
 use crate::scene::{MAX_SLABS, MeshSpec, Scene, ShapeSpec, SlabSpec};
@@ -79,7 +80,8 @@ pub struct SceneGeometry {
     pub slab_distance: f64,
     /// Number of slabs.
     pub slabs: u32,
-    /// Rasterizer set-up of every triangle (depths relative to `z_origin`).
+    /// Rasterizer set-up of every triangle (depths relative to `z_origin`), on the grid of the
+    /// image plus the guard band resolved for this scene (`raster.guard`).
     pub raster: RasterSetup,
 }
 
@@ -172,13 +174,24 @@ impl SceneGeometry {
             .iter()
             .map(|m| (m.mesh.positions.as_slice(), m.mesh.triangles.as_slice()))
             .collect();
-        let raster =
-            RasterSetup::new(&camera, scene.sweep.guard_band, &refs, z_min).map_err(|source| {
-                GeometryError::Raster {
-                    scene: scene.source.clone(),
-                    source,
-                }
-            })?;
+        let guard = GuardBand::resolve(
+            scene.sweep.guard_band,
+            &AutoGuardInput {
+                camera: &camera,
+                meshes: refs.clone(),
+                lights: &scene.lights,
+                slabs,
+                slab_distance,
+                optimal_distance: scene.sweep.optimal_distance,
+                variance_compensation: scene.sweep.variance_compensation,
+            },
+        );
+        let raster = RasterSetup::new(&camera, guard, &refs, z_min).map_err(|source| {
+            GeometryError::Raster {
+                scene: scene.source.clone(),
+                source,
+            }
+        })?;
         Ok(SceneGeometry {
             camera,
             meshes,

@@ -3,6 +3,7 @@
 
 pub mod camera;
 pub mod geometry;
+pub mod guard;
 pub mod hash;
 pub mod image_io;
 pub mod input;

@@ -10,6 +10,7 @@ use std::sync::Arc;
 use glam::{DAffine3, DVec3};
 
 use crate::geometry::SceneGeometry;
+use crate::guard::GuardBand;
 use crate::hash::{JITTER_STREAM, slab_hash};
 use crate::kernel::{KernelMoments, KernelTable, build_table};
 use crate::noise::Detail;
@@ -79,12 +80,13 @@ pub struct PlanError {
 /// Everything the sweep needs besides the LDI.
 #[derive(Clone, Debug)]
 pub struct RenderPlan {
-    /// Grid width (image + 2·guard).
+    /// Grid width (image + left and right guard band).
     pub grid_width: u32,
-    /// Grid height.
+    /// Grid height (image + top and bottom guard band).
     pub grid_height: u32,
-    /// Guard band (pixels on each side).
-    pub guard: u32,
+    /// Guard band per side, as resolved by the geometry (`geometry.raster.guard`): image pixel
+    /// (x, y) is grid pixel (x + left, y + top).
+    pub guard: GuardBand,
     /// Image width.
     pub width: u32,
     /// Image height.
@@ -105,7 +107,9 @@ pub struct RenderPlan {
     pub materials: Vec<MaterialPlan>,
     /// Material of each mesh.
     pub mesh_material: Vec<u32>,
-    /// Per mesh: (grid pixel x, grid pixel y, relative depth) → detail coordinates, row-major 3×4.
+    /// Per mesh: (image pixel x, image pixel y, relative depth) → detail coordinates, row-major
+    /// 3×4. Image, not grid, pixels (negative inside the left and top guard band): a pixel's
+    /// detail value then has the same bits whatever the band (see [`RenderPlan::image_xy`]).
     pub mesh_to_detail: Vec<[f32; 12]>,
     /// Jitter the shading point inside the slab.
     pub jitter: bool,
@@ -189,15 +193,14 @@ impl RenderPlan {
                 return Err(err);
             }
         };
-        let guard = f64::from(scene.sweep.guard_band);
         let mesh_to_detail = scene
             .meshes
             .iter()
             .zip(&geometry.meshes)
             .map(|(spec, wm)| {
-                // Grid pixel coordinates → image pixel coordinates → world → object (→ texture).
+                // Image pixel coordinates → world → object (→ texture).
                 let cam = &geometry.camera;
-                let origin = cam.pixel_to_world(-guard, -guard, geometry.z_origin);
+                let origin = cam.pixel_to_world(0.0, 0.0, geometry.z_origin);
                 let dx = cam.right * cam.pixel_size;
                 let dy = cam.down * cam.pixel_size;
                 let pixel_to_world = DAffine3::from_cols(dx, dy, cam.forward, origin);
@@ -227,7 +230,7 @@ impl RenderPlan {
         Ok(RenderPlan {
             grid_width: geometry.raster.width,
             grid_height: geometry.raster.height,
-            guard: scene.sweep.guard_band,
+            guard: geometry.raster.guard,
             width: scene.image.width,
             height: scene.image.height,
             slabs,
@@ -245,6 +248,31 @@ impl RenderPlan {
                 .collect(),
             background: scene.image.background,
         })
+    }
+
+    /// The column every per-pixel hash (kernel phase, jitter) is keyed by for grid column `x`:
+    /// the image column, wrapping below 0 in the left guard band. The random pattern of an image
+    /// pixel then does not depend on the band, so widening or narrowing it (as `auto` does when
+    /// the scene moves) changes only what the band adds, not the noise.
+    #[inline(always)]
+    pub fn hash_x(&self, x: u32) -> u32 {
+        x.wrapping_sub(self.guard.left)
+    }
+
+    /// The row every per-pixel hash is keyed by for grid row `y` (see [`RenderPlan::hash_x`]).
+    #[inline(always)]
+    pub fn hash_y(&self, y: u32) -> u32 {
+        y.wrapping_sub(self.guard.top)
+    }
+
+    /// The image pixel coordinates, as f32, of grid column `x` and row `y` (negative inside the
+    /// left and top guard band): what the detail affine `mesh_to_detail` is applied to.
+    #[inline(always)]
+    pub fn image_xy(&self, x: usize, y: usize) -> (f32, f32) {
+        (
+            (x as i64 - i64::from(self.guard.left)) as f32,
+            (y as i64 - i64::from(self.guard.top)) as f32,
+        )
     }
 
     /// Floats per light-buffer row: lights × channels × grid width.

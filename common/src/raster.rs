@@ -10,6 +10,7 @@
 use glam::DVec3;
 
 use crate::camera::Camera;
+use crate::guard::GuardBand;
 
 /// Fractional bits of the fixed-point vertex coordinates.
 pub const SUBPIXEL_BITS: u32 = 8;
@@ -114,12 +115,12 @@ pub enum RasterError {
 /// All triangles of a scene, set up for a pixel grid of the image plus a guard band.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RasterSetup {
-    /// Grid width (image width + 2·guard).
+    /// Grid width (image width + left and right guard band).
     pub width: u32,
-    /// Grid height (image height + 2·guard).
+    /// Grid height (image height + top and bottom guard band).
     pub height: u32,
-    /// Guard band in pixels.
-    pub guard: u32,
+    /// Guard band in pixels, per side: image pixel (x, y) is grid pixel (x + left, y + top).
+    pub guard: GuardBand,
     /// Triangles that may cover a pixel centre, in scene order; the index is the sort tie-breaker.
     pub triangles: Vec<TriangleSetup>,
     /// Triangles whose snapped area is zero (they cover nothing).
@@ -130,13 +131,12 @@ impl RasterSetup {
     /// Sets up every triangle of every mesh; depths are relative to `z_origin` (camera depth).
     pub fn new(
         camera: &Camera,
-        guard: u32,
+        guard: GuardBand,
         meshes: &[(&[DVec3], &[[u32; 3]])],
         z_origin: f64,
     ) -> Result<RasterSetup, RasterError> {
-        let width = camera.width + 2 * guard;
-        let height = camera.height + 2 * guard;
-        let g = f64::from(guard);
+        let (width, height) = guard.grid(camera.width, camera.height);
+        let (gx, gy) = (f64::from(guard.left), f64::from(guard.top));
         let mut triangles = Vec::new();
         let mut zero_area = 0;
         for (mesh, (positions, tris)) in meshes.iter().enumerate() {
@@ -146,7 +146,7 @@ impl RasterSetup {
                 let mut depth = [0f64; 3];
                 for k in 0..3 {
                     let p = projected[tri[k] as usize];
-                    let (x, y) = (p.x + g, p.y + g);
+                    let (x, y) = (p.x + gx, p.y + gy);
                     if !(x.abs() < COORD_LIMIT_PX && y.abs() < COORD_LIMIT_PX) {
                         return Err(RasterError::OutOfRange {
                             mesh,

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use serde::de::Error as _;
 use serde::{Deserialize, Deserializer};
 
+use crate::guard::GuardBandSpec;
 use crate::kernel::KernelSpec;
 use crate::noise::DetailKind;
 use crate::texture3d::VoxelType;
@@ -156,7 +157,7 @@ struct RawSweep {
     jitter: Option<bool>,
     seed: Option<u32>,
     variance_compensation: Option<bool>,
-    guard_band: Option<u32>,
+    guard_band: Option<toml::Value>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -317,8 +318,9 @@ pub struct SweepSpec {
     pub seed: u32,
     /// Compensate the variance that bilinear reads add (see docs/accuracy.md).
     pub variance_compensation: bool,
-    /// Extra pixels of light buffer and LDI around the image, so objects just outside cast shadows.
-    pub guard_band: u32,
+    /// Light buffer and LDI beyond the image edges, so objects just outside cast shadows into
+    /// it: sized from the scene (`auto`, the default) or a fixed pixel count on every side.
+    pub guard_band: GuardBandSpec,
 }
 
 /// A distant Gaussian light behind the viewer.
@@ -881,13 +883,21 @@ impl Validator<'_> {
         let kernel = kernel_text
             .parse::<KernelSpec>()
             .map_err(|e| self.err("sweep.kernel", e))?;
-        let guard_band = raw.guard_band.unwrap_or(0);
-        if guard_band > MAX_GUARD_BAND {
-            return Err(self.err(
-                "sweep.guard_band",
-                format!("expected at most {MAX_GUARD_BAND} pixels, got {guard_band}"),
-            ));
-        }
+        let guard_band = match raw.guard_band {
+            None => GuardBandSpec::Auto,
+            Some(toml::Value::String(s)) if s == "auto" => GuardBandSpec::Auto,
+            Some(toml::Value::Integer(g)) if (0..=i64::from(MAX_GUARD_BAND)).contains(&g) => {
+                GuardBandSpec::Pixels(g as u32)
+            }
+            Some(other) => {
+                return Err(self.err(
+                    "sweep.guard_band",
+                    format!(
+                        "expected \"auto\" or a pixel count 0 to {MAX_GUARD_BAND}, got {other}"
+                    ),
+                ));
+            }
+        };
         Ok(SweepSpec {
             slabs,
             optimal_distance: self.length("sweep.optimal_distance", raw.optimal_distance)?,

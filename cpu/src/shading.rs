@@ -39,7 +39,7 @@ pub fn shading_depth(
     if crossed != NO_CROSSING {
         ldi.depth[crossed as usize]
     } else if plan.jitter {
-        front + unit_float(pixel_hash(jitter_row, x as u32)) * plan.slab_distance
+        front + unit_float(pixel_hash(jitter_row, plan.hash_x(x as u32))) * plan.slab_distance
     } else {
         front + 0.5 * plan.slab_distance
     }
@@ -56,7 +56,8 @@ pub struct TfLanes<L> {
     pub attenuation: [L; 3],
 }
 
-/// The transfer-function entry of mesh `mesh`'s material at grid pixels (x, y) (per lane) and
+/// The transfer-function entry of mesh `mesh`'s material at image pixels (x, y) (per lane, see
+/// [`RenderPlan::image_xy`]) and
 /// relative depth `z`: detail value (0 for constant materials), then the table look-up.
 #[inline(always)]
 pub fn material_at<L: Lane>(plan: &RenderPlan, mesh: u32, x: L, y: L, z: L) -> TfLanes<L> {

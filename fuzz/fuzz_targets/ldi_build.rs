@@ -5,6 +5,7 @@
 #![no_main]
 
 use arbitrary::Arbitrary;
+use convshadow_common::guard::GuardBand;
 use convshadow_common::camera::Camera;
 use convshadow_common::raster::RasterSetup;
 use convshadow_cpu::ldi::{BuildLdi, Ldi, LdiError};
@@ -53,7 +54,7 @@ struct Input {
 fuzz_target!(|input: Input| {
     let width = u32::from(input.width % 64) + 1;
     let height = u32::from(input.height % 64) + 1;
-    let guard = u32::from(input.guard % 8);
+    let guard = GuardBand::uniform(u32::from(input.guard % 8));
     let camera = Camera {
         right: DVec3::X,
         down: DVec3::Y,

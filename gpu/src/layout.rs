@@ -77,12 +77,12 @@ pub struct SlabParams {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct Globals {
-    /// Grid width (image + 2·guard).
+    /// Grid width (image + left and right guard band).
     pub grid_w: u32,
-    /// Grid height.
+    /// Grid height (image + top and bottom guard band).
     pub grid_h: u32,
-    /// Guard band in pixels.
-    pub guard: u32,
+    /// Guard band columns left of the image (image x = grid x − guard_left).
+    pub guard_left: u32,
     /// Image width.
     pub width: u32,
     /// Image height.
@@ -109,6 +109,14 @@ pub struct Globals {
     pub bg_b: f32,
     /// Floats per light-buffer row (`lights · channels · grid_w`).
     pub row_len: u32,
+    /// Guard band rows above the image (image y = grid y − guard_top).
+    pub guard_top: u32,
+    /// Uniform structs are a multiple of 16 bytes.
+    pub _pad0: u32,
+    /// See `_pad0`.
+    pub _pad1: u32,
+    /// See `_pad0`.
+    pub _pad2: u32,
 }
 
 /// One slab's faces and jitter hash.
@@ -359,7 +367,7 @@ mod tests {
             layout!(Globals {
                 grid_w,
                 grid_h,
-                guard,
+                guard_left,
                 width,
                 height,
                 slabs,
@@ -373,6 +381,10 @@ mod tests {
                 bg_g,
                 bg_b,
                 row_len,
+                guard_top,
+                _pad0,
+                _pad1,
+                _pad2,
             }),
             layout!(Slab {
                 front,

@@ -155,7 +155,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
         globals: Globals {
             grid_w: plan.grid_width,
             grid_h: plan.grid_height,
-            guard: plan.guard,
+            guard_left: plan.guard.left,
             width: plan.width,
             height: plan.height,
             slabs: plan.slabs,
@@ -169,6 +169,8 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             bg_g: plan.background[1],
             bg_b: plan.background[2],
             row_len: plan.light_row_len() as u32,
+            guard_top: plan.guard.top,
+            ..Globals::default()
         },
         slabs: (0..slabs)
             .map(|k| Slab {

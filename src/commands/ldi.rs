@@ -28,7 +28,8 @@ pub struct LdiArgs {
     /// (the GPU when an adapter exists, else the CPU with a message).
     #[arg(long, value_enum, default_value_t = crate::pipeline::Backend::Cpu)]
     pub backend: crate::pipeline::Backend,
-    /// Write the layer count per pixel as a grey PNG (white = the most layers).
+    /// Write the layer count per pixel as a grey PNG (white = the most layers), over the whole
+    /// grid: the image and its guard band.
     #[arg(long)]
     pub layers_png: Option<PathBuf>,
     /// Memory budget in MiB for the LDI (default: half the machine's memory).
@@ -118,10 +119,14 @@ fn print_summary(built: &BuiltLdi, hash: u64) {
     } = built;
     let (_, _, _, degenerate) = defect_counts(built);
     println!(
-        "ldi: {}x{} px, {} triangles rasterized of {}, {} fragments, max {} layers, {} odd \
-         pixels, {} degenerate triangles dropped, {:.3} s build ({:.1} M fragments/s)",
+        "ldi: {}x{} px (grid {}x{}, guard band {}), {} triangles rasterized of {}, {} fragments, \
+         max {} layers, {} odd pixels, {} degenerate triangles dropped, {:.3} s build ({:.1} M \
+         fragments/s)",
+        geometry.camera.width,
+        geometry.camera.height,
         ldi.width,
         ldi.height,
+        geometry.raster.guard,
         geometry.raster.triangles.len(),
         geometry
             .meshes
@@ -155,7 +160,8 @@ fn print_summary(built: &BuiltLdi, hash: u64) {
     }
 }
 
-/// `--layers-png`: the layer count per pixel as an 8-bit image, scaled to the maximum.
+/// `--layers-png`: the layer count per pixel as an 8-bit image, scaled to the maximum (the whole
+/// grid: the image and its guard band).
 fn write_layers_png(path: &std::path::Path, built: &BuiltLdi) -> Result<(), Failure> {
     let (ldi, stats) = (&built.ldi, &built.stats);
     let max = stats.max_layers.max(1);
@@ -182,8 +188,16 @@ fn write_stats(path: &std::path::Path, built: &BuiltLdi, hash: u64) -> Result<()
     } = built;
     let (boundary, nonmanifold, flipped, degenerate) = defect_counts(built);
     let value = json!({
-        "width": ldi.width,
-        "height": ldi.height,
+        "width": geometry.camera.width,
+        "height": geometry.camera.height,
+        "grid_width": ldi.width,
+        "grid_height": ldi.height,
+        "guard_band_px": {
+            "left": geometry.raster.guard.left,
+            "right": geometry.raster.guard.right,
+            "top": geometry.raster.guard.top,
+            "bottom": geometry.raster.guard.bottom,
+        },
         "triangles": geometry.raster.triangles.len(),
         "fragments": stats.fragments,
         "max_layers": stats.max_layers,

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use convshadow_common::geometry::SceneGeometry;
+use convshadow_common::guard::GuardBandSpec;
 use convshadow_common::image_io::RgbImage;
 use convshadow_common::kernel::{KERNEL_SYNTAX, KernelSpec};
 use convshadow_common::plan::RenderPlan;
@@ -107,6 +108,10 @@ pub struct RenderArgs {
     /// Override the seed.
     #[arg(long)]
     pub seed: Option<u32>,
+    /// Override the guard band: `auto` (sized from the scene's lights, depth and meshes) or
+    /// pixels beyond every image edge (0: none), as `sweep.guard_band`.
+    #[arg(long, value_name = "auto|N", value_parser = parse_guard_band)]
+    pub guard_band: Option<GuardBandSpec>,
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0, value_parser = super::parse_threads)]
     pub threads: usize,
@@ -302,7 +307,13 @@ fn frame_list(args: &RenderArgs) -> Result<(Option<Vec<u32>>, f64), Failure> {
     Ok((frame_list, time_step))
 }
 
-/// `--slabs`, `--kernel`, `--seed` and `--variance-compensation`, then the scene re-validated.
+/// `--guard-band auto|N` (clap reports a bad value with the option's name, exit code 2).
+fn parse_guard_band(s: &str) -> Result<GuardBandSpec, String> {
+    s.parse()
+}
+
+/// `--slabs`, `--kernel`, `--seed`, `--guard-band` and `--variance-compensation`, then the scene
+/// re-validated.
 fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Failure> {
     if let Some(n) = args.slabs {
         scene.sweep.slabs = SlabSpec::Count(n);
@@ -314,6 +325,9 @@ fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Fai
     }
     if let Some(s) = args.seed {
         scene.sweep.seed = s;
+    }
+    if let Some(g) = args.guard_band {
+        scene.sweep.guard_band = g;
     }
     if let Some(v) = args.variance_compensation {
         scene.sweep.variance_compensation = v;
@@ -591,13 +605,14 @@ fn finish(
     let throughput = throughput(r);
     if !args.quiet {
         println!(
-            "rendered {}x{} px, {} slabs, {}, {}, {} fragments: {:.2} s (LDI {:.2} s, sweep \
-             {:.2} s, {:.1} M pixel·slab·light/s, {}) → {}",
+            "rendered {}x{} px, {} slabs, {}, {}, guard band {}, {} fragments: {:.2} s (LDI \
+             {:.2} s, sweep {:.2} s, {:.1} M pixel·slab·light/s, {}) → {}",
             scene.image.width,
             scene.image.height,
             r.plan.slabs,
             plural(r.plan.lights.len(), "light"),
             scene.sweep.kernel,
+            r.plan.guard,
             r.ldi.fragments,
             r.seconds_total,
             r.seconds_ldi,
@@ -646,6 +661,15 @@ fn stats_value(
             "slabs": r.plan.slabs,
             "slab_distance": f64::from(r.plan.slab_distance),
             "kernel": scene.sweep.kernel.to_string(),
+            "guard_band": scene.sweep.guard_band.to_string(),
+            "guard_band_px": {
+                "left": r.plan.guard.left,
+                "right": r.plan.guard.right,
+                "top": r.plan.guard.top,
+                "bottom": r.plan.guard.bottom,
+            },
+            "grid_width": r.plan.grid_width,
+            "grid_height": r.plan.grid_height,
             "lights": r.plan.lights.len(),
             "channels": r.plan.channels,
             "fragments": r.ldi.fragments,
@@ -684,9 +708,11 @@ fn render_reference(
     allow_open: bool,
 ) -> Result<Rendered, Failure> {
     let start = Instant::now();
-    let fragment_budget = MemoryNeed::of(scene, true).check(scene, budget)?;
+    MemoryNeed::of(scene, scene.sweep.guard_band.lower_bound(), true).check(scene, budget)?;
     let pool = super::thread_pool(threads)?;
     let geometry = SceneGeometry::build(scene)?;
+    let fragment_budget =
+        MemoryNeed::of(scene, geometry.raster.guard, true).check(scene, budget)?;
     exit::check_interrupt()?;
     let ldi = pool.install(|| Ldi::build(&geometry.raster, fragment_budget))?;
     let stats = pool.install(|| ldi.stats());

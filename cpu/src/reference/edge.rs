@@ -66,6 +66,7 @@ height = {h}
 [camera]
 view_width = {vw:e}
 [sweep]
+guard_band = 0  # the analytic references read the grid as the image
 slab_distance = {e:e}
 optimal_distance = {d1:e}
 kernel = "{kernel}"

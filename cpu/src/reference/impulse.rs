@@ -29,6 +29,7 @@ height = {grid}
 [camera]
 view_width = {grid}.0
 [sweep]
+guard_band = 0  # the impulse response is read on the grid as the image
 slab_distance = 1.0
 optimal_distance = 1.0
 kernel = "{kernel}"

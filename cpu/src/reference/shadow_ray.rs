@@ -158,7 +158,6 @@ impl<'a> Reference<'a> {
         step: f64,
     ) -> Reference<'a> {
         let cam = &geometry.camera;
-        let guard = f64::from(plan.guard);
         let mut tris = Vec::new();
         for (m, wm) in geometry.meshes.iter().enumerate() {
             let pts: Vec<[f64; 3]> = wm
@@ -167,7 +166,8 @@ impl<'a> Reference<'a> {
                 .iter()
                 .map(|p| {
                     let q = cam.to_pixel(*p);
-                    [q.x + guard, q.y + guard, q.z - geometry.z_origin]
+                    // Image pixel coordinates (as the plan's detail affine takes them).
+                    [q.x, q.y, q.z - geometry.z_origin]
                 })
                 .collect();
             for t in &wm.mesh.triangles {
@@ -409,7 +409,7 @@ impl<'a> Reference<'a> {
         let plan = self.plan;
         let k = samples_side(options.samples);
         let (iw, ih) = (plan.width as usize, plan.height as usize);
-        let g = plan.guard as usize;
+        let (left, top) = (plan.guard.left as usize, plan.guard.top as usize);
         let w = plan.grid_width as usize;
         let ch = plan.channels as usize;
         let lights = plan.lights.len();
@@ -419,9 +419,9 @@ impl<'a> Reference<'a> {
             .enumerate()
             .for_each(|(iy, row)| {
                 let mut scratch = Scratch::default();
-                let y = iy + g;
+                let y = iy + top;
                 for ix in 0..iw {
-                    let x = ix + g;
+                    let x = ix + left;
                     let p = y * w + x;
                     let mut next = ldi.offsets[p];
                     let end = ldi.offsets[p + 1];
@@ -442,11 +442,12 @@ impl<'a> Reference<'a> {
                         if 1.0 - alpha < TRANSPARENCY_CUTOFF {
                             break;
                         }
-                        let jitter_row = row_hash(plan.jitter_slab_hash[slab as usize], y as u32);
+                        let jitter_row =
+                            row_hash(plan.jitter_slab_hash[slab as usize], plan.hash_y(y as u32));
                         let z = shading_depth(plan, ldi, crossed, front, jitter_row, x);
-                        let tf = material_at(plan, mesh, x as f32, y as f32, z);
+                        let tf = material_at(plan, mesh, ix as f32, iy as f32, z);
                         let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
-                        let pos = [x as f64 + 0.5, y as f64 + 0.5, f64::from(z)];
+                        let pos = [ix as f64 + 0.5, iy as f64 + 0.5, f64::from(z)];
                         let stream = mix32(mix32(p as u32) ^ slab);
                         for l in 0..lights {
                             let t =

@@ -37,14 +37,20 @@ pub(crate) struct RowState<'a> {
 pub(crate) fn light_row_hashes(ctx: &SlabContext<'_>, y: usize) -> [u32; MAX_LIGHT_CHANNELS] {
     let mut row_hashes = [0u32; MAX_LIGHT_CHANNELS];
     for (l, light) in ctx.plan.lights.iter().enumerate() {
-        row_hashes[l] = light_row_hash(light.slab_hash[ctx.slab as usize], y as u32);
+        row_hashes[l] = light_row_hash(
+            light.slab_hash[ctx.slab as usize],
+            ctx.plan.hash_y(y as u32),
+        );
     }
     row_hashes
 }
 
 /// The jitter row hash of row `y` of the slab.
 pub(crate) fn jitter_row_hash(ctx: &SlabContext<'_>, y: usize) -> u32 {
-    row_hash(ctx.plan.jitter_slab_hash[ctx.slab as usize], y as u32)
+    row_hash(
+        ctx.plan.jitter_slab_hash[ctx.slab as usize],
+        ctx.plan.hash_y(y as u32),
+    )
 }
 
 /// How far the gather of any light, phase and slab reads from the pixel it writes (bilinear

@@ -211,17 +211,17 @@ fn sweep_slab(
 /// The image: each pixel inside the guard band composited over the background by [`finish`].
 fn finish_image(plan: &RenderPlan, color: &[f32], alpha: &[f32]) -> Vec<f32> {
     let w = plan.grid_width as usize;
-    let g = plan.guard as usize;
+    let (left, top) = (plan.guard.left as usize, plan.guard.top as usize);
     let (iw, ih) = (plan.width as usize, plan.height as usize);
     let mut image = vec![0.0f32; iw * ih * 3];
     image
         .par_chunks_mut(iw * 3)
         .enumerate()
         .for_each(|(y, row)| {
-            let gy = y + g;
+            let gy = y + top;
             let colors = &color[gy * w * 3..(gy + 1) * w * 3];
             for x in 0..iw {
-                let gx = x + g;
+                let gx = x + left;
                 let mut c = [colors[gx], colors[w + gx], colors[2 * w + gx]];
                 finish(&mut c, alpha[gy * w + gx], plan.background);
                 row[3 * x..3 * x + 3].copy_from_slice(&c);

@@ -104,7 +104,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                         gather(&planes, t.phase(p), extent, shift, x0, yi, interior, acc);
                     }
                     None => {
-                        let ph = phases::<L>(t, row_hashes[l], x0 as u32);
+                        let ph = phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32));
                         let columns = &ctx.columns[l];
                         gather_per_lane(&planes, t, columns, ph, shift, x0, yi, interior, acc);
                     }
@@ -218,12 +218,18 @@ fn shade_chunk<L: Lane>(
         active[i] = mesh[i].is_some();
         is_crossed[i] = crossed[i] != NO_CROSSING;
         any_crossed |= is_crossed[i];
-        xs[i] = (x0 + i) as f32;
+        xs[i] = plan.image_xy(x0 + i, y).0;
         zs[i] = shading_depth(plan, ldi, crossed[i], ctx.front, jitter_row, x0 + i);
     }
     let active = L::m_from(&active);
     let z = L::load(&zs, 0);
-    let tf = material_at(plan, m, L::load(&xs, 0), L::splat(y as f32), z);
+    let tf = material_at(
+        plan,
+        m,
+        L::load(&xs, 0),
+        L::splat(plan.image_xy(x0, y).1),
+        z,
+    );
     let material = &plan.materials[plan.mesh_material[m as usize] as usize];
     let spec = match material.specular {
         Some((strength, exponent)) if any_crossed => {

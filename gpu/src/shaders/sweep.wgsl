@@ -31,12 +31,17 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     let back = faces.back;
     let front = faces.front;
 
+    // Per-pixel hashes are keyed by image coordinates (wrapping below 0 in the guard band), as
+    // on the CPU (`RenderPlan::hash_x`): the noise of an image pixel does not depend on the band.
+    let hx = x - globals.guard_left;
+    let hy = y - globals.guard_top;
+
     // 1. Convolution of every light buffer.
     for (var l = 0u; l < globals.lights; l++) {
         let light = lights[l];
         let ls = light_slabs[l * globals.slabs + slab];
-        let row = row_hash(ls.hash, y);
-        let phase = phase_at(light, ls, row, x);
+        let row = row_hash(ls.hash, hy);
+        let phase = phase_at(light, ls, row, hx);
         let per_phase = light.taps_per_phase;
         let first_tap = light.taps + per_phase * phase;
         for (var c = 0u; c < ch; c++) {
@@ -62,15 +67,15 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         if crossed {
             z = frag_depth[adv.first];
         } else if globals.jitter != 0u {
-            let jitter_row = row_hash(faces.jitter_hash, y);
-            z = front + unit_float(pixel_hash(jitter_row, x)) * globals.slab_distance;
+            let jitter_row = row_hash(faces.jitter_hash, hy);
+            z = front + unit_float(pixel_hash(jitter_row, hx)) * globals.slab_distance;
         } else {
             z = front + 0.5 * globals.slab_distance;
         }
         let m = materials[meshes[mesh].material];
         var value = 0.0;
         if m.tf_len > 1u {
-            let q = to_detail(mesh, f32(x) + 0.5, f32(y) + 0.5, z);
+            let q = to_detail(mesh, f32(i32(x) - i32(globals.guard_left)) + 0.5, f32(i32(y) - i32(globals.guard_top)) + 0.5, z);
             value = detail_value(m, q);
         }
         let e = transfer(m, value);
@@ -103,7 +108,7 @@ fn finish_image(@builtin(global_invocation_id) gid: vec3<u32>) {
     if x >= globals.width || y >= globals.height {
         return;
     }
-    let p = (y + globals.guard) * globals.grid_w + x + globals.guard;
+    let p = (y + globals.guard_top) * globals.grid_w + x + globals.guard_left;
     let c = finish(accum[p]);
     let o = 3u * (y * globals.width + x);
     image[o] = c.x;

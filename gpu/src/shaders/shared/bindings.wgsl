@@ -57,7 +57,7 @@ struct SlabParams {
 struct Globals {
     grid_w: u32,
     grid_h: u32,
-    guard: u32,
+    guard_left: u32,  // image x = grid x − guard_left
     width: u32,
     height: u32,
     slabs: u32,
@@ -71,6 +71,10 @@ struct Globals {
     bg_g: f32,
     bg_b: f32,
     row_len: u32,     // floats per light-buffer row: lights · channels · grid_w
+    guard_top: u32,   // image y = grid y − guard_top
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct Slab {
