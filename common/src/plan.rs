@@ -91,6 +91,8 @@ pub struct RenderPlan {
     pub height: u32,
     /// Slab count.
     pub slabs: u32,
+    /// How `slabs = "auto"` chose the count (`None` when the scene gave it).
+    pub auto_slabs: Option<crate::auto_slabs::AutoSlabs>,
     /// Slab thickness (world units) as f32.
     pub slab_distance: f32,
     /// Front face of each slab (depth relative to the first slab's front).
@@ -231,6 +233,7 @@ impl RenderPlan {
             width: scene.image.width,
             height: scene.image.height,
             slabs,
+            auto_slabs: geometry.auto_slabs.clone(),
             slab_distance: e as f32,
             slab_front: (0..slabs).map(|k| (f64::from(k) * e) as f32).collect(),
             slab_back: geometry.slab_back_faces(),
@@ -255,7 +258,7 @@ impl RenderPlan {
 
 /// The largest box with the aspect of `extent`, centred in the bounds `lo..hi`: a NIfTI volume's
 /// voxels keep their spacing's proportions (outside the box, sampling clamps to the edge voxels).
-fn fit_extent(lo: DVec3, hi: DVec3, extent: DVec3) -> (DVec3, DVec3) {
+pub(crate) fn fit_extent(lo: DVec3, hi: DVec3, extent: DVec3) -> (DVec3, DVec3) {
     let size = hi - lo;
     let extent = extent.max(DVec3::splat(1e-30));
     let scale = (size / extent).min_element();

@@ -22,6 +22,8 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 pub const MAX_EXPOSURE_STOPS: f64 = 64.0;
 /// Largest accepted slab count.
 pub const MAX_SLABS: u32 = 65536;
+/// Smallest and largest accepted `sweep.slab_factor` (the modulation of `slabs = "auto"`).
+pub const SLAB_FACTOR_RANGE: (f64, f64) = (1.0 / 1024.0, 1024.0);
 /// Largest accepted number of lights.
 pub const MAX_LIGHTS: usize = 16;
 /// Largest accepted number of meshes (the parity cursor keeps one inside bit per mesh in a u32).
@@ -146,10 +148,40 @@ struct RawCamera {
     view_width: f64,
 }
 
+/// `sweep.slabs` as written: an integer or a word (only `"auto"` is valid; checked with the key).
+#[derive(Debug)]
+enum RawSlabs {
+    Count(i64),
+    Word(String),
+}
+
+impl<'de> Deserialize<'de> for RawSlabs {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = RawSlabs;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("an integer slab count or \"auto\"")
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<RawSlabs, E> {
+                Ok(RawSlabs::Count(v))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<RawSlabs, E> {
+                Ok(RawSlabs::Count(i64::try_from(v).unwrap_or(i64::MAX)))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<RawSlabs, E> {
+                Ok(RawSlabs::Word(v.to_string()))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 struct RawSweep {
-    slabs: Option<u32>,
+    slabs: Option<RawSlabs>,
+    slab_factor: Option<f64>,
     slab_distance: Option<f64>,
     optimal_distance: f64,
     kernel: Option<String>,
@@ -300,6 +332,10 @@ pub enum SlabSpec {
     Count(u32),
     /// A slab thickness in world units.
     Distance(f64),
+    /// Chosen from the detail: 2 slabs per finest period of the procedural detail or per voxel of
+    /// a 3D texture along the view direction, times `SweepSpec::slab_factor`
+    /// (see `crate::auto_slabs`).
+    Auto,
 }
 
 /// Slab sweep parameters.
@@ -307,6 +343,8 @@ pub enum SlabSpec {
 pub struct SweepSpec {
     /// Slab count or thickness.
     pub slabs: SlabSpec,
+    /// Multiplies the count `slabs = "auto"` chooses (1 = 2 slabs per finest period).
+    pub slab_factor: f64,
     /// The optimal shadow distance d1 (world units).
     pub optimal_distance: f64,
     /// Convolution kernel.
@@ -558,6 +596,7 @@ impl Scene {
             SlabSpec::Distance(d) => {
                 v.length("sweep.slab_distance", d)?;
             }
+            SlabSpec::Auto => {}
         }
         Ok(())
     }
@@ -871,12 +910,37 @@ impl Validator<'_> {
                     "expected one of `slabs` (a count) or `slab_distance` (world units)",
                 ));
             }
-            (Some(n), None) => {
-                self.slab_count(n)?;
-                SlabSpec::Count(n)
+            (Some(RawSlabs::Count(n)), None) => match u32::try_from(n) {
+                Ok(n) if (1..=MAX_SLABS).contains(&n) => SlabSpec::Count(n),
+                _ => {
+                    return Err(self.err(
+                        "sweep.slabs",
+                        format!("expected an integer from 1 to {MAX_SLABS} or \"auto\", got {n}"),
+                    ));
+                }
+            },
+            (Some(RawSlabs::Word(w)), None) => {
+                if w != "auto" {
+                    return Err(self.err(
+                        "sweep.slabs",
+                        format!("expected an integer from 1 to {MAX_SLABS} or \"auto\", got {w:?}"),
+                    ));
+                }
+                SlabSpec::Auto
             }
             (None, Some(d)) => SlabSpec::Distance(self.length("sweep.slab_distance", d)?),
         };
+        if let Some(f) = raw.slab_factor {
+            if slabs != SlabSpec::Auto {
+                return Err(self.err(
+                    "sweep.slab_factor",
+                    "`slab_factor` modulates `slabs = \"auto\"` only; remove it or set \
+                     `slabs = \"auto\"`",
+                ));
+            }
+            let (lo, hi) = SLAB_FACTOR_RANGE;
+            self.in_range("sweep.slab_factor", f, lo, hi)?;
+        }
         let kernel_text = raw.kernel.unwrap_or_else(|| "ellipse2".to_string());
         let kernel = kernel_text
             .parse::<KernelSpec>()
@@ -890,6 +954,7 @@ impl Validator<'_> {
         }
         Ok(SweepSpec {
             slabs,
+            slab_factor: raw.slab_factor.unwrap_or(1.0),
             optimal_distance: self.length("sweep.optimal_distance", raw.optimal_distance)?,
             kernel,
             jitter: raw.jitter.unwrap_or(true),
