@@ -111,7 +111,7 @@ fn gpu_image_equals_cpu_for_every_kernel() {
 }
 
 /// A scene that reaches the shader paths the example scenes may not: every detail kind in 3D and
-/// 4D, a 3D texture, specular highlights, no jitter, a guard band and a grey (1-channel) or
+/// 4D, a 3D texture, specular highlights, phase functions (forward and backward), no jitter, a guard band and a grey (1-channel) or
 /// coloured light buffer, a narrow light (mean carried in whole pixels).
 fn path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
     let dims = [5u32, 4, 3];
@@ -188,6 +188,7 @@ gradient = [[0.0, 0.2, 0.9, 0.2, 0.0], [0.6, 0.5, 0.9, 0.5, 0.4], [1.0, 1.0, 1.0
 transport = {transport}
 reference_length = 0.05
 specular = {{ strength = 0.8, exponent = 17 }}
+phase = {{ g = 0.5 }}
 [material.tex]
 texture = {{ path = "tex.raw", dims = [{}, {}, {}], type = "u8" }}
 gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 0.9, 0.6, 0.3, 1.0]]
@@ -199,6 +200,7 @@ gradient = [[0.0, 0.1, 0.1, 0.1, 0.1], [1.0, 0.9, 0.9, 0.9, 0.8]]
 transport = {transport}
 reference_length = 0.05
 specular = {{ strength = 0.5, exponent = 4 }}
+phase = {{ g = -0.4 }}
 [material.wall]
 color = [0.8, 0.8, 0.75]
 opacity = 1.0

@@ -60,7 +60,10 @@ pub fn finest_period(
             } else {
                 d.octaves.max(1)
             };
-            let f_max = d.frequency * d.lacunarity.max(1.0).powi(octaves as i32 - 1);
+            let mut f_max = d.frequency;
+            for _ in 1..octaves {
+                f_max *= d.lacunarity.max(1.0);
+            }
             let rate = f_max * step.length();
             candidates.push((rate, format!("material.{}.detail", material.name)));
         }

@@ -47,6 +47,10 @@ pub struct MaterialPlan {
     pub texture_extent: Option<[f64; 3]>,
     /// Specular strength and exponent.
     pub specular: Option<(f32, u32)>,
+    /// Per light: the light's colour times this material's phase function at the light's
+    /// scattering angle ([`phase_factor`]); exactly the light's colour for an isotropic medium
+    /// (g = 0). Shading sums `Iin ⊙ light_color`; the specular term uses the bare colour.
+    pub light_color: Vec<[f32; 3]>,
 }
 
 /// A light's per-render tables.
@@ -62,6 +66,29 @@ pub struct LightPlan {
     pub slab_hash: Vec<u32>,
     /// Blinn–Phong half vector in camera space (towards light + towards viewer, normalised).
     pub half_vector: [f32; 3],
+}
+
+/// cos θ of the scattering angle of a distant light with tilt `tilt_deg` towards an orthographic
+/// camera: θ is the angle between the light's propagation direction, ∝ (−tan ωx, −tan ωy, 1) in
+/// camera space, and the direction to the camera, (0, 0, −1); so cos θ = −1/√(1 + tan²ωx +
+/// tan²ωy) (−1 for a light straight behind the viewer: back-scattering).
+pub fn scattering_cos(tilt_deg: [f64; 2]) -> f64 {
+    let [mx, my] = tilt_deg.map(|t| t.to_radians().tan());
+    -1.0 / (1.0 + mx * mx + my * my).sqrt()
+}
+
+/// The Henyey–Greenstein phase function normalised to 1 for an isotropic medium:
+/// `(1 − g²) / (1 + g² − 2g·cos θ)^{3/2}` (its 1/4π dropped, so g = 0 gives exactly 1).
+pub fn henyey_greenstein(g: f64, cos_theta: f64) -> f64 {
+    if g == 0.0 {
+        return 1.0;
+    }
+    (1.0 - g * g) / (1.0 + g * g - 2.0 * g * cos_theta).powf(1.5)
+}
+
+/// The phase factor of a medium of asymmetry `g` lit by a light of tilt `tilt_deg`.
+pub fn phase_factor(g: f64, tilt_deg: [f64; 2]) -> f64 {
+    henyey_greenstein(g, scattering_cos(tilt_deg))
 }
 
 /// Errors while planning (a texture file that cannot be read).
@@ -191,6 +218,22 @@ impl RenderPlan {
                 return Err(err);
             }
         };
+        let mut materials = materials;
+        for (plan, spec) in materials.iter_mut().zip(&scene.materials) {
+            plan.light_color = scene
+                .lights
+                .iter()
+                .map(|l| {
+                    if spec.phase_g == 0.0 {
+                        // Bit for bit the colour the shading used before phase functions.
+                        l.color.map(flush_tiny)
+                    } else {
+                        let f = phase_factor(spec.phase_g, l.tilt_deg);
+                        l.color.map(|c| flush_tiny((f64::from(c) * f) as f32))
+                    }
+                })
+                .collect();
+        }
         let guard = f64::from(scene.sweep.guard_band);
         let mesh_to_detail = scene
             .meshes
@@ -348,6 +391,7 @@ fn material_plan(
         texture,
         texture_extent,
         specular: m.specular.as_ref().map(|s| (s.strength, s.exponent)),
+        light_color: Vec::new(),
     })
 }
 

@@ -24,6 +24,9 @@ pub const MAX_EXPOSURE_STOPS: f64 = 64.0;
 pub const MAX_SLABS: u32 = 65536;
 /// Smallest and largest accepted `sweep.slab_factor` (the modulation of `slabs = "auto"`).
 pub const SLAB_FACTOR_RANGE: (f64, f64) = (1.0 / 1024.0, 1024.0);
+/// Largest accepted |g| of a Henyey–Greenstein phase function (the function needs |g| < 1; this
+/// bound keeps its largest value, (1 + 0.999)/(1 − 0.999)² ≈ 2·10⁶, finite with every colour in f32).
+pub const MAX_PHASE_G: f64 = 0.999;
 /// Largest accepted number of lights.
 pub const MAX_LIGHTS: usize = 16;
 /// Largest accepted number of meshes (the parity cursor keeps one inside bit per mesh in a u32).
@@ -231,6 +234,13 @@ struct RawMaterial {
     #[serde(default, deserialize_with = "exact_stops")]
     gradient: Option<Vec<[f64; 5]>>,
     specular: Option<RawSpecular>,
+    phase: Option<RawPhase>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawPhase {
+    g: f64,
 }
 
 #[derive(Deserialize, Debug)]
@@ -512,6 +522,10 @@ pub struct MaterialSpec {
     pub gradient: Vec<GradientStop>,
     /// Optional specular highlight.
     pub specular: Option<SpecularSpec>,
+    /// Henyey–Greenstein asymmetry g of the medium's scattering (0 = isotropic, > 0 forward,
+    /// < 0 backward); with distant lights and an orthographic camera the phase function is one
+    /// constant per light, applied to the light's colour in shading (not to the specular term).
+    pub phase_g: f64,
 }
 
 impl Scene {
@@ -1232,6 +1246,24 @@ impl Validator<'_> {
             ));
         }
         let specular = raw.specular.map(|s| self.specular(&key, s)).transpose()?;
+        let phase_g = match raw.phase {
+            None => 0.0,
+            Some(p) => {
+                let k = key("phase.g");
+                self.finite(&k, p.g)?;
+                if p.g.abs() > MAX_PHASE_G {
+                    return Err(self.err(
+                        k,
+                        format!(
+                            "expected a Henyey-Greenstein asymmetry from -{MAX_PHASE_G} to \
+                             {MAX_PHASE_G} (the function needs -1 < g < 1), got {}",
+                            p.g
+                        ),
+                    ));
+                }
+                p.g
+            }
+        };
         Ok(MaterialSpec {
             name: name.to_string(),
             color,
@@ -1242,6 +1274,7 @@ impl Validator<'_> {
             texture,
             gradient,
             specular,
+            phase_g,
         })
     }
 

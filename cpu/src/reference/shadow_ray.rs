@@ -470,7 +470,7 @@ impl<'a> Reference<'a> {
                             _ => None,
                         };
                         let iin = &iin[..lights * ch];
-                        let shaded = shade(plan, tf.color, iin, spec.as_ref());
+                        let shaded = shade(plan, material, tf.color, iin, spec.as_ref());
                         composite(&mut color, &mut alpha, shaded, tf.alpha, true);
                     }
                     finish(&mut color, alpha, plan.background);
