@@ -229,6 +229,38 @@ fn gpu_image_equals_cpu_on_every_shader_path() {
 }
 
 #[test]
+fn gpu_image_equals_cpu_with_a_patterned_light() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-pattern");
+    // A coloured 7×5 pattern (non-grey, so three light channels), smaller than the view, with
+    // texels that do not align with pixels: bilinear samples, clamped edges.
+    let (w, h) = (7u32, 5u32);
+    let data: Vec<f32> = (0..w * h * 3)
+        .map(|i| ((i * 53 + 11) % 97) as f32 / 96.0)
+        .collect();
+    convshadow::common::image_io::RgbImage {
+        width: w,
+        height: h,
+        data,
+    }
+    .save(&dir.join("gobo.png"))
+    .unwrap();
+    let mut scene = path_scene(&dir, true, true);
+    scene.lights[0].pattern = Some(convshadow::common::scene::PatternSpec {
+        path: dir.join("gobo.png"),
+        size: [3.1, 2.3],
+        center: [0.4, -0.3],
+    });
+    assert!(
+        !scene.is_monochrome(),
+        "a pattern takes three light channels"
+    );
+    check(&ctx, &scene, "patterned light");
+}
+
+#[test]
 fn render_backend_gpu_without_scene_names_the_adapter() {
     let Some(ctx) = gpu_common::gpu() else {
         return;

@@ -14,6 +14,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod nifti;
 pub mod noise;
+pub mod pattern;
 pub mod plan;
 pub mod raster;
 pub mod scene;

@@ -91,15 +91,15 @@ pub fn phase_factor(g: f64, tilt_deg: [f64; 2]) -> f64 {
     henyey_greenstein(g, scattering_cos(tilt_deg))
 }
 
-/// Errors while planning (a texture file that cannot be read).
+/// Errors while planning: a material's 3D texture or a light's pattern that cannot be read.
 #[derive(Debug, thiserror::Error)]
-#[error("{scene}: material `{material}`: {source}")]
+#[error("{scene}: {what}: {source}")]
 pub struct PlanError {
     /// Scene file.
     pub scene: String,
-    /// Material name.
-    pub material: String,
-    /// The texture loader's error.
+    /// What failed: "material `NAME`" (a 3D texture) or "key `light[i].pattern.path`".
+    pub what: String,
+    /// The loader's error (names the file).
     pub source: TextureError,
 }
 
@@ -120,6 +120,8 @@ pub struct RenderPlan {
     pub slabs: u32,
     /// How `slabs = "auto"` chose the count (`None` when the scene gave it).
     pub auto_slabs: Option<crate::auto_slabs::AutoSlabs>,
+    /// Pixel size (world units).
+    pub pixel_size: f64,
     /// Slab thickness (world units) as f32.
     pub slab_distance: f32,
     /// Front face of each slab (depth relative to the first slab's front).
@@ -142,6 +144,9 @@ pub struct RenderPlan {
     pub jitter_slab_hash: Vec<u32>,
     /// Background colour.
     pub background: [f32; 3],
+    /// The light buffer before the first slab (`[row][light][channel][x]`, like the sweep's),
+    /// when a light has a pattern; `None`: every light starts at 1.
+    pub initial_light: Option<Vec<f32>>,
 }
 
 impl RenderPlan {
@@ -199,7 +204,7 @@ impl RenderPlan {
             .collect::<Result<Vec<_>, TextureError>>()
             .map_err(|source| PlanError {
                 scene: scene.source.clone(),
-                material: String::new(),
+                what: "material ``".to_string(),
                 source,
             });
         let materials = match materials {
@@ -213,7 +218,7 @@ impl RenderPlan {
                             .contains(&t.path.display().to_string())
                     })
                 }) {
-                    err.material = m.name.clone();
+                    err.what = format!("material `{}`", m.name);
                 }
                 return Err(err);
             }
@@ -269,7 +274,7 @@ impl RenderPlan {
                 .map(|v| v as f32)
             })
             .collect();
-        Ok(RenderPlan {
+        RenderPlan {
             grid_width: geometry.raster.width,
             grid_height: geometry.raster.height,
             guard: scene.sweep.guard_band,
@@ -290,7 +295,50 @@ impl RenderPlan {
                 .map(|k| slab_hash(seed, JITTER_STREAM, k))
                 .collect(),
             background: scene.image.background,
-        })
+            pixel_size: px,
+            initial_light: None,
+        }
+        .with_patterns(scene)
+    }
+
+    /// Samples every light's pattern into the initial light buffer (`None` without patterns);
+    /// errors name the key and the file.
+    pub fn with_patterns(mut self, scene: &Scene) -> Result<RenderPlan, PlanError> {
+        if scene.lights.iter().all(|l| l.pattern.is_none()) {
+            return Ok(self);
+        }
+        let w = self.grid_width as usize;
+        let h = self.grid_height as usize;
+        let ch = self.channels as usize;
+        let row_len = self.light_row_len();
+        let mut buf = vec![1.0f32; row_len * h];
+        for (l, spec) in scene.lights.iter().enumerate() {
+            let Some(p) = &spec.pattern else { continue };
+            let pattern = crate::pattern::load_pattern(&p.path).map_err(|source| PlanError {
+                scene: scene.source.clone(),
+                what: format!("key `light[{l}].pattern.path`"),
+                source,
+            })?;
+            let (tw, th) = (f64::from(pattern.width), f64::from(pattern.height));
+            let guard = f64::from(self.guard);
+            for y in 0..h {
+                // Camera-space y of the grid pixel centre, from the view's centre.
+                let cy = (y as f64 - guard + 0.5 - f64::from(self.height) * 0.5) * self.pixel_size;
+                let ty = ((cy - p.center[1]) / p.size[1] + 0.5) * th;
+                for c in 0..ch {
+                    let row = &mut buf[y * row_len + (l * ch + c) * w..][..w];
+                    for (x, v) in row.iter_mut().enumerate() {
+                        let cx = (x as f64 - guard + 0.5 - f64::from(self.width) * 0.5)
+                            * self.pixel_size;
+                        let tx = ((cx - p.center[0]) / p.size[0] + 0.5) * tw;
+                        let s = pattern.sample(tx, ty, c) as f32;
+                        *v = if s < FLUSH_BELOW { 0.0 } else { s };
+                    }
+                }
+            }
+        }
+        self.initial_light = Some(buf);
+        Ok(self)
     }
 
     /// Floats per light-buffer row: lights × channels × grid width.

@@ -204,6 +204,17 @@ struct RawLight {
     #[serde(default, deserialize_with = "exact")]
     variance: Option<[f64; 2]>,
     rotation_deg: Option<f64>,
+    pattern: Option<RawPattern>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawPattern {
+    path: String,
+    #[serde(default, deserialize_with = "exact")]
+    size: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "exact")]
+    center: Option<[f64; 2]>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -380,6 +391,19 @@ pub struct LightSpec {
     pub variance: [f64; 2],
     /// Rotation α of the principal axes, degrees.
     pub rotation_deg: f64,
+    /// A gobo: an image that is the light's initial light buffer (see `crate::pattern`).
+    pub pattern: Option<PatternSpec>,
+}
+
+/// A light's pattern (`[[light]] pattern = { path, size, center }`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PatternSpec {
+    /// Resolved image path.
+    pub path: PathBuf,
+    /// World-unit size [w, h] of the image on the first slab plane.
+    pub size: [f64; 2],
+    /// Centre of the image, camera-space [x right, y down] world units from the view's centre.
+    pub center: [f64; 2],
 }
 
 /// The shape of a mesh.
@@ -559,11 +583,14 @@ impl Scene {
         Validator { file: source }.scene(raw, base_dir)
     }
 
-    /// Whether every material's transport is grey, so one light-buffer channel suffices.
+    /// Whether every material's transport is grey and no light has a pattern (which may be
+    /// coloured), so one light-buffer channel suffices.
     pub fn is_monochrome(&self) -> bool {
-        self.materials
-            .iter()
-            .all(|m| m.transport[0] == m.transport[1] && m.transport[1] == m.transport[2])
+        self.lights.iter().all(|l| l.pattern.is_none())
+            && self
+                .materials
+                .iter()
+                .all(|m| m.transport[0] == m.transport[1] && m.transport[1] == m.transport[2])
     }
 
     /// Overrides camera values (command line): the direction is normalised and checked against
@@ -864,7 +891,7 @@ impl Validator<'_> {
         }
         let mut lights = Vec::new();
         for (i, l) in raw.light.into_iter().enumerate() {
-            lights.push(self.light(i, l)?);
+            lights.push(self.light(i, l, base_dir)?);
         }
         if lights.is_empty() {
             lights.push(LightSpec {
@@ -872,6 +899,7 @@ impl Validator<'_> {
                 tilt_deg: [0.0; 2],
                 variance: [0.0; 2],
                 rotation_deg: 0.0,
+                pattern: None,
             });
         }
 
@@ -978,7 +1006,7 @@ impl Validator<'_> {
         })
     }
 
-    fn light(&self, i: usize, raw: RawLight) -> Result<LightSpec, SceneError> {
+    fn light(&self, i: usize, raw: RawLight, base_dir: &Path) -> Result<LightSpec, SceneError> {
         let key = |k: &str| format!("light[{i}].{k}");
         let color = self.color(&key("color"), raw.color.unwrap_or([1.0; 3]))?;
         let tilt = raw.tilt_deg.unwrap_or([0.0; 2]);
@@ -1003,7 +1031,31 @@ impl Validator<'_> {
                 ));
             }
         }
+        let pattern = match raw.pattern {
+            None => None,
+            Some(p) => {
+                let size = p.size.ok_or_else(|| {
+                    self.err(
+                        key("pattern.size"),
+                        "expected `size = [w, h]`: the pattern's world-unit size on the first slab plane",
+                    )
+                })?;
+                for (j, v) in size.iter().enumerate() {
+                    self.length(&format!("light[{i}].pattern.size[{j}]"), *v)?;
+                }
+                let center = p.center.unwrap_or([0.0; 2]);
+                for (j, v) in center.iter().enumerate() {
+                    self.bounded(&format!("light[{i}].pattern.center[{j}]"), *v, MAX_WORLD)?;
+                }
+                Some(PatternSpec {
+                    path: base_dir.join(p.path),
+                    size,
+                    center,
+                })
+            }
+        };
         Ok(LightSpec {
+            pattern,
             color: color.map(|c| c as f32),
             tilt_deg: tilt,
             variance,
