@@ -118,7 +118,7 @@ impl From<crate::pipeline::RenderError> for Failure {
 fn geometry_code(e: &convshadow_common::geometry::GeometryError) -> i32 {
     use convshadow_common::geometry::GeometryError as G;
     match e {
-        G::TooManySlabs { .. } => RESOURCE_LIMIT,
+        G::TooManySlabs { .. } | G::TooManyAutoSlabs { .. } => RESOURCE_LIMIT,
         _ => BAD_INPUT,
     }
 }

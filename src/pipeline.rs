@@ -600,7 +600,8 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     let options = SweepOptions {
         progress: req.progress,
         cancel: req.cancel,
-        initial_light: None,
+        // A light's pattern (gobo) is its initial light buffer; without one every light starts at 1.
+        initial_light: plan.initial_light.as_deref(),
     };
     let cpu = CpuOptions {
         path: req.path.sweep_path(),

@@ -188,3 +188,74 @@ fn reference_samples_are_checked() {
     assert!(err.contains("only applies to --backend reference"), "{err}");
     assert!(!dir.join("render.png").exists(), "nothing is written");
 }
+
+#[test]
+fn slabs_auto_is_printed_and_written_to_the_stats() {
+    let dir = support::temp_dir("render-auto-slabs");
+    // A 2-deep box of fBm at frequency 5, 3 octaves of lacunarity 2: finest period 1/20, so
+    // 2 · 20 · 2 = 80 slabs (81 with the depth's widening by one part in 10⁶).
+    let scene = r#"
+[image]
+width = 16
+height = 16
+[camera]
+view_width = 4.0
+[sweep]
+slabs = 8
+optimal_distance = 1.0
+[[mesh]]
+shape = "box"
+size = [2.0, 2.0, 2.0]
+material = "m"
+[material.m]
+detail = { kind = "fbm", frequency = 5.0, octaves = 3, lacunarity = 2.0 }
+gradient = [[0.0, 1.0, 1.0, 1.0, 0.2]]
+"#;
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let (code, out, err) = support::run_cli(
+        &[
+            "render",
+            "s.toml",
+            "--slabs",
+            "auto",
+            "-o",
+            "a.exr",
+            "--stats-json",
+            "s.json",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("81 slabs (auto: 2 per finest period 5.000e-2 of material.m.detail"),
+        "{out}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    assert_eq!(v["slabs"], 81, "{v}");
+    assert_eq!(v["slabs_auto"]["limited_by"], "material.m.detail", "{v}");
+    assert_eq!(v["slabs_auto"]["slab_factor"], 1.0, "{v}");
+    // A count on the command line: no auto note, `slabs_auto` null.
+    let (code, out, err) = support::run_cli(
+        &[
+            "render",
+            "s.toml",
+            "--slabs",
+            "12",
+            "-o",
+            "b.exr",
+            "--stats-json",
+            "t.json",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("12 slabs,") && !out.contains("auto"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("t.json")).unwrap()).unwrap();
+    assert!(v["slabs_auto"].is_null(), "{v}");
+    // A word other than auto is a bad argument naming the flag.
+    let (code, _, err) = support::run_cli(&["render", "s.toml", "--slabs", "many"], &dir);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--slabs") && err.contains("auto"), "{err}");
+}

@@ -112,7 +112,7 @@ fn gpu_image_equals_cpu_for_every_kernel() {
 }
 
 /// A scene that reaches the shader paths the example scenes may not: every detail kind in 3D and
-/// 4D, a 3D texture, specular highlights, no jitter, a guard band and a grey (1-channel) or
+/// 4D, a 3D texture, specular highlights, phase functions (forward and backward), no jitter, a guard band and a grey (1-channel) or
 /// coloured light buffer, a narrow light (mean carried in whole pixels).
 fn path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
     let dims = [5u32, 4, 3];
@@ -189,6 +189,7 @@ gradient = [[0.0, 0.2, 0.9, 0.2, 0.0], [0.6, 0.5, 0.9, 0.5, 0.4], [1.0, 1.0, 1.0
 transport = {transport}
 reference_length = 0.05
 specular = {{ strength = 0.8, exponent = 17 }}
+phase = {{ g = 0.5 }}
 [material.tex]
 texture = {{ path = "tex.raw", dims = [{}, {}, {}], type = "u8" }}
 gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 0.9, 0.6, 0.3, 1.0]]
@@ -200,6 +201,7 @@ gradient = [[0.0, 0.1, 0.1, 0.1, 0.1], [1.0, 0.9, 0.9, 0.9, 0.8]]
 transport = {transport}
 reference_length = 0.05
 specular = {{ strength = 0.5, exponent = 4 }}
+phase = {{ g = -0.4 }}
 [material.wall]
 color = [0.8, 0.8, 0.75]
 opacity = 1.0
@@ -239,6 +241,38 @@ fn gpu_image_equals_cpu_on_every_shader_path() {
             &format!("shader paths, monochrome {monochrome}, jitter {jitter}, band {band}"),
         );
     }
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_a_patterned_light() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-pattern");
+    // A coloured 7×5 pattern (non-grey, so three light channels), smaller than the view, with
+    // texels that do not align with pixels: bilinear samples, clamped edges.
+    let (w, h) = (7u32, 5u32);
+    let data: Vec<f32> = (0..w * h * 3)
+        .map(|i| ((i * 53 + 11) % 97) as f32 / 96.0)
+        .collect();
+    convshadow::common::image_io::RgbImage {
+        width: w,
+        height: h,
+        data,
+    }
+    .save(&dir.join("gobo.png"))
+    .unwrap();
+    let mut scene = path_scene(&dir, true, true);
+    scene.lights[0].pattern = Some(convshadow::common::scene::PatternSpec {
+        path: dir.join("gobo.png"),
+        size: [3.1, 2.3],
+        center: [0.4, -0.3],
+    });
+    assert!(
+        !scene.is_monochrome(),
+        "a pattern takes three light channels"
+    );
+    check(&ctx, &scene, "patterned light");
 }
 
 #[test]

@@ -2,6 +2,7 @@
 
 use glam::{DAffine3, DMat3, DVec3};
 
+use crate::auto_slabs::{AutoSlabs, auto_slabs};
 use crate::camera::Camera;
 use crate::guard::{AutoGuardInput, GuardBand};
 use crate::mesh::{MeshError, MeshReport, TriMesh};
@@ -65,6 +66,37 @@ pub enum GeometryError {
         /// Scene depth.
         depth: f64,
     },
+    /// `slabs = "auto"` needs more slabs than the limit.
+    #[error(
+        "{scene}: key `sweep.slabs`: \"auto\" needs {count} slabs (2 per finest period of \
+         {period:.4e} world units of `{limited_by}` over the scene's depth of {depth:.4e}, times \
+         sweep.slab_factor = {factor}), expected at most {MAX_SLABS}; lower `sweep.slab_factor` \
+         or give `sweep.slabs` a count"
+    )]
+    TooManyAutoSlabs {
+        /// Scene file.
+        scene: String,
+        /// The count auto needs.
+        count: f64,
+        /// Scene depth.
+        depth: f64,
+        /// The finest period (world units along the view).
+        period: f64,
+        /// The key of the detail that sets it.
+        limited_by: String,
+        /// `sweep.slab_factor`.
+        factor: f64,
+    },
+    /// A NIfTI texture's header could not be read (`slabs = "auto"` reads its dims).
+    #[error("{scene}: material `{material}`: {source}")]
+    Texture {
+        /// Scene file.
+        scene: String,
+        /// Material name.
+        material: String,
+        /// The loader's error.
+        source: crate::texture3d::TextureError,
+    },
 }
 
 /// Everything geometric the LDI and the sweep need.
@@ -80,6 +112,8 @@ pub struct SceneGeometry {
     pub slab_distance: f64,
     /// Number of slabs.
     pub slabs: u32,
+    /// How `slabs = "auto"` chose the count (`None` for a count or distance given).
+    pub auto_slabs: Option<AutoSlabs>,
     /// Rasterizer set-up of every triangle (depths relative to `z_origin`), on the grid of the
     /// image plus the guard band resolved for this scene (`raster.guard`).
     pub raster: RasterSetup,
@@ -155,8 +189,15 @@ impl SceneGeometry {
         // Widen the far end slightly so the farthest surface lies strictly before the last back face.
         let depth = (z_max - z_min).max(1e-12 * z_min.abs().max(1.0));
         let depth = depth + depth * 1e-6;
+        let mut auto = None;
         let (slab_distance, slabs) = match scene.sweep.slabs {
             SlabSpec::Count(n) => (depth / f64::from(n), n),
+            SlabSpec::Auto => {
+                let a = auto_slabs(scene, camera.forward, &meshes, depth)?;
+                let n = a.count;
+                auto = Some(a);
+                (depth / f64::from(n), n)
+            }
             SlabSpec::Distance(e) => {
                 let count = (depth / e).ceil();
                 if count > f64::from(MAX_SLABS) {
@@ -198,6 +239,7 @@ impl SceneGeometry {
             z_origin: z_min,
             slab_distance,
             slabs,
+            auto_slabs: auto,
             raster,
         })
     }

@@ -1,6 +1,7 @@
 //! Shared core of convshadow: the scene model, parameters, tables, hashing, noise, rasterizer
 //! set-up and image I/O. Everything here is used by both the CPU oracle and the GPU port.
 
+pub mod auto_slabs;
 pub mod camera;
 pub mod geometry;
 pub mod guard;
@@ -14,6 +15,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod nifti;
 pub mod noise;
+pub mod pattern;
 pub mod plan;
 pub mod raster;
 pub mod scene;

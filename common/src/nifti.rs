@@ -348,6 +348,34 @@ fn voxel_stream(
     open_stream(&img)
 }
 
+/// The voxel counts and spacing of a NIfTI-1 file, from its header alone (no voxel data is
+/// read): what `sweep.slabs = "auto"` needs before the texture is loaded. Dimensions beyond the
+/// file's count are 1, spacing follows [`load_nifti`] (absolute, 1 where the header has 0).
+pub fn header_grid(path: &Path) -> Result<([u32; 3], [f64; 3]), TextureError> {
+    check_header(path)?;
+    let header = nifti::NiftiHeader::from_file(path)
+        .map_err(|e| nifti_err(path, format!("cannot read the NIfTI header: {e}")))?;
+    let ndim = usize::from(header.dim[0].min(7));
+    let dims = [1, 2, 3].map(|i| {
+        if i <= ndim {
+            u32::from(header.dim[i])
+        } else {
+            1
+        }
+    });
+    if dims.contains(&0) {
+        return Err(TextureError::Dims {
+            path: path.to_path_buf(),
+            dims,
+        });
+    }
+    let spacing = [1, 2, 3].map(|i| {
+        let s = f64::from(header.pixdim[i]).abs();
+        if s.is_finite() && s > 0.0 { s } else { 1.0 }
+    });
+    Ok((dims, spacing))
+}
+
 /// Loads a NIfTI-1 file as a texture: the first 3D volume, scaled by `scl_slope`/`scl_inter`
 /// (when the slope is non-zero), mapped to [0, 1] through `window` (default: min–max; values
 /// outside clamp). Errors name the file: unreadable, not NIfTI-1, truncated, unsupported type.

@@ -48,6 +48,10 @@ pub struct MaterialPlan {
     pub texture_extent: Option<[f64; 3]>,
     /// Specular strength and exponent.
     pub specular: Option<(f32, u32)>,
+    /// Per light: the light's colour times this material's phase function at the light's
+    /// scattering angle ([`phase_factor`]); exactly the light's colour for an isotropic medium
+    /// (g = 0). Shading sums `Iin ⊙ light_color`; the specular term uses the bare colour.
+    pub light_color: Vec<[f32; 3]>,
 }
 
 /// A light's per-render tables.
@@ -65,15 +69,38 @@ pub struct LightPlan {
     pub half_vector: [f32; 3],
 }
 
-/// Errors while planning (a texture file that cannot be read).
+/// cos θ of the scattering angle of a distant light with tilt `tilt_deg` towards an orthographic
+/// camera: θ is the angle between the light's propagation direction, ∝ (−tan ωx, −tan ωy, 1) in
+/// camera space, and the direction to the camera, (0, 0, −1); so cos θ = −1/√(1 + tan²ωx +
+/// tan²ωy) (−1 for a light straight behind the viewer: back-scattering).
+pub fn scattering_cos(tilt_deg: [f64; 2]) -> f64 {
+    let [mx, my] = tilt_deg.map(|t| t.to_radians().tan());
+    -1.0 / (1.0 + mx * mx + my * my).sqrt()
+}
+
+/// The Henyey–Greenstein phase function normalised to 1 for an isotropic medium:
+/// `(1 − g²) / (1 + g² − 2g·cos θ)^{3/2}` (its 1/4π dropped, so g = 0 gives exactly 1).
+pub fn henyey_greenstein(g: f64, cos_theta: f64) -> f64 {
+    if g == 0.0 {
+        return 1.0;
+    }
+    (1.0 - g * g) / (1.0 + g * g - 2.0 * g * cos_theta).powf(1.5)
+}
+
+/// The phase factor of a medium of asymmetry `g` lit by a light of tilt `tilt_deg`.
+pub fn phase_factor(g: f64, tilt_deg: [f64; 2]) -> f64 {
+    henyey_greenstein(g, scattering_cos(tilt_deg))
+}
+
+/// Errors while planning: a material's 3D texture or a light's pattern that cannot be read.
 #[derive(Debug, thiserror::Error)]
-#[error("{scene}: material `{material}`: {source}")]
+#[error("{scene}: {what}: {source}")]
 pub struct PlanError {
     /// Scene file.
     pub scene: String,
-    /// Material name.
-    pub material: String,
-    /// The texture loader's error.
+    /// What failed: "material `NAME`" (a 3D texture) or "key `light[i].pattern.path`".
+    pub what: String,
+    /// The loader's error (names the file).
     pub source: TextureError,
 }
 
@@ -93,6 +120,10 @@ pub struct RenderPlan {
     pub height: u32,
     /// Slab count.
     pub slabs: u32,
+    /// How `slabs = "auto"` chose the count (`None` when the scene gave it).
+    pub auto_slabs: Option<crate::auto_slabs::AutoSlabs>,
+    /// Pixel size (world units).
+    pub pixel_size: f64,
     /// Slab thickness (world units) as f32.
     pub slab_distance: f32,
     /// Front face of each slab (depth relative to the first slab's front).
@@ -117,6 +148,9 @@ pub struct RenderPlan {
     pub jitter_slab_hash: Vec<u32>,
     /// Background colour.
     pub background: [f32; 3],
+    /// The light buffer before the first slab (`[row][light][channel][x]`, like the sweep's),
+    /// when a light has a pattern; `None`: every light starts at 1.
+    pub initial_light: Option<Vec<f32>>,
 }
 
 impl RenderPlan {
@@ -174,7 +208,7 @@ impl RenderPlan {
             .collect::<Result<Vec<_>, TextureError>>()
             .map_err(|source| PlanError {
                 scene: scene.source.clone(),
-                material: String::new(),
+                what: "material ``".to_string(),
                 source,
             });
         let materials = match materials {
@@ -188,11 +222,27 @@ impl RenderPlan {
                             .contains(&t.path.display().to_string())
                     })
                 }) {
-                    err.material = m.name.clone();
+                    err.what = format!("material `{}`", m.name);
                 }
                 return Err(err);
             }
         };
+        let mut materials = materials;
+        for (plan, spec) in materials.iter_mut().zip(&scene.materials) {
+            plan.light_color = scene
+                .lights
+                .iter()
+                .map(|l| {
+                    if spec.phase_g == 0.0 {
+                        // Bit for bit the colour the shading used before phase functions.
+                        l.color.map(flush_tiny)
+                    } else {
+                        let f = phase_factor(spec.phase_g, l.tilt_deg);
+                        l.color.map(|c| flush_tiny((f64::from(c) * f) as f32))
+                    }
+                })
+                .collect();
+        }
         let mesh_to_detail = scene
             .meshes
             .iter()
@@ -227,13 +277,14 @@ impl RenderPlan {
                 .map(|v| v as f32)
             })
             .collect();
-        Ok(RenderPlan {
+        RenderPlan {
             grid_width: geometry.raster.width,
             grid_height: geometry.raster.height,
             guard: geometry.raster.guard,
             width: scene.image.width,
             height: scene.image.height,
             slabs,
+            auto_slabs: geometry.auto_slabs.clone(),
             slab_distance: e as f32,
             slab_front: (0..slabs).map(|k| (f64::from(k) * e) as f32).collect(),
             slab_back: geometry.slab_back_faces(),
@@ -247,7 +298,50 @@ impl RenderPlan {
                 .map(|k| slab_hash(seed, JITTER_STREAM, k))
                 .collect(),
             background: scene.image.background,
-        })
+            pixel_size: px,
+            initial_light: None,
+        }
+        .with_patterns(scene)
+    }
+
+    /// Samples every light's pattern into the initial light buffer (`None` without patterns);
+    /// errors name the key and the file.
+    pub fn with_patterns(mut self, scene: &Scene) -> Result<RenderPlan, PlanError> {
+        if scene.lights.iter().all(|l| l.pattern.is_none()) {
+            return Ok(self);
+        }
+        let w = self.grid_width as usize;
+        let h = self.grid_height as usize;
+        let ch = self.channels as usize;
+        let row_len = self.light_row_len();
+        let mut buf = vec![1.0f32; row_len * h];
+        for (l, spec) in scene.lights.iter().enumerate() {
+            let Some(p) = &spec.pattern else { continue };
+            let pattern = crate::pattern::load_pattern(&p.path).map_err(|source| PlanError {
+                scene: scene.source.clone(),
+                what: format!("key `light[{l}].pattern.path`"),
+                source,
+            })?;
+            let (tw, th) = (f64::from(pattern.width), f64::from(pattern.height));
+            let (left, top) = (f64::from(self.guard.left), f64::from(self.guard.top));
+            for y in 0..h {
+                // Camera-space y of the grid pixel centre, from the view's centre.
+                let cy = (y as f64 - top + 0.5 - f64::from(self.height) * 0.5) * self.pixel_size;
+                let ty = ((cy - p.center[1]) / p.size[1] + 0.5) * th;
+                for c in 0..ch {
+                    let row = &mut buf[y * row_len + (l * ch + c) * w..][..w];
+                    for (x, v) in row.iter_mut().enumerate() {
+                        let cx = (x as f64 - left + 0.5 - f64::from(self.width) * 0.5)
+                            * self.pixel_size;
+                        let tx = ((cx - p.center[0]) / p.size[0] + 0.5) * tw;
+                        let s = pattern.sample(tx, ty, c) as f32;
+                        *v = if s < FLUSH_BELOW { 0.0 } else { s };
+                    }
+                }
+            }
+        }
+        self.initial_light = Some(buf);
+        Ok(self)
     }
 
     /// The column every per-pixel hash (kernel phase, jitter) is keyed by for grid column `x`:
@@ -283,7 +377,7 @@ impl RenderPlan {
 
 /// The largest box with the aspect of `extent`, centred in the bounds `lo..hi`: a NIfTI volume's
 /// voxels keep their spacing's proportions (outside the box, sampling clamps to the edge voxels).
-fn fit_extent(lo: DVec3, hi: DVec3, extent: DVec3) -> (DVec3, DVec3) {
+pub(crate) fn fit_extent(lo: DVec3, hi: DVec3, extent: DVec3) -> (DVec3, DVec3) {
     let size = hi - lo;
     let extent = extent.max(DVec3::splat(1e-30));
     let scale = (size / extent).min_element();
@@ -373,6 +467,7 @@ fn material_plan(
         texture,
         texture_extent,
         specular: m.specular.as_ref().map(|s| (s.strength, s.exponent)),
+        light_color: Vec::new(),
     })
 }
 

@@ -23,6 +23,11 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 pub const MAX_EXPOSURE_STOPS: f64 = 64.0;
 /// Largest accepted slab count.
 pub const MAX_SLABS: u32 = 65536;
+/// Smallest and largest accepted `sweep.slab_factor` (the modulation of `slabs = "auto"`).
+pub const SLAB_FACTOR_RANGE: (f64, f64) = (1.0 / 1024.0, 1024.0);
+/// Largest accepted |g| of a Henyey–Greenstein phase function (the function needs |g| < 1; this
+/// bound keeps its largest value, (1 + 0.999)/(1 − 0.999)² ≈ 2·10⁶, finite with every colour in f32).
+pub const MAX_PHASE_G: f64 = 0.999;
 /// Largest accepted number of lights.
 pub const MAX_LIGHTS: usize = 16;
 /// Largest accepted number of meshes (the parity cursor keeps one inside bit per mesh in a u32).
@@ -147,10 +152,40 @@ struct RawCamera {
     view_width: f64,
 }
 
+/// `sweep.slabs` as written: an integer or a word (only `"auto"` is valid; checked with the key).
+#[derive(Debug)]
+enum RawSlabs {
+    Count(i64),
+    Word(String),
+}
+
+impl<'de> Deserialize<'de> for RawSlabs {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = RawSlabs;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("an integer slab count or \"auto\"")
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<RawSlabs, E> {
+                Ok(RawSlabs::Count(v))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<RawSlabs, E> {
+                Ok(RawSlabs::Count(i64::try_from(v).unwrap_or(i64::MAX)))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<RawSlabs, E> {
+                Ok(RawSlabs::Word(v.to_string()))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 struct RawSweep {
-    slabs: Option<u32>,
+    slabs: Option<RawSlabs>,
+    slab_factor: Option<f64>,
     slab_distance: Option<f64>,
     optimal_distance: f64,
     kernel: Option<String>,
@@ -170,6 +205,17 @@ struct RawLight {
     #[serde(default, deserialize_with = "exact")]
     variance: Option<[f64; 2]>,
     rotation_deg: Option<f64>,
+    pattern: Option<RawPattern>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawPattern {
+    path: String,
+    #[serde(default, deserialize_with = "exact")]
+    size: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "exact")]
+    center: Option<[f64; 2]>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -200,6 +246,13 @@ struct RawMaterial {
     #[serde(default, deserialize_with = "exact_stops")]
     gradient: Option<Vec<[f64; 5]>>,
     specular: Option<RawSpecular>,
+    phase: Option<RawPhase>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct RawPhase {
+    g: f64,
 }
 
 #[derive(Deserialize, Debug)]
@@ -301,6 +354,10 @@ pub enum SlabSpec {
     Count(u32),
     /// A slab thickness in world units.
     Distance(f64),
+    /// Chosen from the detail: 2 slabs per finest period of the procedural detail or per voxel of
+    /// a 3D texture along the view direction, times `SweepSpec::slab_factor`
+    /// (see `crate::auto_slabs`).
+    Auto,
 }
 
 /// Slab sweep parameters.
@@ -308,6 +365,8 @@ pub enum SlabSpec {
 pub struct SweepSpec {
     /// Slab count or thickness.
     pub slabs: SlabSpec,
+    /// Multiplies the count `slabs = "auto"` chooses (1 = 2 slabs per finest period).
+    pub slab_factor: f64,
     /// The optimal shadow distance d1 (world units).
     pub optimal_distance: f64,
     /// Convolution kernel.
@@ -334,6 +393,19 @@ pub struct LightSpec {
     pub variance: [f64; 2],
     /// Rotation α of the principal axes, degrees.
     pub rotation_deg: f64,
+    /// A gobo: an image that is the light's initial light buffer (see `crate::pattern`).
+    pub pattern: Option<PatternSpec>,
+}
+
+/// A light's pattern (`[[light]] pattern = { path, size, center }`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PatternSpec {
+    /// Resolved image path.
+    pub path: PathBuf,
+    /// World-unit size [w, h] of the image on the first slab plane.
+    pub size: [f64; 2],
+    /// Centre of the image, camera-space [x right, y down] world units from the view's centre.
+    pub center: [f64; 2],
 }
 
 /// The shape of a mesh.
@@ -476,6 +548,10 @@ pub struct MaterialSpec {
     pub gradient: Vec<GradientStop>,
     /// Optional specular highlight.
     pub specular: Option<SpecularSpec>,
+    /// Henyey–Greenstein asymmetry g of the medium's scattering (0 = isotropic, > 0 forward,
+    /// < 0 backward); with distant lights and an orthographic camera the phase function is one
+    /// constant per light, applied to the light's colour in shading (not to the specular term).
+    pub phase_g: f64,
 }
 
 impl Scene {
@@ -509,11 +585,14 @@ impl Scene {
         Validator { file: source }.scene(raw, base_dir)
     }
 
-    /// Whether every material's transport is grey, so one light-buffer channel suffices.
+    /// Whether every material's transport is grey and no light has a pattern (which may be
+    /// coloured), so one light-buffer channel suffices.
     pub fn is_monochrome(&self) -> bool {
-        self.materials
-            .iter()
-            .all(|m| m.transport[0] == m.transport[1] && m.transport[1] == m.transport[2])
+        self.lights.iter().all(|l| l.pattern.is_none())
+            && self
+                .materials
+                .iter()
+                .all(|m| m.transport[0] == m.transport[1] && m.transport[1] == m.transport[2])
     }
 
     /// Overrides camera values (command line): the direction is normalised and checked against
@@ -560,6 +639,7 @@ impl Scene {
             SlabSpec::Distance(d) => {
                 v.length("sweep.slab_distance", d)?;
             }
+            SlabSpec::Auto => {}
         }
         Ok(())
     }
@@ -813,7 +893,7 @@ impl Validator<'_> {
         }
         let mut lights = Vec::new();
         for (i, l) in raw.light.into_iter().enumerate() {
-            lights.push(self.light(i, l)?);
+            lights.push(self.light(i, l, base_dir)?);
         }
         if lights.is_empty() {
             lights.push(LightSpec {
@@ -821,6 +901,7 @@ impl Validator<'_> {
                 tilt_deg: [0.0; 2],
                 variance: [0.0; 2],
                 rotation_deg: 0.0,
+                pattern: None,
             });
         }
 
@@ -873,12 +954,37 @@ impl Validator<'_> {
                     "expected one of `slabs` (a count) or `slab_distance` (world units)",
                 ));
             }
-            (Some(n), None) => {
-                self.slab_count(n)?;
-                SlabSpec::Count(n)
+            (Some(RawSlabs::Count(n)), None) => match u32::try_from(n) {
+                Ok(n) if (1..=MAX_SLABS).contains(&n) => SlabSpec::Count(n),
+                _ => {
+                    return Err(self.err(
+                        "sweep.slabs",
+                        format!("expected an integer from 1 to {MAX_SLABS} or \"auto\", got {n}"),
+                    ));
+                }
+            },
+            (Some(RawSlabs::Word(w)), None) => {
+                if w != "auto" {
+                    return Err(self.err(
+                        "sweep.slabs",
+                        format!("expected an integer from 1 to {MAX_SLABS} or \"auto\", got {w:?}"),
+                    ));
+                }
+                SlabSpec::Auto
             }
             (None, Some(d)) => SlabSpec::Distance(self.length("sweep.slab_distance", d)?),
         };
+        if let Some(f) = raw.slab_factor {
+            if slabs != SlabSpec::Auto {
+                return Err(self.err(
+                    "sweep.slab_factor",
+                    "`slab_factor` modulates `slabs = \"auto\"` only; remove it or set \
+                     `slabs = \"auto\"`",
+                ));
+            }
+            let (lo, hi) = SLAB_FACTOR_RANGE;
+            self.in_range("sweep.slab_factor", f, lo, hi)?;
+        }
         let kernel_text = raw.kernel.unwrap_or_else(|| "ellipse2".to_string());
         let kernel = kernel_text
             .parse::<KernelSpec>()
@@ -900,6 +1006,7 @@ impl Validator<'_> {
         };
         Ok(SweepSpec {
             slabs,
+            slab_factor: raw.slab_factor.unwrap_or(1.0),
             optimal_distance: self.length("sweep.optimal_distance", raw.optimal_distance)?,
             kernel,
             jitter: raw.jitter.unwrap_or(true),
@@ -909,7 +1016,7 @@ impl Validator<'_> {
         })
     }
 
-    fn light(&self, i: usize, raw: RawLight) -> Result<LightSpec, SceneError> {
+    fn light(&self, i: usize, raw: RawLight, base_dir: &Path) -> Result<LightSpec, SceneError> {
         let key = |k: &str| format!("light[{i}].{k}");
         let color = self.color(&key("color"), raw.color.unwrap_or([1.0; 3]))?;
         let tilt = raw.tilt_deg.unwrap_or([0.0; 2]);
@@ -934,7 +1041,31 @@ impl Validator<'_> {
                 ));
             }
         }
+        let pattern = match raw.pattern {
+            None => None,
+            Some(p) => {
+                let size = p.size.ok_or_else(|| {
+                    self.err(
+                        key("pattern.size"),
+                        "expected `size = [w, h]`: the pattern's world-unit size on the first slab plane",
+                    )
+                })?;
+                for (j, v) in size.iter().enumerate() {
+                    self.length(&format!("light[{i}].pattern.size[{j}]"), *v)?;
+                }
+                let center = p.center.unwrap_or([0.0; 2]);
+                for (j, v) in center.iter().enumerate() {
+                    self.bounded(&format!("light[{i}].pattern.center[{j}]"), *v, MAX_WORLD)?;
+                }
+                Some(PatternSpec {
+                    path: base_dir.join(p.path),
+                    size,
+                    center,
+                })
+            }
+        };
         Ok(LightSpec {
+            pattern,
             color: color.map(|c| c as f32),
             tilt_deg: tilt,
             variance,
@@ -1177,6 +1308,24 @@ impl Validator<'_> {
             ));
         }
         let specular = raw.specular.map(|s| self.specular(&key, s)).transpose()?;
+        let phase_g = match raw.phase {
+            None => 0.0,
+            Some(p) => {
+                let k = key("phase.g");
+                self.finite(&k, p.g)?;
+                if p.g.abs() > MAX_PHASE_G {
+                    return Err(self.err(
+                        k,
+                        format!(
+                            "expected a Henyey-Greenstein asymmetry from -{MAX_PHASE_G} to \
+                             {MAX_PHASE_G} (the function needs -1 < g < 1), got {}",
+                            p.g
+                        ),
+                    ));
+                }
+                p.g
+            }
+        };
         Ok(MaterialSpec {
             name: name.to_string(),
             color,
@@ -1187,6 +1336,7 @@ impl Validator<'_> {
             texture,
             gradient,
             specular,
+            phase_g,
         })
     }
 

@@ -63,6 +63,14 @@ pub enum TextureError {
         /// The file.
         path: PathBuf,
     },
+    /// A light's pattern image cannot be used (unreadable, not an image, bad size or values).
+    #[error("{}: {message}", .path.display())]
+    Pattern {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
     /// The file could not be read.
     #[error("{}: cannot read 3D texture: {source}", .path.display())]
     Io {

@@ -183,21 +183,25 @@ pub struct Specular<L: Lane> {
 }
 
 /// The shaded colour `c ⊙ Σ_l (Iin_l ⊙ colour_l)` plus specular terms, summed light by light.
+/// `colour_l` is `material.light_color[l]`: the light's colour times the material's phase
+/// function for that light (the bare colour for isotropic media); the specular term, a surface
+/// reflection, uses the bare colour.
 ///
 /// `iin` holds `lights × channels` values; with one channel the light is grey.
 #[inline(always)]
 pub fn shade<L: Lane>(
     plan: &RenderPlan,
+    material: &MaterialPlan,
     color: [L; 3],
     iin: &[L],
     spec: Option<&Specular<L>>,
 ) -> [L; 3] {
     let ch = plan.channels as usize;
     let mut sum = [L::splat(0.0); 3];
-    for (l, light) in plan.lights.iter().enumerate() {
+    for (l, lc) in material.light_color.iter().enumerate() {
         for (c, s) in sum.iter_mut().enumerate() {
             let i = iin[l * ch + if ch == 1 { 0 } else { c }];
-            *s = *s + i * L::splat(light.color[c]);
+            *s = *s + i * L::splat(lc[c]);
         }
     }
     let mut out = [color[0] * sum[0], color[1] * sum[1], color[2] * sum[2]];

@@ -16,7 +16,7 @@ fn small(scene: &Scene) -> bool {
     let pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
     let slabs_ok = match scene.sweep.slabs {
         SlabSpec::Count(n) => n <= 256,
-        SlabSpec::Distance(_) => true,
+        SlabSpec::Distance(_) | SlabSpec::Auto => true,
     };
     let meshes_ok = scene.meshes.iter().all(|m| match &m.shape {
         ShapeSpec::Sphere { subdivisions, .. } => *subdivisions <= 3,

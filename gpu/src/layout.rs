@@ -316,6 +316,7 @@ pub mod slot {
         VOXELS = "voxels", 26;
         MESHES = "meshes", 27;
         NORMALS = "normals", 28;
+        LIGHT_COLORS = "light_colors", 29;
     }
 }
 

@@ -45,6 +45,8 @@ struct Tables {
     voxels: Vec<f32>,
     meshes: Vec<MeshHeader>,
     normals: Vec<[f32; 3]>,
+    /// Per (material, light): the phase-weighted light colour.
+    light_colors: Vec<[f32; 3]>,
 }
 
 /// Checks the scene against the shader's limits.
@@ -196,6 +198,11 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             })
             .collect(),
         normals: raster.triangles.iter().map(|tri| tri.normal).collect(),
+        light_colors: plan
+            .materials
+            .iter()
+            .flat_map(|m| m.light_color.iter().copied())
+            .collect(),
     };
     for light in &plan.lights {
         let header = light_tables(light, slabs, &mut t);
@@ -254,6 +261,7 @@ struct SweepBuffers {
     voxels: wgpu::Buffer,
     meshes: wgpu::Buffer,
     normals: wgpu::Buffer,
+    light_colors: wgpu::Buffer,
     image: wgpu::Buffer,
     image_words: u64,
     globals: wgpu::Buffer,
@@ -304,6 +312,7 @@ fn upload_buffers(
     let voxels = upload(ctx, "texture voxel", &tables.voxels, false)?;
     let meshes = upload(ctx, "mesh header", &tables.meshes, false)?;
     let normals = upload(ctx, "triangle normal", &tables.normals, false)?;
+    let light_colors = upload(ctx, "phase light colour", &tables.light_colors, false)?;
     let image_words = u64::from(plan.width) * u64::from(plan.height) * 3;
     let image = zeroed(ctx, "image", image_words)?;
     let globals = uniform(ctx, "globals", &tables.globals);
@@ -327,6 +336,7 @@ fn upload_buffers(
         voxels,
         meshes,
         normals,
+        light_colors,
         image,
         image_words,
         globals,
@@ -371,7 +381,7 @@ fn slab_groups(
     slab_pipe: &wgpu::ComputePipeline,
     b: &SweepBuffers,
 ) -> [wgpu::BindGroup; 2] {
-    let common: [(u32, &wgpu::Buffer); 17] = [
+    let common: [(u32, &wgpu::Buffer); 18] = [
         (slot::SLAB_PARAMS, &b.slab_param),
         (slot::GLOBALS, &b.globals),
         (slot::CURSORS, &b.cursors),
@@ -389,6 +399,7 @@ fn slab_groups(
         (slot::VOXELS, &b.voxels),
         (slot::MESHES, &b.meshes),
         (slot::NORMALS, &b.normals),
+        (slot::LIGHT_COLORS, &b.light_colors),
     ];
     let group_for = |prev: &wgpu::Buffer, cur: &wgpu::Buffer| {
         let mut e: Vec<(u32, &wgpu::Buffer)> = common.to_vec();

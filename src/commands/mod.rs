@@ -103,6 +103,17 @@ pub fn parse_side(s: &str) -> Result<u32, String> {
     }
 }
 
+/// `--slabs`: a slab count (its range is checked with the scene) or `auto`.
+pub fn parse_slabs(s: &str) -> Result<convshadow_common::scene::SlabSpec, String> {
+    use convshadow_common::scene::{MAX_SLABS, SlabSpec};
+    if s == "auto" {
+        return Ok(SlabSpec::Auto);
+    }
+    s.parse::<u32>()
+        .map(SlabSpec::Count)
+        .map_err(|_| format!("expected an integer from 1 to {MAX_SLABS} or `auto`, got {s:?}"))
+}
+
 /// The pipeline's thread pool with `threads` workers (0 = one per core), its error as a failure.
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, Failure> {
     Ok(crate::pipeline::thread_pool(threads)?)

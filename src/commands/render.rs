@@ -99,9 +99,10 @@ pub struct RenderArgs {
     /// Detail time advanced per frame (default 0.05).
     #[arg(long, value_name = "DT", allow_hyphen_values = true)]
     pub time_step: Option<f64>,
-    /// Override the slab count.
-    #[arg(long)]
-    pub slabs: Option<u32>,
+    /// Override the slab count: N, or `auto` (2 slabs per finest period of the detail along the
+    /// view, times sweep.slab_factor; the count chosen is printed and in --stats-json).
+    #[arg(long, value_name = "N|auto", value_parser = super::parse_slabs)]
+    pub slabs: Option<SlabSpec>,
     /// Override the kernel (the help lists the kernels of `common::kernel::KERNEL_SYNTAX`).
     #[arg(long, help = format!("Override the kernel ({KERNEL_SYNTAX})"))]
     pub kernel: Option<String>,
@@ -174,7 +175,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     let frame_count = frame_list.as_ref().map_or(1, Vec::len) as u64;
     let slab_count = std::sync::atomic::AtomicU64::new(match scene.sweep.slabs {
         SlabSpec::Count(n) => u64::from(n),
-        SlabSpec::Distance(_) => 0,
+        SlabSpec::Distance(_) | SlabSpec::Auto => 0,
     });
     let progress = |slab: u32| {
         if let Some(b) = &bar {
@@ -316,7 +317,7 @@ fn parse_guard_band(s: &str) -> Result<GuardBandSpec, String> {
 /// re-validated.
 fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Failure> {
     if let Some(n) = args.slabs {
-        scene.sweep.slabs = SlabSpec::Count(n);
+        scene.sweep.slabs = n;
     }
     if let Some(k) = &args.kernel {
         scene.sweep.kernel = k
@@ -552,12 +553,13 @@ fn finish_frames(
             );
         }
         println!(
-            "rendered {} frame{} of {}x{} px, {} slabs, {}: {:.2} s",
+            "rendered {} frame{} of {}x{} px, {} slabs{}, {}: {:.2} s",
             done.len(),
             if done.len() == 1 { "" } else { "s" },
             scene.image.width,
             scene.image.height,
             last.plan.slabs,
+            auto_note(last),
             plural(last.plan.lights.len(), "light"),
             seconds
         );
@@ -605,11 +607,12 @@ fn finish(
     let throughput = throughput(r);
     if !args.quiet {
         println!(
-            "rendered {}x{} px, {} slabs, {}, {}, guard band {}, {} fragments: {:.2} s (LDI \
+            "rendered {}x{} px, {} slabs{}, {}, {}, guard band {}, {} fragments: {:.2} s (LDI \
              {:.2} s, sweep {:.2} s, {:.1} M pixel·slab·light/s, {}) → {}",
             scene.image.width,
             scene.image.height,
             r.plan.slabs,
+            auto_note(r),
             plural(r.plan.lights.len(), "light"),
             scene.sweep.kernel,
             r.plan.guard,
@@ -637,6 +640,20 @@ fn finish(
     Ok(exit::OK)
 }
 
+/// ` (auto: …)` after the slab count when `slabs = "auto"` chose it, else nothing.
+fn auto_note(r: &Rendered) -> String {
+    match &r.plan.auto_slabs {
+        None => String::new(),
+        Some(a) => match (&a.finest_period, &a.limited_by) {
+            (Some(p), Some(key)) => format!(
+                " (auto: 2 per finest period {p:.3e} of {key} along the view, × slab_factor {})",
+                a.factor
+            ),
+            _ => format!(" (auto: no detail, the minimum × slab_factor {})", a.factor),
+        },
+    }
+}
+
 /// Pixel·slab·light updates per second of the sweep.
 fn throughput(r: &Rendered) -> f64 {
     let updates = f64::from(r.plan.grid_width)
@@ -659,6 +676,11 @@ fn stats_value(
             "width": scene.image.width,
             "height": scene.image.height,
             "slabs": r.plan.slabs,
+            "slabs_auto": r.plan.auto_slabs.as_ref().map(|a| json!({
+                "finest_period": a.finest_period,
+                "limited_by": a.limited_by,
+                "slab_factor": a.factor,
+            })),
             "slab_distance": f64::from(r.plan.slab_distance),
             "kernel": scene.sweep.kernel.to_string(),
             "guard_band": scene.sweep.guard_band.to_string(),

@@ -27,6 +27,10 @@
 //!   positive length blocks the light. Crossings closer than 1e-9 (relative) to the shading
 //!   point are ignored, so a ray does not hit the surface it starts on.
 //!
+//! - **Patterned lights**: a ray's transmittance is multiplied by the light's initial light
+//!   (its pattern, as the plan sampled it at pixel centres; bilinear between them, 1 outside the
+//!   grid like the sweep's reads) where the ray leaves the scene through the first slab plane.
+//!
 //! It is slow — every shading point marches `lights × M` rays — and meant for small images.
 
 use convshadow_common::geometry::SceneGeometry;
@@ -393,7 +397,15 @@ impl<'a> Reference<'a> {
                     mu[0] + f[0][0] * z1 + f[0][1] * z2,
                     mu[1] + f[1][0] * z1 + f[1][1] * z2,
                 ];
-                let t = self.transmittance(p, dir, scratch);
+                let mut t = self.transmittance(p, dir, scratch);
+                if self.plan.initial_light.is_some() {
+                    // A patterned light: the ray leaves the scene through the first slab plane
+                    // (depth 0) at p + p.z·dir, where the pattern gives the light's value.
+                    let i = self.initial_at(l, p[0] + p[2] * dir[0], p[1] + p[2] * dir[1]);
+                    for (v, s) in t.iter_mut().zip(i) {
+                        *v *= s;
+                    }
+                }
                 for (a, v) in acc.iter_mut().zip(t) {
                     *a += v;
                 }
@@ -401,6 +413,39 @@ impl<'a> Reference<'a> {
         }
         let m = f64::from(k * k);
         acc.map(|v| v / m)
+    }
+
+    /// Light `l`'s initial light (its pattern) at grid position (x, y) in pixels, per channel:
+    /// bilinear between pixel centres, 1 outside the grid (as the sweep reads it).
+    fn initial_at(&self, l: usize, x: f64, y: f64) -> [f64; 3] {
+        let plan = self.plan;
+        let Some(buf) = &plan.initial_light else {
+            return [1.0; 3];
+        };
+        let (w, h) = (plan.grid_width as i64, plan.grid_height as i64);
+        let ch = plan.channels as usize;
+        let row_len = plan.light_row_len();
+        let (fx, fy) = (x - 0.5, y - 0.5);
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (ax, ay) = (fx - x0, fy - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let mut out = [1.0f64; 3];
+        for (c, o) in out.iter_mut().enumerate().take(ch) {
+            let at = |xi: i64, yi: i64| {
+                if xi < 0 || yi < 0 || xi >= w || yi >= h {
+                    1.0
+                } else {
+                    f64::from(buf[yi as usize * row_len + (l * ch + c) * w as usize + xi as usize])
+                }
+            };
+            let top = at(x0, y0) * (1.0 - ax) + at(x0 + 1, y0) * ax;
+            let bottom = at(x0, y0 + 1) * (1.0 - ax) + at(x0 + 1, y0 + 1) * ax;
+            *o = top * (1.0 - ay) + bottom * ay;
+        }
+        if ch == 1 {
+            out = [out[0]; 3];
+        }
+        out
     }
 
     /// Renders the image (linear RGB, `width·height·3`) with the sweep's view samples and
@@ -471,7 +516,7 @@ impl<'a> Reference<'a> {
                             _ => None,
                         };
                         let iin = &iin[..lights * ch];
-                        let shaded = shade(plan, tf.color, iin, spec.as_ref());
+                        let shaded = shade(plan, material, tf.color, iin, spec.as_ref());
                         composite(&mut color, &mut alpha, shaded, tf.alpha, true);
                     }
                     finish(&mut color, alpha, plan.background);

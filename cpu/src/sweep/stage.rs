@@ -257,7 +257,7 @@ fn shade_chunk<L: Lane>(
         }
         _ => None,
     };
-    let shaded = shade(plan, tf.color, iin, spec.as_ref());
+    let shaded = shade(plan, material, tf.color, iin, spec.as_ref());
 
     let mut color = [
         L::load(row.color, x0),

@@ -110,11 +110,18 @@ fn iin_at(l: u32, c: u32) -> f32 {
     return iin[l * ch + select(c, 0u, ch == 1u)];
 }
 
-// `shade`: c ⊙ Σ_l (Iin_l ⊙ colour_l), then the specular terms light by light.
-fn shade(color: vec3<f32>, has_spec: bool, strength: f32, exponent: u32, n: vec3<f32>) -> vec3<f32> {
+// Material `material`'s colour of light `l`: the light's colour times its phase function.
+fn phase_light_color(material: u32, l: u32) -> vec3<f32> {
+    let c = light_colors[material * globals.lights + l];
+    return vec3<f32>(c[0], c[1], c[2]);
+}
+
+// `shade`: c ⊙ Σ_l (Iin_l ⊙ colour_l) with the material's phase-weighted light colours, then the
+// specular terms light by light with the bare light colours.
+fn shade(material: u32, color: vec3<f32>, has_spec: bool, strength: f32, exponent: u32, n: vec3<f32>) -> vec3<f32> {
     var sum = vec3<f32>(0.0, 0.0, 0.0);
     for (var l = 0u; l < globals.lights; l++) {
-        let lc = light_color(l);
+        let lc = phase_light_color(material, l);
         for (var c = 0u; c < 3u; c++) {
             sum[c] = sum[c] + iin_at(l, c) * lc[c];
         }

@@ -72,7 +72,8 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         } else {
             z = front + 0.5 * globals.slab_distance;
         }
-        let m = materials[meshes[mesh].material];
+        let mi = meshes[mesh].material;
+        let m = materials[mi];
         var value = 0.0;
         if m.tf_len > 1u {
             let q = to_detail(mesh, f32(i32(x) - i32(globals.guard_left)) + 0.5, f32(i32(y) - i32(globals.guard_top)) + 0.5, z);
@@ -85,7 +86,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             let o = normals[frag_meta[adv.first] >> MESH_BITS];
             n = vec3<f32>(o[0], o[1], o[2]);
         }
-        let shaded = shade(e.color, has_spec, m.spec_strength, m.spec_exponent, n);
+        let shaded = shade(mi, e.color, has_spec, m.spec_strength, m.spec_exponent, n);
         accum[p] = composite(accum[p], shaded, e.alpha);
         attenuation = e.attenuation;
     }

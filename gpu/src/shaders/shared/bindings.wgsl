@@ -169,3 +169,6 @@ struct Cursor {
 @group(0) @binding(27) var<storage, read> meshes: array<MeshHeader>;
 // Per rasterized triangle: its unit normal.
 @group(0) @binding(28) var<storage, read> normals: array<array<f32, 3>>;
+// Per (material, light), at `material · lights + light`: the light's colour times the material's
+// phase function (the bare colour for isotropic media), read by the shading's light sum.
+@group(0) @binding(29) var<storage, read> light_colors: array<array<f32, 3>>;
