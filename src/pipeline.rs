@@ -451,7 +451,8 @@ pub fn open_within_budget(
     }
     let choice = BackendChoice::open(backend)?;
     if choice.gpu.is_none() {
-        let left = MemoryNeed::for_backend(scene, guard, sweep, Backend::Cpu).check(scene, budget)?;
+        let left =
+            MemoryNeed::for_backend(scene, guard, sweep, Backend::Cpu).check(scene, budget)?;
         return Ok((choice, left));
     }
     // No silent fall-back to the CPU by memory: `auto` means the GPU where there is one. The

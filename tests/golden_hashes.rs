@@ -146,7 +146,11 @@ fn check_table(file: &str, extra: &[&str], dir: &Path) -> usize {
         let want = golden
             .get(&key)
             .unwrap_or_else(|| panic!("{key} is not in {file}"));
-        let base: Vec<&str> = args.iter().map(String::as_str).chain(extra.iter().copied()).collect();
+        let base: Vec<&str> = args
+            .iter()
+            .map(String::as_str)
+            .chain(extra.iter().copied())
+            .collect();
         // The full-size scenes once on the default path; the small grid on both paths and
         // thread counts.
         let variants: &[&[&str]] = if key.ends_with("/full") {

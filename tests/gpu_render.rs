@@ -342,8 +342,10 @@ fn auto_counts_the_memory_of_the_backend_it_picks() {
                 size = [1.0, 1.0, 1.0]\nmaterial = \"m\"\n[material.m]\nopacity = 0.5\n";
     std::fs::write(dir.join("s.toml"), text).unwrap();
     let scene = Scene::load(&dir.join("s.toml")).unwrap();
-    let cpu = MemoryNeed::for_backend(&scene, true, Backend::Cpu).total();
-    let gpu = MemoryNeed::for_backend(&scene, true, Backend::Gpu).total();
+    // The box lies inside the view: the automatic guard band is 0, its lower bound.
+    let band = scene.sweep.guard_band.lower_bound();
+    let cpu = MemoryNeed::for_backend(&scene, band, true, Backend::Cpu).total();
+    let gpu = MemoryNeed::for_backend(&scene, band, true, Backend::Gpu).total();
     // A budget (whole MiB, as --max-memory takes it) between the two needs, leaving the CPU
     // several MiB for the box's fragments (about 60k of 17 bytes).
     let mib = (cpu + (gpu - cpu) / 2) >> 20;

@@ -290,6 +290,7 @@ mod tests {
             tilt_deg,
             variance,
             rotation_deg: 0.0,
+            pattern: None,
         }
     }
 

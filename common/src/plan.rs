@@ -331,8 +331,8 @@ impl RenderPlan {
                 for c in 0..ch {
                     let row = &mut buf[y * row_len + (l * ch + c) * w..][..w];
                     for (x, v) in row.iter_mut().enumerate() {
-                        let cx = (x as f64 - left + 0.5 - f64::from(self.width) * 0.5)
-                            * self.pixel_size;
+                        let cx =
+                            (x as f64 - left + 0.5 - f64::from(self.width) * 0.5) * self.pixel_size;
                         let tx = ((cx - p.center[0]) / p.size[0] + 0.5) * tw;
                         let s = pattern.sample(tx, ty, c) as f32;
                         *v = if s < FLUSH_BELOW { 0.0 } else { s };
