@@ -415,13 +415,18 @@ impl<'a> Reference<'a> {
         acc.map(|v| v / m)
     }
 
-    /// Light `l`'s initial light (its pattern) at grid position (x, y) in pixels, per channel:
-    /// bilinear between pixel centres, 1 outside the grid (as the sweep reads it).
+    /// Light `l`'s initial light (its pattern) at image position (x, y) in pixels (the ray
+    /// positions' frame; the grid starts `guard.left`, `guard.top` pixels before it), per
+    /// channel: bilinear between pixel centres, 1 outside the grid (as the sweep reads it).
     fn initial_at(&self, l: usize, x: f64, y: f64) -> [f64; 3] {
         let plan = self.plan;
         let Some(buf) = &plan.initial_light else {
             return [1.0; 3];
         };
+        let (x, y) = (
+            x + f64::from(plan.guard.left),
+            y + f64::from(plan.guard.top),
+        );
         let (w, h) = (plan.grid_width as i64, plan.grid_height as i64);
         let ch = plan.channels as usize;
         let row_len = plan.light_row_len();
