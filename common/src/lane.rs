@@ -460,15 +460,11 @@ mod avx2 {
     use wide::bytemuck::cast;
     use wide::{f32x8, u32x8};
 
-    /// The lowest and highest lane of `i` read as `i32` (`signed`) or `u32`, widened.
+    /// The lowest and highest lane of `rel` read as signed (`i32`) offsets, widened.
     #[inline(always)]
-    fn lane_range(i: u32x8, signed: bool) -> (i64, i64) {
-        if signed {
-            let v: wide::i32x8 = i.cast_signed();
-            (i64::from(v.reduce_min()), i64::from(v.reduce_max()))
-        } else {
-            (i64::from(i.reduce_min()), i64::from(i.reduce_max()))
-        }
+    fn signed_range(rel: u32x8) -> (i64, i64) {
+        let v: wide::i32x8 = rel.cast_signed();
+        (i64::from(v.reduce_min()), i64::from(v.reduce_max()))
     }
 
     /// Panics unless `lo..=hi` lies inside `0..len`.
@@ -480,11 +476,18 @@ mod avx2 {
         );
     }
 
+    /// The highest of the unsigned lane indices `i`, after checking that all lie in `0..len`.
+    #[inline(always)]
+    fn checked_max(i: u32x8, len: usize) -> i64 {
+        let hi = i64::from(i.reduce_max());
+        check(0, hi, len);
+        hi
+    }
+
     /// `data[i]` per lane.
     #[inline(always)]
     pub(super) fn gather_f32(data: &[f32], i: u32x8) -> f32x8 {
-        let (lo, hi) = lane_range(i, false);
-        check(lo, hi, data.len());
+        let hi = checked_max(i, data.len());
         #[cfg(target_feature = "avx2")]
         if hi <= i64::from(i32::MAX) {
             // SAFETY: every lane's index lies in 0..data.len() (checked above) and fits i32.
@@ -497,8 +500,7 @@ mod avx2 {
     /// `table[i]` per integer lane.
     #[inline(always)]
     pub(super) fn gather_u32(table: &[u32], i: u32x8) -> u32x8 {
-        let (lo, hi) = lane_range(i, false);
-        check(lo, hi, table.len());
+        let hi = checked_max(i, table.len());
         #[cfg(target_feature = "avx2")]
         if hi <= i64::from(i32::MAX) {
             // SAFETY: every lane's index lies in 0..table.len() (checked above) and fits i32.
@@ -513,8 +515,7 @@ mod avx2 {
     /// in each 128-bit half.
     #[inline(always)]
     pub(super) fn gather4(table: &[[f32; 4]], i: u32x8) -> [f32x8; 4] {
-        let (lo, hi) = lane_range(i, false);
-        check(lo, hi, table.len());
+        checked_max(i, table.len());
         let a = i.to_array();
         #[cfg(target_feature = "avx2")]
         // SAFETY: every lane's entry lies in `table` (checked above).
@@ -545,8 +546,7 @@ mod avx2 {
     /// `[w01 of lanes 0–3, w01 of lanes 4–7, w23 of lanes 0–3, w23 of lanes 4–7]`.
     #[inline(always)]
     pub(super) fn weights4(table: &[[f32; 4]], i: u32x8) -> [f32x8; 4] {
-        let (lo, hi) = lane_range(i, false);
-        check(lo, hi, table.len());
+        checked_max(i, table.len());
         let a = i.to_array();
         #[cfg(target_feature = "avx2")]
         // SAFETY: every lane's entry lies in `table` (checked above).
@@ -633,7 +633,7 @@ mod avx2 {
         rel: u32x8,
         stride: usize,
     ) {
-        let (lo, hi) = lane_range(rel, true);
+        let (lo, hi) = signed_range(rel);
         let o = origin as i64;
         let last_plane = (sums.len().max(1) as i64 - 1) * plane_step as i64;
         check(o + lo, o + last_plane + hi + stride as i64 + 1, data.len());
