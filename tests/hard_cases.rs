@@ -11,7 +11,7 @@ use std::path::Path;
 use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::kernel::{KernelTable, PhaseMode};
 use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::Scene;
+use convshadow::common::scene::{Penumbra, Scene};
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::cpu::reference::disk::DiskSetup;
 use convshadow::cpu::reference::edge::{EdgeSetup, half_crossing, model_profile, phi, width_10_90};
@@ -220,6 +220,8 @@ fn expected_table(t: &KernelTable) -> KernelTable {
         phase_mode: PhaseMode::Schedule,
         slab_phase: vec![0; t.slab_shift.len()],
         slab_shift: t.slab_shift.clone(),
+        levels: 1,
+        level_of: Vec::new(),
     }
 }
 
@@ -354,6 +356,7 @@ fn reference_disk_scene() -> Scene {
         rotation_deg: 30.0,
         kernel: "ellipse2".into(),
         compensation: true,
+        penumbra: Penumbra::Iterated,
     };
     let text = setup
         .toml()

@@ -224,6 +224,7 @@ impl SceneGeometry {
                 slabs,
                 slab_distance,
                 optimal_distance: scene.sweep.optimal_distance,
+                penumbra: scene.sweep.penumbra,
                 variance_compensation: scene.sweep.variance_compensation,
             },
         );

@@ -13,7 +13,7 @@ use glam::DVec3;
 
 use crate::camera::Camera;
 use crate::kernel::KernelMoments;
-use crate::scene::{LightSpec, MAX_GUARD_BAND};
+use crate::scene::{LightSpec, MAX_GUARD_BAND, Penumbra};
 
 /// Standard deviations of the accumulated kernel the automatic band adds to the mean shift.
 ///
@@ -148,8 +148,10 @@ pub struct AutoGuardInput<'a> {
     pub slabs: u32,
     /// Slab thickness (world units).
     pub slab_distance: f64,
-    /// The optimal shadow distance d1 (world units).
-    pub optimal_distance: f64,
+    /// The optimal shadow distance d1 (world units), for the iterated penumbra.
+    pub optimal_distance: Option<f64>,
+    /// How the kernel grows with depth.
+    pub penumbra: Penumbra,
     /// Whether the kernels compensate the variance of bilinear reads.
     pub variance_compensation: bool,
 }
@@ -189,7 +191,11 @@ pub fn auto_guard_band(input: &AutoGuardInput<'_>) -> GuardBand {
                 light.variance,
                 light.rotation_deg,
                 input.slab_distance,
-                input.optimal_distance,
+                // Distance penumbra: the covariance per e² of depth, scaled by k² below.
+                match input.penumbra {
+                    Penumbra::Iterated => input.optimal_distance.unwrap_or(input.slab_distance),
+                    Penumbra::Distance => input.slab_distance,
+                },
                 cam.pixel_size,
             )
         })
@@ -203,7 +209,12 @@ pub fn auto_guard_band(input: &AutoGuardInput<'_>) -> GuardBand {
     let reach = |k: f64| -> [f64; 4] {
         let mut r = [0.0f64; 4];
         for m in &moments {
-            let sd = |axis: usize| (k * (m.cov[axis][axis].max(0.0) + bilinear)).sqrt();
+            // Iterated: k·Σκ after k slabs; distance: (k·e)²·Σl, at most, for an occluder k
+            // slabs in front.
+            let sd = |axis: usize| match input.penumbra {
+                Penumbra::Iterated => (k * (m.cov[axis][axis].max(0.0) + bilinear)).sqrt(),
+                Penumbra::Distance => (k * k * m.cov[axis][axis].max(0.0) + k * bilinear).sqrt(),
+            };
             // μκ is where the impulse response moves per slab (the gather reads at −μκ): an
             // occluder at q darkens q + k·μκ, so occluders left of the image (x < 0) reach
             // into it when μκ.x > 0.
@@ -334,7 +345,8 @@ mod tests {
             lights,
             slabs: 10,
             slab_distance: 0.1,
-            optimal_distance: 1.0,
+            optimal_distance: Some(1.0),
+            penumbra: Penumbra::Iterated,
             variance_compensation: true,
         })
     }
@@ -409,7 +421,8 @@ mod tests {
             lights: &lights,
             slabs: 100,
             slab_distance: 1.0,
-            optimal_distance: 1.0,
+            optimal_distance: Some(1.0),
+            penumbra: Penumbra::Iterated,
             variance_compensation: false,
         });
         assert_eq!(band, GuardBand::uniform(MAX_GUARD_BAND));

@@ -12,9 +12,9 @@ use glam::{DAffine3, DVec3};
 use crate::geometry::SceneGeometry;
 use crate::guard::GuardBand;
 use crate::hash::{JITTER_STREAM, slab_hash};
-use crate::kernel::{KernelMoments, KernelTable, build_table};
+use crate::kernel::{KernelMoments, KernelTable, build_distance_table, build_table};
 use crate::noise::Detail;
-use crate::scene::{MaterialSpec, Scene, TextureFormat, TextureSpec};
+use crate::scene::{MaterialSpec, Penumbra, Scene, TextureFormat, TextureSpec};
 use crate::texture3d::{Texture3d, TextureError};
 
 /// Entries of a material's transfer-function table over detail values [0, 1].
@@ -22,6 +22,11 @@ pub const TF_SIZE: usize = 256;
 /// Light values below this are flushed to zero after attenuation (no subnormals, same zeros on
 /// CPU and GPU); products with tap weights (≥ 2^-24) then stay far above f32's normal range.
 pub const FLUSH_BELOW: f32 = 1.0e-20;
+
+/// Distance penumbra: a pixel whose occluded light (channels − Σ light) is at most this has no
+/// mean occluder depth to speak of (D / u would be rounding noise) and gathers through the
+/// smallest kernel. 2^-16: the quotient's error from u's rounding stays below 0.1 %.
+pub const OCCLUSION_EPS: f32 = 1.0 / 65536.0;
 
 /// One transfer-function entry: colour, slab opacity, and per-channel attenuation.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,7 +64,8 @@ pub struct MaterialPlan {
 pub struct LightPlan {
     /// Linear RGB colour.
     pub color: [f32; 3],
-    /// Kernel moments per slab (pixels).
+    /// Kernel moments per slab (pixels); for the distance penumbra, those of its smallest level
+    /// (an occluder one slab in front).
     pub moments: KernelMoments,
     /// The tap table.
     pub table: KernelTable,
@@ -132,6 +138,10 @@ pub struct RenderPlan {
     pub slab_back: Vec<f32>,
     /// Light-buffer channels: 1 when every transport colour is grey, else 3.
     pub channels: u32,
+    /// How the kernels grow with depth. With [`Penumbra::Distance`] each light's buffer has one
+    /// more plane after its channels: the occlusion-weighted occluder depth D (in slabs), so that
+    /// the mean occluder depth is D / (channels − Σ light).
+    pub penumbra: Penumbra,
     /// Lights.
     pub lights: Vec<LightPlan>,
     /// Materials.
@@ -175,20 +185,31 @@ impl RenderPlan {
             .iter()
             .enumerate()
             .map(|(l, spec)| {
-                let moments = KernelMoments::for_light(
-                    spec.tilt_deg,
-                    spec.variance,
-                    spec.rotation_deg,
-                    e,
-                    scene.sweep.optimal_distance,
-                    px,
-                );
-                let table = build_table(
-                    scene.sweep.kernel,
-                    &moments,
-                    slabs,
-                    scene.sweep.variance_compensation,
-                );
+                let moments_for = |d1: f64| {
+                    KernelMoments::for_light(
+                        spec.tilt_deg,
+                        spec.variance,
+                        spec.rotation_deg,
+                        e,
+                        d1,
+                        px,
+                    )
+                };
+                let compensate = scene.sweep.variance_compensation;
+                let kernel = scene.sweep.kernel;
+                let (moments, table) = match scene.sweep.penumbra {
+                    Penumbra::Iterated => {
+                        // Scene validation requires d1 with the iterated penumbra.
+                        let moments = moments_for(scene.sweep.optimal_distance.unwrap_or(e));
+                        (moments, build_table(kernel, &moments, slabs, compensate))
+                    }
+                    Penumbra::Distance => {
+                        // A covariance step of f·e²·Σl is d1 = f·e in the iterated formula.
+                        let per_e2 = |f: f64| moments_for(f * e);
+                        let table = build_distance_table(kernel, &per_e2, slabs, compensate);
+                        (per_e2(1.0), table)
+                    }
+                };
                 let mu = spec.tilt_deg.map(|t| t.to_radians().tan());
                 let to_light = DVec3::new(mu[0], mu[1], -1.0).normalize();
                 let h = (to_light + DVec3::new(0.0, 0.0, -1.0)).normalize();
@@ -289,6 +310,7 @@ impl RenderPlan {
             slab_front: (0..slabs).map(|k| (f64::from(k) * e) as f32).collect(),
             slab_back: geometry.slab_back_faces(),
             channels: if scene.is_monochrome() { 1 } else { 3 },
+            penumbra: scene.sweep.penumbra,
             lights,
             materials,
             mesh_material: scene.meshes.iter().map(|m| m.material as u32).collect(),
@@ -314,7 +336,7 @@ impl RenderPlan {
         let h = self.grid_height as usize;
         let ch = self.channels as usize;
         let row_len = self.light_row_len();
-        let mut buf = vec![1.0f32; row_len * h];
+        let mut buf = self.unlit_light_buffer();
         for (l, spec) in scene.lights.iter().enumerate() {
             let Some(p) = &spec.pattern else { continue };
             let pattern = crate::pattern::load_pattern(&p.path).map_err(|source| PlanError {
@@ -329,7 +351,7 @@ impl RenderPlan {
                 let cy = (y as f64 - top + 0.5 - f64::from(self.height) * 0.5) * self.pixel_size;
                 let ty = ((cy - p.center[1]) / p.size[1] + 0.5) * th;
                 for c in 0..ch {
-                    let row = &mut buf[y * row_len + (l * ch + c) * w..][..w];
+                    let row = &mut buf[y * row_len + self.light_plane(l, c) * w..][..w];
                     for (x, v) in row.iter_mut().enumerate() {
                         let cx =
                             (x as f64 - left + 0.5 - f64::from(self.width) * 0.5) * self.pixel_size;
@@ -369,9 +391,47 @@ impl RenderPlan {
         )
     }
 
-    /// Floats per light-buffer row: lights × channels × grid width.
+    /// Floats per light-buffer row: lights × planes per light × grid width.
     pub fn light_row_len(&self) -> usize {
-        self.lights.len() * self.channels as usize * self.grid_width as usize
+        self.lights.len() * self.planes_per_light() * self.grid_width as usize
+    }
+
+    /// Depth planes per light: 1 (the occluder depth D) with the distance penumbra, else 0.
+    pub fn depth_planes(&self) -> usize {
+        usize::from(self.penumbra == Penumbra::Distance)
+    }
+
+    /// Planes per light in the light buffer: its channels, then its depth plane if any.
+    pub fn planes_per_light(&self) -> usize {
+        self.channels as usize + self.depth_planes()
+    }
+
+    /// Index of light `l`'s plane `c` within a light-buffer row, in units of the grid width
+    /// (`c == channels` is its depth plane).
+    pub fn light_plane(&self, l: usize, c: usize) -> usize {
+        l * self.planes_per_light() + c
+    }
+
+    /// Whether plane `p` of a light-buffer row is a depth plane (whose unlit value is 0, not 1).
+    pub fn is_depth_plane(&self, p: usize) -> bool {
+        p % self.planes_per_light() >= self.channels as usize
+    }
+
+    /// The light buffer before the first slab without patterns: light 1, occluder depth 0.
+    pub fn unlit_light_buffer(&self) -> Vec<f32> {
+        let w = self.grid_width as usize;
+        let row_len = self.light_row_len();
+        let mut buf = vec![1.0f32; row_len * self.grid_height as usize];
+        if self.depth_planes() > 0 {
+            for row in buf.chunks_mut(row_len) {
+                for (p, plane) in row.chunks_mut(w).enumerate() {
+                    if self.is_depth_plane(p) {
+                        plane.fill(0.0);
+                    }
+                }
+            }
+        }
+        buf
     }
 }
 

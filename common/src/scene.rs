@@ -187,7 +187,8 @@ struct RawSweep {
     slabs: Option<RawSlabs>,
     slab_factor: Option<f64>,
     slab_distance: Option<f64>,
-    optimal_distance: f64,
+    optimal_distance: Option<f64>,
+    penumbra: Option<String>,
     kernel: Option<String>,
     jitter: Option<bool>,
     seed: Option<u32>,
@@ -360,6 +361,40 @@ pub enum SlabSpec {
     Auto,
 }
 
+/// How a light's kernel grows from slab to slab (`sweep.penumbra`; docs/accuracy.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Penumbra {
+    /// The paper's model: the same kernel every slab, covariance d1·e·Σl, so after distance d the
+    /// penumbra has covariance d·d1·Σl: right at d = d1 only.
+    #[default]
+    Iterated,
+    /// The kernel follows each pixel's mean occluder depth z̄: covariance ((h+1)² − h²)·e²·Σl at
+    /// h = (z − z̄)/e slabs, so a single occluder's penumbra has (z − z̄)²·Σl at every distance.
+    Distance,
+}
+
+impl fmt::Display for Penumbra {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Penumbra::Iterated => "iterated",
+            Penumbra::Distance => "distance",
+        })
+    }
+}
+
+impl std::str::FromStr for Penumbra {
+    type Err = String;
+
+    /// `iterated` or `distance`.
+    fn from_str(s: &str) -> Result<Penumbra, String> {
+        match s {
+            "iterated" => Ok(Penumbra::Iterated),
+            "distance" => Ok(Penumbra::Distance),
+            _ => Err(format!("expected \"iterated\" or \"distance\", got {s:?}")),
+        }
+    }
+}
+
 /// Slab sweep parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepSpec {
@@ -367,8 +402,12 @@ pub struct SweepSpec {
     pub slabs: SlabSpec,
     /// Multiplies the count `slabs = "auto"` chooses (1 = 2 slabs per finest period).
     pub slab_factor: f64,
-    /// The optimal shadow distance d1 (world units).
-    pub optimal_distance: f64,
+    /// The optimal shadow distance d1 (world units): where the iterated mode's shadows are right.
+    /// Required with `penumbra = "iterated"`; optional (and unused) with `"distance"`.
+    pub optimal_distance: Option<f64>,
+    /// How the kernel grows with depth: the paper's fixed per-slab kernel, or one that follows
+    /// each pixel's distance to its occluders.
+    pub penumbra: Penumbra,
     /// Convolution kernel.
     pub kernel: KernelSpec,
     /// Jitter the shading point inside each slab.
@@ -640,6 +679,13 @@ impl Scene {
                 v.length("sweep.slab_distance", d)?;
             }
             SlabSpec::Auto => {}
+        }
+        if self.sweep.penumbra == Penumbra::Iterated && self.sweep.optimal_distance.is_none() {
+            return Err(v.err(
+                "sweep.optimal_distance",
+                "missing: the iterated penumbra needs the distance d1 (world units) at which its \
+                 shadows are right (or use the distance penumbra, which needs none)",
+            ));
         }
         Ok(())
     }
@@ -1004,10 +1050,28 @@ impl Validator<'_> {
                 ));
             }
         };
+        let penumbra = match raw.penumbra.as_deref() {
+            None => Penumbra::default(),
+            Some(p) => p
+                .parse::<Penumbra>()
+                .map_err(|e| self.err("sweep.penumbra", e))?,
+        };
+        let optimal_distance = match raw.optimal_distance {
+            Some(d) => Some(self.length("sweep.optimal_distance", d)?),
+            None if penumbra == Penumbra::Iterated => {
+                return Err(self.err(
+                    "sweep.optimal_distance",
+                    "missing: the iterated penumbra needs the distance d1 (world units) at which \
+                     its shadows are right (or set penumbra = \"distance\", which needs none)",
+                ));
+            }
+            None => None,
+        };
         Ok(SweepSpec {
             slabs,
             slab_factor: raw.slab_factor.unwrap_or(1.0),
-            optimal_distance: self.length("sweep.optimal_distance", raw.optimal_distance)?,
+            optimal_distance,
+            penumbra,
             kernel,
             jitter: raw.jitter.unwrap_or(true),
             seed: raw.seed.unwrap_or(0),

@@ -24,6 +24,14 @@ pub fn attenuate<L: Lane>(iin: L, attenuation: L) -> L {
     L::select(v.lt(L::splat(FLUSH_BELOW)), L::splat(0.0), v)
 }
 
+/// Distance penumbra: the occluder-depth plane after a slab, `D + slab · removed` (`removed`:
+/// the light the slab took out, summed over channels), flushed like the light.
+#[inline(always)]
+pub fn deepen<L: Lane>(depth: L, slab: u32, removed: L) -> L {
+    let v = depth + L::splat(slab as f32) * removed;
+    L::select(v.lt(L::splat(FLUSH_BELOW)), L::splat(0.0), v)
+}
+
 /// The final `C += (1 − A)·background`.
 #[inline(always)]
 pub fn finish(color: &mut [f32; 3], alpha: f32, background: [f32; 3]) {

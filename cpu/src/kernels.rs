@@ -8,9 +8,12 @@
 use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
 use convshadow_common::lane::{Lane, MAX_LANES};
+use convshadow_common::plan::OCCLUSION_EPS;
 
 /// Value read outside the buffer: the unoccluded light.
 pub const OUTSIDE: f32 = 1.0;
+/// Value a depth plane (distance penumbra) reads outside the buffer: no occluder.
+pub const OUTSIDE_DEPTH: f32 = 0.0;
 
 /// One light channel's previous buffer, as the gather reads it.
 #[derive(Clone, Copy)]
@@ -25,16 +28,18 @@ pub struct Plane<'a> {
     pub width: i32,
     /// Grid height.
     pub height: i32,
+    /// The value beyond the grid: [`OUTSIDE`] for light, [`OUTSIDE_DEPTH`] for a depth plane.
+    pub outside: f32,
 }
 
 impl Plane<'_> {
-    /// The value at (x, y), or [`OUTSIDE`] beyond the grid.
+    /// The value at (x, y), or [`Plane::outside`] beyond the grid.
     #[inline(always)]
     pub fn fetch(&self, x: i32, y: i32) -> f32 {
         if x >= 0 && y >= 0 && x < self.width && y < self.height {
             self.data[self.base + y as usize * self.row_stride + x as usize]
         } else {
-            OUTSIDE
+            self.outside
         }
     }
 }
@@ -63,8 +68,11 @@ pub struct LightPlanes<'a> {
     pub data: &'a [f32],
     /// Index of channel 0's pixel (0, 0) in `data`.
     pub base: usize,
-    /// Channels of this light.
+    /// Planes gathered: the light's channels, then its depth plane if any.
     pub channels: usize,
+    /// Planes that are light (read [`OUTSIDE`] beyond the grid); planes from this index on are
+    /// depth planes (read [`OUTSIDE_DEPTH`]).
+    pub light_channels: usize,
     /// Distance between rows in `data`.
     pub row_stride: usize,
     /// Grid width (and the distance between a row's channel planes).
@@ -74,7 +82,7 @@ pub struct LightPlanes<'a> {
 }
 
 impl LightPlanes<'_> {
-    /// Channel `c` as a scalar [`Plane`].
+    /// Plane `c` as a scalar [`Plane`].
     #[inline(always)]
     pub fn plane(&self, c: usize) -> Plane<'_> {
         Plane {
@@ -83,6 +91,11 @@ impl LightPlanes<'_> {
             row_stride: self.row_stride,
             width: self.width,
             height: self.height,
+            outside: if c < self.light_channels {
+                OUTSIDE
+            } else {
+                OUTSIDE_DEPTH
+            },
         }
     }
 }
@@ -191,11 +204,11 @@ pub fn gather<L: Lane>(
     }
 }
 
-/// A light's tap table by tap, as structure-of-arrays for the per-lane gather: tap k of phase p
-/// at `k * phase_count + p`, so that one gather by the lanes' phases reads a tap's column. Built
+/// A light's tap table by tap, as structure-of-arrays for the per-lane gather: tap k of row p
+/// at `k * phase_count + p`, so that one gather by the lanes' rows reads a tap's column. Built
 /// once per sweep from the plan's [`KernelTable`] (same values, another layout).
 pub struct TapColumns {
-    /// Phases of the table.
+    /// Rows of the table (levels × phases).
     pub phase_count: usize,
     /// The four corner weights of each tap, one column per tap.
     pub weights: Vec<[f32; 4]>,
@@ -208,7 +221,8 @@ pub struct TapColumns {
 impl TapColumns {
     /// The columns of `table` for light buffers with rows `row_stride` apart.
     pub fn new(table: &KernelTable, row_stride: usize) -> TapColumns {
-        let (pc, n) = (table.phase_count as usize, table.taps_per_phase as usize);
+        // Every row of every level: the per-lane gather picks a row per lane.
+        let (pc, n) = (table.rows() as usize, table.taps_per_phase as usize);
         TapColumns {
             phase_count: pc,
             weights: (0..n * pc)
@@ -262,9 +276,12 @@ pub fn gather_per_lane<L: Lane>(
         L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
     );
     if interior {
-        // Every channel's accumulator, in the lane type's layout for pixel-pair loads.
-        let mut sums = [L::acc_from(L::splat(0.0)); 3];
-        assert!(planes.channels <= sums.len(), "a light has 1 or 3 channels");
+        // Every plane's accumulator, in the lane type's layout for pixel-pair loads.
+        let mut sums = [L::acc_from(L::splat(0.0)); 4];
+        assert!(
+            planes.channels <= sums.len(),
+            "a light has 1 or 3 channels and at most one depth plane"
+        );
         let sums = &mut sums[..planes.channels];
         for (sum, a) in sums.iter_mut().zip(acc.iter()) {
             *sum = L::acc_from(*a);
@@ -298,6 +315,56 @@ pub fn gather_per_lane<L: Lane>(
             *a = add_bilinear(*a, &w, &v);
         }
     }
+}
+
+/// Distance penumbra: the rows of `table` that pixels x0.. of row y gather through in slab
+/// `slab`, given each lane's phase within a level. From the light's previous planes at the pixel
+/// itself: the occluded light `u = channels − Σ I` and the occlusion-weighted depth `D` give the
+/// mean occluder depth `z̄ = D / u` (slabs); the distance `h = slab − z̄` is rounded (`+ ½`,
+/// truncated) and clamped to 1..=slabs, and [`KernelTable::level_of`] maps it to a level. A pixel
+/// with `u ≤ OCCLUSION_EPS` has no occluder to speak of and takes the smallest kernel (h = 1).
+#[inline(always)]
+pub fn distance_rows<L: Lane>(
+    planes: &LightPlanes<'_>,
+    table: &KernelTable,
+    slab: u32,
+    phase: L::U,
+    x0: i32,
+    y: i32,
+) -> L::U {
+    let ch = planes.light_channels;
+    let w = planes.width as usize;
+    let at = planes.base + y as usize * planes.row_stride + x0 as usize;
+    let mut lit = L::load(planes.data, at);
+    for c in 1..ch {
+        lit = lit + L::load(planes.data, at + c * w);
+    }
+    let depth = L::load(planes.data, at + ch * w);
+    let occluded = L::splat(ch as f32) - lit;
+    let one = L::splat(1.0);
+    let has_occluder = occluded.gt(L::splat(OCCLUSION_EPS));
+    let mean_depth = depth / L::select(has_occluder, occluded, one);
+    let h = (L::splat(slab as f32) - mean_depth) + L::splat(0.5);
+    let top = L::splat(table.level_of.len().saturating_sub(1) as f32);
+    let h = L::select(h.lt(one), one, h);
+    let h = L::select(h.gt(top), top, h);
+    let h = L::select(has_occluder, h, one).trunc_u32();
+    let level = L::u_gather(&table.level_of, h);
+    L::u_add(L::u_mul(level, L::u_splat(table.phase_count)), phase)
+}
+
+/// Distance penumbra with a scheduled kernel: `rows` (level · phase_count, phase 0) moved to the
+/// level's phase of slab `slab`, `slab_phase[level · slabs + slab]`.
+#[inline(always)]
+pub fn schedule_rows<L: Lane>(table: &KernelTable, rows: L::U, slabs: u32, slab: u32) -> L::U {
+    let mut r = [0u32; MAX_LANES];
+    L::u_store(rows, &mut r);
+    let pc = table.phase_count;
+    for v in r.iter_mut().take(L::LANES) {
+        let level = *v / pc;
+        *v = level * pc + table.slab_phase[(level * slabs + slab) as usize];
+    }
+    L::u_gather(&r, L::u_iota(0))
 }
 
 /// The per-pixel phases of pixels x0.. as integer lanes ([`phase_at`] for `PerPixel` tables): the

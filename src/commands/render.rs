@@ -9,7 +9,7 @@ use convshadow_common::guard::GuardBandSpec;
 use convshadow_common::image_io::RgbImage;
 use convshadow_common::kernel::{KERNEL_SYNTAX, KernelSpec};
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::{Scene, SlabSpec};
+use convshadow_common::scene::{Penumbra, Scene, SlabSpec};
 use convshadow_common::tonemap::Tonemap;
 use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_cpu::reference::{Reference, ReferenceOptions, samples_side};
@@ -109,6 +109,10 @@ pub struct RenderArgs {
     /// Override the seed.
     #[arg(long)]
     pub seed: Option<u32>,
+    /// Override the penumbra model (`sweep.penumbra`): `iterated` (the paper's: right at
+    /// sweep.optimal_distance only) or `distance` (follows each pixel's occluder distance).
+    #[arg(long, value_name = "iterated|distance", value_parser = parse_penumbra)]
+    pub penumbra: Option<Penumbra>,
     /// Override the guard band: `auto` (sized from the scene's lights, depth and meshes) or
     /// pixels beyond every image edge (0: none), as `sweep.guard_band`.
     #[arg(long, value_name = "auto|N", value_parser = parse_guard_band)]
@@ -308,12 +312,18 @@ fn frame_list(args: &RenderArgs) -> Result<(Option<Vec<u32>>, f64), Failure> {
     Ok((frame_list, time_step))
 }
 
+/// `--penumbra iterated|distance` (clap reports a bad value with the option's name).
+pub(crate) fn parse_penumbra(s: &str) -> Result<Penumbra, String> {
+    s.parse()
+}
+
 /// `--guard-band auto|N` (clap reports a bad value with the option's name, exit code 2).
 fn parse_guard_band(s: &str) -> Result<GuardBandSpec, String> {
     s.parse()
 }
 
-/// `--slabs`, `--kernel`, `--seed`, `--guard-band` and `--variance-compensation`, then the scene
+/// `--slabs`, `--kernel`, `--seed`, `--penumbra`, `--guard-band` and `--variance-compensation`,
+/// then the scene
 /// re-validated.
 fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Failure> {
     if let Some(n) = args.slabs {
@@ -326,6 +336,9 @@ fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Fai
     }
     if let Some(s) = args.seed {
         scene.sweep.seed = s;
+    }
+    if let Some(p) = args.penumbra {
+        scene.sweep.penumbra = p;
     }
     if let Some(g) = args.guard_band {
         scene.sweep.guard_band = g;
@@ -683,6 +696,7 @@ fn stats_value(
             })),
             "slab_distance": f64::from(r.plan.slab_distance),
             "kernel": scene.sweep.kernel.to_string(),
+            "penumbra": scene.sweep.penumbra.to_string(),
             "guard_band": scene.sweep.guard_band.to_string(),
             "guard_band_px": {
                 "left": r.plan.guard.left,

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use convshadow_common::kernel::KERNEL_NAMES;
+use convshadow_common::scene::Penumbra;
 use convshadow_cpu::reference::disk::DiskSetup;
 use convshadow_cpu::reference::edge::EdgeSetup;
 
@@ -75,6 +76,9 @@ pub fn edge_setup(
         height: 64,
         tilt_deg: tilt,
         variance,
+        variance_y: None,
+        rotation_deg: 0.0,
+        penumbra: Penumbra::Iterated,
         kernel: kernel.to_string(),
         compensation: comp,
         seed: 0,
@@ -96,5 +100,6 @@ pub fn disk_setup(k: f64, slabs: u32, tilt: f64, variance: f64, kernel: &str) ->
         rotation_deg: 0.0,
         kernel: kernel.to_string(),
         compensation: true,
+        penumbra: Penumbra::Iterated,
     }
 }

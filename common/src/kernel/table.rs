@@ -37,27 +37,44 @@ pub enum PhaseMode {
 }
 
 /// A light's tap table: built once on the host, read by every path and uploaded to the GPU.
+///
+/// The iterated penumbra has one kernel (`levels == 1`). The distance penumbra has one kernel per
+/// *level*, a range of distances (in slabs) between a pixel and its mean occluder depth; a pixel
+/// reads row `level · phase_count + phase` (see [`KernelTable::level_of`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct KernelTable {
-    /// Number of phases (rows); a power of two for hashed modes.
+    /// Number of phases per level; a power of two for hashed modes.
     pub phase_count: u32,
+    /// Number of levels (kernels of different covariance): 1 for the iterated penumbra.
+    pub levels: u32,
     /// Taps per phase (columns).
     pub taps_per_phase: u32,
-    /// The taps, phase-major: phase p's taps are `taps[p*taps_per_phase ..][..taps_per_phase]`.
+    /// The taps, row-major with rows level-major: row r = level · phase_count + phase has taps
+    /// `taps[r*taps_per_phase ..][..taps_per_phase]`.
     pub taps: Vec<Tap>,
     /// How a slab picks its phase.
     pub phase_mode: PhaseMode,
-    /// For `PhaseMode::Schedule`: the phase of each slab.
+    /// For `PhaseMode::Schedule`: the phase of each slab, per level (`level · slabs + slab`).
     pub slab_phase: Vec<u32>,
-    /// Whole-pixel shift added to every tap in each slab (all zero unless a mean carry is used).
+    /// Whole-pixel shift added to every tap in each slab (all zero unless a mean carry is used);
+    /// the same for every level.
     pub slab_shift: Vec<[i32; 2]>,
+    /// Distance penumbra: the level of a pixel whose mean occluder lies `h` slabs in front of the
+    /// slab being gathered, for h = 0..=slabs (h is rounded and clamped to 1..=slabs first).
+    /// Empty for the iterated penumbra.
+    pub level_of: Vec<u32>,
 }
 
 impl KernelTable {
-    /// The taps of one phase.
+    /// The taps of one row (`level · phase_count + phase`; the phase itself when `levels == 1`).
     pub fn phase(&self, p: u32) -> &[Tap] {
         let n = self.taps_per_phase as usize;
         &self.taps[p as usize * n..][..n]
+    }
+
+    /// Rows of taps: levels × phases.
+    pub fn rows(&self) -> u32 {
+        self.levels * self.phase_count
     }
 
     /// log2 of the phase count for hashed modes (0 for a single phase).
@@ -131,8 +148,26 @@ pub fn build_table(
     slabs: u32,
     compensate: bool,
 ) -> KernelTable {
+    build_table_with_carry(
+        spec,
+        moments,
+        slabs,
+        compensate,
+        compensate && carry_mean(moments),
+    )
+}
+
+/// [`build_table`] with the decision to carry the mean in whole pixels given (`carry` implies
+/// `compensate`): the distance penumbra's levels all carry, or none does, as their smallest
+/// kernel needs, so that every level moves a shadow by the same whole pixels.
+fn build_table_with_carry(
+    spec: KernelSpec,
+    moments: &KernelMoments,
+    slabs: u32,
+    compensate: bool,
+    carry: bool,
+) -> KernelTable {
     let slabs_us = slabs as usize;
-    let carry = compensate && carry_mean(moments);
     let (pattern_mean, slab_shift) = if carry {
         let step = |i: usize| {
             [
@@ -244,6 +279,8 @@ pub(crate) fn discretise(
         phase_mode,
         slab_phase,
         slab_shift,
+        levels: 1,
+        level_of: Vec::new(),
     }
 }
 
@@ -284,4 +321,93 @@ pub(crate) fn normalise_exactly(taps: &mut [Tap]) {
         w = if s > 1.0 { w.next_down() } else { w.next_up() };
     }
     taps[last].w[3] = w;
+}
+
+/// Distance penumbra: distances (in slabs) up to this each have a level of their own; beyond,
+/// a level spans `h / LEVEL_RATIO_STEPS` distances (ranges growing by 1/16: about 16 levels per
+/// doubling of the distance).
+pub const EXACT_LEVELS: u32 = 16;
+/// See [`EXACT_LEVELS`].
+pub const LEVEL_RATIO_STEPS: u32 = 16;
+
+/// The distance penumbra's levels for a sweep of `slabs` slabs: inclusive ranges `[a, b]` of the
+/// distance h (in slabs, 1..=slabs) from a pixel's mean occluder depth to the slab gathered.
+pub fn distance_levels(slabs: u32) -> Vec<[u32; 2]> {
+    let mut levels = Vec::new();
+    let mut a = 1u32;
+    let top = slabs.max(1);
+    while a <= top {
+        let width = if a <= EXACT_LEVELS {
+            1
+        } else {
+            (a / LEVEL_RATIO_STEPS).max(1)
+        };
+        let b = (a + width - 1).min(top);
+        levels.push([a, b]);
+        a = b + 1;
+    }
+    levels
+}
+
+/// Builds a light's tap tables for the distance penumbra: one level per range of
+/// [`distance_levels`]. A single occluder h slabs in front of the slab being gathered needs the
+/// covariance step ((h)² − (h−1)²)·e²·Σl = (2h − 1)·e²·Σl, so that after h slabs its penumbra
+/// has h²·e²·Σl; a level spanning [a, b] uses the step of its mean, (a + b − 1)·e²·Σl, whose sum
+/// over the range is exactly b² − (a−1)². `per_e2` gives the per-slab moments for a step
+/// factor f: mean −e·μl, covariance f·e²·Σl (pixels).
+pub fn build_distance_table(
+    spec: KernelSpec,
+    per_e2: &dyn Fn(f64) -> KernelMoments,
+    slabs: u32,
+    compensate: bool,
+) -> KernelTable {
+    let ranges = distance_levels(slabs);
+    // Every level carries the mean iff the smallest one (h = 1) needs it.
+    let carry = compensate && carry_mean(&per_e2(1.0));
+    let tables: Vec<KernelTable> = ranges
+        .iter()
+        .map(|&[a, b]| {
+            let m = per_e2(f64::from(a + b - 1));
+            build_table_with_carry(spec, &m, slabs, compensate, carry)
+        })
+        .collect();
+    let phase_count = tables.iter().map(|t| t.phase_count).max().unwrap_or(1);
+    let taps_per_phase = tables.iter().map(|t| t.taps_per_phase).max().unwrap_or(1);
+    let zero = Tap {
+        dx: 0,
+        dy: 0,
+        w: [0.0; 4],
+    };
+    let mut taps = Vec::with_capacity(tables.len() * (phase_count * taps_per_phase) as usize);
+    let mut slab_phase = Vec::new();
+    for t in &tables {
+        for p in 0..phase_count {
+            // Levels with fewer phases (schedules) repeat their first; the schedule never
+            // picks the copies.
+            let row = t.phase(if p < t.phase_count { p } else { 0 });
+            taps.extend_from_slice(row);
+            // Zero taps after the last one leave the exact sum of 1 unchanged.
+            taps.extend(std::iter::repeat_n(
+                zero,
+                (taps_per_phase - t.taps_per_phase) as usize,
+            ));
+        }
+        slab_phase.extend_from_slice(&t.slab_phase);
+    }
+    let mut level_of = vec![0u32; slabs.max(1) as usize + 1];
+    for (level, &[a, b]) in ranges.iter().enumerate() {
+        for h in a..=b {
+            level_of[h as usize] = level as u32;
+        }
+    }
+    KernelTable {
+        phase_count,
+        levels: tables.len() as u32,
+        taps_per_phase,
+        taps,
+        phase_mode: tables[0].phase_mode,
+        slab_phase,
+        slab_shift: tables[0].slab_shift.clone(),
+        level_of,
+    }
 }

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::kernel::eigen2;
-use convshadow_common::scene::{Scene, SceneError};
+use convshadow_common::scene::{Penumbra, Scene, SceneError};
 
 use super::edge::{CaseFrame, phi};
 
@@ -39,6 +39,8 @@ pub struct DiskSetup {
     pub kernel: String,
     /// `sweep.variance_compensation`.
     pub compensation: bool,
+    /// How the kernels grow with depth.
+    pub penumbra: Penumbra,
 }
 
 /// Sides of the disk polygon.
@@ -72,7 +74,7 @@ impl DiskSetup {
             slabs: self.slabs,
         }
         .toml(
-            "",
+            &format!("penumbra = \"{}\"\n", self.penumbra),
             &format!(
                 "tilt_deg = [{:e}, 0.0]\nvariance = [{:e}, {:e}]\nrotation_deg = {:e}\n",
                 self.tilt_deg, self.variance[0], self.variance[1], self.rotation_deg

@@ -9,7 +9,7 @@ use crate::ldi::{BuildLdi, Ldi};
 use crate::sweep::{SweepOptions, SweepOutput, sweep};
 use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::{Scene, SceneError};
+use convshadow_common::scene::{Penumbra, Scene, SceneError};
 
 /// One edge set-up. The occluder covers world x ≥ 0, i.e. the image columns left of the centre
 /// (column boundary `width / 2`); the receiver is `slabs` slabs of thickness `slab_distance`
@@ -30,8 +30,14 @@ pub struct EdgeSetup {
     pub height: u32,
     /// Light tilt ωx (degrees); ωy = 0.
     pub tilt_deg: f64,
-    /// Light variance σ² on both axes.
+    /// Light variance σx² (and σy² unless `variance_y` is given).
     pub variance: f64,
+    /// Light variance σy², if not σx².
+    pub variance_y: Option<f64>,
+    /// Rotation of the light's principal axes (degrees).
+    pub rotation_deg: f64,
+    /// How the kernels grow with depth.
+    pub penumbra: Penumbra,
     /// Kernel name.
     pub kernel: String,
     /// `sweep.variance_compensation`.
@@ -107,10 +113,20 @@ impl EdgeSetup {
             height: 96,
             tilt_deg,
             variance,
+            variance_y: None,
+            rotation_deg: 0.0,
+            penumbra: Penumbra::Iterated,
             kernel: kernel.to_string(),
             compensation: true,
             seed: 0,
         }
+    }
+
+    /// The light's variance across the edge (along x), σx² cos²α + σy² sin²α: the correct
+    /// penumbra's standard deviation is d·√ of it.
+    pub fn variance_across(&self) -> f64 {
+        let (s, c) = self.rotation_deg.to_radians().sin_cos();
+        c * c * self.variance + s * s * self.variance_y.unwrap_or(self.variance)
     }
 
     /// Distance d from occluder to receiver (world units).
@@ -132,11 +148,14 @@ impl EdgeSetup {
             slabs: self.slabs,
         }
         .toml(
-            &format!("seed = {}\n", self.seed),
+            &format!("seed = {}\npenumbra = \"{}\"\n", self.seed, self.penumbra),
             &format!(
-                "tilt_deg = [{tilt:e}, 0.0]\nvariance = [{var:e}, {var:e}]\n",
+                "tilt_deg = [{tilt:e}, 0.0]\nvariance = [{var:e}, {var_y:e}]\n\
+                 rotation_deg = {rot:e}\n",
                 tilt = self.tilt_deg,
-                var = self.variance
+                var = self.variance,
+                var_y = self.variance_y.unwrap_or(self.variance),
+                rot = self.rotation_deg,
             ),
             &format!(
                 "shape = \"box\"\nsize = [20.0, 20.0, {:e}]\ntranslate = [10.0, 0.0, {:e}]\n",

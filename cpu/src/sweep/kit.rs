@@ -8,6 +8,7 @@ use convshadow_common::raster::RasterSetup;
 use crate::kernels::{TapColumns, light_row_hash};
 use crate::ldi::Ldi;
 
+pub use convshadow_common::scene::MAX_LIGHTS;
 pub use convshadow_common::sweep_io::MAX_LIGHT_CHANNELS;
 
 /// What every pixel of one slab shares.

@@ -102,7 +102,7 @@ impl PixelState {
         let row_len = plan.light_row_len();
         let prev = match options.initial_light {
             Some(v) => v.to_vec(),
-            None => vec![1.0f32; row_len * h],
+            None => plan.unlit_light_buffer(),
         };
         PixelState {
             prev,

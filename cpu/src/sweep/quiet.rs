@@ -116,7 +116,7 @@ impl QuietSetup {
     pub(crate) fn new(plan: &RenderPlan, ldi: &Ldi, initial: &[f32]) -> QuietSetup {
         let ones_exact = plan.lights.iter().all(|l| {
             let t = &l.table;
-            (0..t.phase_count).all(|p| {
+            (0..t.rows()).all(|p| {
                 let mut s = 0.0f32;
                 for tap in t.phase(p) {
                     for w in tap.w {
@@ -136,7 +136,12 @@ impl QuietSetup {
                 for p in 0..planes {
                     for x in 0..w {
                         let v = initial[y * row_len + p * w + x];
-                        s.record(x, 1, v != 1.0, v != 0.0);
+                        // A depth plane is quiet at 0 in the light and in the dark.
+                        if plan.is_depth_plane(p) {
+                            s.record(x, 1, v != 0.0, v != 0.0);
+                        } else {
+                            s.record(x, 1, v != 1.0, v != 0.0);
+                        }
                     }
                 }
                 s

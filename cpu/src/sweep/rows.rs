@@ -68,6 +68,7 @@ pub(crate) fn sweep_row_simd(
     let w = plan.grid_width as usize;
     let h = plan.grid_height as usize;
     let planes = plan.lights.len() * plan.channels as usize;
+    let all_planes = plan.lights.len() * plan.planes_per_light();
     let row_hashes = light_row_hashes(ctx, y);
     let jitter_row = jitter_row_hash(ctx, y);
     let mut spans = RowSpans::EMPTY;
@@ -84,8 +85,10 @@ pub(crate) fn sweep_row_simd(
         let moved = match work {
             ChunkWork::Unoccluded => {
                 tally[1] += 1;
-                for p in 0..planes {
-                    row.light[p * w + x0..][..LANES].fill(1.0);
+                for p in 0..all_planes {
+                    // Light 1; a depth plane's unoccluded value is 0.
+                    let v = if plan.is_depth_plane(p) { 0.0 } else { 1.0 };
+                    row.light[p * w + x0..][..LANES].fill(v);
                 }
                 spans.record(x0, LANES, false, true);
                 continue;
@@ -99,7 +102,7 @@ pub(crate) fn sweep_row_simd(
                         advance(ctx.ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
                     moved |= first != NO_CROSSING;
                 }
-                for p in 0..planes {
+                for p in 0..all_planes {
                     row.light[p * w + x0..][..LANES].fill(0.0);
                 }
                 spans.record(x0, LANES, true, false);

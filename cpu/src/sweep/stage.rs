@@ -10,9 +10,11 @@
 use convshadow_common::kernel::PhaseMode;
 use convshadow_common::lane::{Lane, MAX_LANES};
 
-use super::kit::{MAX_LIGHT_CHANNELS, RowState, SlabContext};
-use crate::composite::{attenuate, composite};
-use crate::kernels::{LightPlanes, gather, gather_per_lane, phase_at, phases};
+use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowState, SlabContext};
+use crate::composite::{attenuate, composite, deepen};
+use crate::kernels::{
+    LightPlanes, distance_rows, gather, gather_per_lane, phase_at, phases, schedule_rows,
+};
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{Specular, material_at, shade, shading_depth};
 
@@ -75,17 +77,21 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     let slab = ctx.slab as usize;
     let n = plan.lights.len() * ch;
 
-    // 1. Convolution of every light buffer.
+    // 1. Convolution of every light buffer (and, distance penumbra, its depth plane).
     let mut iin = [L::splat(0.0); N];
+    let mut depth_in = [L::splat(0.0); MAX_LIGHTS];
+    let distance = plan.depth_planes() > 0;
     match known_light {
+        // Every value read is `v` and every depth read is 0 (the quiet spans track both).
         Some(v) => iin[..n].fill(L::splat(v)),
         None => {
             for (l, light) in plan.lights.iter().enumerate() {
                 let t = &light.table;
                 let planes = LightPlanes {
                     data: prev,
-                    base: l * ch * w,
+                    base: plan.light_plane(l, 0) * w,
                     channels: ch,
+                    light_channels: ch,
                     row_stride: plan.light_row_len(),
                     width: w as i32,
                     height: plan.grid_height as i32,
@@ -98,6 +104,42 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                     PhaseMode::Schedule => Some(t.slab_phase[slab]),
                 };
                 let (x0, yi) = (x0 as i32, y as i32);
+                if distance {
+                    // The light's channels and its depth plane, each lane through its level's row.
+                    let planes = LightPlanes {
+                        channels: ch + 1,
+                        ..planes
+                    };
+                    let phase = match t.phase_mode {
+                        PhaseMode::PerPixel => {
+                            phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32))
+                        }
+                        PhaseMode::PerSlab => L::u_splat(uniform.unwrap_or(0)),
+                        PhaseMode::Schedule => L::u_splat(0),
+                    };
+                    let rows = distance_rows::<L>(&planes, t, ctx.slab, phase, x0, yi);
+                    let rows = match t.phase_mode {
+                        // A schedule's phase depends on the level: `slab_phase[level·slabs + slab]`.
+                        PhaseMode::Schedule => schedule_rows::<L>(t, rows, plan.slabs, ctx.slab),
+                        _ => rows,
+                    };
+                    let columns = &ctx.columns[l];
+                    let mut all = [L::splat(0.0); 4];
+                    gather_per_lane(
+                        &planes,
+                        t,
+                        columns,
+                        rows,
+                        shift,
+                        x0,
+                        yi,
+                        interior,
+                        &mut all[..=ch],
+                    );
+                    acc.copy_from_slice(&all[..ch]);
+                    depth_in[l] = all[ch];
+                    continue;
+                }
                 match uniform {
                     Some(p) => {
                         let extent = ctx.columns[l].extent[p as usize];
@@ -176,11 +218,23 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     let mut not_one = zero.ne(zero);
     let mut not_zero = not_one;
     for l in 0..plan.lights.len() {
+        let (mut lit_in, mut lit_out) = (zero, zero);
         for c in 0..ch {
             let out = attenuate(iin[l * ch + c], attenuation[c]);
             not_one = L::m_or(not_one, out.ne(one));
             not_zero = L::m_or(not_zero, out.ne(zero));
-            out.store(row.light, (l * ch + c) * w + x0);
+            out.store(row.light, plan.light_plane(l, c) * w + x0);
+            if distance {
+                (lit_in, lit_out) = (lit_in + iin[l * ch + c], lit_out + out);
+            }
+        }
+        if distance {
+            // The light this slab removed, at this slab's depth; a depth plane's quiet value is 0.
+            let out = deepen(depth_in[l], ctx.slab, lit_in - lit_out);
+            let moved_depth = out.ne(zero);
+            not_one = L::m_or(not_one, moved_depth);
+            not_zero = L::m_or(not_zero, moved_depth);
+            out.store(row.light, plan.light_plane(l, ch) * w + x0);
         }
     }
     ChunkOutcome {
