@@ -15,7 +15,7 @@ use convshadow::cpu::reference::edge::{
     EdgeSetup, half_crossing, light_at, model_profile, run_light, width_10_90,
 };
 use convshadow::cpu::reference::{Reference, ReferenceOptions};
-use convshadow::cpu::sweep::{CpuOptions, SweepOptions, SweepPath, sweep_with};
+use convshadow::cpu::sweep::{CpuOptions, SweepOptions, sweep_with};
 
 /// Root mean square of the differences of paired values.
 fn rmse(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
@@ -166,4 +166,100 @@ fn a_disk_shadow_is_right_at_every_distance() {
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Paper fig. 18's set-up: two opaque bars at different depths (0.0 and 1.2) over a wall whose
+/// upper half faces the camera (depth 2.0) and whose lower half is angled 45° away from it (depth
+/// 2.0 to 4.0), so the occluder-to-receiver distance runs from 0.8 to 4.0 over one image.
+fn two_occluders(penumbra: Penumbra, d1: f64) -> Scene {
+    let text = format!(
+        r#"
+[image]
+width = 128
+height = 128
+[camera]
+view_width = 4.0
+[sweep]
+slabs = 256
+optimal_distance = {d1:e}
+penumbra = "{penumbra}"
+[[light]]
+tilt_deg = [15.0, 10.0]
+variance = [0.02, 0.015]
+rotation_deg = 30.0
+[[mesh]]
+shape = "box"
+size = [0.5, 3.4, 0.05]
+translate = [-0.9, 0.0, 0.0]
+material = "bar"
+[[mesh]]
+shape = "box"
+size = [0.5, 3.4, 0.05]
+translate = [0.7, 0.0, 1.2]
+material = "bar"
+[[mesh]]
+shape = "box"
+size = [6.0, 3.0, 0.1]
+translate = [0.0, 1.5, 2.05]
+material = "wall"
+[[mesh]]
+shape = "box"
+size = [6.0, 3.0, 0.1]
+rotate_deg = [-45.0, 0.0, 0.0]
+translate = [0.0, -1.0, 3.05]
+material = "wall"
+[material.bar]
+color = [0.1, 0.1, 0.1]
+[material.wall]
+color = [1.0, 1.0, 1.0]
+"#
+    );
+    Scene::parse(&text, "fig18.toml", Path::new(".")).expect("scene")
+}
+
+/// The sweep's image and the shadow-ray reference's (`samples` light directions) for `scene`.
+fn sweep_and_reference(scene: &Scene, samples: u32) -> (Vec<f32>, Vec<f32>) {
+    let g = SceneGeometry::build(scene).expect("geometry");
+    let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
+    let plan = RenderPlan::new(scene, &g).expect("plan");
+    let out = sweep_with(
+        &plan,
+        &g.raster,
+        &ldi,
+        &SweepOptions::default(),
+        &CpuOptions::default(),
+    )
+    .expect("sweep");
+    let reference = Reference::new(scene, &g, &plan, 0.0).render(
+        &ldi,
+        &ReferenceOptions {
+            samples,
+            ..ReferenceOptions::default()
+        },
+    );
+    (out.image, reference)
+}
+
+/// RMSE of two images.
+fn image_rmse(a: &[f32], b: &[f32]) -> f64 {
+    rmse(a.iter().zip(b).map(|(x, y)| (f64::from(*x), f64::from(*y))))
+}
+
+#[test]
+fn two_occluders_over_an_angled_wall_beat_the_iterated_mode_at_its_best_d1() {
+    const SAMPLES: u32 = 64;
+    let (image, reference) = sweep_and_reference(&two_occluders(Penumbra::Distance, 1.0), SAMPLES);
+    let distance = image_rmse(&image, &reference);
+    let mut best = (f64::INFINITY, 0.0);
+    for d1 in [0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0] {
+        let (image, reference) =
+            sweep_and_reference(&two_occluders(Penumbra::Iterated, d1), SAMPLES);
+        let e = image_rmse(&image, &reference);
+        eprintln!("fig. 18: iterated, d1 = {d1}: RMSE {e:.5}");
+        if e < best.0 {
+            best = (e, d1);
+        }
+    }
+    eprintln!("fig. 18: distance RMSE {distance:.5}; iterated at its best d1 = {}: {:.5}", best.1, best.0);
+    assert!(distance < best.0, "distance {distance} vs iterated {best:?}");
 }
