@@ -260,6 +260,12 @@ fn two_occluders_over_an_angled_wall_beat_the_iterated_mode_at_its_best_d1() {
             best = (e, d1);
         }
     }
-    eprintln!("fig. 18: distance RMSE {distance:.5}; iterated at its best d1 = {}: {:.5}", best.1, best.0);
-    assert!(distance < best.0, "distance {distance} vs iterated {best:?}");
+    eprintln!(
+        "fig. 18: distance RMSE {distance:.5}; iterated at its best d1 = {}: {:.5}",
+        best.1, best.0
+    );
+    assert!(
+        distance < best.0,
+        "distance {distance} vs iterated {best:?}"
+    );
 }
