@@ -36,6 +36,18 @@ pub struct ReportOptions {
     /// Run only case I (0-based, in the order of `report.csv`'s rows) and write its row alone to
     /// `report.csv` (no markdown, no plot): for running the cases as separate jobs.
     pub case: Option<usize>,
+    /// Run one penumbra model only; `None`: both, every case.
+    pub penumbra: Option<Penumbra>,
+}
+
+impl ReportOptions {
+    /// The penumbra models every case runs with.
+    pub fn penumbras(&self) -> Vec<Penumbra> {
+        match self.penumbra {
+            Some(p) => vec![p],
+            None => vec![Penumbra::Iterated, Penumbra::Distance],
+        }
+    }
 }
 
 impl ReportOptions {
@@ -66,6 +78,7 @@ pub fn edge_setup(
     variance: f64,
     kernel: &str,
     comp: bool,
+    penumbra: Penumbra,
 ) -> EdgeSetup {
     EdgeSetup {
         slabs,
@@ -78,7 +91,7 @@ pub fn edge_setup(
         variance,
         variance_y: None,
         rotation_deg: 0.0,
-        penumbra: Penumbra::Iterated,
+        penumbra,
         kernel: kernel.to_string(),
         compensation: comp,
         seed: 0,
@@ -86,7 +99,14 @@ pub fn edge_setup(
 }
 
 /// The disk set-up of the report.
-pub fn disk_setup(k: f64, slabs: u32, tilt: f64, variance: f64, kernel: &str) -> DiskSetup {
+pub fn disk_setup(
+    k: f64,
+    slabs: u32,
+    tilt: f64,
+    variance: f64,
+    kernel: &str,
+    penumbra: Penumbra,
+) -> DiskSetup {
     DiskSetup {
         slabs,
         slab_distance: k * D1 / f64::from(slabs),
@@ -100,6 +120,6 @@ pub fn disk_setup(k: f64, slabs: u32, tilt: f64, variance: f64, kernel: &str) ->
         rotation_deg: 0.0,
         kernel: kernel.to_string(),
         compensation: true,
-        penumbra: Penumbra::Iterated,
+        penumbra,
     }
 }

@@ -35,6 +35,8 @@ pub struct Row {
     pub family: String,
     /// Kernel name.
     pub kernel: String,
+    /// Penumbra model (`iterated` or `distance`).
+    pub penumbra: String,
     /// Slab count (see the module documentation).
     pub slabs: u32,
     /// Variance level name (`zero`, `low`, `high`, or `scene`).

@@ -239,14 +239,22 @@ fn draw_panel(
     Ok(())
 }
 
-/// Per (kernel, slabs): mean time and mean of `err` over the rows selected by `keep`.
+/// Per (kernel, penumbra, slabs): mean time and mean of `err` over the rows selected by `keep`;
+/// one series per kernel and penumbra model present (`ellipse2 (distance)`).
 fn aggregate(
     rows: &[Row],
     keep: &dyn Fn(&Row) -> bool,
     err: &dyn Fn(&Row) -> Option<f64>,
 ) -> Vec<Series> {
+    let penumbras: Vec<&str> = ["iterated", "distance"]
+        .into_iter()
+        .filter(|p| rows.iter().any(|r| r.penumbra == *p))
+        .collect();
+    let both = penumbras.len() > 1;
     kernels()
-        .map(|k| {
+        .flat_map(|k| penumbras.iter().map(move |p| (k, *p)))
+        .map(|(k, p)| {
+            let keep = |r: &Row| r.penumbra == p && keep(r);
             let mut slabs: Vec<u32> = rows
                 .iter()
                 .filter(|r| r.kernel == *k && keep(r))
@@ -267,7 +275,11 @@ fn aggregate(
                 })
                 .collect();
             Series {
-                name: k.to_string(),
+                name: if both {
+                    format!("{k} ({p})")
+                } else {
+                    k.to_string()
+                },
                 points,
             }
         })

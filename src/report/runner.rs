@@ -5,7 +5,7 @@ use std::time::Instant;
 use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::metrics::rmse;
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::{Scene, SlabSpec};
+use convshadow_common::scene::{Penumbra, Scene, SlabSpec};
 use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_cpu::reference::disk::DiskSetup;
 use convshadow_cpu::reference::edge::{self, EdgeSetup, model_profile, run_light};
@@ -57,6 +57,7 @@ pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
     Row {
         family: "edge".into(),
         kernel: setup.kernel.clone(),
+        penumbra: setup.penumbra.to_string(),
         slabs: setup.slabs,
         variance_level: level.into(),
         variance: Some(setup.variance),
@@ -152,6 +153,7 @@ fn disk_row(setup: &DiskSetup, level: &str, r: &DiskReference) -> Row {
     Row {
         family: "disk".into(),
         kernel: setup.kernel.clone(),
+        penumbra: setup.penumbra.to_string(),
         slabs: setup.slabs,
         variance_level: level.into(),
         variance: Some(setup.variance[0]),
@@ -193,7 +195,13 @@ fn rmse_f32(a: &[f32], b: &[f32]) -> f64 {
 }
 
 /// The default scene at `size`² with `slabs`: one row per kernel against the reference.
-fn scene_rows(size: u32, slabs: u32, samples: u32, verbose: bool) -> Vec<Row> {
+fn scene_rows(
+    size: u32,
+    slabs: u32,
+    samples: u32,
+    penumbras: &[Penumbra],
+    verbose: bool,
+) -> Vec<Row> {
     let mut base = Scene::default_scene();
     base.image.width = size;
     base.image.height = size;
@@ -225,13 +233,16 @@ fn scene_rows(size: u32, slabs: u32, samples: u32, verbose: bool) -> Vec<Row> {
         );
     }
     kernels()
-        .map(|k| {
+        .flat_map(|k| penumbras.iter().map(move |&p| (k, p)))
+        .map(|(k, penumbra)| {
             let mut scene = base.clone();
             scene.sweep.kernel = k.parse().unwrap_or_else(|e: String| panic!("{e}"));
+            scene.sweep.penumbra = penumbra;
             let (_, _, _, image, seconds) = render_scene(&scene);
             Row {
                 family: "scene".into(),
                 kernel: k.to_string(),
+                penumbra: penumbra.to_string(),
                 slabs,
                 variance_level: "scene".into(),
                 compensation: scene.sweep.variance_compensation,
@@ -310,12 +321,14 @@ fn edge_cases(cases: &mut Cases<'_>) {
                             if !comp && quick && kernel != "ellipse2" {
                                 continue;
                             }
-                            cases.next += 1;
-                            if !cases.want(cases.next - 1) {
-                                continue;
+                            for penumbra in cases.options.penumbras() {
+                                cases.next += 1;
+                                if !cases.want(cases.next - 1) {
+                                    continue;
+                                }
+                                let setup = edge_setup(k, n, tilt, var, kernel, comp, penumbra);
+                                cases.push(edge_row(&setup, level));
                             }
-                            let row = edge_row(&edge_setup(k, n, tilt, var, kernel, comp), level);
-                            cases.push(row);
                         }
                     }
                 }
@@ -346,7 +359,8 @@ fn disk_grid(quick: bool) -> Vec<(f64, u32, &'static str, f64, f64)> {
 /// The disk family: one case per kernel at each [`disk_grid`] point, the reference shared
 /// while d, σ² and tilt stay the same.
 fn disk_cases(cases: &mut Cases<'_>) -> Result<(), String> {
-    let kernel_count = kernels().count();
+    let penumbras = cases.options.penumbras();
+    let kernel_count = kernels().count() * penumbras.len();
     let mut cached: Option<((u64, u64, u64), DiskReference)> = None;
     for (k, n, level, var, tilt) in disk_grid(cases.options.quick) {
         let group = cases.next..cases.next + kernel_count;
@@ -359,17 +373,26 @@ fn disk_cases(cases: &mut Cases<'_>) -> Result<(), String> {
             // The reference depends on d, σ² and tilt only (the disk polygon is the same mesh).
             cached = Some((
                 key,
-                disk_reference(&disk_setup(k, 64, tilt, var, "ellipse2")),
+                disk_reference(&disk_setup(
+                    k,
+                    64,
+                    tilt,
+                    var,
+                    "ellipse2",
+                    Penumbra::Iterated,
+                )),
             ));
         }
         let reference = &cached.as_ref().map(|c| &c.1).ok_or("no disk reference")?;
         for kernel in kernels() {
-            cases.next += 1;
-            if !cases.want(cases.next - 1) {
-                continue;
+            for &penumbra in &penumbras {
+                cases.next += 1;
+                if !cases.want(cases.next - 1) {
+                    continue;
+                }
+                let setup = disk_setup(k, n, tilt, var, kernel, penumbra);
+                cases.push(disk_row(&setup, level, reference));
             }
-            let row = disk_row(&disk_setup(k, n, tilt, var, kernel), level, reference);
-            cases.push(row);
         }
     }
     Ok(())
@@ -377,7 +400,8 @@ fn disk_cases(cases: &mut Cases<'_>) -> Result<(), String> {
 
 /// The full-scene family: one case per kernel at each slab count.
 fn scene_cases(cases: &mut Cases<'_>) {
-    let kernel_count = kernels().count();
+    let penumbras = cases.options.penumbras();
+    let kernel_count = kernels().count() * penumbras.len();
     let (size, scene_slabs): (u32, &[u32]) = if cases.options.quick {
         (24, &[64])
     } else {
@@ -389,7 +413,8 @@ fn scene_cases(cases: &mut Cases<'_>) {
         if !group.clone().any(|i| cases.want(i)) {
             continue;
         }
-        for (i, row) in group.zip(scene_rows(size, n, 16, cases.options.verbose)) {
+        let rows = scene_rows(size, n, 16, &penumbras, cases.options.verbose);
+        for (i, row) in group.zip(rows) {
             if cases.want(i) {
                 cases.push(row);
             }
