@@ -318,7 +318,8 @@ impl MemoryNeed {
         let (light_buffers, sweep_state, output) = if sweep {
             (
                 2 * lights * channels * 4 * grid_pixels,
-                (4 + 4 + 12 + 4) * grid_pixels,
+                // Cursor, inside bits, colour, alpha; with pre-integration the kept front value.
+                (4 + 4 + 12 + 4 + if scene.sweep.preintegration { 4 } else { 0 }) * grid_pixels,
                 (12 + 3 + 3) * image_pixels,
             )
         } else {

@@ -91,6 +91,9 @@ struct PixelState {
     inside: Vec<u32>,
     color: Vec<f32>,
     alpha: Vec<f32>,
+    /// Pre-integration's kept front values ([`RowState::pre`]), `pre_stride` per row.
+    pre: Vec<f32>,
+    pre_stride: usize,
 }
 
 impl PixelState {
@@ -100,6 +103,9 @@ impl PixelState {
         let w = plan.grid_width as usize;
         let h = plan.grid_height as usize;
         let row_len = plan.light_row_len();
+        // One float per pixel with pre-integration, one per row (unused) without: every row
+        // needs a slice.
+        let pre_stride = if plan.preintegration { w } else { 1 };
         let prev = match options.initial_light {
             Some(v) => v.to_vec(),
             None => vec![1.0f32; row_len * h],
@@ -111,6 +117,8 @@ impl PixelState {
             inside: vec![0u32; w * h],
             color: vec![0.0f32; w * h * 3],
             alpha: vec![0.0f32; w * h],
+            pre: vec![f32::NAN; pre_stride * h],
+            pre_stride,
         }
     }
 }
@@ -160,8 +168,9 @@ fn sweep_slab(
         .zip(state.inside.par_chunks_mut(w))
         .zip(state.color.par_chunks_mut(w * 3))
         .zip(state.alpha.par_chunks_mut(w))
+        .zip(state.pre.par_chunks_mut(state.pre_stride))
         .enumerate()
-        .map(|(y, ((((light, next), inside), color), alpha))| {
+        .map(|(y, (((((light, next), inside), color), alpha), pre))| {
             (
                 y,
                 RowState {
@@ -170,6 +179,7 @@ fn sweep_slab(
                     inside,
                     color,
                     alpha,
+                    pre,
                 },
             )
         });

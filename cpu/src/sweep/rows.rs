@@ -102,6 +102,11 @@ pub(crate) fn sweep_row_simd(
                 for p in 0..planes {
                     row.light[p * w + x0..][..LANES].fill(0.0);
                 }
+                if plan.preintegration {
+                    // The cursors may have crossed surfaces: forget the kept front values (a
+                    // kept value is only a saved evaluation, see `stage::preintegrated`).
+                    row.pre[x0..x0 + LANES].fill(f32::NAN);
+                }
                 spans.record(x0, LANES, true, false);
                 moved
             }
