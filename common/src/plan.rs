@@ -611,4 +611,88 @@ mod tests {
         assert!((clear.attenuation[1] - 0.1).abs() < 1e-6);
         assert!((clear.attenuation[2] - 0.55).abs() < 1e-6);
     }
+
+    /// A detail material whose gradient is the given stops (value, grey colour, opacity).
+    fn graded(stops: &[(f64, f64, f64)], transport: [f64; 3]) -> MaterialSpec {
+        MaterialSpec {
+            name: "m".into(),
+            color: [1.0; 3],
+            opacity: 1.0,
+            transport,
+            reference_length: None,
+            detail: None,
+            texture: None,
+            gradient: stops
+                .iter()
+                .map(|&(value, c, opacity)| crate::scene::GradientStop {
+                    value,
+                    color: [c; 3],
+                    opacity,
+                })
+                .collect(),
+            specular: None,
+            phase_g: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_constant_preintegrated_slab_matches_the_closed_form_of_its_thin_slabs() {
+        // Constant value: 16 thin slabs of opacity a = 1 − (1 − α)^(r/16); the slab passes
+        // T = (1 − α)^r of the view. With τ = 0 the light passes the same, so thin slab i is
+        // seen through (1 − a)^i and lit through (1 − a)^i: Σ a·(1 − a)^{2i}·c
+        // = c·a·(1 − T²)/(1 − (1 − a)²), i.e. colour = c·(1 + T)/(2 − a) after dividing by
+        // A = 1 − T. With τ = 1 the light is not attenuated and the colour is c itself.
+        let (alpha, r, c) = (0.6, 0.5, 0.8);
+        let m = graded(&[(0.0, c, alpha), (1.0, c, alpha)], [0.0; 3]);
+        let e = preintegrated_entry(&m, r, 0.3, 0.3);
+        let t = (1.0f64 - alpha).powf(r);
+        let a = 1.0 - (1.0f64 - alpha).powf(r / 16.0);
+        assert!((f64::from(e.alpha) - (1.0 - t)).abs() < 1e-6, "{e:?}");
+        assert!((f64::from(e.color[0]) - c * (1.0 + t) / (2.0 - a)).abs() < 1e-6);
+        assert!((f64::from(e.attenuation[1]) - t).abs() < 1e-6);
+        let clear = preintegrated_entry(&graded(&[(0.0, c, alpha)], [1.0; 3]), r, 0.3, 0.3);
+        assert!((f64::from(clear.color[2]) - c).abs() < 1e-6);
+        assert_eq!(clear.attenuation, [1.0; 3]);
+        assert!((f64::from(clear.alpha) - (1.0 - t)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_preintegrated_slab_is_its_two_halves_composited() {
+        // Front 0.2 → back 0.8 over a gradient with a narrow band: 308 thin slabs; each half
+        // (0.2 → 0.5, 0.5 → 0.8, half the thickness) is 154 of the same thin slabs. Compositing
+        // the halves as the sweep composites slabs — the second seen through the first's opacity
+        // and lit through its attenuation — must give the whole slab.
+        let m = graded(
+            &[
+                (0.0, 0.2, 0.0),
+                (0.45, 0.9, 0.0),
+                (0.5, 0.5, 0.9),
+                (0.55, 0.1, 0.0),
+            ],
+            [0.3, 0.6, 0.9],
+        );
+        let r = 2.0;
+        let whole = preintegrated_entry(&m, r, 0.2, 0.8);
+        let (h1, h2) = (
+            preintegrated_entry(&m, r / 2.0, 0.2, 0.5),
+            preintegrated_entry(&m, r / 2.0, 0.5, 0.8),
+        );
+        let (a1, a2) = (f64::from(h1.alpha), f64::from(h2.alpha));
+        let alpha = 1.0 - (1.0 - a1) * (1.0 - a2);
+        assert!(whole.alpha > 0.2, "the band is crossed: {whole:?}");
+        assert!((f64::from(whole.alpha) - alpha).abs() < 1e-6);
+        for k in 0..3 {
+            let l1 = f64::from(h1.attenuation[k]);
+            let color = a1 * f64::from(h1.color[k]) + (1.0 - a1) * l1 * a2 * f64::from(h2.color[k]);
+            assert!(
+                (f64::from(whole.color[k]) * alpha - color).abs() < 1e-6,
+                "channel {k}: {whole:?} vs {h1:?} + {h2:?}"
+            );
+            let att = l1 * f64::from(h2.attenuation[k]);
+            assert!((f64::from(whole.attenuation[k]) - att).abs() < 1e-6);
+        }
+        // The band is inside the slab, not at its faces: one sample at either face misses it.
+        assert_eq!(gradient_at(&m, 0.2).1, 0.0);
+        assert_eq!(gradient_at(&m, 0.8).1, 0.0);
+    }
 }
