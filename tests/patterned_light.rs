@@ -261,7 +261,7 @@ fn patterned_checkerboard(
     let texels: Vec<u8> = (0..h)
         .flat_map(|y| {
             (0..w).map(move |x| {
-                if (x / half + y / half) % 2 == 0 {
+                if (x / half + y / half).is_multiple_of(2) {
                     0
                 } else {
                     255

@@ -327,15 +327,13 @@ fn preintegrated<L: Lane>(
         kept
     };
     let back = detail_at(plan, m, x, y, L::splat(ctx.back));
-    for i in 0..L::LANES {
-        if active[i] {
-            let xi = x0 + i;
-            row.pre[xi] = if first_mesh(row.inside[xi]) == Some(m) {
-                back.lane(i)
-            } else {
-                f32::NAN
-            };
-        }
+    for (i, _) in active[..L::LANES].iter().enumerate().filter(|(_, a)| **a) {
+        let xi = x0 + i;
+        row.pre[xi] = if first_mesh(row.inside[xi]) == Some(m) {
+            back.lane(i)
+        } else {
+            f32::NAN
+        };
     }
     pre_transfer(table, front, back)
 }
@@ -344,10 +342,8 @@ fn preintegrated<L: Lane>(
 /// they were shaded by a material without a pre-integration table.
 #[inline(always)]
 fn forget_front(row: &mut RowState<'_>, x0: usize, lanes: usize, active: &[bool; MAX_LANES]) {
-    for i in 0..lanes {
-        if active[i] {
-            row.pre[x0 + i] = f32::NAN;
-        }
+    for (i, _) in active[..lanes].iter().enumerate().filter(|(_, a)| **a) {
+        row.pre[x0 + i] = f32::NAN;
     }
 }
 
