@@ -111,11 +111,11 @@ pub struct Globals {
     pub row_len: u32,
     /// Guard band rows above the image (image y = grid y − guard_top).
     pub guard_top: u32,
+    /// 1 with pre-integrated compositing (`pre_front` then holds one word per grid pixel).
+    pub preintegration: u32,
     /// Uniform structs are a multiple of 16 bytes.
-    pub _pad0: u32,
-    /// See `_pad0`.
     pub _pad1: u32,
-    /// See `_pad0`.
+    /// See `_pad1`.
     pub _pad2: u32,
 }
 
@@ -205,7 +205,15 @@ pub struct MaterialHeader {
     pub spec_strength: f32,
     /// Specular exponent.
     pub spec_exponent: u32,
+    /// Index of the first entry of the pre-integration table (`PI_SIZE²` entries in
+    /// `tf_entries`, front-major), or [`NO_PRE`] without one.
+    pub pre: u32,
 }
+
+/// [`MaterialHeader::pre`] of a material without a pre-integration table.
+pub const NO_PRE: u32 = u32::MAX;
+/// A `pre_front` word that keeps no front value (a NaN pattern: never a detail value's bits).
+pub const PRE_NONE: u32 = 0x7fc0_0000;
 
 /// One transfer-function entry.
 #[repr(C)]
@@ -317,6 +325,7 @@ pub mod slot {
         MESHES = "meshes", 27;
         NORMALS = "normals", 28;
         LIGHT_COLORS = "light_colors", 29;
+        PRE_FRONT = "pre_front", 30;
     }
 }
 
@@ -383,7 +392,7 @@ mod tests {
                 bg_b,
                 row_len,
                 guard_top,
-                _pad0,
+                preintegration,
                 _pad1,
                 _pad2,
             }),
@@ -417,6 +426,7 @@ mod tests {
                 has_specular,
                 spec_strength,
                 spec_exponent,
+                pre,
             }),
             layout!(TransferEntry {
                 color,

@@ -11,7 +11,7 @@
 use convshadow_common::kernel::PhaseMode;
 use convshadow_common::ldi::Ldi;
 use convshadow_common::noise::{DetailKind, PERLIN4_SCALE};
-use convshadow_common::plan::{FLUSH_BELOW, LightPlan, MaterialPlan, RenderPlan, TF_SIZE};
+use convshadow_common::plan::{FLUSH_BELOW, LightPlan, MaterialPlan, RenderPlan, TF_SIZE, TfEntry};
 use convshadow_common::raster::RasterSetup;
 use convshadow_common::scene::MAX_MESHES;
 use convshadow_common::sweep_io::{MAX_LIGHT_CHANNELS, SweepOptions, SweepOutput};
@@ -20,8 +20,8 @@ use crate::buffers::{bind, check_size, pipeline, read_back, uniform, upload, wai
 use crate::device::{GpuContext, GpuError};
 use crate::layout::{
     Cursor, DETAIL_FBM, DETAIL_NONE, DETAIL_PERLIN, DETAIL_RIDGED, DETAIL_TURBULENCE, Globals,
-    LightHeader, LightSlab, MESH_BITS, MaterialHeader, MeshHeader, Octave, PHASE_PER_PIXEL,
-    PHASE_PER_SLAB, PHASE_SCHEDULE, Slab, SlabParams, Tap, TransferEntry, slot,
+    LightHeader, LightSlab, MESH_BITS, MaterialHeader, MeshHeader, NO_PRE, Octave, PHASE_PER_PIXEL,
+    PHASE_PER_SLAB, PHASE_SCHEDULE, PRE_NONE, Slab, SlabParams, Tap, TransferEntry, slot,
 };
 use crate::shader::sweep_wgsl;
 
@@ -112,13 +112,20 @@ fn material_tables(m: &MaterialPlan, t: &mut Tables) -> MaterialHeader {
         octaves: t.octaves.len() as u32,
         texture: t.voxels.len() as u32,
         dims: [1, 1, 1],
+        pre: NO_PRE,
         ..MaterialHeader::default()
     };
-    t.tf_entries.extend(m.tf.iter().map(|e| TransferEntry {
+    let entry = |e: &TfEntry| TransferEntry {
         color: e.color,
         alpha: e.alpha,
         attenuation: e.attenuation,
-    }));
+    };
+    t.tf_entries.extend(m.tf.iter().map(entry));
+    if let Some(pre) = &m.pre {
+        // The pre-integration table follows the transfer function in the same buffer.
+        header.pre = t.tf_entries.len() as u32;
+        t.tf_entries.extend(pre.iter().map(entry));
+    }
     if let Some(d) = &m.detail {
         let n = d.octave_frequency.len().min(d.octave_amplitude.len());
         t.octaves.extend((0..n).map(|i| Octave {
@@ -172,6 +179,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             bg_b: plan.background[2],
             row_len: plan.light_row_len() as u32,
             guard_top: plan.guard.top,
+            preintegration: u32::from(plan.preintegration),
             ..Globals::default()
         },
         slabs: (0..slabs)
@@ -262,6 +270,7 @@ struct SweepBuffers {
     meshes: wgpu::Buffer,
     normals: wgpu::Buffer,
     light_colors: wgpu::Buffer,
+    pre_front: wgpu::Buffer,
     image: wgpu::Buffer,
     image_words: u64,
     globals: wgpu::Buffer,
@@ -313,6 +322,14 @@ fn upload_buffers(
     let meshes = upload(ctx, "mesh header", &tables.meshes, false)?;
     let normals = upload(ctx, "triangle normal", &tables.normals, false)?;
     let light_colors = upload(ctx, "phase light colour", &tables.light_colors, false)?;
+    // One word per grid pixel with pre-integration (none kept yet), else one unused word.
+    let pre_words = if plan.preintegration { pixels } else { 1 };
+    let pre_front = upload(
+        ctx,
+        "pre-integration front value",
+        &vec![PRE_NONE; pre_words as usize],
+        false,
+    )?;
     let image_words = u64::from(plan.width) * u64::from(plan.height) * 3;
     let image = zeroed(ctx, "image", image_words)?;
     let globals = uniform(ctx, "globals", &tables.globals);
@@ -337,6 +354,7 @@ fn upload_buffers(
         meshes,
         normals,
         light_colors,
+        pre_front,
         image,
         image_words,
         globals,
@@ -381,7 +399,7 @@ fn slab_groups(
     slab_pipe: &wgpu::ComputePipeline,
     b: &SweepBuffers,
 ) -> [wgpu::BindGroup; 2] {
-    let common: [(u32, &wgpu::Buffer); 18] = [
+    let common: [(u32, &wgpu::Buffer); 19] = [
         (slot::SLAB_PARAMS, &b.slab_param),
         (slot::GLOBALS, &b.globals),
         (slot::CURSORS, &b.cursors),
@@ -400,6 +418,7 @@ fn slab_groups(
         (slot::MESHES, &b.meshes),
         (slot::NORMALS, &b.normals),
         (slot::LIGHT_COLORS, &b.light_colors),
+        (slot::PRE_FRONT, &b.pre_front),
     ];
     let group_for = |prev: &wgpu::Buffer, cur: &wgpu::Buffer| {
         let mut e: Vec<(u32, &wgpu::Buffer)> = common.to_vec();

@@ -57,14 +57,17 @@ impl ReportOptions {
             "quick subset: edge at d = d1/4, d1, 4·d1 × all 7 kernels × slabs 64, 128 × variance \
              zero, high × tilt 0°, 45° (compensation on), plus ellipse2 with compensation off; disk at \
              d = 4·d1, tilt 45°, high variance, slabs 128, all kernels; default scene at 24×24, \
-             slabs 64, all kernels, reference M = 16 (self-error against M = 64)"
+             slabs 64, all kernels, reference M = 16 (self-error against M = 64); narrow-band \
+             scene at 48×48, ellipse2 with and without pre-integration, slabs 64, 128, against \
+             2048 slabs (self-error against 4096)"
                 .to_string()
         } else {
             "full grid: edge at d = d1/4, d1, 4·d1 × 7 kernels × slabs 64, 128, 256, 512 × variance \
              zero, low, high × tilt 0°, 45°, with compensation on and off; disk at d = d1 and 4·d1 \
              × 7 kernels × 4 slab counts × 3 variances × 2 tilts (compensation on); default scene \
              at 24×24 × 7 kernels × slabs 64, 128, 256, 512, reference M = 16 (self-error against \
-             M = 64)"
+             M = 64); narrow-band scene at 64×64, ellipse2 with and without pre-integration × \
+             slabs 64, 128, 256, 512, against 2048 slabs (self-error against 4096)"
                 .to_string()
         }
     }

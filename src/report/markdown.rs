@@ -57,6 +57,7 @@ pub fn markdown(report: &Report, options: &ReportOptions) -> String {
     growth_table(&mut md, &report.rows);
     disk_table(&mut md, &report.rows);
     scene_table(&mut md, &report.rows);
+    narrowband_table(&mut md, &report.rows);
     md
 }
 
@@ -66,6 +67,39 @@ fn penumbras(rows: &[Row]) -> Vec<&'static str> {
         .into_iter()
         .filter(|p| rows.iter().any(|r| r.penumbra == *p))
         .collect()
+}
+
+/// The narrow-band scene with and without pre-integrated compositing.
+fn narrowband_table(md: &mut String, rows: &[Row]) {
+    let nb: Vec<&Row> = rows.iter().filter(|r| r.family == "narrowband").collect();
+    if nb.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "\n## Narrow band: pre-integrated compositing\n\n`scenes/narrowband.toml` (an opacity \
+         band 0.05 wide over fBm), `ellipse2`, against its {}-slab sweep without \
+         pre-integration.\n",
+        super::NARROWBAND_REFERENCE_SLABS
+    );
+    let _ = writeln!(
+        md,
+        "| slabs | size | pre-integration | time ms | image RMSE vs reference | reference self-error |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for r in nb {
+        let _ = writeln!(
+            md,
+            "| {} | {}×{} | {} | {} | {} | {} |",
+            r.slabs,
+            r.width,
+            r.height,
+            if r.preintegration { "on" } else { "off" },
+            fmt(r.time_ms),
+            fmt(r.rmse_reference.unwrap_or(f64::NAN)),
+            fmt(r.reference_self_err.unwrap_or(f64::NAN)),
+        );
+    }
 }
 
 /// Edge cases with compensation on, per kernel × slab count.

@@ -286,10 +286,27 @@ fn aggregate(
         .collect()
 }
 
-/// The figure's three panels: edge against both references, the scene against shadow rays.
+/// The narrow-band family's series: `ellipse2` without and with pre-integration.
+fn narrowband_series(rows: &[Row]) -> Vec<Series> {
+    [(false, "ellipse2"), (true, "ellipse2 + pre-integration")]
+        .into_iter()
+        .map(|(pre, name)| Series {
+            name: name.to_string(),
+            points: rows
+                .iter()
+                .filter(|r| r.family == "narrowband" && r.preintegration == pre)
+                .filter_map(|r| Some((r.time_ms, r.rmse_reference?, r.slabs)))
+                .filter(|(t, e, _)| t.is_finite() && e.is_finite())
+                .collect(),
+        })
+        .collect()
+}
+
+/// The figure's panels: edge against both references, the scene against shadow rays, and (when
+/// the report ran it) the narrow-band scene with and without pre-integration.
 pub fn panels(rows: &[Row]) -> Vec<Panel> {
     let edge_on = |r: &Row| r.family == "edge" && r.compensation;
-    vec![
+    let mut out = vec![
         Panel {
             title: "edge: error vs the correct shadow".into(),
             y_desc: "mean RMSE (light)".into(),
@@ -305,7 +322,15 @@ pub fn panels(rows: &[Row]) -> Vec<Panel> {
             y_desc: "image RMSE (linear)".into(),
             series: aggregate(rows, &|r| r.family == "scene", &|r| r.rmse_reference),
         },
-    ]
+    ];
+    if rows.iter().any(|r| r.family == "narrowband") {
+        out.push(Panel {
+            title: "narrow band vs 2048 slabs: pre-integration".into(),
+            y_desc: "image RMSE (linear)".into(),
+            series: narrowband_series(rows),
+        });
+    }
+    out
 }
 
 #[cfg(test)]

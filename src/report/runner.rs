@@ -64,6 +64,7 @@ pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
         tilt_deg: Some(setup.tilt_deg),
         distance_over_d1: Some(d / setup.optimal_distance),
         compensation: setup.compensation,
+        preintegration: false,
         width: setup.width,
         height: setup.height,
         time_ms: seconds * 1e3,
@@ -160,6 +161,7 @@ fn disk_row(setup: &DiskSetup, level: &str, r: &DiskReference) -> Row {
         tilt_deg: Some(setup.tilt_deg),
         distance_over_d1: Some(setup.distance() / setup.optimal_distance),
         compensation: setup.compensation,
+        preintegration: false,
         width: setup.width,
         height: setup.height,
         time_ms: seconds * 1e3,
@@ -246,6 +248,7 @@ fn scene_rows(
                 slabs,
                 variance_level: "scene".into(),
                 compensation: scene.sweep.variance_compensation,
+                preintegration: false,
                 width: size,
                 height: size,
                 time_ms: seconds * 1e3,
@@ -259,6 +262,86 @@ fn scene_rows(
             }
         })
         .collect()
+}
+
+/// The narrow-band example scene (`scenes/narrowband.toml`, compiled in) at `size`² with `slabs`
+/// and pre-integration on or off.
+pub fn narrowband_scene(size: u32, slabs: u32, preintegration: bool) -> Scene {
+    let mut scene = Scene::parse(
+        include_str!("../../scenes/narrowband.toml"),
+        "scenes/narrowband.toml",
+        std::path::Path::new("scenes"),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    scene.image.width = size;
+    scene.image.height = size;
+    scene.sweep.slabs = SlabSpec::Count(slabs);
+    scene.sweep.preintegration = preintegration;
+    scene
+}
+
+/// The slab count of the narrow-band family's reference (and twice it for its self-error).
+pub const NARROWBAND_REFERENCE_SLABS: u32 = 2048;
+
+/// The narrow-band family at `size`²: per slab count, `ellipse2` without and with
+/// pre-integration, against the 2048-slab sweep without it.
+fn narrowband_rows(size: u32, slab_counts: &[u32], verbose: bool) -> Vec<Row> {
+    let n_ref = NARROWBAND_REFERENCE_SLABS;
+    let (_, _, _, reference, _) = render_scene(&narrowband_scene(size, n_ref, false));
+    let (_, _, _, finer, _) = render_scene(&narrowband_scene(size, 2 * n_ref, false));
+    let self_err = rmse_f32(&reference, &finer);
+    if verbose {
+        eprintln!(
+            "narrowband {size}²: reference {n_ref} slabs, self error (vs {}) {self_err:.2e}",
+            2 * n_ref
+        );
+    }
+    let mut rows = Vec::new();
+    for &n in slab_counts {
+        for pre in [false, true] {
+            let scene = narrowband_scene(size, n, pre);
+            let (_, _, _, image, seconds) = render_scene(&scene);
+            rows.push(Row {
+                family: "narrowband".into(),
+                kernel: scene.sweep.kernel.to_string(),
+                penumbra: scene.sweep.penumbra.to_string(),
+                slabs: n,
+                variance_level: "scene".into(),
+                compensation: scene.sweep.variance_compensation,
+                preintegration: pre,
+                width: size,
+                height: size,
+                time_ms: seconds * 1e3,
+                rmse_reference: Some(rmse_f32(&image, &reference)),
+                reference_self_err: Some(self_err),
+                note: format!(
+                    "scenes/narrowband.toml against its {n_ref}-slab sweep without                      pre-integration (self-error: against {} slabs); no closed form",
+                    2 * n_ref
+                ),
+                ..Row::default()
+            });
+        }
+    }
+    rows
+}
+
+/// The narrow-band family: both compositing modes at each slab count (one reference for all).
+fn narrowband_cases(cases: &mut Cases<'_>) {
+    let (size, slab_counts): (u32, &[u32]) = if cases.options.quick {
+        (48, &[64, 128])
+    } else {
+        (64, &SLAB_COUNTS)
+    };
+    let group = cases.next..cases.next + 2 * slab_counts.len();
+    cases.next = group.end;
+    if !group.clone().any(|i| cases.want(i)) {
+        return;
+    }
+    for (i, row) in group.zip(narrowband_rows(size, slab_counts, cases.options.verbose)) {
+        if cases.want(i) {
+            cases.push(row);
+        }
+    }
 }
 
 /// The rows computed so far and the case numbering: cases are numbered in row order; with
@@ -287,7 +370,7 @@ impl Cases<'_> {
 fn log_row(options: &ReportOptions, r: &Row) {
     if options.verbose {
         eprintln!(
-            "{} {} n={} var={} tilt={:?} d/d1={:?} comp={} {:.1} ms rmse_c={:?} rmse_i={:?} ref={:?}",
+            "{} {} n={} var={} tilt={:?} d/d1={:?} comp={} pre={} {:.1} ms rmse_c={:?} rmse_i={:?} ref={:?}",
             r.family,
             r.kernel,
             r.slabs,
@@ -295,6 +378,7 @@ fn log_row(options: &ReportOptions, r: &Row) {
             r.tilt_deg,
             r.distance_over_d1,
             r.compensation,
+            r.preintegration,
             r.time_ms,
             r.rmse_correct,
             r.rmse_iterated,
@@ -475,6 +559,7 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
     edge_cases(&mut cases);
     disk_cases(&mut cases)?;
     scene_cases(&mut cases);
+    narrowband_cases(&mut cases);
     check_case(options, cases.next)?;
     write_files(options, cases.rows, start)
 }

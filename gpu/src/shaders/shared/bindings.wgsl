@@ -72,7 +72,7 @@ struct Globals {
     bg_b: f32,
     row_len: u32,     // floats per light-buffer row: lights · channels · grid_w
     guard_top: u32,   // image y = grid y − guard_top
-    _pad0: u32,
+    preintegration: u32, // 1: pre-integrated compositing (`pre_front` per grid pixel)
     _pad1: u32,
     _pad2: u32,
 }
@@ -123,6 +123,7 @@ struct MaterialHeader {
     has_specular: u32,
     spec_strength: f32,
     spec_exponent: u32,
+    pre: u32,         // first entry of the PI_SIZE² pre-integration table, or NO_PRE
 }
 
 struct TransferEntry {
@@ -172,3 +173,6 @@ struct Cursor {
 // Per (material, light), at `material · lights + light`: the light's colour times the material's
 // phase function (the bare colour for isotropic media), read by the shading's light sum.
 @group(0) @binding(29) var<storage, read> light_colors: array<array<f32, 3>>;
+// Pre-integration: per grid pixel the bits of the detail value at the next slab's front face
+// kept from this slab, or PRE_NONE (one unused word without pre-integration).
+@group(0) @binding(30) var<storage, read_write> pre_front: array<u32>;
