@@ -1,15 +1,18 @@
 //! The image bits are a contract: every example scene × every kernel renders to the `image_hash`
 //! and `ldi_hash` recorded for it, on the scalar and the SIMD path and for 1 and 3 threads, and
-//! every example scene at its own full size renders to its recorded hash. Two tables:
+//! every example scene at its own full size renders to its recorded hash. Three tables:
 //!
 //! - `tests/data/golden_hashes_band0.tsv`: the bits of commit 2934191, before the structure, speed
 //!   and guard-band work, written through the command line by that commit (so they do not come
-//!   from the code they now check), checked with `--guard-band 0` (the default then). Never
-//!   re-recorded: the sweep's rewrites for speed must keep these bits. Scenes added later
-//!   (`shaft`) are not in it.
-//! - `tests/data/golden_hashes.tsv`: the same cases with the default automatic guard band,
-//!   recorded when it became the default. A change that is meant to change an image (a new
-//!   default) re-records this table with
+//!   from the code they now check), checked with `--guard-band 0 --penumbra iterated` (the
+//!   defaults then). Never re-recorded: the sweep's rewrites for speed must keep these bits.
+//!   Scenes added later (`shaft`, `gobo`, `narrowband`) are not in it.
+//! - `tests/data/golden_hashes_iterated.tsv`: the same cases with the automatic guard band and the
+//!   iterated penumbra, recorded when the guard band became the default (new scenes added with
+//!   their rows). Never re-recorded either: checked with `--penumbra iterated`.
+//! - `tests/data/golden_hashes.tsv`: the same cases with the defaults (automatic guard band,
+//!   distance penumbra), recorded when the distance penumbra became the default. A change that is
+//!   meant to change an image (a new default) re-records this table with
 //!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test golden_hashes` and says why in its
 //!   commit.
 
@@ -19,8 +22,10 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 const GOLDEN: &str = "tests/data/golden_hashes.tsv";
-/// The pre-guard-band bits, checked with `--guard-band 0`.
+/// The pre-guard-band bits, checked with `--guard-band 0 --penumbra iterated`.
 const GOLDEN_BAND0: &str = "tests/data/golden_hashes_band0.tsv";
+/// The iterated penumbra's bits with the automatic guard band, checked with `--penumbra iterated`.
+const GOLDEN_ITERATED: &str = "tests/data/golden_hashes_iterated.tsv";
 
 /// One render through the CLI: `(image_hash, ldi_hash)` from `--stats-json`.
 fn hashes(scene: &Path, extra: &[&str], dir: &Path) -> (String, String) {
@@ -114,7 +119,7 @@ fn every_example_scene_and_kernel_keeps_its_recorded_bits() {
     let dir = support::temp_dir("golden");
     let record = std::env::var_os("CONVSHADOW_RECORD_GOLDEN").is_some();
     if record {
-        // Only the default-band table: the band-0 table is the starting commit's bits.
+        // Only the defaults' table: the others are earlier defaults' bits.
         let mut text = String::from(
             "# key\timage_hash\tldi_hash — written by CONVSHADOW_RECORD_GOLDEN=1 (see \
              tests/golden_hashes.rs)\n",
@@ -132,9 +137,17 @@ fn every_example_scene_and_kernel_keeps_its_recorded_bits() {
 }
 
 #[test]
+fn every_example_scene_and_kernel_keeps_the_iterated_bits() {
+    let dir = support::temp_dir("golden-iterated");
+    let checked = check_table(GOLDEN_ITERATED, &["--penumbra", "iterated"], true, &dir);
+    assert!(checked > 100, "only {checked} cases checked");
+}
+
+#[test]
 fn every_example_scene_and_kernel_keeps_the_starting_bits_without_a_guard_band() {
     let dir = support::temp_dir("golden-band0");
-    let checked = check_table(GOLDEN_BAND0, &["--guard-band", "0"], false, &dir);
+    let extra = ["--guard-band", "0", "--penumbra", "iterated"];
+    let checked = check_table(GOLDEN_BAND0, &extra, false, &dir);
     assert!(checked > 100, "only {checked} cases checked");
 }
 

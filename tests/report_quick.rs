@@ -44,11 +44,24 @@ fn check_case_counts(t: &Csv<'_>) {
     let col = |name: &str| t.col(name);
     // The quick subset (src/report/mod.rs, ReportOptions::describe): edge 3 distances × 2 slab
     // counts × 2 variances × 2 tilts × (7 kernels + ellipse2 without compensation) = 192; disk
-    // 7 kernels; default scene 7 kernels.
+    // 7 kernels; default scene 7 kernels; each with both penumbra models.
     let count = |family: &str| rows.iter().filter(|r| r[col("family")] == family).count();
-    assert_eq!(count("edge"), 3 * 2 * 2 * 2 * (kernels().count() + 1));
-    assert_eq!(count("disk"), kernels().count());
-    assert_eq!(count("scene"), kernels().count());
+    assert_eq!(count("edge"), 2 * 3 * 2 * 2 * 2 * (kernels().count() + 1));
+    assert_eq!(count("disk"), 2 * kernels().count());
+    assert_eq!(count("scene"), 2 * kernels().count());
+    for family in ["edge", "disk", "scene"] {
+        for penumbra in ["iterated", "distance"] {
+            let n = rows
+                .iter()
+                .filter(|r| r[col("family")] == family && r[col("penumbra")] == penumbra)
+                .count();
+            assert_eq!(
+                2 * n,
+                count(family),
+                "{family}: half the rows are {penumbra}"
+            );
+        }
+    }
     // Narrow band: slabs 64 and 128, each without and with pre-integration.
     assert_eq!(count("narrowband"), 4);
     for pre in ["false", "true"] {

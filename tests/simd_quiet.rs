@@ -7,7 +7,7 @@ use std::path::Path;
 
 use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::Scene;
+use convshadow::common::scene::{Penumbra, Scene};
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::cpu::sweep::{ChunkCounts, CpuOptions, SweepOptions, SweepPath, sweep_with};
 use convshadow::pipeline::image_fingerprint;
@@ -16,10 +16,10 @@ mod support;
 
 /// A thin opaque wall over the image's left half at the front, and a small box far behind it so
 /// the sweep goes on for slabs after the wall.
-fn scene(kernel: &str) -> Scene {
+fn scene(kernel: &str, penumbra: Penumbra) -> Scene {
     let text = format!(
         "[image]\nwidth = 75\nheight = 36\n[camera]\nview_width = 4.0\n[sweep]\nguard_band = 0\nslabs = 20\n\
-         optimal_distance = 0.5\nkernel = \"{kernel}\"\n[[light]]\ntilt_deg = [20.0, 10.0]\n\
+         optimal_distance = 0.5\npenumbra = \"{penumbra}\"\nkernel = \"{kernel}\"\n[[light]]\ntilt_deg = [20.0, 10.0]\n\
          variance = [0.04, 0.02]\nrotation_deg = 25.0\n\
          [[mesh]]\nshape = \"box\"\nsize = [2.0, 5.0, 0.05]\ntranslate = [1.0, 0.0, 0.0]\n\
          material = \"wall\"\n\
@@ -31,8 +31,13 @@ fn scene(kernel: &str) -> Scene {
 
 /// Runs both paths from `initial` light and compares image and light bits; returns the SIMD
 /// path's chunk counts.
-fn compare(kernel: &str, what: &str, initial_of: &dyn Fn(usize, usize, usize) -> f32) -> [u64; 3] {
-    let scene = scene(kernel);
+fn compare(
+    kernel: &str,
+    penumbra: Penumbra,
+    what: &str,
+    initial_of: &dyn Fn(usize, usize, usize) -> f32,
+) -> [u64; 3] {
+    let scene = scene(kernel, penumbra);
     let g = SceneGeometry::build(&scene).expect("geometry");
     let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
     let plan = RenderPlan::new(&scene, &g).expect("plan");
@@ -46,7 +51,12 @@ fn compare(kernel: &str, what: &str, initial_of: &dyn Fn(usize, usize, usize) ->
     for y in 0..h {
         for p in 0..planes {
             for x in 0..w {
-                initial[y * row_len + p * w + x] = initial_of(x, y, w);
+                // A depth plane starts at 0: no occluder yet.
+                initial[y * row_len + p * w + x] = if plan.is_depth_plane(p) {
+                    0.0
+                } else {
+                    initial_of(x, y, w)
+                };
             }
         }
     }
@@ -88,13 +98,18 @@ fn dot(x: usize, y: usize) -> bool {
 #[test]
 fn single_dots_of_shadow_in_unoccluded_light() {
     for kernel in support::kernels() {
-        let counts = compare(kernel, "shadow dots in light", &|x, y, _| {
-            if dot(x, y) { 0.5 } else { 1.0 }
-        });
-        assert!(
-            counts[1] > 0,
-            "{kernel}: no unoccluded chunk was skipped: {counts:?}"
-        );
+        for penumbra in [Penumbra::Iterated, Penumbra::Distance] {
+            let counts = compare(kernel, penumbra, "shadow dots in light", &|x, y, _| {
+                if dot(x, y) { 0.5 } else { 1.0 }
+            });
+            // The distance penumbra grows the dots' kernels with the slab count (their
+            // occluders are at depth 0), so they soon reach every chunk: the bits are compared,
+            // the skips counted for the iterated penumbra only.
+            assert!(
+                counts[1] > 0 || penumbra == Penumbra::Distance,
+                "{kernel} {penumbra}: no unoccluded chunk was skipped: {counts:?}"
+            );
+        }
     }
 }
 
@@ -102,13 +117,17 @@ fn single_dots_of_shadow_in_unoccluded_light() {
 fn single_dots_of_light_beside_opaque_darkness() {
     // Dark everywhere but for dots of light in the unoccluded right half (grid x > w/2): the dots
     // spread under the wall's opaque left half, whose chunks are skipped while all they read is 0.
+    // The wall is in slab 0, so the distance penumbra's depth plane stays 0 under it (0 · the
+    // light removed) and its dark chunks are skipped too.
     for kernel in support::kernels() {
-        let counts = compare(kernel, "light dots in the dark", &|x, y, w| {
-            if x > w / 2 && dot(x, y) { 0.5 } else { 0.0 }
-        });
-        assert!(
-            counts[2] > 0,
-            "{kernel}: no dark chunk was skipped: {counts:?}"
-        );
+        for penumbra in [Penumbra::Iterated, Penumbra::Distance] {
+            let counts = compare(kernel, penumbra, "light dots in the dark", &|x, y, w| {
+                if x > w / 2 && dot(x, y) { 0.5 } else { 0.0 }
+            });
+            assert!(
+                counts[2] > 0,
+                "{kernel} {penumbra}: no dark chunk was skipped: {counts:?}"
+            );
+        }
     }
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use convshadow::common::kernel::{KERNEL_NAMES as KERNELS, KernelKind, KernelSpec};
 use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::Scene;
+use convshadow::common::scene::{Penumbra, Scene};
 use convshadow::cpu::reference::edge::{self, EdgeSetup, InitialLight, phi, run_light};
 use convshadow::cpu::reference::impulse::{self, moments};
 use convshadow::cpu::sweep::SweepOutput;
@@ -292,16 +292,30 @@ fn penumbra_matches_the_correct_shadow_at_d1_and_the_iterated_model_elsewhere() 
 #[test]
 fn a_constant_unoccluded_light_stays_exactly_one_over_4096_slabs() {
     for kernel in KERNELS {
-        let scene = impulse::empty_scene(4096, 24, [30.0, -20.0], [0.3, 0.1], 25.0, kernel, true)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let (plan, out) = run(&scene, None);
-        assert_eq!(plan.slabs, 4096);
-        // Exact: each phase's f32 weights sum to exactly 1 in the gather's order, and reads
-        // outside the buffer see 1.
-        assert!(
-            out.light.iter().all(|&v| v == 1.0),
-            "{kernel}: the light drifted"
-        );
+        for penumbra in [Penumbra::Iterated, Penumbra::Distance] {
+            let mut scene =
+                impulse::empty_scene(4096, 24, [30.0, -20.0], [0.3, 0.1], 25.0, kernel, true)
+                    .unwrap_or_else(|e| panic!("{e}"));
+            scene.sweep.penumbra = penumbra;
+            let (plan, out) = run(&scene, None);
+            assert_eq!(plan.slabs, 4096);
+            // Exact: each phase's f32 weights sum to exactly 1 in the gather's order, and reads
+            // outside the buffer see 1 (and 0 in a depth plane: no occluder).
+            let w = plan.grid_width as usize;
+            let planes = out.light.chunks(w).enumerate();
+            let per_row = plan.light_row_len() / w;
+            assert!(
+                planes.clone().all(|(i, p)| {
+                    let want = if plan.is_depth_plane(i % per_row) {
+                        0.0
+                    } else {
+                        1.0
+                    };
+                    p.iter().all(|&v| v == want)
+                }),
+                "{kernel} {penumbra}: the light drifted"
+            );
+        }
     }
 }
 

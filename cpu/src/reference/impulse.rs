@@ -32,6 +32,7 @@ view_width = {grid}.0
 guard_band = 0  # the impulse response is read on the grid as the image
 slab_distance = 1.0
 optimal_distance = 1.0
+penumbra = "iterated"  # the iterated kernel's impulse response
 kernel = "{kernel}"
 variance_compensation = {compensate}
 [[light]]
