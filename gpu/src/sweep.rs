@@ -3,7 +3,8 @@
 //!
 //! Every table the sweep reads comes from the [`RenderPlan`] built on the host (kernel taps,
 //! per-slab hashes, phases and shifts, transfer functions, octave tables, detail transforms,
-//! slab faces) and is uploaded as it is, one storage buffer per table, each an array of one of
+//! slab faces, and for the distance penumbra every level's taps, `level_of` and the per-level
+//! slab schedule) and is uploaded as it is, one storage buffer per table, each an array of one of
 //! the `layout` structs: nothing is recomputed on the device. One dispatch per slab, one invocation per
 //! grid pixel; the two light buffers ping-pong; the slab index reaches the shader through a small
 //! uniform filled by a buffer copy before each dispatch, so many slabs go in one submission.
@@ -11,7 +12,9 @@
 use convshadow_common::kernel::PhaseMode;
 use convshadow_common::ldi::Ldi;
 use convshadow_common::noise::{DetailKind, PERLIN4_SCALE};
-use convshadow_common::plan::{FLUSH_BELOW, LightPlan, MaterialPlan, RenderPlan, TF_SIZE};
+use convshadow_common::plan::{
+    FLUSH_BELOW, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE,
+};
 use convshadow_common::raster::RasterSetup;
 use convshadow_common::scene::MAX_MESHES;
 use convshadow_common::sweep_io::{MAX_LIGHT_CHANNELS, SweepOptions, SweepOutput};
@@ -31,6 +34,10 @@ pub const MAX_TRIANGLES: usize = 1 << (32 - MESH_BITS);
 const SLABS_PER_SUBMIT: u32 = 32;
 /// The sweep's workgroup edge (`@workgroup_size(8, 8)`).
 const TILE: u32 = 8;
+/// Storage buffers the `sweep_slab` entry point binds (the two light buffers and every table of
+/// [`slab_groups`]); checked against the adapter's per-stage limit before the pipeline is made
+/// (lavapipe allows 32), and against the WGSL by a test.
+const SWEEP_STORAGE_BUFFERS: u32 = 19;
 
 /// Everything the sweep reads besides the LDI and the light buffers, as the shader's structs.
 struct Tables {
@@ -39,6 +46,8 @@ struct Tables {
     lights: Vec<LightHeader>,
     light_slabs: Vec<LightSlab>,
     taps: Vec<Tap>,
+    /// Distance penumbra, per light: `level_of`, then the per-level slab phases.
+    level_table: Vec<u32>,
     materials: Vec<MaterialHeader>,
     tf_entries: Vec<TransferEntry>,
     octaves: Vec<Octave>,
@@ -73,12 +82,67 @@ fn check_limits(plan: &RenderPlan, raster: &RasterSetup) -> Result<(), GpuError>
     Ok(())
 }
 
-/// One light's header, appending its taps and per-slab values.
-fn light_tables(light: &LightPlan, slabs: usize, t: &mut Tables) -> LightHeader {
+/// Checks a light's level tables (distance penumbra) against what the shader indexes: `level_of`
+/// covers every distance 1..=slabs with a level below `levels`, and a schedule has a phase
+/// below `phase_count` per level and slab. A malformed plan is refused, not read out of bounds.
+fn check_levels(l: usize, light: &LightPlan, slabs: usize) -> Result<(), GpuError> {
+    let t = &light.table;
+    let bad = |what: String| {
+        Err(GpuError::Unsupported(format!(
+            "light {l}: the distance penumbra's kernel table {what}"
+        )))
+    };
+    if t.level_of.len() < 2 || t.level_of.len() > slabs + 1 {
+        return bad(format!(
+            "has {} level_of entries, expected 2..={}",
+            t.level_of.len(),
+            slabs + 1
+        ));
+    }
+    if let Some(v) = t.level_of.iter().find(|&&v| v >= t.levels) {
+        return bad(format!("maps a distance to level {v} of {}", t.levels));
+    }
+    if t.taps.len() != (t.rows() * t.taps_per_phase) as usize {
+        return bad(format!(
+            "has {} taps, expected {} rows × {}",
+            t.taps.len(),
+            t.rows(),
+            t.taps_per_phase
+        ));
+    }
+    if t.phase_mode == PhaseMode::Schedule
+        && (t.slab_phase.len() != t.levels as usize * slabs
+            || t.slab_phase.iter().any(|&p| p >= t.phase_count))
+    {
+        return bad(format!(
+            "has a schedule of {} phases, expected {} levels × {slabs} slabs below {}",
+            t.slab_phase.len(),
+            t.levels,
+            t.phase_count
+        ));
+    }
+    Ok(())
+}
+
+/// One light's header, appending its taps (every level's rows), per-slab values and, for the
+/// distance penumbra, its level tables.
+fn light_tables(light: &LightPlan, slabs: usize, distance: bool, t: &mut Tables) -> LightHeader {
     let table = &light.table;
+    let level_of = t.level_table.len() as u32;
+    if distance {
+        t.level_table.extend_from_slice(&table.level_of);
+    }
+    let level_phases = t.level_table.len() as u32;
+    if distance && table.phase_mode == PhaseMode::Schedule {
+        t.level_table.extend_from_slice(&table.slab_phase);
+    }
     let header = LightHeader {
         taps: t.taps.len() as u32,
         taps_per_phase: table.taps_per_phase,
+        phase_count: table.phase_count,
+        level_of,
+        level_top: table.level_of.len().saturating_sub(1) as u32,
+        level_phases,
         phase_bits: table.phase_bits(),
         phase_mode: match table.phase_mode {
             PhaseMode::PerPixel => PHASE_PER_PIXEL,
@@ -172,7 +236,9 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             bg_b: plan.background[2],
             row_len: plan.light_row_len() as u32,
             guard_top: plan.guard.top,
-            ..Globals::default()
+            planes: plan.planes_per_light() as u32,
+            depth_planes: plan.depth_planes() as u32,
+            occlusion_eps: OCCLUSION_EPS,
         },
         slabs: (0..slabs)
             .map(|k| Slab {
@@ -184,6 +250,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
         lights: Vec::with_capacity(plan.lights.len()),
         light_slabs: Vec::new(),
         taps: Vec::new(),
+        level_table: Vec::new(),
         materials: Vec::with_capacity(plan.materials.len()),
         tf_entries: Vec::new(),
         octaves: Vec::new(),
@@ -204,8 +271,12 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             .flat_map(|m| m.light_color.iter().copied())
             .collect(),
     };
-    for light in &plan.lights {
-        let header = light_tables(light, slabs, &mut t);
+    let distance = plan.depth_planes() > 0;
+    for (l, light) in plan.lights.iter().enumerate() {
+        if distance {
+            check_levels(l, light, slabs)?;
+        }
+        let header = light_tables(light, slabs, distance, &mut t);
         t.lights.push(header);
     }
     for m in &plan.materials {
@@ -255,6 +326,7 @@ struct SweepBuffers {
     lights: wgpu::Buffer,
     light_slabs: wgpu::Buffer,
     taps: wgpu::Buffer,
+    level_table: wgpu::Buffer,
     materials: wgpu::Buffer,
     tf_entries: wgpu::Buffer,
     octaves: wgpu::Buffer,
@@ -281,7 +353,12 @@ fn upload_buffers(
     let (pixels, light_words) = (grid.pixels, grid.light_words);
     let initial: Vec<u32> = match options.initial_light {
         Some(v) => v.iter().map(|x| x.to_bits()).collect(),
-        None => vec![1.0f32.to_bits(); light_words as usize],
+        // Light 1 and, with the distance penumbra, occluder depth 0 (as the CPU starts).
+        None => plan
+            .unlit_light_buffer()
+            .into_iter()
+            .map(f32::to_bits)
+            .collect(),
     };
     let light_a = upload(ctx, "light", &initial, true)?;
     drop(initial);
@@ -306,6 +383,7 @@ fn upload_buffers(
     let lights = upload(ctx, "light header", &tables.lights, false)?;
     let light_slabs = upload(ctx, "light slab", &tables.light_slabs, false)?;
     let taps = upload(ctx, "kernel tap", &tables.taps, false)?;
+    let level_table = upload(ctx, "kernel level table", &tables.level_table, false)?;
     let materials = upload(ctx, "material header", &tables.materials, false)?;
     let tf_entries = upload(ctx, "transfer function", &tables.tf_entries, false)?;
     let octaves = upload(ctx, "octave", &tables.octaves, false)?;
@@ -330,6 +408,7 @@ fn upload_buffers(
         lights,
         light_slabs,
         taps,
+        level_table,
         materials,
         tf_entries,
         octaves,
@@ -381,7 +460,7 @@ fn slab_groups(
     slab_pipe: &wgpu::ComputePipeline,
     b: &SweepBuffers,
 ) -> [wgpu::BindGroup; 2] {
-    let common: [(u32, &wgpu::Buffer); 18] = [
+    let common: [(u32, &wgpu::Buffer); 19] = [
         (slot::SLAB_PARAMS, &b.slab_param),
         (slot::GLOBALS, &b.globals),
         (slot::CURSORS, &b.cursors),
@@ -393,6 +472,7 @@ fn slab_groups(
         (slot::LIGHTS, &b.lights),
         (slot::LIGHT_SLABS, &b.light_slabs),
         (slot::TAPS, &b.taps),
+        (slot::LEVEL_TABLE, &b.level_table),
         (slot::MATERIALS, &b.materials),
         (slot::TF_ENTRIES, &b.tf_entries),
         (slot::OCTAVES, &b.octaves),
@@ -522,6 +602,13 @@ pub fn sweep(
 ) -> Result<SweepOutput, GpuError> {
     let grid = grid_size(plan)?;
     let tables = build_tables(plan, raster)?;
+    let per_stage = ctx.limits.max_storage_buffers_per_shader_stage;
+    if per_stage < SWEEP_STORAGE_BUFFERS {
+        return Err(GpuError::Unsupported(format!(
+            "the sweep binds {SWEEP_STORAGE_BUFFERS} storage buffers, the adapter allows \
+             {per_stage} per shader stage"
+        )));
+    }
     check_size(ctx, "light", grid.light_words * 4)?;
     check_size(ctx, "per-pixel colour", grid.pixels * 16)?;
     let buffers = upload_buffers(ctx, plan, ldi, options, &tables, &grid)?;
@@ -533,4 +620,36 @@ pub fn sweep(
     )?;
     dispatch_finish(ctx, plan, &buffers, &finish_pipe);
     read_output(ctx, plan, &buffers, grid.light_words)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_sweep_binds_the_counted_storage_buffers() {
+        let wgsl = sweep_wgsl();
+        let module = naga::front::wgsl::parse_str(&wgsl).expect("the sweep WGSL parses");
+        let info = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        )
+        .validate(&module)
+        .expect("the sweep WGSL validates");
+        let (index, _) = module
+            .entry_points
+            .iter()
+            .enumerate()
+            .find(|(_, e)| e.name == "sweep_slab")
+            .expect("sweep_slab");
+        let used = info.get_entry_point(index);
+        let storage = module
+            .global_variables
+            .iter()
+            .filter(|(h, g)| {
+                matches!(g.space, naga::AddressSpace::Storage { .. }) && !used[*h].is_empty()
+            })
+            .count();
+        assert_eq!(storage as u32, SWEEP_STORAGE_BUFFERS);
+    }
 }
