@@ -10,7 +10,7 @@ use convshadow_common::guard::GuardBand;
 use convshadow_common::hash::Fingerprint;
 use convshadow_common::image_io::RgbImage;
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::{Scene, SceneError};
+use convshadow_common::scene::{Penumbra, Scene, SceneError};
 use convshadow_cpu::ldi::{BuildLdi, Ldi, LdiError, LdiStats};
 use convshadow_cpu::sweep::{
     ChunkCounts, CpuOptions, SweepError, SweepOptions, SweepPath, sweep_with,
@@ -251,7 +251,8 @@ pub struct MemoryNeed {
     pub grid_pixels: u64,
     /// The LDI's per-pixel arrays.
     pub ldi_pixels: u64,
-    /// The sweep's two light buffers per light and channel (ping-pong), f32.
+    /// The sweep's two light buffers per light and plane (ping-pong), f32: a plane per channel
+    /// and, with the distance penumbra, the occluder-depth plane.
     pub light_buffers: u64,
     /// The sweep's per-pixel state: layer cursor, inside bits, colour and alpha.
     pub sweep_state: u64,
@@ -314,10 +315,12 @@ impl MemoryNeed {
         let grid_pixels = guard.grid_pixels(scene.image.width, scene.image.height);
         let image_pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
         let channels: u64 = if scene.is_monochrome() { 1 } else { 3 };
+        // The distance penumbra's depth plane per light (`RenderPlan::depth_planes`).
+        let depth_planes = u64::from(scene.sweep.penumbra == Penumbra::Distance);
         let lights = scene.lights.len() as u64;
         let (light_buffers, sweep_state, output) = if sweep {
             (
-                2 * lights * channels * 4 * grid_pixels,
+                2 * lights * (channels + depth_planes) * 4 * grid_pixels,
                 (4 + 4 + 12 + 4) * grid_pixels,
                 (12 + 3 + 3) * image_pixels,
             )
