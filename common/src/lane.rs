@@ -64,6 +64,10 @@ pub trait Lane:
     fn u_shl(a: Self::U, n: u32) -> Self::U;
     /// `a == b` as a float-select mask.
     fn u_eq(a: Self::U, b: Self::U) -> Self::M;
+    /// The smaller of `a` and `b` per lane.
+    fn u_min(a: Self::U, b: Self::U) -> Self::U;
+    /// `a` where `m` is set, else `b`, on integer lanes.
+    fn u_select(m: Self::M, a: Self::U, b: Self::U) -> Self::U;
     /// `table[i]` per lane (bounds-checked).
     fn gather(table: &[f32], i: Self::U) -> Self;
     /// `table[i]` per integer lane (bounds-checked).
@@ -189,6 +193,14 @@ impl Lane for f32 {
     #[inline(always)]
     fn u_eq(a: u32, b: u32) -> bool {
         a == b
+    }
+    #[inline(always)]
+    fn u_min(a: u32, b: u32) -> u32 {
+        a.min(b)
+    }
+    #[inline(always)]
+    fn u_select(m: bool, a: u32, b: u32) -> u32 {
+        if m { a } else { b }
     }
     #[inline(always)]
     fn gather(table: &[f32], i: u32) -> Self {
@@ -356,6 +368,14 @@ impl Lane for f32x8 {
     #[inline(always)]
     fn u_eq(a: u32x8, b: u32x8) -> f32x8 {
         f32x8::from_bits(a.simd_eq(b))
+    }
+    #[inline(always)]
+    fn u_min(a: u32x8, b: u32x8) -> u32x8 {
+        a.min(b)
+    }
+    #[inline(always)]
+    fn u_select(m: f32x8, a: u32x8, b: u32x8) -> u32x8 {
+        m.to_bits().select(a, b)
     }
     #[inline(always)]
     fn gather(table: &[f32], i: u32x8) -> Self {

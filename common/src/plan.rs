@@ -28,6 +28,10 @@ pub const FLUSH_BELOW: f32 = 1.0e-20;
 /// smallest kernel. 2^-16: the quotient's error from u's rounding stays below 0.1 %.
 pub const OCCLUSION_EPS: f32 = 1.0 / 65536.0;
 
+/// Distance penumbra: the level plane's value at a pixel with no occluder (every level is
+/// smaller, so a minimum over a footprint ignores it).
+pub const LIT_LEVEL: u32 = u32::MAX;
+
 /// One transfer-function entry: colour, slab opacity, and per-channel attenuation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TfEntry {
@@ -394,6 +398,16 @@ impl RenderPlan {
     /// Floats per light-buffer row: lights × planes per light × grid width.
     pub fn light_row_len(&self) -> usize {
         self.lights.len() * self.planes_per_light() * self.grid_width as usize
+    }
+
+    /// Entries per row of the level plane (distance penumbra: one per light and grid column; else
+    /// 1, unused).
+    pub fn level_row_len(&self) -> usize {
+        if self.depth_planes() > 0 {
+            self.lights.len() * self.grid_width as usize
+        } else {
+            1
+        }
     }
 
     /// Depth planes per light: 1 (the occluder depth D) with the distance penumbra, else 0.

@@ -8,7 +8,7 @@
 use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
 use convshadow_common::lane::{Lane, MAX_LANES};
-use convshadow_common::plan::OCCLUSION_EPS;
+use convshadow_common::plan::{LIT_LEVEL, OCCLUSION_EPS};
 
 /// Value read outside the buffer: the unoccluded light.
 pub const OUTSIDE: f32 = 1.0;
@@ -216,11 +216,15 @@ pub struct TapColumns {
     pub offset: Vec<u32>,
     /// Per phase, the taps' `[min dx, max dx, min dy, max dy]` (the top-left corners' extent).
     pub extent: Vec<[i32; 4]>,
+    /// `dy · level_stride + dx` (wrapping): the taps' offsets in the level plane (distance
+    /// penumbra).
+    pub level_offset: Vec<u32>,
 }
 
 impl TapColumns {
-    /// The columns of `table` for light buffers with rows `row_stride` apart.
-    pub fn new(table: &KernelTable, row_stride: usize) -> TapColumns {
+    /// The columns of `table` for light buffers with rows `row_stride` apart and level planes with
+    /// rows `level_stride` apart.
+    pub fn new(table: &KernelTable, row_stride: usize, level_stride: usize) -> TapColumns {
         // Every row of every level: the per-lane gather picks a row per lane.
         let (pc, n) = (table.rows() as usize, table.taps_per_phase as usize);
         TapColumns {
@@ -232,6 +236,12 @@ impl TapColumns {
                 .map(|j| {
                     let t = &table.taps[(j % pc) * n + j / pc];
                     (t.dy as i64 * row_stride as i64 + t.dx as i64) as i32 as u32
+                })
+                .collect(),
+            level_offset: (0..n * pc)
+                .map(|j| {
+                    let t = &table.taps[(j % pc) * n + j / pc];
+                    (t.dy as i64 * level_stride as i64 + t.dx as i64) as i32 as u32
                 })
                 .collect(),
             extent: (0..pc as u32)
@@ -317,30 +327,14 @@ pub fn gather_per_lane<L: Lane>(
     }
 }
 
-/// Distance penumbra: the rows of `table` that pixels x0.. of row y gather through in slab
-/// `slab`, given each lane's phase within a level. From the light's previous planes at the pixel
-/// itself: the occluded light `u = channels − Σ I` and the occlusion-weighted depth `D` give the
-/// mean occluder depth `z̄ = D / u` (slabs); the distance `h = slab − z̄` is rounded (`+ ½`,
-/// truncated) and clamped to 1..=slabs, and [`KernelTable::level_of`] maps it to a level. A pixel
-/// with `u ≤ OCCLUSION_EPS` has no occluder to speak of and takes the smallest kernel (h = 1).
+/// Distance penumbra: the level a pixel gathers through in slab `slab`, from its light after
+/// the previous slab: the occluded light `occluded = channels − Σ I` and the occlusion-weighted
+/// depth `depth` give the mean occluder depth `z̄ = depth / occluded` (slabs); the distance
+/// `h = slab − z̄` is rounded (`+ ½`, truncated) and clamped to 1..=slabs, and
+/// [`KernelTable::level_of`] maps it to a level. [`LIT_LEVEL`] where `occluded ≤ OCCLUSION_EPS`:
+/// no occluder to speak of (`depth / occluded` would be rounding noise).
 #[inline(always)]
-pub fn distance_rows<L: Lane>(
-    planes: &LightPlanes<'_>,
-    table: &KernelTable,
-    slab: u32,
-    phase: L::U,
-    x0: i32,
-    y: i32,
-) -> L::U {
-    let ch = planes.light_channels;
-    let w = planes.width as usize;
-    let at = planes.base + y as usize * planes.row_stride + x0 as usize;
-    let mut lit = L::load(planes.data, at);
-    for c in 1..ch {
-        lit = lit + L::load(planes.data, at + c * w);
-    }
-    let depth = L::load(planes.data, at + ch * w);
-    let occluded = L::splat(ch as f32) - lit;
+pub fn pixel_level<L: Lane>(table: &KernelTable, occluded: L, depth: L, slab: u32) -> L::U {
     let one = L::splat(1.0);
     let has_occluder = occluded.gt(L::splat(OCCLUSION_EPS));
     let mean_depth = depth / L::select(has_occluder, occluded, one);
@@ -350,7 +344,118 @@ pub fn distance_rows<L: Lane>(
     let h = L::select(h.gt(top), top, h);
     let h = L::select(has_occluder, h, one).trunc_u32();
     let level = L::u_gather(&table.level_of, h);
-    L::u_add(L::u_mul(level, L::u_splat(table.phase_count)), phase)
+    L::u_select(has_occluder, level, L::u_splat(LIT_LEVEL))
+}
+
+/// One light's level plane of the previous slab (distance penumbra), as the gather reads it.
+#[derive(Clone, Copy)]
+pub struct LevelPlane<'a> {
+    /// The whole plane (all rows, all lights).
+    pub data: &'a [u32],
+    /// Index of this light's pixel (0, 0) in `data`.
+    pub base: usize,
+    /// Distance between rows in `data`.
+    pub row_stride: usize,
+    /// Grid width.
+    pub width: i32,
+    /// Grid height.
+    pub height: i32,
+}
+
+/// Distance penumbra: the rows that pixels x0.. of row y gather through. A pixel takes the
+/// smallest level among its own and those of every pixel its own level's kernel reads (level 0's
+/// kernel when it has no occluder; pixels without one do not count): the kernel of the nearest
+/// occluder in reach. So a fresh shadow's lit neighbours take its small kernel (a gather with a
+/// larger one would erode it), and a pixel in a distant occluder's penumbra next to a surface
+/// that was just crossed does not blur the darkness behind that surface over itself.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn distance_rows<L: Lane>(
+    levels: &LevelPlane<'_>,
+    table: &KernelTable,
+    columns: &TapColumns,
+    phase: L::U,
+    slabs: u32,
+    slab: u32,
+    shift: [i32; 2],
+    x0: i32,
+    y: i32,
+    interior: bool,
+) -> L::U {
+    let lit = L::u_splat(LIT_LEVEL);
+    let zero = L::u_splat(0);
+    let at = levels.base + y as usize * levels.row_stride + x0 as usize;
+    let own = L::u_gather(&levels.data[at..], L::u_iota(0));
+    let own_rows = level_rows::<L>(
+        table,
+        L::u_select(L::u_eq(own, lit), zero, own),
+        phase,
+        slabs,
+        slab,
+    );
+    let mut nearest = own;
+    let n = table.taps_per_phase as usize;
+    let pc = columns.phase_count;
+    let rs = levels.row_stride;
+    if interior {
+        let lane_shift = L::u_add(
+            L::u_iota(at as u32),
+            L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
+        );
+        for k in 0..n {
+            let rel = L::u_gather(&columns.level_offset[k * pc..(k + 1) * pc], own_rows);
+            let top_left = L::u_add(lane_shift, rel);
+            let below = L::u_add(top_left, L::u_splat(rs as u32));
+            for corner in [
+                top_left,
+                L::u_add(top_left, L::u_splat(1)),
+                below,
+                L::u_add(below, L::u_splat(1)),
+            ] {
+                nearest = L::u_min(nearest, L::u_gather(levels.data, corner));
+            }
+        }
+    } else {
+        let mut rows = [0u32; MAX_LANES];
+        let mut near = [0u32; MAX_LANES];
+        L::u_store(own_rows, &mut rows);
+        L::u_store(nearest, &mut near);
+        let fetch = |x: i32, y: i32| {
+            if x >= 0 && y >= 0 && x < levels.width && y < levels.height {
+                levels.data[levels.base + y as usize * rs + x as usize]
+            } else {
+                LIT_LEVEL
+            }
+        };
+        for i in 0..L::LANES {
+            for t in table.phase(rows[i]) {
+                let (sx, sy) = (x0 + i as i32 + t.dx + shift[0], y + t.dy + shift[1]);
+                for (cx, cy) in [(sx, sy), (sx + 1, sy), (sx, sy + 1), (sx + 1, sy + 1)] {
+                    near[i] = near[i].min(fetch(cx, cy));
+                }
+            }
+        }
+        nearest = L::u_gather(&near, L::u_iota(0));
+    }
+    let nearest = L::u_select(L::u_eq(nearest, lit), zero, nearest);
+    level_rows::<L>(table, nearest, phase, slabs, slab)
+}
+
+/// The rows of levels `level` at the lanes' phases: `level · phase_count + phase`, or for a
+/// scheduled kernel the level's phase of slab `slab`, `slab_phase[level · slabs + slab]`.
+#[inline(always)]
+fn level_rows<L: Lane>(
+    table: &KernelTable,
+    level: L::U,
+    phase: L::U,
+    slabs: u32,
+    slab: u32,
+) -> L::U {
+    let rows = L::u_mul(level, L::u_splat(table.phase_count));
+    match table.phase_mode {
+        PhaseMode::Schedule => schedule_rows::<L>(table, rows, slabs, slab),
+        _ => L::u_add(rows, phase),
+    }
 }
 
 /// Distance penumbra with a scheduled kernel: `rows` (level · phase_count, phase 0) moved to the

@@ -24,8 +24,9 @@
 //!   between the model and physically based transport. Detail media are marched with a step
 //!   given to [`Reference::new`] (by default an eighth of the slab thickness),
 //!   constant media are integrated in closed form. Opacity 1 is an infinite extinction: any
-//!   positive length blocks the light. Crossings closer than 1e-9 (relative) to the shading
-//!   point are ignored, so a ray does not hit the surface it starts on.
+//!   positive length blocks the light. Crossings closer than 2^-16 (relative) to the
+//!   shading point are ignored, so a ray does not hit the surface it starts on (a crossing's
+//!   shading point has the LDI's f32 depth, a few ulps off the surface).
 //!
 //! - **Patterned lights**: a ray's transmittance is multiplied by the light's initial light
 //!   (its pattern, as the plan sampled it at pixel centres; bilinear between them, 1 outside the
@@ -289,7 +290,11 @@ impl<'a> Reference<'a> {
         self.candidates([p[0], p[1]], end, &mut scratch.tris);
         let d = [dir[0], dir[1], -1.0];
         scratch.hits.clear();
-        let tol = 1e-9 * (1.0 + p[2]);
+        // A crossing's shading point has the LDI's f32 depth (a plane equation evaluated in f32:
+        // a few ulps off its surface, more along a ray that leaves a sloped surface at a shallow
+        // angle): a surface that close is the one the point lies on, else an opaque receiver
+        // whose depth rounded inwards would shadow itself completely.
+        let tol = (1.0 + p[2].abs()) / 65_536.0;
         for &i in &scratch.tris {
             let t = &self.tris[i as usize];
             if let Some(u) = intersect(p, d, t)
@@ -440,7 +445,8 @@ impl<'a> Reference<'a> {
                 if xi < 0 || yi < 0 || xi >= w || yi >= h {
                     1.0
                 } else {
-                    f64::from(buf[yi as usize * row_len + (l * ch + c) * w as usize + xi as usize])
+                    let plane = plan.light_plane(l, c);
+                    f64::from(buf[yi as usize * row_len + plane * w as usize + xi as usize])
                 }
             };
             let top = at(x0, y0) * (1.0 - ax) + at(x0 + 1, y0) * ax;

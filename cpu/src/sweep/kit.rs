@@ -25,9 +25,19 @@ pub(crate) struct SlabContext<'a> {
     pub front: f32,
 }
 
+/// What the previous slab left that a pixel's gather reads beyond its own row: the light
+/// buffer and (distance penumbra) the level plane.
+#[derive(Clone, Copy)]
+pub(crate) struct Previous<'a> {
+    pub light: &'a [f32],
+    pub levels: &'a [u32],
+}
+
 /// One row's mutable per-pixel state. Colours are planar per row: `[R…][G…][B…]`.
 pub(crate) struct RowState<'a> {
     pub light: &'a mut [f32],
+    /// Distance penumbra: each light's level per pixel for the next slab (`[light][x]`).
+    pub levels: &'a mut [u32],
     pub next: &'a mut [u32],
     pub inside: &'a mut [u32],
     pub color: &'a mut [f32],

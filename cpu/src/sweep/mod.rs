@@ -30,9 +30,9 @@ use convshadow_common::raster::RasterSetup;
 use rayon::prelude::*;
 
 use crate::composite::finish;
-use crate::kernels::TapColumns;
+use crate::kernels::{TapColumns, pixel_level};
 use crate::ldi::Ldi;
-use kit::{Reach, RowState, SlabContext};
+use kit::{Previous, Reach, RowState, SlabContext};
 use quiet::{QuietRow, QuietSetup};
 use rows::{sweep_row_scalar, sweep_row_simd};
 
@@ -87,6 +87,10 @@ pub fn sweep(
 struct PixelState {
     prev: Vec<f32>,
     cur: Vec<f32>,
+    /// Distance penumbra: each light's level per pixel for the next slab (ping-pong like the
+    /// light; see `kernels::distance_rows`). One unused entry per row otherwise.
+    levels_prev: Vec<u32>,
+    levels_cur: Vec<u32>,
     next: Vec<u32>,
     inside: Vec<u32>,
     color: Vec<f32>,
@@ -104,7 +108,10 @@ impl PixelState {
             Some(v) => v.to_vec(),
             None => plan.unlit_light_buffer(),
         };
+        let levels_prev = initial_levels(plan, &prev);
         PixelState {
+            levels_cur: vec![0u32; levels_prev.len()],
+            levels_prev,
             prev,
             cur: vec![0.0f32; row_len * h],
             next: ldi.offsets[..w * h].to_vec(),
@@ -113,6 +120,33 @@ impl PixelState {
             alpha: vec![0.0f32; w * h],
         }
     }
+}
+
+/// The level plane before the first slab (distance penumbra): from the initial light (a pattern's
+/// dark parts are occluders at depth 0).
+fn initial_levels(plan: &RenderPlan, light: &[f32]) -> Vec<u32> {
+    let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
+    let lrl = plan.level_row_len();
+    if plan.depth_planes() == 0 {
+        return vec![0u32; lrl * h];
+    }
+    let (ch, row_len) = (plan.channels as usize, plan.light_row_len());
+    let mut levels = vec![0u32; lrl * h];
+    for y in 0..h {
+        for (l, light_plan) in plan.lights.iter().enumerate() {
+            for x in 0..w {
+                let at = |c: usize| light[y * row_len + plan.light_plane(l, c) * w + x];
+                let mut lit = 0.0f32;
+                for c in 0..ch {
+                    lit += at(c);
+                }
+                let occluded = ch as f32 - lit;
+                levels[y * lrl + l * w + x] =
+                    pixel_level::<f32>(&light_plan.table, occluded, at(ch), 0);
+            }
+        }
+    }
+    levels
 }
 
 /// SIMD path: per-row spans of the light that is not exactly 1 / not exactly 0, and per-chunk
@@ -152,20 +186,25 @@ fn sweep_slab(
 ) {
     let w = ctx.plan.grid_width as usize;
     let row_len = ctx.plan.light_row_len();
-    let prev_ref = &state.prev;
+    let prev_ref = &Previous {
+        light: &state.prev,
+        levels: &state.levels_prev,
+    };
     let rows = state
         .cur
         .par_chunks_mut(row_len)
+        .zip(state.levels_cur.par_chunks_mut(ctx.plan.level_row_len()))
         .zip(state.next.par_chunks_mut(w))
         .zip(state.inside.par_chunks_mut(w))
         .zip(state.color.par_chunks_mut(w * 3))
         .zip(state.alpha.par_chunks_mut(w))
         .enumerate()
-        .map(|(y, ((((light, next), inside), color), alpha))| {
+        .map(|(y, (((((light, levels), next), inside), color), alpha))| {
             (
                 y,
                 RowState {
                     light,
+                    levels,
                     next,
                     inside,
                     color,
@@ -206,6 +245,7 @@ fn sweep_slab(
         }
     }
     std::mem::swap(&mut state.prev, &mut state.cur);
+    std::mem::swap(&mut state.levels_prev, &mut state.levels_cur);
 }
 
 /// The image: each pixel inside the guard band composited over the background by [`finish`].
@@ -251,7 +291,7 @@ pub fn sweep_with(
     let columns: Vec<TapColumns> = plan
         .lights
         .iter()
-        .map(|l| TapColumns::new(&l.table, plan.light_row_len()))
+        .map(|l| TapColumns::new(&l.table, plan.light_row_len(), plan.level_row_len()))
         .collect();
 
     for slab in 0..plan.slabs {

@@ -7,18 +7,20 @@ use std::ops::Range;
 use wide::f32x8;
 
 use super::kit::{
-    MAX_LIGHT_CHANNELS, Reach, RowState, SlabContext, jitter_row_hash, light_row_hashes,
+    MAX_LIGHT_CHANNELS, Previous, Reach, RowState, SlabContext, jitter_row_hash, light_row_hashes,
 };
 use super::quiet::{ChunkCounts, ChunkState, ChunkWork, LANES, QuietRow, RowSpans};
 use super::stage::{ChunkFn, chunk_fn};
+use crate::kernels::pixel_level;
 use crate::parity::{NO_CROSSING, advance};
+use convshadow_common::plan::LIT_LEVEL;
 
 /// Processes one row of one slab, one pixel at a time.
 pub(crate) fn sweep_row_scalar(
     ctx: &SlabContext<'_>,
     reach: &Reach,
     y: usize,
-    prev: &[f32],
+    prev: &Previous<'_>,
     mut row: RowState<'_>,
 ) {
     let w = ctx.plan.grid_width as usize;
@@ -37,7 +39,7 @@ fn sweep_pixels(
     reach: &Reach,
     y: usize,
     xs: Range<usize>,
-    prev: &[f32],
+    prev: &Previous<'_>,
     row: &mut RowState<'_>,
     hashes: (&[u32; MAX_LIGHT_CHANNELS], u32),
     spans: &mut RowSpans,
@@ -59,7 +61,7 @@ pub(crate) fn sweep_row_simd(
     ctx: &SlabContext<'_>,
     reach: &Reach,
     y: usize,
-    prev: &[f32],
+    prev: &Previous<'_>,
     mut row: RowState<'_>,
     mut quiet: Option<QuietRow<'_>>,
     counts: Option<&ChunkCounts>,
@@ -69,6 +71,17 @@ pub(crate) fn sweep_row_simd(
     let h = plan.grid_height as usize;
     let planes = plan.lights.len() * plan.channels as usize;
     let all_planes = plan.lights.len() * plan.planes_per_light();
+    let distance = plan.depth_planes() > 0;
+    // The level a dark pixel (light 0, depth 0: an occluder at depth 0) starts the next slab with.
+    let dark_levels: Vec<u32> = if distance {
+        let ch = plan.channels as f32;
+        plan.lights
+            .iter()
+            .map(|l| pixel_level::<f32>(&l.table, ch, 0.0, ctx.slab + 1))
+            .collect()
+    } else {
+        Vec::new()
+    };
     let row_hashes = light_row_hashes(ctx, y);
     let jitter_row = jitter_row_hash(ctx, y);
     let mut spans = RowSpans::EMPTY;
@@ -90,6 +103,11 @@ pub(crate) fn sweep_row_simd(
                     let v = if plan.is_depth_plane(p) { 0.0 } else { 1.0 };
                     row.light[p * w + x0..][..LANES].fill(v);
                 }
+                if distance {
+                    for l in 0..plan.lights.len() {
+                        row.levels[l * w + x0..][..LANES].fill(LIT_LEVEL);
+                    }
+                }
                 spans.record(x0, LANES, false, true);
                 continue;
             }
@@ -104,6 +122,9 @@ pub(crate) fn sweep_row_simd(
                 }
                 for p in 0..all_planes {
                     row.light[p * w + x0..][..LANES].fill(0.0);
+                }
+                for (l, level) in dark_levels.iter().enumerate() {
+                    row.levels[l * w + x0..][..LANES].fill(*level);
                 }
                 spans.record(x0, LANES, true, false);
                 moved

@@ -10,10 +10,10 @@
 use convshadow_common::kernel::PhaseMode;
 use convshadow_common::lane::{Lane, MAX_LANES};
 
-use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowState, SlabContext};
+use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowState, SlabContext};
 use crate::composite::{attenuate, composite, deepen};
 use crate::kernels::{
-    LightPlanes, distance_rows, gather, gather_per_lane, phase_at, phases, schedule_rows,
+    LevelPlane, LightPlanes, distance_rows, gather, gather_per_lane, phase_at, phases, pixel_level,
 };
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{Specular, material_at, shade, shading_depth};
@@ -23,7 +23,7 @@ pub(crate) type ChunkFn = fn(
     &SlabContext<'_>,
     usize,
     usize,
-    &[f32],
+    &Previous<'_>,
     &mut RowState<'_>,
     &[u32; MAX_LIGHT_CHANNELS],
     u32,
@@ -63,7 +63,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     ctx: &SlabContext<'_>,
     y: usize,
     x0: usize,
-    prev: &[f32],
+    prev: &Previous<'_>,
     row: &mut RowState<'_>,
     row_hashes: &[u32; MAX_LIGHT_CHANNELS],
     jitter_row: u32,
@@ -88,7 +88,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
             for (l, light) in plan.lights.iter().enumerate() {
                 let t = &light.table;
                 let planes = LightPlanes {
-                    data: prev,
+                    data: prev.light,
                     base: plan.light_plane(l, 0) * w,
                     channels: ch,
                     light_channels: ch,
@@ -117,13 +117,17 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                         PhaseMode::PerSlab => L::u_splat(uniform.unwrap_or(0)),
                         PhaseMode::Schedule => L::u_splat(0),
                     };
-                    let rows = distance_rows::<L>(&planes, t, ctx.slab, phase, x0, yi);
-                    let rows = match t.phase_mode {
-                        // A schedule's phase depends on the level: `slab_phase[level·slabs + slab]`.
-                        PhaseMode::Schedule => schedule_rows::<L>(t, rows, plan.slabs, ctx.slab),
-                        _ => rows,
+                    let levels = LevelPlane {
+                        data: prev.levels,
+                        base: l * w,
+                        row_stride: plan.level_row_len(),
+                        width: w as i32,
+                        height: plan.grid_height as i32,
                     };
                     let columns = &ctx.columns[l];
+                    let rows = distance_rows::<L>(
+                        &levels, t, columns, phase, plan.slabs, ctx.slab, shift, x0, yi, interior,
+                    );
                     let mut all = [L::splat(0.0); 4];
                     gather_per_lane(
                         &planes,
@@ -235,8 +239,15 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
             not_one = L::m_or(not_one, moved_depth);
             not_zero = L::m_or(not_zero, moved_depth);
             out.store(row.light, plan.light_plane(l, ch) * w + x0);
+            // The level this pixel starts the next slab with.
+            let occluded = L::splat(ch as f32) - lit_out;
+            let level = pixel_level::<L>(&plan.lights[l].table, occluded, out, ctx.slab + 1);
+            let mut lanes = [0u32; MAX_LANES];
+            L::u_store(level, &mut lanes);
+            row.levels[l * w + x0..][..L::LANES].copy_from_slice(&lanes[..L::LANES]);
         }
     }
+
     ChunkOutcome {
         not_one: L::m_any(not_one),
         not_zero: L::m_any(not_zero),
@@ -338,7 +349,7 @@ mod tests {
 
     use convshadow_common::geometry::SceneGeometry;
     use convshadow_common::hash::unit_float;
-    use convshadow_common::plan::RenderPlan;
+    use convshadow_common::plan::{LIT_LEVEL, RenderPlan};
     use convshadow_common::scene::Scene;
     use wide::f32x8;
 
@@ -362,6 +373,7 @@ mod tests {
     #[derive(Clone)]
     struct Row {
         light: Vec<f32>,
+        levels: Vec<u32>,
         next: Vec<u32>,
         inside: Vec<u32>,
         color: Vec<f32>,
@@ -372,6 +384,7 @@ mod tests {
         fn state(&mut self) -> RowState<'_> {
             RowState {
                 light: &mut self.light,
+                levels: &mut self.levels,
                 next: &mut self.next,
                 inside: &mut self.inside,
                 color: &mut self.color,
@@ -392,7 +405,12 @@ mod tests {
                 return Some(format!("{name}[{i}]: {} vs {}", u[i], v[i]));
             }
         }
-        for (name, u, v) in [("next", &a.next, &b.next), ("inside", &a.inside, &b.inside)] {
+        let ints = [
+            ("levels", &a.levels, &b.levels),
+            ("next", &a.next, &b.next),
+            ("inside", &a.inside, &b.inside),
+        ];
+        for (name, u, v) in ints {
             if let Some(i) = (0..u.len()).find(|&i| u[i] != v[i]) {
                 return Some(format!("{name}[{i}]: {} vs {}", u[i], v[i]));
             }
@@ -401,11 +419,14 @@ mod tests {
     }
 
     /// The default scene, small: two coloured lights (six light channels), noise and specular
-    /// materials, three meshes, through `kernel`.
-    fn plan_of(kernel: &str) -> (Scene, SceneGeometry, Ldi, RenderPlan) {
+    /// materials, three meshes, through `kernel` with `penumbra` ("iterated" or "distance").
+    fn plan_of(kernel: &str, penumbra: &str) -> (Scene, SceneGeometry, Ldi, RenderPlan) {
         let text = include_str!("../../../scenes/default.toml")
             .replace("width = 512\nheight = 512", "width = 37\nheight = 19")
-            .replace("slabs = 512", "slabs = 24")
+            .replace(
+                "slabs = 512",
+                &format!("slabs = 24\npenumbra = \"{penumbra}\""),
+            )
             .replace("kernel = \"ellipse2\"", &format!("kernel = \"{kernel}\""));
         let scene = Scene::parse(&text, "lanes", Path::new(".")).expect("scene");
         let g = SceneGeometry::build(&scene).expect("geometry");
@@ -417,8 +438,8 @@ mod tests {
     /// Runs `eight` (an 8-lane stage) and the 1-lane stage eight times on the same random
     /// inputs, at every chunk position of some rows of every slab; returns the first
     /// difference.
-    fn compare_lanes(kernel: &str, seed: u32, eight: ChunkFn) -> Option<String> {
-        let (_scene, g, ldi, plan) = plan_of(kernel);
+    fn compare_lanes(kernel: &str, penumbra: &str, seed: u32, eight: ChunkFn) -> Option<String> {
+        let (_scene, g, ldi, plan) = plan_of(kernel, penumbra);
         let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
         let row_len = plan.light_row_len();
         let meshes = plan.mesh_material.len() as u32;
@@ -427,12 +448,24 @@ mod tests {
         let one: ChunkFn = chunk_fn::<f32>(planes);
         let reach = Reach::of(&plan);
         let mut rng = TestRng::new(seed);
-        let prev: Vec<f32> = (0..row_len * h).map(|_| value(&mut rng)).collect();
+        let light: Vec<f32> = (0..row_len * h).map(|_| value(&mut rng)).collect();
+        // Distance penumbra: each pixel's level any of the table's, or none (one in four).
+        let lrl = plan.level_row_len();
+        let levels: Vec<u32> = (0..lrl * h)
+            .map(|_| match rng.below(4) {
+                0 => LIT_LEVEL,
+                _ => rng.below(plan.lights[0].table.levels),
+            })
+            .collect();
+        let prev = Previous {
+            light: &light,
+            levels: &levels,
+        };
         let mut counts = [0u32; 9];
         let columns: Vec<TapColumns> = plan
             .lights
             .iter()
-            .map(|l| TapColumns::new(&l.table, row_len))
+            .map(|l| TapColumns::new(&l.table, row_len, lrl))
             .collect();
         for slab in 0..plan.slabs {
             let ctx = SlabContext {
@@ -452,6 +485,7 @@ mod tests {
                 let fixed = 1 << rng.below(meshes);
                 let row = Row {
                     light: vec![f32::NAN; row_len],
+                    levels: vec![7; lrl],
                     next: (0..w)
                         .map(|x| {
                             let (a, b) = (ldi.offsets[y * w + x], ldi.offsets[y * w + x + 1]);
@@ -478,7 +512,9 @@ mod tests {
                         one(&ctx, y, x, &prev, &mut b.state(), rh, jr, interior, None);
                     }
                     if let Some(d) = mismatch(&a, &b) {
-                        return Some(format!("{kernel}, slab {slab}, row {y}, x0 {x0}: {d}"));
+                        return Some(format!(
+                            "{kernel} {penumbra}, slab {slab}, row {y}, x0 {x0}: {d}"
+                        ));
                     }
                     let shaded = (0..8).filter(|&i| a.alpha[x0 + i] != row.alpha[x0 + i]);
                     counts[shaded.count()] += 1;
@@ -495,13 +531,15 @@ mod tests {
 
     #[test]
     fn eight_lanes_and_one_lane_give_the_same_bits() {
-        // Per-pixel, per-slab and scheduled phases.
+        // Per-pixel, per-slab and scheduled phases, both penumbra models.
         for (k, kernel) in ["ellipse2", "ellipse2:slab", "gaussian:7", "poisson8"]
             .iter()
             .enumerate()
         {
-            let eight = chunk_fn::<f32x8>(6);
-            assert_eq!(compare_lanes(kernel, 17 + k as u32, eight), None);
+            for penumbra in ["iterated", "distance"] {
+                let eight = chunk_fn::<f32x8>(6);
+                assert_eq!(compare_lanes(kernel, penumbra, 17 + k as u32, eight), None);
+            }
         }
     }
 
@@ -514,7 +552,8 @@ mod tests {
             row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
             r
         };
-        let d = compare_lanes("ellipse2", 3, wrong_lane).expect("the flipped bit is found");
+        let d =
+            compare_lanes("ellipse2", "distance", 3, wrong_lane).expect("the flipped bit is found");
         assert!(d.contains("light["), "{d}");
     }
 }
