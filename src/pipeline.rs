@@ -253,7 +253,8 @@ pub struct MemoryNeed {
     /// The LDI's per-pixel arrays.
     pub ldi_pixels: u64,
     /// The sweep's two light buffers per light and plane (ping-pong), f32: a plane per channel
-    /// and, with the distance penumbra, the occluder-depth plane.
+    /// and, with the distance penumbra, the occluder-depth plane; then (distance penumbra) the
+    /// two level planes per light, u32.
     pub light_buffers: u64,
     /// The sweep's per-pixel state: layer cursor, inside bits, colour and alpha.
     pub sweep_state: u64,
@@ -316,12 +317,13 @@ impl MemoryNeed {
         let grid_pixels = guard.grid_pixels(scene.image.width, scene.image.height);
         let image_pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
         let channels: u64 = if scene.is_monochrome() { 1 } else { 3 };
-        // The distance penumbra's depth plane per light (`RenderPlan::depth_planes`).
+        // The distance penumbra's depth plane per light (`RenderPlan::depth_planes`), and its
+        // level plane (4 bytes a pixel too): two planes more per light.
         let depth_planes = u64::from(scene.sweep.penumbra == Penumbra::Distance);
         let lights = scene.lights.len() as u64;
         let (light_buffers, sweep_state, output) = if sweep {
             (
-                2 * lights * (channels + depth_planes) * 4 * grid_pixels,
+                2 * lights * (channels + 2 * depth_planes) * 4 * grid_pixels,
                 (4 + 4 + 12 + 4) * grid_pixels,
                 (12 + 3 + 3) * image_pixels,
             )
@@ -440,7 +442,8 @@ impl MemoryNeed {
 /// once the plan is built: they grow with the distance penumbra's levels (one tap table per
 /// level, about 100 at 512 slabs). On the host the taps (24 bytes each) and the level tables
 /// (`level_of` and the per-level schedule, 4 bytes an entry); the CPU sweep adds its per-tap
-/// columns (16 bytes of weights and a 4-byte offset a tap); the GPU a device copy of the taps and
+/// columns (16 bytes of weights, a 4-byte light offset and a 4-byte level-plane offset a tap);
+/// the GPU a device copy of the taps and
 /// level tables (gpu/src/sweep.rs `light_tables`).
 pub fn kernel_table_bytes(plan: &RenderPlan, backend: Backend) -> u64 {
     let (mut taps, mut words) = (0u64, 0u64);
@@ -452,7 +455,7 @@ pub fn kernel_table_bytes(plan: &RenderPlan, backend: Backend) -> u64 {
     let host = 24 * taps + 4 * words;
     match backend {
         Backend::Gpu => 2 * host,
-        _ => host + 20 * taps,
+        _ => host + 24 * taps,
     }
 }
 
@@ -710,18 +713,19 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_distance_penumbra_counts_a_depth_plane_per_light() {
+    fn the_distance_penumbra_counts_a_depth_and_a_level_plane_per_light() {
         // The default scene: two coloured lights, three channels each; the distance penumbra
-        // adds one plane per light, so its light buffers are 4/3 of the iterated ones.
+        // adds a depth plane and a level plane (4 bytes a pixel each) per light, so its light
+        // buffers are 5/3 of the iterated ones.
         let mut scene = Scene::default_scene();
         let g = GuardBand::default();
         let iterated = MemoryNeed::for_backend(&scene, g, true, Backend::Gpu);
         scene.sweep.penumbra = Penumbra::Distance;
         let distance = MemoryNeed::for_backend(&scene, g, true, Backend::Gpu);
-        assert_eq!(3 * distance.light_buffers, 4 * iterated.light_buffers);
+        assert_eq!(3 * distance.light_buffers, 5 * iterated.light_buffers);
         assert_eq!(
             distance.light_buffers,
-            2 * 2 * (3 + 1) * 4 * iterated.grid_pixels
+            2 * 2 * (3 + 1 + 1) * 4 * iterated.grid_pixels
         );
         // Both copies count on the GPU: the host's and the device's.
         assert_eq!(
@@ -747,9 +751,9 @@ mod tests {
         // 48 slabs: levels 1..=16 of one slab, 17..=31 of one, 32..=47 of two, 48 alone.
         assert_eq!(r.plan.lights[0].table.levels, 16 + 15 + 8 + 1);
         let tables = kernel_table_bytes(&r.plan, Backend::Cpu);
-        // At least every level's taps, each of 24 + 20 bytes.
+        // At least every level's taps, each of 24 + 24 bytes.
         let min_taps: u64 = r.plan.lights.len() as u64 * 40;
-        assert!(tables >= min_taps * 44, "{tables}");
+        assert!(tables >= min_taps * 48, "{tables}");
         let need = MemoryNeed::for_backend(&scene, r.plan.guard, true, Backend::Cpu).total();
         let exact = need + r.ldi.fragments * BYTES_PER_FRAGMENT + tables;
         let err = render(&scene, &req(exact - 1))
@@ -770,7 +774,7 @@ mod tests {
             .sum();
         assert_eq!(
             kernel_table_bytes(&r.plan, Backend::Gpu),
-            2 * (tables - 20 * taps)
+            2 * (tables - 24 * taps)
         );
     }
 

@@ -329,6 +329,8 @@ pub mod slot {
         NORMALS = "normals", 28;
         LIGHT_COLORS = "light_colors", 29;
         LEVEL_TABLE = "level_table", 30;
+        LEVEL_PREV = "level_prev", 31;
+        LEVEL_CUR = "level_cur", 32;
     }
 }
 

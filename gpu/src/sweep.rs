@@ -9,11 +9,12 @@
 //! grid pixel; the two light buffers ping-pong; the slab index reaches the shader through a small
 //! uniform filled by a buffer copy before each dispatch, so many slabs go in one submission.
 
+use convshadow_common::kernel::KernelTable;
 use convshadow_common::kernel::PhaseMode;
 use convshadow_common::ldi::Ldi;
 use convshadow_common::noise::{DetailKind, PERLIN4_SCALE};
 use convshadow_common::plan::{
-    FLUSH_BELOW, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE,
+    FLUSH_BELOW, LIT_LEVEL, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE,
 };
 use convshadow_common::raster::RasterSetup;
 use convshadow_common::scene::MAX_MESHES;
@@ -35,9 +36,9 @@ const SLABS_PER_SUBMIT: u32 = 32;
 /// The sweep's workgroup edge (`@workgroup_size(8, 8)`).
 const TILE: u32 = 8;
 /// Storage buffers the `sweep_slab` entry point binds (the two light buffers and every table of
-/// [`slab_groups`]); checked against the adapter's per-stage limit before the pipeline is made
+/// [`slab_groups`], and the two level planes); checked against the adapter's per-stage limit before the pipeline is made
 /// (lavapipe allows 32), and against the WGSL by a test.
-const SWEEP_STORAGE_BUFFERS: u32 = 19;
+const SWEEP_STORAGE_BUFFERS: u32 = 21;
 
 /// Everything the sweep reads besides the LDI and the light buffers, as the shader's structs.
 struct Tables {
@@ -313,10 +314,61 @@ fn grid_size(plan: &RenderPlan) -> Result<GridSize, GpuError> {
     })
 }
 
+/// `convshadow_cpu::kernels::pixel_level` for one pixel (the same f32 operations in the same
+/// order; the GPU's `pixel_level` in kernels.wgsl too): the level of a pixel whose light has the
+/// occluded part `occluded` and the occlusion-weighted depth `depth`, for slab `slab`;
+/// [`LIT_LEVEL`] without an occluder.
+fn pixel_level(table: &KernelTable, occluded: f32, depth: f32, slab: u32) -> u32 {
+    let has_occluder = occluded > OCCLUSION_EPS;
+    let mean_depth = depth / if has_occluder { occluded } else { 1.0 };
+    let mut h = (slab as f32 - mean_depth) + 0.5;
+    let top = table.level_of.len().saturating_sub(1) as f32;
+    // Compare and select, as the lanes do (a NaN passes both unchanged).
+    if h < 1.0 {
+        h = 1.0;
+    }
+    if h > top {
+        h = top;
+    }
+    let h = if has_occluder { h } else { 1.0 };
+    let level = table.level_of[h as i32 as u32 as usize];
+    if has_occluder { level } else { LIT_LEVEL }
+}
+
+/// The level planes before the first slab (distance penumbra), `[row][light][x]`, as the CPU's
+/// `initial_levels`: from the initial light (a pattern's dark parts are occluders at depth 0),
+/// channels summed left to right from 0. One unused word per row with the iterated penumbra.
+fn initial_levels(plan: &RenderPlan, light: &[u32]) -> Vec<u32> {
+    let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
+    let lrl = plan.level_row_len();
+    let mut levels = vec![0u32; lrl * h];
+    if plan.depth_planes() == 0 {
+        return levels;
+    }
+    let (ch, row_len) = (plan.channels as usize, plan.light_row_len());
+    for y in 0..h {
+        for (l, light_plan) in plan.lights.iter().enumerate() {
+            for x in 0..w {
+                let at =
+                    |c: usize| f32::from_bits(light[y * row_len + plan.light_plane(l, c) * w + x]);
+                let mut lit = 0.0f32;
+                for c in 0..ch {
+                    lit += at(c);
+                }
+                let occluded = ch as f32 - lit;
+                levels[y * lrl + l * w + x] = pixel_level(&light_plan.table, occluded, at(ch), 0);
+            }
+        }
+    }
+    levels
+}
+
 /// Every device buffer the sweep binds or copies from.
 struct SweepBuffers {
     light_a: wgpu::Buffer,
     light_b: wgpu::Buffer,
+    level_a: wgpu::Buffer,
+    level_b: wgpu::Buffer,
     cursors: wgpu::Buffer,
     accum: wgpu::Buffer,
     offsets: wgpu::Buffer,
@@ -361,8 +413,12 @@ fn upload_buffers(
             .collect(),
     };
     let light_a = upload(ctx, "light", &initial, true)?;
+    let levels = initial_levels(plan, &initial);
     drop(initial);
     let light_b = zeroed(ctx, "light", light_words)?;
+    let level_a = upload(ctx, "level plane", &levels, false)?;
+    let level_b = zeroed(ctx, "level plane", levels.len() as u64)?;
+    drop(levels);
     let cursors: Vec<Cursor> = ldi.offsets[..pixels as usize]
         .iter()
         .map(|&o| Cursor { next: o, inside: 0 })
@@ -399,6 +455,8 @@ fn upload_buffers(
     Ok(SweepBuffers {
         light_a,
         light_b,
+        level_a,
+        level_b,
         cursors,
         accum,
         offsets,
@@ -454,7 +512,8 @@ fn sweep_pipelines(ctx: &GpuContext) -> (wgpu::ComputePipeline, wgpu::ComputePip
     (slab_pipe, finish_pipe)
 }
 
-/// The per-slab bind groups, `[even, odd]`: each reads one light buffer and writes the other.
+/// The per-slab bind groups, `[even, odd]`: each reads one light buffer and level plane and
+/// writes the other.
 fn slab_groups(
     ctx: &GpuContext,
     slab_pipe: &wgpu::ComputePipeline,
@@ -481,14 +540,16 @@ fn slab_groups(
         (slot::NORMALS, &b.normals),
         (slot::LIGHT_COLORS, &b.light_colors),
     ];
-    let group_for = |prev: &wgpu::Buffer, cur: &wgpu::Buffer| {
+    let group_for = |prev: [&wgpu::Buffer; 2], cur: [&wgpu::Buffer; 2]| {
         let mut e: Vec<(u32, &wgpu::Buffer)> = common.to_vec();
-        e.push((slot::LIGHT_PREV, prev));
-        e.push((slot::LIGHT_CUR, cur));
+        e.push((slot::LIGHT_PREV, prev[0]));
+        e.push((slot::LIGHT_CUR, cur[0]));
+        e.push((slot::LEVEL_PREV, prev[1]));
+        e.push((slot::LEVEL_CUR, cur[1]));
         bind(ctx, slab_pipe, &e)
     };
-    let even = group_for(&b.light_a, &b.light_b);
-    let odd = group_for(&b.light_b, &b.light_a);
+    let even = group_for([&b.light_a, &b.level_a], [&b.light_b, &b.level_b]);
+    let odd = group_for([&b.light_b, &b.level_b], [&b.light_a, &b.level_a]);
     [even, odd]
 }
 

@@ -47,22 +47,12 @@ fn gather(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, o
     return acc;
 }
 
-// `distance_rows` (distance penumbra): the tap row of `light` at pixel (x, y) in `slab`, from the
-// light's previous planes at the pixel itself (`base`: its plane 0's pixel (0, 0)). The occluded
-// light u = channels − Σ I and the occlusion-weighted depth D give the mean occluder depth D / u;
-// the distance h = slab − D / u is rounded (+ ½, truncated) and clamped to 1..=level_top by
-// selects, h = 1 without an occluder (u ≤ OCCLUSION_EPS); `level_table` maps h to a level.
-// `phase`: the pixel's phase within a level (PHASE_PER_PIXEL, PHASE_PER_SLAB); a schedule's phase
-// is the level's own, `slab_phase[level · slabs + slab]`. The CPU's operation order throughout.
-fn distance_row(light: LightHeader, base: u32, slab: u32, phase: u32, x: u32, y: u32) -> u32 {
-    let ch = globals.channels;
-    let at = base + y * globals.row_len + x;
-    var lit = light_prev[at];
-    for (var c = 1u; c < ch; c++) {
-        lit = lit + light_prev[at + c * globals.grid_w];
-    }
-    let depth = light_prev[at + ch * globals.grid_w];
-    let occluded = f32(ch) - lit;
+// `pixel_level` (distance penumbra): the level of a pixel whose light, after a slab, has the
+// occluded part `occluded` (channels − Σ I) and the occlusion-weighted depth `depth`, for slab
+// `slab`: the mean occluder depth depth / occluded, the distance h = slab − depth / occluded
+// rounded (+ ½, truncated) and clamped to 1..=level_top by selects, `level_of[h]` from
+// `level_table`; LIT_LEVEL without an occluder (occluded ≤ OCCLUSION_EPS). The CPU's order.
+fn pixel_level(light: LightHeader, occluded: f32, depth: f32, slab: u32) -> u32 {
     let has_occluder = occluded > globals.occlusion_eps;
     let mean_depth = depth / select(1.0, occluded, has_occluder);
     var h = (f32(slab) - mean_depth) + 0.5;
@@ -72,9 +62,46 @@ fn distance_row(light: LightHeader, base: u32, slab: u32, phase: u32, x: u32, y:
     h = select(1.0, h, has_occluder);
     // h is in [1, level_top] here (finite), where u32() truncates as Rust's `as i32 as u32` does.
     let level = level_table[light.level_of + u32(h)];
-    var p = phase;
+    return select(LIT_LEVEL, level, has_occluder);
+}
+
+// `level_rows`: the tap row of `level` at `phase`, or for a scheduled kernel the level's own
+// phase of `slab` (`slab_phase[level · slabs + slab]`).
+fn level_row(light: LightHeader, level: u32, phase: u32, slab: u32) -> u32 {
     if light.phase_mode == PHASE_SCHEDULE {
-        p = level_table[light.level_phases + level * globals.slabs + slab];
+        return level * light.phase_count + level_table[light.level_phases + level * globals.slabs + slab];
     }
-    return level * light.phase_count + p;
+    return level * light.phase_count + phase;
+}
+
+// Light `base`'s level plane of the previous slab at (x, y) (`base`: the light's pixel (0, 0),
+// rows `lights · grid_w` apart); LIT_LEVEL beyond the grid.
+fn fetch_level(base: u32, x: i32, y: i32) -> u32 {
+    if x >= 0 && y >= 0 && x < i32(globals.grid_w) && y < i32(globals.grid_h) {
+        return level_prev[base + u32(y) * globals.lights * globals.grid_w + u32(x)];
+    }
+    return LIT_LEVEL;
+}
+
+// `distance_rows` (distance penumbra): the tap row of light `l` at pixel (x, y) in `slab`. The
+// pixel's own level (level 0's when it has none) gives a row; the smallest level among its own
+// and the levels at the four corners of every tap of that row (slab shift included, padding taps
+// too) is the nearest occluder's in reach, whose row (level 0's when there is none) the pixel
+// gathers through. `phase`: the pixel's phase within a level (PHASE_PER_PIXEL, PHASE_PER_SLAB).
+fn distance_row(light: LightHeader, l: u32, slab: u32, phase: u32, shift: vec2<i32>, x: u32, y: u32) -> u32 {
+    let base = l * globals.grid_w;
+    let own = level_prev[base + y * globals.lights * globals.grid_w + x];
+    let own_row = level_row(light, select(own, 0u, own == LIT_LEVEL), phase, slab);
+    var nearest = own;
+    let first = light.taps + light.taps_per_phase * own_row;
+    for (var k = 0u; k < light.taps_per_phase; k++) {
+        let t = taps[first + k];
+        let sx = i32(x) + t.dx + shift.x;
+        let sy = i32(y) + t.dy + shift.y;
+        nearest = min(nearest, fetch_level(base, sx, sy));
+        nearest = min(nearest, fetch_level(base, sx + 1, sy));
+        nearest = min(nearest, fetch_level(base, sx, sy + 1));
+        nearest = min(nearest, fetch_level(base, sx + 1, sy + 1));
+    }
+    return level_row(light, select(nearest, 0u, nearest == LIT_LEVEL), phase, slab);
 }

@@ -49,8 +49,8 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         var phase = phase_at(light, ls, row, hx);
         let base = l * planes * w;
         if distance {
-            // Each pixel's tap row from its distance to the light's mean occluder.
-            phase = distance_row(light, base, slab, phase, x, y);
+            // The tap row of the nearest occluder's level in the pixel's reach.
+            phase = distance_row(light, l, slab, phase, ls.shift, x, y);
         }
         let per_phase = light.taps_per_phase;
         let first_tap = light.taps + per_phase * phase;
@@ -118,7 +118,11 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             lit_out = lit_out + out;
         }
         if distance {
-            light_cur[row_base + (l * planes + ch) * w + x] = deepen(depth_in[l], slab, lit_in - lit_out);
+            let depth_out = deepen(depth_in[l], slab, lit_in - lit_out);
+            light_cur[row_base + (l * planes + ch) * w + x] = depth_out;
+            // The level this pixel starts the next slab with.
+            let occluded = f32(ch) - lit_out;
+            level_cur[(y * globals.lights + l) * w + x] = pixel_level(lights[l], occluded, depth_out, slab + 1u);
         }
     }
 }

@@ -181,3 +181,7 @@ struct Cursor {
 // distance in slabs (`KernelTable::level_of`) and, for scheduled kernels, each level's phase per
 // slab (`KernelTable::slab_phase`).
 @group(0) @binding(30) var<storage, read> level_table: array<u32>;
+// Distance penumbra: each light's level per pixel (`pixel_level`, LIT_LEVEL without an occluder),
+// `[row][light][x]`, ping-pong like the light buffers: the previous slab's and this slab's.
+@group(0) @binding(31) var<storage, read> level_prev: array<u32>;
+@group(0) @binding(32) var<storage, read_write> level_cur: array<u32>;
