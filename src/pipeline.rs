@@ -324,7 +324,8 @@ impl MemoryNeed {
         let (light_buffers, sweep_state, output) = if sweep {
             (
                 2 * lights * (channels + 2 * depth_planes) * 4 * grid_pixels,
-                (4 + 4 + 12 + 4) * grid_pixels,
+                // Cursor, inside bits, colour, alpha; with pre-integration the kept front value.
+                (4 + 4 + 12 + 4 + if scene.sweep.preintegration { 4 } else { 0 }) * grid_pixels,
                 (12 + 3 + 3) * image_pixels,
             )
         } else {
@@ -363,14 +364,17 @@ impl MemoryNeed {
     /// Adds the GPU backend's device buffers, estimated from the sizes `convshadow-gpu`
     /// allocates (gpu/src/sweep.rs `upload_buffers`, gpu/src/ldi.rs): for a render, the light
     /// ping-pong pair (as on the CPU), 8-byte layer cursors, 16-byte per-pixel colour, 4-byte LDI
-    /// offsets, the image (12 bytes per pixel) and its read-back copy, and the 3D textures' f32
+    /// offsets (with pre-integration 4-byte kept front values), the image (12 bytes per pixel)
+    /// and its read-back copy, and the 3D textures' f32
     /// voxels; for an LDI alone, its per-pixel counts and offsets. Fragments are then held on
     /// the host and on the device.
     pub fn on_gpu(mut self, scene: &Scene, sweep: bool) -> MemoryNeed {
         let image_pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
         self.gpu_buffers = if sweep {
             let textures = input_bytes(scene, true).saturating_sub(input_bytes(scene, false));
-            (self.light_buffers + (8 + 16 + 4) * self.grid_pixels + 2 * 12 * image_pixels)
+            // With pre-integration, 4 more bytes per pixel: the kept front value.
+            let pre = if scene.sweep.preintegration { 4 } else { 0 };
+            (self.light_buffers + (8 + 16 + 4 + pre) * self.grid_pixels + 2 * 12 * image_pixels)
                 .saturating_add(textures / 2)
         } else {
             (4 + 4) * self.grid_pixels

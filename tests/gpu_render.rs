@@ -1,10 +1,10 @@
 //! On lavapipe the GPU image is bit-identical to the CPU image (same `image_hash`, same final
 //! light buffers) for every example scene, every kernel, and scenes that reach every shader path
 //! (3D and 4D noise of every kind, 3D textures, specular, jitter off, monochrome light, a fixed
-//! guard band and an automatic one, different on each side), with the iterated and the distance
-//! penumbra (every kernel family, volumes, a patterned light; the distance penumbra's depth
-//! planes are part of the final light buffers compared). On other adapters the images must stay
-//! within the thresholds of docs/gpu.md.
+//! guard band and an automatic one, different on each side, pre-integrated compositing), with the
+//! iterated and the distance penumbra (every kernel family, volumes, a patterned light; the
+//! distance penumbra's depth planes are part of the final light buffers compared). On other
+//! adapters the images must stay within the thresholds of docs/gpu.md.
 
 mod gpu_common;
 mod support;
@@ -286,6 +286,25 @@ fn gpu_image_equals_cpu_on_every_shader_path() {
             &ctx,
             &scene,
             &format!("shader paths, monochrome {monochrome}, jitter {jitter}, band {band}"),
+        );
+    }
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_preintegration() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-pre");
+    // Every detail kind, a 3D texture, constant materials between them (their pixels forget the
+    // kept front value), crossings in and out, a grey and a coloured light buffer.
+    for (monochrome, jitter) in [(false, true), (true, false)] {
+        let mut scene = path_scene(&dir, monochrome, jitter);
+        scene.sweep.preintegration = true;
+        check(
+            &ctx,
+            &scene,
+            &format!("pre-integration, monochrome {monochrome}, jitter {jitter}"),
         );
     }
 }

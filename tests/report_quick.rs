@@ -49,6 +49,32 @@ fn check_case_counts(t: &Csv<'_>) {
     assert_eq!(count("edge"), 3 * 2 * 2 * 2 * (kernels().count() + 1));
     assert_eq!(count("disk"), kernels().count());
     assert_eq!(count("scene"), kernels().count());
+    // Narrow band: slabs 64 and 128, each without and with pre-integration.
+    assert_eq!(count("narrowband"), 4);
+    for pre in ["false", "true"] {
+        assert_eq!(
+            rows.iter()
+                .filter(|r| r[col("family")] == "narrowband" && r[col("preintegration")] == pre)
+                .count(),
+            2,
+            "narrowband rows with preintegration = {pre}"
+        );
+    }
+    // Pre-integration beats one sample per slab on the narrow band at each slab count (by 2× and
+    // more at 128², tests/preintegration.rs; here only the order is asserted, the frame is small).
+    for n in ["64", "128"] {
+        let err = |pre: &str| -> f64 {
+            rows.iter()
+                .find(|r| {
+                    r[col("family")] == "narrowband"
+                        && r[col("slabs")] == n
+                        && r[col("preintegration")] == pre
+                })
+                .map(|r| r[col("rmse_reference")].parse().unwrap())
+                .unwrap()
+        };
+        assert!(err("true") < err("false"), "narrowband, {n} slabs");
+    }
     for k in kernels() {
         for family in ["edge", "disk", "scene"] {
             assert!(

@@ -194,6 +194,7 @@ struct RawSweep {
     seed: Option<u32>,
     variance_compensation: Option<bool>,
     guard_band: Option<toml::Value>,
+    preintegration: Option<bool>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -419,6 +420,10 @@ pub struct SweepSpec {
     /// Light buffer and LDI beyond the image edges, so objects just outside cast shadows into
     /// it: sized from the scene (`auto`, the default) or a fixed pixel count on every side.
     pub guard_band: GuardBandSpec,
+    /// Pre-integrated compositing (Patel et al. 2013 §7, Engel, Kraus & Ertl 2001): materials
+    /// with detail are shaded from a 2D table over the detail values at a slab's front and back
+    /// faces instead of one sample (off by default: the images of before, bit for bit).
+    pub preintegration: bool,
 }
 
 /// A distant Gaussian light behind the viewer.
@@ -1077,6 +1082,7 @@ impl Validator<'_> {
             seed: raw.seed.unwrap_or(0),
             variance_compensation: raw.variance_compensation.unwrap_or(true),
             guard_band,
+            preintegration: raw.preintegration.unwrap_or(false),
         })
     }
 

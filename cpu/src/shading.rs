@@ -7,7 +7,7 @@
 
 use convshadow_common::hash::{pixel_hash, unit_float};
 use convshadow_common::lane::{Lane, MAX_LANES};
-use convshadow_common::plan::{MaterialPlan, RenderPlan, TF_SIZE, TfEntry};
+use convshadow_common::plan::{MaterialPlan, PI_SIZE, RenderPlan, TF_SIZE, TfEntry};
 
 use crate::ldi::Ldi;
 use crate::parity::NO_CROSSING;
@@ -63,13 +63,71 @@ pub struct TfLanes<L> {
 pub fn material_at<L: Lane>(plan: &RenderPlan, mesh: u32, x: L, y: L, z: L) -> TfLanes<L> {
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
     let value = if material.tf.len() > 1 {
-        let half = L::splat(0.5);
-        let q = to_detail(&plan.mesh_to_detail[mesh as usize], x + half, y + half, z);
-        detail_value(material, q)
+        detail_at(plan, mesh, x, y, z)
     } else {
         L::splat(0.0)
     };
     transfer(&material.tf, value)
+}
+
+/// The detail value of mesh `mesh`'s material at image pixels (x, y) (per lane) and relative
+/// depth `z`: a pure function of its inputs, so a value kept from one slab to the next has the
+/// bits of a fresh evaluation.
+#[inline(always)]
+pub fn detail_at<L: Lane>(plan: &RenderPlan, mesh: u32, x: L, y: L, z: L) -> L {
+    let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
+    let half = L::splat(0.5);
+    let q = to_detail(&plan.mesh_to_detail[mesh as usize], x + half, y + half, z);
+    detail_value(material, q)
+}
+
+/// Looks up a pre-integration table ([`MaterialPlan::pre`]) at detail values `front` and
+/// `back`: bilinear between the four nearest entries, first along the back value, then along
+/// the front value. Indices are found per lane (truncation clamped to [0, PI_SIZE − 2], as in
+/// [`transfer`]), the interpolation runs on lanes.
+#[inline(always)]
+pub fn pre_transfer<L: Lane>(table: &[TfEntry], front: L, back: L) -> TfLanes<L> {
+    let scale = L::splat((PI_SIZE - 1) as f32);
+    let (pf, pb) = (front * scale, back * scale);
+    let mut index = [0usize; MAX_LANES];
+    let (mut if_, mut ib) = ([0.0f32; MAX_LANES], [0.0f32; MAX_LANES]);
+    for i in 0..L::LANES {
+        let kf = (pf.lane(i) as i32).clamp(0, PI_SIZE as i32 - 2) as usize;
+        let kb = (pb.lane(i) as i32).clamp(0, PI_SIZE as i32 - 2) as usize;
+        index[i] = kf * PI_SIZE + kb;
+        if_[i] = kf as f32;
+        ib[i] = kb as f32;
+    }
+    let ff = pf - L::load(&if_, 0);
+    let fb = pb - L::load(&ib, 0);
+    // Per-lane entries as 7 planes, for the corners (f, b), (f, b + 1), (f + 1, b), (f + 1, b + 1).
+    let mut e = [[[0.0f32; MAX_LANES]; 7]; 4];
+    for i in 0..L::LANES {
+        let k = index[i];
+        for (corner, off) in [0, 1, PI_SIZE, PI_SIZE + 1].into_iter().enumerate() {
+            let t = table[k + off];
+            let dst = &mut e[corner];
+            dst[0][i] = t.color[0];
+            dst[1][i] = t.color[1];
+            dst[2][i] = t.color[2];
+            dst[3][i] = t.alpha;
+            dst[4][i] = t.attenuation[0];
+            dst[5][i] = t.attenuation[1];
+            dst[6][i] = t.attenuation[2];
+        }
+    }
+    let field = |j: usize| {
+        let (u00, u01) = (L::load(&e[0][j], 0), L::load(&e[1][j], 0));
+        let (u10, u11) = (L::load(&e[2][j], 0), L::load(&e[3][j], 0));
+        let lo = u00 + fb * (u01 - u00);
+        let hi = u10 + fb * (u11 - u10);
+        lo + ff * (hi - lo)
+    };
+    TfLanes {
+        color: [field(0), field(1), field(2)],
+        alpha: field(3),
+        attenuation: [field(4), field(5), field(6)],
+    }
 }
 
 /// Maps pixel-grid coordinates and relative depth to a mesh's detail coordinates

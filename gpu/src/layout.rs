@@ -111,6 +111,8 @@ pub struct Globals {
     pub row_len: u32,
     /// Guard band rows above the image (image y = grid y − guard_top).
     pub guard_top: u32,
+    /// 1 with pre-integrated compositing (`pre_front` then holds one word per grid pixel).
+    pub preintegration: u32,
     /// Planes per light in the light buffers: its channels, then its depth plane if any.
     pub planes: u32,
     /// Depth planes per light: 1 with the distance penumbra (`RenderPlan::depth_planes`), else 0.
@@ -118,6 +120,12 @@ pub struct Globals {
     /// Distance penumbra: occluded light at or below this has no mean occluder depth
     /// (`plan::OCCLUSION_EPS`, uploaded as its f32 bits).
     pub occlusion_eps: f32,
+    /// Uniform structs are a multiple of 16 bytes.
+    pub _pad0: u32,
+    /// See `_pad0`.
+    pub _pad1: u32,
+    /// See `_pad0`.
+    pub _pad2: u32,
 }
 
 /// One slab's faces and jitter hash.
@@ -216,7 +224,15 @@ pub struct MaterialHeader {
     pub spec_strength: f32,
     /// Specular exponent.
     pub spec_exponent: u32,
+    /// Index of the first entry of the pre-integration table (`PI_SIZE²` entries in
+    /// `tf_entries`, front-major), or [`NO_PRE`] without one.
+    pub pre: u32,
 }
+
+/// [`MaterialHeader::pre`] of a material without a pre-integration table.
+pub const NO_PRE: u32 = u32::MAX;
+/// A `pre_front` word that keeps no front value (a NaN pattern: never a detail value's bits).
+pub const PRE_NONE: u32 = 0x7fc0_0000;
 
 /// One transfer-function entry.
 #[repr(C)]
@@ -328,9 +344,10 @@ pub mod slot {
         MESHES = "meshes", 27;
         NORMALS = "normals", 28;
         LIGHT_COLORS = "light_colors", 29;
-        LEVEL_TABLE = "level_table", 30;
-        LEVEL_PREV = "level_prev", 31;
-        LEVEL_CUR = "level_cur", 32;
+        PRE_FRONT = "pre_front", 30;
+        LEVEL_TABLE = "level_table", 31;
+        LEVEL_PREV = "level_prev", 32;
+        LEVEL_CUR = "level_cur", 33;
     }
 }
 
@@ -397,9 +414,13 @@ mod tests {
                 bg_b,
                 row_len,
                 guard_top,
+                preintegration,
                 planes,
                 depth_planes,
                 occlusion_eps,
+                _pad0,
+                _pad1,
+                _pad2,
             }),
             layout!(Slab {
                 front,
@@ -435,6 +456,7 @@ mod tests {
                 has_specular,
                 spec_strength,
                 spec_exponent,
+                pre,
             }),
             layout!(TransferEntry {
                 color,

@@ -14,7 +14,7 @@ use convshadow_common::kernel::PhaseMode;
 use convshadow_common::ldi::Ldi;
 use convshadow_common::noise::{DetailKind, PERLIN4_SCALE};
 use convshadow_common::plan::{
-    FLUSH_BELOW, LIT_LEVEL, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE,
+    FLUSH_BELOW, LIT_LEVEL, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE, TfEntry,
 };
 use convshadow_common::raster::RasterSetup;
 use convshadow_common::scene::MAX_MESHES;
@@ -24,8 +24,8 @@ use crate::buffers::{bind, check_size, pipeline, read_back, uniform, upload, wai
 use crate::device::{GpuContext, GpuError};
 use crate::layout::{
     Cursor, DETAIL_FBM, DETAIL_NONE, DETAIL_PERLIN, DETAIL_RIDGED, DETAIL_TURBULENCE, Globals,
-    LightHeader, LightSlab, MESH_BITS, MaterialHeader, MeshHeader, Octave, PHASE_PER_PIXEL,
-    PHASE_PER_SLAB, PHASE_SCHEDULE, Slab, SlabParams, Tap, TransferEntry, slot,
+    LightHeader, LightSlab, MESH_BITS, MaterialHeader, MeshHeader, NO_PRE, Octave, PHASE_PER_PIXEL,
+    PHASE_PER_SLAB, PHASE_SCHEDULE, PRE_NONE, Slab, SlabParams, Tap, TransferEntry, slot,
 };
 use crate::shader::sweep_wgsl;
 
@@ -38,7 +38,7 @@ const TILE: u32 = 8;
 /// Storage buffers the `sweep_slab` entry point binds (the two light buffers and every table of
 /// [`slab_groups`], and the two level planes); checked against the adapter's per-stage limit before the pipeline is made
 /// (lavapipe allows 32), and against the WGSL by a test.
-const SWEEP_STORAGE_BUFFERS: u32 = 21;
+const SWEEP_STORAGE_BUFFERS: u32 = 22;
 
 /// Everything the sweep reads besides the LDI and the light buffers, as the shader's structs.
 struct Tables {
@@ -177,13 +177,20 @@ fn material_tables(m: &MaterialPlan, t: &mut Tables) -> MaterialHeader {
         octaves: t.octaves.len() as u32,
         texture: t.voxels.len() as u32,
         dims: [1, 1, 1],
+        pre: NO_PRE,
         ..MaterialHeader::default()
     };
-    t.tf_entries.extend(m.tf.iter().map(|e| TransferEntry {
+    let entry = |e: &TfEntry| TransferEntry {
         color: e.color,
         alpha: e.alpha,
         attenuation: e.attenuation,
-    }));
+    };
+    t.tf_entries.extend(m.tf.iter().map(entry));
+    if let Some(pre) = &m.pre {
+        // The pre-integration table follows the transfer function in the same buffer.
+        header.pre = t.tf_entries.len() as u32;
+        t.tf_entries.extend(pre.iter().map(entry));
+    }
     if let Some(d) = &m.detail {
         let n = d.octave_frequency.len().min(d.octave_amplitude.len());
         t.octaves.extend((0..n).map(|i| Octave {
@@ -240,6 +247,8 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             planes: plan.planes_per_light() as u32,
             depth_planes: plan.depth_planes() as u32,
             occlusion_eps: OCCLUSION_EPS,
+            preintegration: u32::from(plan.preintegration),
+            ..Globals::default()
         },
         slabs: (0..slabs)
             .map(|k| Slab {
@@ -386,6 +395,7 @@ struct SweepBuffers {
     meshes: wgpu::Buffer,
     normals: wgpu::Buffer,
     light_colors: wgpu::Buffer,
+    pre_front: wgpu::Buffer,
     image: wgpu::Buffer,
     image_words: u64,
     globals: wgpu::Buffer,
@@ -447,6 +457,14 @@ fn upload_buffers(
     let meshes = upload(ctx, "mesh header", &tables.meshes, false)?;
     let normals = upload(ctx, "triangle normal", &tables.normals, false)?;
     let light_colors = upload(ctx, "phase light colour", &tables.light_colors, false)?;
+    // One word per grid pixel with pre-integration (none kept yet), else one unused word.
+    let pre_words = if plan.preintegration { pixels } else { 1 };
+    let pre_front = upload(
+        ctx,
+        "pre-integration front value",
+        &vec![PRE_NONE; pre_words as usize],
+        false,
+    )?;
     let image_words = u64::from(plan.width) * u64::from(plan.height) * 3;
     let image = zeroed(ctx, "image", image_words)?;
     let globals = uniform(ctx, "globals", &tables.globals);
@@ -474,6 +492,7 @@ fn upload_buffers(
         meshes,
         normals,
         light_colors,
+        pre_front,
         image,
         image_words,
         globals,
@@ -519,7 +538,7 @@ fn slab_groups(
     slab_pipe: &wgpu::ComputePipeline,
     b: &SweepBuffers,
 ) -> [wgpu::BindGroup; 2] {
-    let common: [(u32, &wgpu::Buffer); 19] = [
+    let common: [(u32, &wgpu::Buffer); 20] = [
         (slot::SLAB_PARAMS, &b.slab_param),
         (slot::GLOBALS, &b.globals),
         (slot::CURSORS, &b.cursors),
@@ -539,6 +558,7 @@ fn slab_groups(
         (slot::MESHES, &b.meshes),
         (slot::NORMALS, &b.normals),
         (slot::LIGHT_COLORS, &b.light_colors),
+        (slot::PRE_FRONT, &b.pre_front),
     ];
     let group_for = |prev: [&wgpu::Buffer; 2], cur: [&wgpu::Buffer; 2]| {
         let mut e: Vec<(u32, &wgpu::Buffer)> = common.to_vec();

@@ -140,6 +140,10 @@ pub struct RenderArgs {
     /// Turn the bilinear-variance compensation on or off (overrides the scene).
     #[arg(long)]
     pub variance_compensation: Option<bool>,
+    /// Pre-integrated compositing (overrides sweep.preintegration): `--preintegration` or
+    /// `--preintegration true` turns it on, `--preintegration false` off.
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
+    pub preintegration: Option<bool>,
     /// Render even if meshes are open (reports the pixels with odd fragment counts).
     #[arg(long)]
     pub allow_open: bool,
@@ -322,9 +326,8 @@ fn parse_guard_band(s: &str) -> Result<GuardBandSpec, String> {
     s.parse()
 }
 
-/// `--slabs`, `--kernel`, `--seed`, `--penumbra`, `--guard-band` and `--variance-compensation`,
-/// then the scene
-/// re-validated.
+/// `--slabs`, `--kernel`, `--seed`, `--penumbra`, `--guard-band`, `--variance-compensation` and
+/// `--preintegration`, then the scene re-validated.
 fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Failure> {
     if let Some(n) = args.slabs {
         scene.sweep.slabs = n;
@@ -345,6 +348,9 @@ fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Fai
     }
     if let Some(v) = args.variance_compensation {
         scene.sweep.variance_compensation = v;
+    }
+    if let Some(v) = args.preintegration {
+        scene.sweep.preintegration = v;
     }
     scene
         .revalidate()
@@ -697,6 +703,7 @@ fn stats_value(
             "slab_distance": f64::from(r.plan.slab_distance),
             "kernel": scene.sweep.kernel.to_string(),
             "penumbra": scene.sweep.penumbra.to_string(),
+            "preintegration": r.plan.preintegration,
             "guard_band": scene.sweep.guard_band.to_string(),
             "guard_band_px": {
                 "left": r.plan.guard.left,

@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+use convshadow_common::scene::Penumbra;
+
 use crate::exit::{self, Failure};
 use crate::report::{ReportOptions, run as run_report};
 
@@ -25,6 +27,10 @@ pub struct ReportArgs {
     /// with that row alone, for job arrays (docs/scale-out.md).
     #[arg(long, value_name = "I")]
     pub case: Option<usize>,
+    /// Run one penumbra model only (`iterated` or `distance`); by default every case runs with
+    /// both.
+    #[arg(long, value_name = "iterated|distance", value_parser = super::render::parse_penumbra)]
+    pub penumbra: Option<Penumbra>,
 }
 
 /// Runs `convshadow report`.
@@ -46,6 +52,7 @@ pub fn run(args: &ReportArgs) -> Result<i32, Failure> {
         out: args.out.clone(),
         verbose: args.verbose,
         case: args.case,
+        penumbra: args.penumbra,
     };
     let report = pool.install(|| run_report(&options)).map_err(|e| {
         let code = if e.starts_with("--case") {

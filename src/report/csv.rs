@@ -3,8 +3,8 @@
 use super::Row;
 
 /// The header line of `report.csv`.
-pub const CSV_HEADER: &str = "family,kernel,slabs,variance_level,variance,tilt_deg,distance_over_d1,\
-compensation,width,height,time_ms,rmse_correct,rmse_iterated,isoline_err_px,width_err_correct_px,\
+pub const CSV_HEADER: &str = "family,kernel,penumbra,slabs,variance_level,variance,tilt_deg,distance_over_d1,\
+compensation,preintegration,width,height,time_ms,rmse_correct,rmse_iterated,isoline_err_px,width_err_correct_px,\
 width_err_iterated_px,width_px,rmse_reference,reference_self_err,note";
 
 impl Row {
@@ -12,15 +12,17 @@ impl Row {
     pub fn csv(&self) -> String {
         let o = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.6}"));
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{:.3},{},{},{},{},{},{},{},{},\"{}\"",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{},{},{},{},{},{},{},{},\"{}\"",
             self.family,
             self.kernel,
+            self.penumbra,
             self.slabs,
             self.variance_level,
             o(self.variance),
             o(self.tilt_deg),
             o(self.distance_over_d1),
             self.compensation,
+            self.preintegration,
             self.width,
             self.height,
             self.time_ms,

@@ -36,6 +36,18 @@ pub struct ReportOptions {
     /// Run only case I (0-based, in the order of `report.csv`'s rows) and write its row alone to
     /// `report.csv` (no markdown, no plot): for running the cases as separate jobs.
     pub case: Option<usize>,
+    /// Run one penumbra model only; `None`: both, every case.
+    pub penumbra: Option<Penumbra>,
+}
+
+impl ReportOptions {
+    /// The penumbra models every case runs with.
+    pub fn penumbras(&self) -> Vec<Penumbra> {
+        match self.penumbra {
+            Some(p) => vec![p],
+            None => vec![Penumbra::Iterated, Penumbra::Distance],
+        }
+    }
 }
 
 impl ReportOptions {
@@ -45,14 +57,17 @@ impl ReportOptions {
             "quick subset: edge at d = d1/4, d1, 4·d1 × all 7 kernels × slabs 64, 128 × variance \
              zero, high × tilt 0°, 45° (compensation on), plus ellipse2 with compensation off; disk at \
              d = 4·d1, tilt 45°, high variance, slabs 128, all kernels; default scene at 24×24, \
-             slabs 64, all kernels, reference M = 16 (self-error against M = 64)"
+             slabs 64, all kernels, reference M = 16 (self-error against M = 64); narrow-band \
+             scene at 48×48, ellipse2 with and without pre-integration, slabs 64, 128, against \
+             2048 slabs (self-error against 4096)"
                 .to_string()
         } else {
             "full grid: edge at d = d1/4, d1, 4·d1 × 7 kernels × slabs 64, 128, 256, 512 × variance \
              zero, low, high × tilt 0°, 45°, with compensation on and off; disk at d = d1 and 4·d1 \
              × 7 kernels × 4 slab counts × 3 variances × 2 tilts (compensation on); default scene \
              at 24×24 × 7 kernels × slabs 64, 128, 256, 512, reference M = 16 (self-error against \
-             M = 64)"
+             M = 64); narrow-band scene at 64×64, ellipse2 with and without pre-integration × \
+             slabs 64, 128, 256, 512, against 2048 slabs (self-error against 4096)"
                 .to_string()
         }
     }
@@ -66,6 +81,7 @@ pub fn edge_setup(
     variance: f64,
     kernel: &str,
     comp: bool,
+    penumbra: Penumbra,
 ) -> EdgeSetup {
     EdgeSetup {
         slabs,
@@ -78,7 +94,7 @@ pub fn edge_setup(
         variance,
         variance_y: None,
         rotation_deg: 0.0,
-        penumbra: Penumbra::Iterated,
+        penumbra,
         kernel: kernel.to_string(),
         compensation: comp,
         seed: 0,
@@ -86,7 +102,14 @@ pub fn edge_setup(
 }
 
 /// The disk set-up of the report.
-pub fn disk_setup(k: f64, slabs: u32, tilt: f64, variance: f64, kernel: &str) -> DiskSetup {
+pub fn disk_setup(
+    k: f64,
+    slabs: u32,
+    tilt: f64,
+    variance: f64,
+    kernel: &str,
+    penumbra: Penumbra,
+) -> DiskSetup {
     DiskSetup {
         slabs,
         slab_distance: k * D1 / f64::from(slabs),
@@ -100,6 +123,6 @@ pub fn disk_setup(k: f64, slabs: u32, tilt: f64, variance: f64, kernel: &str) ->
         rotation_deg: 0.0,
         kernel: kernel.to_string(),
         compensation: true,
-        penumbra: Penumbra::Iterated,
+        penumbra,
     }
 }

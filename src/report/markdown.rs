@@ -57,7 +57,49 @@ pub fn markdown(report: &Report, options: &ReportOptions) -> String {
     growth_table(&mut md, &report.rows);
     disk_table(&mut md, &report.rows);
     scene_table(&mut md, &report.rows);
+    narrowband_table(&mut md, &report.rows);
     md
+}
+
+/// The penumbra models present in `rows`, iterated first.
+fn penumbras(rows: &[Row]) -> Vec<&'static str> {
+    ["iterated", "distance"]
+        .into_iter()
+        .filter(|p| rows.iter().any(|r| r.penumbra == *p))
+        .collect()
+}
+
+/// The narrow-band scene with and without pre-integrated compositing.
+fn narrowband_table(md: &mut String, rows: &[Row]) {
+    let nb: Vec<&Row> = rows.iter().filter(|r| r.family == "narrowband").collect();
+    if nb.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "\n## Narrow band: pre-integrated compositing\n\n`scenes/narrowband.toml` (an opacity \
+         band 0.05 wide over fBm), `ellipse2`, against its {}-slab sweep without \
+         pre-integration.\n",
+        super::NARROWBAND_REFERENCE_SLABS
+    );
+    let _ = writeln!(
+        md,
+        "| slabs | size | pre-integration | time ms | image RMSE vs reference | reference self-error |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for r in nb {
+        let _ = writeln!(
+            md,
+            "| {} | {}×{} | {} | {} | {} | {} |",
+            r.slabs,
+            r.width,
+            r.height,
+            if r.preintegration { "on" } else { "off" },
+            fmt(r.time_ms),
+            fmt(r.rmse_reference.unwrap_or(f64::NAN)),
+            fmt(r.reference_self_err.unwrap_or(f64::NAN)),
+        );
+    }
 }
 
 /// Edge cases with compensation on, per kernel × slab count.
@@ -68,10 +110,10 @@ fn edge_table(md: &mut String, rows: &[Row]) {
     );
     let _ = writeln!(
         md,
-        "| kernel | slabs | time ms | RMSE vs correct | RMSE vs iterated | max abs isoline err px | max abs 10–90 width err vs iterated px |"
+        "| kernel | penumbra | slabs | time ms | RMSE vs correct | RMSE vs iterated | max abs isoline err px | max abs 10–90 width err vs iterated px |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
-    for k in kernels() {
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    for (k, p) in kernels().flat_map(|k| penumbras(rows).into_iter().map(move |p| (k, p))) {
         let mut ns: Vec<u32> = rows
             .iter()
             .filter(|r| r.family == "edge")
@@ -82,14 +124,20 @@ fn edge_table(md: &mut String, rows: &[Row]) {
         for n in ns {
             let sel: Vec<&Row> = rows
                 .iter()
-                .filter(|r| r.family == "edge" && r.compensation && r.kernel == k && r.slabs == n)
+                .filter(|r| {
+                    r.family == "edge"
+                        && r.compensation
+                        && r.kernel == k
+                        && r.penumbra == p
+                        && r.slabs == n
+                })
                 .collect();
             if sel.is_empty() {
                 continue;
             }
             let _ = writeln!(
                 md,
-                "| {k} | {n} | {} | {} | {} | {} | {} |",
+                "| {k} | {p} | {n} | {} | {} | {} | {} | {} |",
                 fmt(mean(sel.iter().map(|r| r.time_ms))),
                 fmt(mean(sel.iter().filter_map(|r| r.rmse_correct))),
                 fmt(mean(sel.iter().filter_map(|r| r.rmse_iterated))),
@@ -108,10 +156,10 @@ fn over_blur_table(md: &mut String, rows: &[Row]) {
     );
     let _ = writeln!(
         md,
-        "| kernel | compensation | tilt | max width px | mean RMSE vs iterated, all variances |"
+        "| kernel | penumbra | compensation | tilt | max width px | mean RMSE vs iterated, all variances |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|");
-    for k in kernels() {
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for (k, p) in kernels().flat_map(|k| penumbras(rows).into_iter().map(move |p| (k, p))) {
         for comp in [true, false] {
             for tilt in TILTS {
                 let sel: Vec<&Row> = rows
@@ -119,6 +167,7 @@ fn over_blur_table(md: &mut String, rows: &[Row]) {
                     .filter(|r| {
                         r.family == "edge"
                             && r.kernel == k
+                            && r.penumbra == p
                             && r.compensation == comp
                             && r.tilt_deg == Some(tilt)
                     })
@@ -133,7 +182,7 @@ fn over_blur_table(md: &mut String, rows: &[Row]) {
                 );
                 let _ = writeln!(
                     md,
-                    "| {k} | {} | {tilt}° | {} | {} |",
+                    "| {k} | {p} | {} | {tilt}° | {} | {} |",
                     if comp { "on" } else { "off" },
                     fmt(zero),
                     fmt(mean(sel.iter().filter_map(|r| r.rmse_iterated))),
@@ -151,9 +200,9 @@ fn growth_table(md: &mut String, rows: &[Row]) {
     );
     let _ = writeln!(
         md,
-        "| d / d1 | slabs | RMSE vs correct | RMSE vs iterated | width err vs correct px | width err vs iterated px |"
+        "| penumbra | d / d1 | slabs | RMSE vs correct | RMSE vs iterated | width err vs correct px | width err vs iterated px |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
     for r in rows.iter().filter(|r| {
         r.family == "edge"
             && r.kernel == "ellipse2"
@@ -163,7 +212,8 @@ fn growth_table(md: &mut String, rows: &[Row]) {
     }) {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} |",
+            r.penumbra,
             fmt(r.distance_over_d1.unwrap_or(f64::NAN)),
             r.slabs,
             fmt(r.rmse_correct.unwrap_or(f64::NAN)),
@@ -182,20 +232,20 @@ fn disk_table(md: &mut String, rows: &[Row]) {
     );
     let _ = writeln!(
         md,
-        "| kernel | time ms | RMSE vs correct | RMSE vs iterated | mean isoline displacement px | width err vs iterated px |"
+        "| kernel | penumbra | time ms | RMSE vs correct | RMSE vs iterated | mean isoline displacement px | width err vs iterated px |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|");
-    for k in kernels() {
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
+    for (k, p) in kernels().flat_map(|k| penumbras(rows).into_iter().map(move |p| (k, p))) {
         let sel: Vec<&Row> = rows
             .iter()
-            .filter(|r| r.family == "disk" && r.kernel == k)
+            .filter(|r| r.family == "disk" && r.kernel == k && r.penumbra == p)
             .collect();
         if sel.is_empty() {
             continue;
         }
         let _ = writeln!(
             md,
-            "| {k} | {} | {} | {} | {} | {} |",
+            "| {k} | {p} | {} | {} | {} | {} | {} |",
             fmt(mean(sel.iter().map(|r| r.time_ms))),
             fmt(mean(sel.iter().filter_map(|r| r.rmse_correct))),
             fmt(mean(sel.iter().filter_map(|r| r.rmse_iterated))),
@@ -210,14 +260,15 @@ fn scene_table(md: &mut String, rows: &[Row]) {
     let _ = writeln!(md, "\n## Default scene against the shadow-ray reference\n");
     let _ = writeln!(
         md,
-        "| kernel | slabs | size | time ms | image RMSE vs reference | reference self-error (M vs 4M) |"
+        "| kernel | penumbra | slabs | size | time ms | image RMSE vs reference | reference self-error (M vs 4M) |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
     for r in rows.iter().filter(|r| r.family == "scene") {
         let _ = writeln!(
             md,
-            "| {} | {} | {}×{} | {} | {} | {} |",
+            "| {} | {} | {} | {}×{} | {} | {} | {} |",
             r.kernel,
+            r.penumbra,
             r.slabs,
             r.width,
             r.height,

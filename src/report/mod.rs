@@ -8,7 +8,10 @@
 //! - `disk`: the disk over a plane ([`disk`], the same); references: the disk's indicator convolved with
 //!   the correct and the iterated Gaussian, numerically in f64;
 //! - `scene`: the embedded default scene at a small size; reference: the ground-truth shadow-ray
-//!   renderer (`convshadow_cpu::reference::shadow_ray`), whose own error (M against 4·M samples) is reported.
+//!   renderer (`convshadow_cpu::reference::shadow_ray`), whose own error (M against 4·M samples) is reported;
+//! - `narrowband`: `scenes/narrowband.toml` (a 0.05-wide opacity band over fBm) at a small size,
+//!   `ellipse2`, with and without pre-integrated compositing; reference: the same scene swept
+//!   with 2048 slabs without pre-integration, whose own error (against 4096 slabs) is reported.
 //!
 //! "Slab count" for the edge and disk is the number of convolutions between occluder and
 //! receiver (d = n·e); for the scene it is the scene's slab count.
@@ -35,6 +38,8 @@ pub struct Row {
     pub family: String,
     /// Kernel name.
     pub kernel: String,
+    /// Penumbra model (`iterated` or `distance`).
+    pub penumbra: String,
     /// Slab count (see the module documentation).
     pub slabs: u32,
     /// Variance level name (`zero`, `low`, `high`, or `scene`).
@@ -47,6 +52,8 @@ pub struct Row {
     pub distance_over_d1: Option<f64>,
     /// `sweep.variance_compensation`.
     pub compensation: bool,
+    /// `sweep.preintegration` (pre-integrated compositing).
+    pub preintegration: bool,
     /// Frame width.
     pub width: u32,
     /// Frame height.

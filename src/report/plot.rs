@@ -239,14 +239,22 @@ fn draw_panel(
     Ok(())
 }
 
-/// Per (kernel, slabs): mean time and mean of `err` over the rows selected by `keep`.
+/// Per (kernel, penumbra, slabs): mean time and mean of `err` over the rows selected by `keep`;
+/// one series per kernel and penumbra model present (`ellipse2 (distance)`).
 fn aggregate(
     rows: &[Row],
     keep: &dyn Fn(&Row) -> bool,
     err: &dyn Fn(&Row) -> Option<f64>,
 ) -> Vec<Series> {
+    let penumbras: Vec<&str> = ["iterated", "distance"]
+        .into_iter()
+        .filter(|p| rows.iter().any(|r| r.penumbra == *p))
+        .collect();
+    let both = penumbras.len() > 1;
     kernels()
-        .map(|k| {
+        .flat_map(|k| penumbras.iter().map(move |p| (k, *p)))
+        .map(|(k, p)| {
+            let keep = |r: &Row| r.penumbra == p && keep(r);
             let mut slabs: Vec<u32> = rows
                 .iter()
                 .filter(|r| r.kernel == *k && keep(r))
@@ -267,17 +275,38 @@ fn aggregate(
                 })
                 .collect();
             Series {
-                name: k.to_string(),
+                name: if both {
+                    format!("{k} ({p})")
+                } else {
+                    k.to_string()
+                },
                 points,
             }
         })
         .collect()
 }
 
-/// The figure's three panels: edge against both references, the scene against shadow rays.
+/// The narrow-band family's series: `ellipse2` without and with pre-integration.
+fn narrowband_series(rows: &[Row]) -> Vec<Series> {
+    [(false, "ellipse2"), (true, "ellipse2 + pre-integration")]
+        .into_iter()
+        .map(|(pre, name)| Series {
+            name: name.to_string(),
+            points: rows
+                .iter()
+                .filter(|r| r.family == "narrowband" && r.preintegration == pre)
+                .filter_map(|r| Some((r.time_ms, r.rmse_reference?, r.slabs)))
+                .filter(|(t, e, _)| t.is_finite() && e.is_finite())
+                .collect(),
+        })
+        .collect()
+}
+
+/// The figure's panels: edge against both references, the scene against shadow rays, and (when
+/// the report ran it) the narrow-band scene with and without pre-integration.
 pub fn panels(rows: &[Row]) -> Vec<Panel> {
     let edge_on = |r: &Row| r.family == "edge" && r.compensation;
-    vec![
+    let mut out = vec![
         Panel {
             title: "edge: error vs the correct shadow".into(),
             y_desc: "mean RMSE (light)".into(),
@@ -293,7 +322,15 @@ pub fn panels(rows: &[Row]) -> Vec<Panel> {
             y_desc: "image RMSE (linear)".into(),
             series: aggregate(rows, &|r| r.family == "scene", &|r| r.rmse_reference),
         },
-    ]
+    ];
+    if rows.iter().any(|r| r.family == "narrowband") {
+        out.push(Panel {
+            title: "narrow band vs 2048 slabs: pre-integration".into(),
+            y_desc: "image RMSE (linear)".into(),
+            series: narrowband_series(rows),
+        });
+    }
+    out
 }
 
 #[cfg(test)]

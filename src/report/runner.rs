@@ -5,7 +5,7 @@ use std::time::Instant;
 use convshadow_common::geometry::SceneGeometry;
 use convshadow_common::metrics::rmse;
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::{Scene, SlabSpec};
+use convshadow_common::scene::{Penumbra, Scene, SlabSpec};
 use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_cpu::reference::disk::DiskSetup;
 use convshadow_cpu::reference::edge::{self, EdgeSetup, model_profile, run_light};
@@ -57,12 +57,14 @@ pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
     Row {
         family: "edge".into(),
         kernel: setup.kernel.clone(),
+        penumbra: setup.penumbra.to_string(),
         slabs: setup.slabs,
         variance_level: level.into(),
         variance: Some(setup.variance),
         tilt_deg: Some(setup.tilt_deg),
         distance_over_d1: Some(d / setup.optimal_distance),
         compensation: setup.compensation,
+        preintegration: false,
         width: setup.width,
         height: setup.height,
         time_ms: seconds * 1e3,
@@ -152,12 +154,14 @@ fn disk_row(setup: &DiskSetup, level: &str, r: &DiskReference) -> Row {
     Row {
         family: "disk".into(),
         kernel: setup.kernel.clone(),
+        penumbra: setup.penumbra.to_string(),
         slabs: setup.slabs,
         variance_level: level.into(),
         variance: Some(setup.variance[0]),
         tilt_deg: Some(setup.tilt_deg),
         distance_over_d1: Some(setup.distance() / setup.optimal_distance),
         compensation: setup.compensation,
+        preintegration: false,
         width: setup.width,
         height: setup.height,
         time_ms: seconds * 1e3,
@@ -193,7 +197,13 @@ fn rmse_f32(a: &[f32], b: &[f32]) -> f64 {
 }
 
 /// The default scene at `size`² with `slabs`: one row per kernel against the reference.
-fn scene_rows(size: u32, slabs: u32, samples: u32, verbose: bool) -> Vec<Row> {
+fn scene_rows(
+    size: u32,
+    slabs: u32,
+    samples: u32,
+    penumbras: &[Penumbra],
+    verbose: bool,
+) -> Vec<Row> {
     let mut base = Scene::default_scene();
     base.image.width = size;
     base.image.height = size;
@@ -225,16 +235,20 @@ fn scene_rows(size: u32, slabs: u32, samples: u32, verbose: bool) -> Vec<Row> {
         );
     }
     kernels()
-        .map(|k| {
+        .flat_map(|k| penumbras.iter().map(move |&p| (k, p)))
+        .map(|(k, penumbra)| {
             let mut scene = base.clone();
             scene.sweep.kernel = k.parse().unwrap_or_else(|e: String| panic!("{e}"));
+            scene.sweep.penumbra = penumbra;
             let (_, _, _, image, seconds) = render_scene(&scene);
             Row {
                 family: "scene".into(),
                 kernel: k.to_string(),
+                penumbra: penumbra.to_string(),
                 slabs,
                 variance_level: "scene".into(),
                 compensation: scene.sweep.variance_compensation,
+                preintegration: false,
                 width: size,
                 height: size,
                 time_ms: seconds * 1e3,
@@ -248,6 +262,86 @@ fn scene_rows(size: u32, slabs: u32, samples: u32, verbose: bool) -> Vec<Row> {
             }
         })
         .collect()
+}
+
+/// The narrow-band example scene (`scenes/narrowband.toml`, compiled in) at `size`² with `slabs`
+/// and pre-integration on or off.
+pub fn narrowband_scene(size: u32, slabs: u32, preintegration: bool) -> Scene {
+    let mut scene = Scene::parse(
+        include_str!("../../scenes/narrowband.toml"),
+        "scenes/narrowband.toml",
+        std::path::Path::new("scenes"),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    scene.image.width = size;
+    scene.image.height = size;
+    scene.sweep.slabs = SlabSpec::Count(slabs);
+    scene.sweep.preintegration = preintegration;
+    scene
+}
+
+/// The slab count of the narrow-band family's reference (and twice it for its self-error).
+pub const NARROWBAND_REFERENCE_SLABS: u32 = 2048;
+
+/// The narrow-band family at `size`²: per slab count, `ellipse2` without and with
+/// pre-integration, against the 2048-slab sweep without it.
+fn narrowband_rows(size: u32, slab_counts: &[u32], verbose: bool) -> Vec<Row> {
+    let n_ref = NARROWBAND_REFERENCE_SLABS;
+    let (_, _, _, reference, _) = render_scene(&narrowband_scene(size, n_ref, false));
+    let (_, _, _, finer, _) = render_scene(&narrowband_scene(size, 2 * n_ref, false));
+    let self_err = rmse_f32(&reference, &finer);
+    if verbose {
+        eprintln!(
+            "narrowband {size}²: reference {n_ref} slabs, self error (vs {}) {self_err:.2e}",
+            2 * n_ref
+        );
+    }
+    let mut rows = Vec::new();
+    for &n in slab_counts {
+        for pre in [false, true] {
+            let scene = narrowband_scene(size, n, pre);
+            let (_, _, _, image, seconds) = render_scene(&scene);
+            rows.push(Row {
+                family: "narrowband".into(),
+                kernel: scene.sweep.kernel.to_string(),
+                penumbra: scene.sweep.penumbra.to_string(),
+                slabs: n,
+                variance_level: "scene".into(),
+                compensation: scene.sweep.variance_compensation,
+                preintegration: pre,
+                width: size,
+                height: size,
+                time_ms: seconds * 1e3,
+                rmse_reference: Some(rmse_f32(&image, &reference)),
+                reference_self_err: Some(self_err),
+                note: format!(
+                    "scenes/narrowband.toml against its {n_ref}-slab sweep without                      pre-integration (self-error: against {} slabs); no closed form",
+                    2 * n_ref
+                ),
+                ..Row::default()
+            });
+        }
+    }
+    rows
+}
+
+/// The narrow-band family: both compositing modes at each slab count (one reference for all).
+fn narrowband_cases(cases: &mut Cases<'_>) {
+    let (size, slab_counts): (u32, &[u32]) = if cases.options.quick {
+        (48, &[64, 128])
+    } else {
+        (64, &SLAB_COUNTS)
+    };
+    let group = cases.next..cases.next + 2 * slab_counts.len();
+    cases.next = group.end;
+    if !group.clone().any(|i| cases.want(i)) {
+        return;
+    }
+    for (i, row) in group.zip(narrowband_rows(size, slab_counts, cases.options.verbose)) {
+        if cases.want(i) {
+            cases.push(row);
+        }
+    }
 }
 
 /// The rows computed so far and the case numbering: cases are numbered in row order; with
@@ -276,7 +370,7 @@ impl Cases<'_> {
 fn log_row(options: &ReportOptions, r: &Row) {
     if options.verbose {
         eprintln!(
-            "{} {} n={} var={} tilt={:?} d/d1={:?} comp={} {:.1} ms rmse_c={:?} rmse_i={:?} ref={:?}",
+            "{} {} n={} var={} tilt={:?} d/d1={:?} comp={} pre={} {:.1} ms rmse_c={:?} rmse_i={:?} ref={:?}",
             r.family,
             r.kernel,
             r.slabs,
@@ -284,6 +378,7 @@ fn log_row(options: &ReportOptions, r: &Row) {
             r.tilt_deg,
             r.distance_over_d1,
             r.compensation,
+            r.preintegration,
             r.time_ms,
             r.rmse_correct,
             r.rmse_iterated,
@@ -310,12 +405,14 @@ fn edge_cases(cases: &mut Cases<'_>) {
                             if !comp && quick && kernel != "ellipse2" {
                                 continue;
                             }
-                            cases.next += 1;
-                            if !cases.want(cases.next - 1) {
-                                continue;
+                            for penumbra in cases.options.penumbras() {
+                                cases.next += 1;
+                                if !cases.want(cases.next - 1) {
+                                    continue;
+                                }
+                                let setup = edge_setup(k, n, tilt, var, kernel, comp, penumbra);
+                                cases.push(edge_row(&setup, level));
                             }
-                            let row = edge_row(&edge_setup(k, n, tilt, var, kernel, comp), level);
-                            cases.push(row);
                         }
                     }
                 }
@@ -346,7 +443,8 @@ fn disk_grid(quick: bool) -> Vec<(f64, u32, &'static str, f64, f64)> {
 /// The disk family: one case per kernel at each [`disk_grid`] point, the reference shared
 /// while d, σ² and tilt stay the same.
 fn disk_cases(cases: &mut Cases<'_>) -> Result<(), String> {
-    let kernel_count = kernels().count();
+    let penumbras = cases.options.penumbras();
+    let kernel_count = kernels().count() * penumbras.len();
     let mut cached: Option<((u64, u64, u64), DiskReference)> = None;
     for (k, n, level, var, tilt) in disk_grid(cases.options.quick) {
         let group = cases.next..cases.next + kernel_count;
@@ -359,17 +457,26 @@ fn disk_cases(cases: &mut Cases<'_>) -> Result<(), String> {
             // The reference depends on d, σ² and tilt only (the disk polygon is the same mesh).
             cached = Some((
                 key,
-                disk_reference(&disk_setup(k, 64, tilt, var, "ellipse2")),
+                disk_reference(&disk_setup(
+                    k,
+                    64,
+                    tilt,
+                    var,
+                    "ellipse2",
+                    Penumbra::Iterated,
+                )),
             ));
         }
         let reference = &cached.as_ref().map(|c| &c.1).ok_or("no disk reference")?;
         for kernel in kernels() {
-            cases.next += 1;
-            if !cases.want(cases.next - 1) {
-                continue;
+            for &penumbra in &penumbras {
+                cases.next += 1;
+                if !cases.want(cases.next - 1) {
+                    continue;
+                }
+                let setup = disk_setup(k, n, tilt, var, kernel, penumbra);
+                cases.push(disk_row(&setup, level, reference));
             }
-            let row = disk_row(&disk_setup(k, n, tilt, var, kernel), level, reference);
-            cases.push(row);
         }
     }
     Ok(())
@@ -377,7 +484,8 @@ fn disk_cases(cases: &mut Cases<'_>) -> Result<(), String> {
 
 /// The full-scene family: one case per kernel at each slab count.
 fn scene_cases(cases: &mut Cases<'_>) {
-    let kernel_count = kernels().count();
+    let penumbras = cases.options.penumbras();
+    let kernel_count = kernels().count() * penumbras.len();
     let (size, scene_slabs): (u32, &[u32]) = if cases.options.quick {
         (24, &[64])
     } else {
@@ -389,7 +497,8 @@ fn scene_cases(cases: &mut Cases<'_>) {
         if !group.clone().any(|i| cases.want(i)) {
             continue;
         }
-        for (i, row) in group.zip(scene_rows(size, n, 16, cases.options.verbose)) {
+        let rows = scene_rows(size, n, 16, &penumbras, cases.options.verbose);
+        for (i, row) in group.zip(rows) {
             if cases.want(i) {
                 cases.push(row);
             }
@@ -450,6 +559,7 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
     edge_cases(&mut cases);
     disk_cases(&mut cases)?;
     scene_cases(&mut cases);
+    narrowband_cases(&mut cases);
     check_case(options, cases.next)?;
     write_files(options, cases.rows, start)
 }

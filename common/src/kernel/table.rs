@@ -356,12 +356,12 @@ pub fn distance_levels(slabs: u32) -> Vec<[u32; 2]> {
 /// over the range is exactly b² − (a−1)². `per_e2` gives the per-slab moments for a step
 /// factor f: mean −e·μl, covariance f·e²·Σl (pixels).
 ///
-/// The mean is carried by the levels, not the slabs: a shadow h slabs behind its occluder has
-/// moved by the sum of its levels' means, the same wherever the occluder is. With compensation,
-/// a level's mean keeps only a fraction f whose bilinear variance f(1 − f) its covariance can
-/// absorb (see [`readable_mean`]); the small levels of a narrow light so move by whole pixels,
-/// and the larger ones, which can read between pixels, take up what the small ones left over,
-/// until the sum is exact.
+/// The mean moves with the slabs, as in the iterated mode: every level reads around the same
+/// per-slab mean, so a pixel moves its light by μκ per slab whatever level it sits at (inside a
+/// medium a pixel may keep a small level for many slabs). Where the smallest level (h = 1) cannot
+/// read the mean's fraction without exceeding its covariance, every level carries the mean in
+/// whole pixels from slab to slab (the shift of an occluder in slab j onto slab k is then
+/// round(k·μκ) − round(j·μκ): within 1 px, within ½ px for j = 0).
 pub fn build_distance_table(
     spec: KernelSpec,
     per_e2: &dyn Fn(f64) -> KernelMoments,
@@ -369,29 +369,12 @@ pub fn build_distance_table(
     compensate: bool,
 ) -> KernelTable {
     let ranges = distance_levels(slabs);
-    let step = per_e2(1.0).mean;
-    let mut moved = [0.0f64; 2];
+    let carry = compensate && carry_mean(&per_e2(1.0));
     let tables: Vec<KernelTable> = ranges
         .iter()
         .map(|&[a, b]| {
-            let target = per_e2(f64::from(a + b - 1));
-            let n = f64::from(b - a + 1);
-            let mut mean = [0.0f64; 2];
-            for axis in 0..2 {
-                // What each slab of the range must move for the sum to reach b·step.
-                let want = (f64::from(b) * step[axis] - moved[axis]) / n;
-                mean[axis] = if compensate {
-                    readable_mean(want, target.cov[axis][axis])
-                } else {
-                    want
-                };
-                moved[axis] += n * mean[axis];
-            }
-            let m = KernelMoments {
-                mean,
-                cov: target.cov,
-            };
-            build_table_with_carry(spec, &m, slabs, compensate, false)
+            let m = per_e2(f64::from(a + b - 1));
+            build_table_with_carry(spec, &m, slabs, compensate, carry)
         })
         .collect();
     let phase_count = tables.iter().map(|t| t.phase_count).max().unwrap_or(1);
@@ -430,26 +413,7 @@ pub fn build_distance_table(
         taps,
         phase_mode: tables[0].phase_mode,
         slab_phase,
-        slab_shift: vec![[0, 0]; slabs as usize],
+        slab_shift: tables[0].slab_shift.clone(),
         level_of,
-    }
-}
-
-/// The per-slab move closest to `want` (pixels, one axis) whose fraction f a kernel of variance
-/// `variance` can read without exceeding it: a bilinear read at fraction f adds f(1 − f), so f
-/// must lie within f_max of a whole pixel, f_max(1 − f_max) = variance (any f from ¼ px² on).
-pub fn readable_mean(want: f64, variance: f64) -> f64 {
-    if variance >= 0.25 {
-        return want;
-    }
-    let f_max = 0.5 * (1.0 - (1.0 - 4.0 * variance.max(0.0)).sqrt());
-    let whole = want.floor();
-    let f = want - whole;
-    if f <= f_max || f >= 1.0 - f_max {
-        want
-    } else if f < 0.5 {
-        whole + f_max
-    } else {
-        whole + 1.0 - f_max
     }
 }

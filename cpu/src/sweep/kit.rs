@@ -42,6 +42,9 @@ pub(crate) struct RowState<'a> {
     pub inside: &'a mut [u32],
     pub color: &'a mut [f32],
     pub alpha: &'a mut [f32],
+    /// With pre-integration: per pixel the detail value at the slab's front face kept from the
+    /// previous slab (NaN: none kept). Without: one unused float.
+    pub pre: &'a mut [f32],
 }
 
 /// Every light's row hash for row `y` of the slab (the prefix of each per-pixel phase hash).

@@ -95,6 +95,9 @@ struct PixelState {
     inside: Vec<u32>,
     color: Vec<f32>,
     alpha: Vec<f32>,
+    /// Pre-integration's kept front values ([`RowState::pre`]), `pre_stride` per row.
+    pre: Vec<f32>,
+    pre_stride: usize,
 }
 
 impl PixelState {
@@ -104,6 +107,9 @@ impl PixelState {
         let w = plan.grid_width as usize;
         let h = plan.grid_height as usize;
         let row_len = plan.light_row_len();
+        // One float per pixel with pre-integration, one per row (unused) without: every row
+        // needs a slice.
+        let pre_stride = if plan.preintegration { w } else { 1 };
         let prev = match options.initial_light {
             Some(v) => v.to_vec(),
             None => plan.unlit_light_buffer(),
@@ -118,6 +124,8 @@ impl PixelState {
             inside: vec![0u32; w * h],
             color: vec![0.0f32; w * h * 3],
             alpha: vec![0.0f32; w * h],
+            pre: vec![f32::NAN; pre_stride * h],
+            pre_stride,
         }
     }
 }
@@ -198,20 +206,24 @@ fn sweep_slab(
         .zip(state.inside.par_chunks_mut(w))
         .zip(state.color.par_chunks_mut(w * 3))
         .zip(state.alpha.par_chunks_mut(w))
+        .zip(state.pre.par_chunks_mut(state.pre_stride))
         .enumerate()
-        .map(|(y, (((((light, levels), next), inside), color), alpha))| {
-            (
-                y,
-                RowState {
-                    light,
-                    levels,
-                    next,
-                    inside,
-                    color,
-                    alpha,
-                },
-            )
-        });
+        .map(
+            |(y, ((((((light, levels), next), inside), color), alpha), pre))| {
+                (
+                    y,
+                    RowState {
+                        light,
+                        levels,
+                        next,
+                        inside,
+                        color,
+                        alpha,
+                        pre,
+                    },
+                )
+            },
+        );
     match (cpu.path, quiet) {
         (SweepPath::Scalar, _) => rows.for_each(|(y, row)| {
             sweep_row_scalar(ctx, reach, y, prev_ref, row);

@@ -126,6 +126,11 @@ pub(crate) fn sweep_row_simd(
                 for (l, level) in dark_levels.iter().enumerate() {
                     row.levels[l * w + x0..][..LANES].fill(*level);
                 }
+                if plan.preintegration {
+                    // The cursors may have crossed surfaces: forget the kept front values (a
+                    // kept value is only a saved evaluation, see `stage::preintegrated`).
+                    row.pre[x0..x0 + LANES].fill(f32::NAN);
+                }
                 spans.record(x0, LANES, true, false);
                 moved
             }

@@ -16,7 +16,10 @@ use crate::kernels::{
     LevelPlane, LightPlanes, distance_rows, gather, gather_per_lane, phase_at, phases, pixel_level,
 };
 use crate::parity::{NO_CROSSING, advance, first_mesh};
-use crate::shading::{Specular, material_at, shade, shading_depth};
+use crate::shading::{
+    Specular, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
+};
+use convshadow_common::plan::TfEntry;
 
 /// [`sweep_chunk`] for one lane type and light-channel capacity.
 pub(crate) type ChunkFn = fn(
@@ -286,16 +289,20 @@ fn shade_chunk<L: Lane>(
         xs[i] = plan.image_xy(x0 + i, y).0;
         zs[i] = shading_depth(plan, ldi, crossed[i], ctx.front, jitter_row, x0 + i);
     }
+    let active_lanes = active;
     let active = L::m_from(&active);
     let z = L::load(&zs, 0);
-    let tf = material_at(
-        plan,
-        m,
-        L::load(&xs, 0),
-        L::splat(plan.image_xy(x0, y).1),
-        z,
-    );
     let material = &plan.materials[plan.mesh_material[m as usize] as usize];
+    let (xv, yv) = (L::load(&xs, 0), L::splat(plan.image_xy(x0, y).1));
+    let tf = match &material.pre {
+        Some(table) => preintegrated(ctx, x0, row, m, table, xv, yv, &active_lanes, crossed),
+        None => {
+            if plan.preintegration {
+                forget_front(row, x0, L::LANES, &active_lanes);
+            }
+            material_at(plan, m, xv, yv, z)
+        }
+    };
     let spec = match material.specular {
         Some((strength, exponent)) if any_crossed => {
             let mut normal = [[0.0f32; MAX_LANES]; 3];
@@ -343,6 +350,68 @@ fn shade_chunk<L: Lane>(
     ]
 }
 
+/// Pre-integrated shading (`sweep.preintegration`) of the lanes of mesh `m` (those in `active`)
+/// whose material has the pre-integration table `table`: the table's entry at the detail values
+/// on the slab's front and back faces. The front value is the one the previous slab kept in
+/// `row.pre` (NaN: none), else evaluated at the front face, or at the crossed fragment's depth
+/// where the pixel crosses a surface in this slab. The back value is kept for the next slab when
+/// the pixel is still in mesh `m` at the back face (the next slab shades `m` unless it crosses a
+/// surface), else NaN. The detail is a pure function of pixel, mesh and depth, and slab k's back
+/// face is slab k + 1's front face bit for bit, so a kept value has the bits of a fresh one:
+/// keeping it only saves an evaluation, and forgetting it never changes the image.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn preintegrated<L: Lane>(
+    ctx: &SlabContext<'_>,
+    x0: usize,
+    row: &mut RowState<'_>,
+    m: u32,
+    table: &[TfEntry],
+    x: L,
+    y: L,
+    active: &[bool; MAX_LANES],
+    crossed: &[u32; MAX_LANES],
+) -> TfLanes<L> {
+    let plan = ctx.plan;
+    let mut zf = [ctx.front; MAX_LANES];
+    let mut use_kept = [false; MAX_LANES];
+    let mut fresh = false;
+    for i in 0..L::LANES {
+        let is_crossed = crossed[i] != NO_CROSSING;
+        if is_crossed {
+            zf[i] = ctx.ldi.depth[crossed[i] as usize];
+        }
+        use_kept[i] = !is_crossed && !row.pre[x0 + i].is_nan();
+        fresh |= active[i] && !use_kept[i];
+    }
+    let kept = L::load(row.pre, x0);
+    let front = if fresh {
+        let v = detail_at(plan, m, x, y, L::load(&zf, 0));
+        L::select(L::m_from(&use_kept), kept, v)
+    } else {
+        kept
+    };
+    let back = detail_at(plan, m, x, y, L::splat(ctx.back));
+    for (i, _) in active[..L::LANES].iter().enumerate().filter(|(_, a)| **a) {
+        let xi = x0 + i;
+        row.pre[xi] = if first_mesh(row.inside[xi]) == Some(m) {
+            back.lane(i)
+        } else {
+            f32::NAN
+        };
+    }
+    pre_transfer(table, front, back)
+}
+
+/// Forgets the kept front value (see [`preintegrated`]) of the `active` lanes of pixels x0..:
+/// they were shaded by a material without a pre-integration table.
+#[inline(always)]
+fn forget_front(row: &mut RowState<'_>, x0: usize, lanes: usize, active: &[bool; MAX_LANES]) {
+    for (i, _) in active[..lanes].iter().enumerate().filter(|(_, a)| **a) {
+        row.pre[x0 + i] = f32::NAN;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use std::path::Path;
@@ -378,6 +447,7 @@ mod tests {
         inside: Vec<u32>,
         color: Vec<f32>,
         alpha: Vec<f32>,
+        pre: Vec<f32>,
     }
 
     impl Row {
@@ -389,6 +459,7 @@ mod tests {
                 inside: &mut self.inside,
                 color: &mut self.color,
                 alpha: &mut self.alpha,
+                pre: &mut self.pre,
             }
         }
     }
@@ -399,6 +470,7 @@ mod tests {
             ("light", &a.light, &b.light),
             ("color", &a.color, &b.color),
             ("alpha", &a.alpha, &b.alpha),
+            ("pre", &a.pre, &b.pre),
         ];
         for (name, u, v) in floats {
             if let Some(i) = (0..u.len()).find(|&i| u[i].to_bits() != v[i].to_bits()) {
@@ -419,9 +491,16 @@ mod tests {
     }
 
     /// The default scene, small: two coloured lights (six light channels), noise and specular
-    /// materials, three meshes, through `kernel` with `penumbra` ("iterated" or "distance").
-    fn plan_of(kernel: &str, penumbra: &str) -> (Scene, SceneGeometry, Ldi, RenderPlan) {
+    /// materials, three meshes, through `kernel` with `penumbra` ("iterated" or "distance") and
+    /// `preintegration`.
+    fn plan_of(
+        kernel: &str,
+        penumbra: &str,
+        preintegration: bool,
+    ) -> (Scene, SceneGeometry, Ldi, RenderPlan) {
+        let sweep = format!("[sweep]\npreintegration = {preintegration}");
         let text = include_str!("../../../scenes/default.toml")
+            .replace("[sweep]", &sweep)
             .replace("width = 512\nheight = 512", "width = 37\nheight = 19")
             .replace(
                 "slabs = 512",
@@ -438,8 +517,15 @@ mod tests {
     /// Runs `eight` (an 8-lane stage) and the 1-lane stage eight times on the same random
     /// inputs, at every chunk position of some rows of every slab; returns the first
     /// difference.
-    fn compare_lanes(kernel: &str, penumbra: &str, seed: u32, eight: ChunkFn) -> Option<String> {
-        let (_scene, g, ldi, plan) = plan_of(kernel, penumbra);
+    fn compare_lanes(
+        kernel: &str,
+        penumbra: &str,
+        pre: bool,
+        seed: u32,
+        eight: ChunkFn,
+    ) -> Option<String> {
+        let (_scene, g, ldi, plan) = plan_of(kernel, penumbra, pre);
+        assert_eq!(plan.materials.iter().any(|m| m.pre.is_some()), pre);
         let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
         let row_len = plan.light_row_len();
         let meshes = plan.mesh_material.len() as u32;
@@ -501,6 +587,14 @@ mod tests {
                         .collect(),
                     color: (0..3 * w).map(|_| value(&mut rng)).collect(),
                     alpha: (0..w).map(|_| value(&mut rng)).collect(),
+                    // Kept front values: none (NaN) one time in three, else any value (both
+                    // paths must choose kept or fresh lane by lane alike).
+                    pre: (0..w)
+                        .map(|_| match rng.below(3) {
+                            0 => f32::NAN,
+                            _ => value(&mut rng),
+                        })
+                        .collect(),
                 };
                 for x0 in 0..=w - 8 {
                     let (mut a, mut b) = (row.clone(), row.clone());
@@ -538,7 +632,23 @@ mod tests {
         {
             for penumbra in ["iterated", "distance"] {
                 let eight = chunk_fn::<f32x8>(6);
-                assert_eq!(compare_lanes(kernel, penumbra, 17 + k as u32, eight), None);
+                assert_eq!(
+                    compare_lanes(kernel, penumbra, false, 17 + k as u32, eight),
+                    None
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn eight_lanes_and_one_lane_give_the_same_bits_with_preintegration() {
+        for (k, kernel) in ["ellipse2", "gaussian:7"].iter().enumerate() {
+            for penumbra in ["iterated", "distance"] {
+                let eight = chunk_fn::<f32x8>(6);
+                assert_eq!(
+                    compare_lanes(kernel, penumbra, true, 41 + k as u32, eight),
+                    None
+                );
             }
         }
     }
@@ -552,8 +662,8 @@ mod tests {
             row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
             r
         };
-        let d =
-            compare_lanes("ellipse2", "distance", 3, wrong_lane).expect("the flipped bit is found");
+        let d = compare_lanes("ellipse2", "distance", false, 3, wrong_lane)
+            .expect("the flipped bit is found");
         assert!(d.contains("light["), "{d}");
     }
 }

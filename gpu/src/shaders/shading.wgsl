@@ -74,6 +74,76 @@ fn transfer(m: MaterialHeader, value: f32) -> TfEntry {
     );
 }
 
+// `pre_transfer`: bilinear look-up of the pre-integration table at `base` (PI_SIZE × PI_SIZE,
+// front-major): first along the back value, then along the front value; indices clamped to
+// [0, PI_SIZE − 2] as in `transfer`.
+fn pre_index(pos: f32) -> u32 {
+    let fl = floor(pos);
+    if fl >= f32(PI_SIZE - 2u) {
+        return PI_SIZE - 2u;
+    } else if fl > 0.0 {
+        return u32(fl);
+    }
+    return 0u;
+}
+
+fn pre_transfer(base: u32, front: f32, back: f32) -> TfEntry {
+    let scale = f32(PI_SIZE - 1u);
+    let pf = front * scale;
+    let pb = back * scale;
+    let kf = pre_index(pf);
+    let kb = pre_index(pb);
+    let ff = pf - f32(kf);
+    let fb = pb - f32(kb);
+    let i = base + kf * PI_SIZE + kb;
+    let e00 = tf_entry(i);
+    let e01 = tf_entry(i + 1u);
+    let e10 = tf_entry(i + PI_SIZE);
+    let e11 = tf_entry(i + PI_SIZE + 1u);
+    let lo = TfEntry(
+        lerp3(fb, e00.color, e01.color),
+        e00.alpha + fb * (e01.alpha - e00.alpha),
+        lerp3(fb, e00.attenuation, e01.attenuation),
+    );
+    let hi = TfEntry(
+        lerp3(fb, e10.color, e11.color),
+        e10.alpha + fb * (e11.alpha - e10.alpha),
+        lerp3(fb, e10.attenuation, e11.attenuation),
+    );
+    return TfEntry(
+        lerp3(ff, lo.color, hi.color),
+        lo.alpha + ff * (hi.alpha - lo.alpha),
+        lerp3(ff, lo.attenuation, hi.attenuation),
+    );
+}
+
+// `preintegrated` (cpu/src/sweep/stage.rs): the pre-integration entry of mesh `mesh` (material
+// `m`) at pixel `p` (image coordinates + 0.5: `x`, `y`) for the detail values at the slab's
+// faces. The front value is the one kept in `pre_front` unless the pixel crossed a surface (then
+// at the crossing depth `zc`) or none is kept (then at `front`); the back value is kept for the
+// next slab when `keep` (the pixel is still in `mesh` at the back face). A kept value has the
+// bits of a fresh one, so keeping it only saves an evaluation.
+fn preintegrated(p: u32, mesh: u32, m: MaterialHeader, crossed: bool, zc: f32, front: f32, back: f32, x: f32, y: f32, keep: bool) -> TfEntry {
+    let kept = pre_front[p];
+    var vf: f32;
+    if !crossed && kept != PRE_NONE {
+        vf = bitcast<f32>(kept);
+    } else {
+        var z = front;
+        if crossed {
+            z = zc;
+        }
+        vf = detail_value(m, to_detail(mesh, x, y, z));
+    }
+    let vb = detail_value(m, to_detail(mesh, x, y, back));
+    var next = PRE_NONE;
+    if keep {
+        next = bitcast<u32>(vb);
+    }
+    pre_front[p] = next;
+    return pre_transfer(m.pre, vf, vb);
+}
+
 // `powi_by_squaring`.
 fn powi_by_squaring(x0: f32, n0: u32) -> f32 {
     var x = x0;

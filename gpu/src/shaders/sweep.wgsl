@@ -87,12 +87,22 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let mi = meshes[mesh].material;
         let m = materials[mi];
-        var value = 0.0;
-        if m.tf_len > 1u {
-            let q = to_detail(mesh, f32(i32(x) - i32(globals.guard_left)) + 0.5, f32(i32(y) - i32(globals.guard_top)) + 0.5, z);
-            value = detail_value(m, q);
+        let xi = f32(i32(x) - i32(globals.guard_left)) + 0.5;
+        let yi = f32(i32(y) - i32(globals.guard_top)) + 0.5;
+        var e: TfEntry;
+        if m.pre != NO_PRE {
+            // Pre-integrated compositing (shading.wgsl `preintegrated`).
+            e = preintegrated(p, mesh, m, crossed, z, front, back, xi, yi, first_mesh(adv.inside) == mesh);
+        } else {
+            if globals.preintegration != 0u {
+                pre_front[p] = PRE_NONE;
+            }
+            var value = 0.0;
+            if m.tf_len > 1u {
+                value = detail_value(m, to_detail(mesh, xi, yi, z));
+            }
+            e = transfer(m, value);
         }
-        let e = transfer(m, value);
         let has_spec = crossed && m.has_specular != 0u;
         var n = vec3<f32>(0.0, 0.0, 0.0);
         if has_spec {

@@ -72,9 +72,13 @@ struct Globals {
     bg_b: f32,
     row_len: u32,     // floats per light-buffer row: lights · planes · grid_w
     guard_top: u32,   // image y = grid y − guard_top
+    preintegration: u32, // 1: pre-integrated compositing (`pre_front` per grid pixel)
     planes: u32,      // planes per light: channels, then the depth plane (distance penumbra)
     depth_planes: u32, // 1 with the distance penumbra, else 0
     occlusion_eps: f32, // OCCLUSION_EPS (its f32 bits from Rust)
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct Slab {
@@ -128,6 +132,7 @@ struct MaterialHeader {
     has_specular: u32,
     spec_strength: f32,
     spec_exponent: u32,
+    pre: u32,         // first entry of the PI_SIZE² pre-integration table, or NO_PRE
 }
 
 struct TransferEntry {
@@ -177,11 +182,14 @@ struct Cursor {
 // Per (material, light), at `material · lights + light`: the light's colour times the material's
 // phase function (the bare colour for isotropic media), read by the shading's light sum.
 @group(0) @binding(29) var<storage, read> light_colors: array<array<f32, 3>>;
+// Pre-integration: per grid pixel the bits of the detail value at the next slab's front face
+// kept from this slab, or PRE_NONE (one unused word without pre-integration).
+@group(0) @binding(30) var<storage, read_write> pre_front: array<u32>;
 // Distance penumbra, per light from `LightHeader.level_of` and `.level_phases`: the level of each
 // distance in slabs (`KernelTable::level_of`) and, for scheduled kernels, each level's phase per
 // slab (`KernelTable::slab_phase`).
-@group(0) @binding(30) var<storage, read> level_table: array<u32>;
+@group(0) @binding(31) var<storage, read> level_table: array<u32>;
 // Distance penumbra: each light's level per pixel (`pixel_level`, LIT_LEVEL without an occluder),
 // `[row][light][x]`, ping-pong like the light buffers: the previous slab's and this slab's.
-@group(0) @binding(31) var<storage, read> level_prev: array<u32>;
-@group(0) @binding(32) var<storage, read_write> level_cur: array<u32>;
+@group(0) @binding(32) var<storage, read> level_prev: array<u32>;
+@group(0) @binding(33) var<storage, read_write> level_cur: array<u32>;
