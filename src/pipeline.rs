@@ -9,8 +9,9 @@ use convshadow_common::geometry::{GeometryError, SceneGeometry};
 use convshadow_common::guard::GuardBand;
 use convshadow_common::hash::Fingerprint;
 use convshadow_common::image_io::RgbImage;
+use convshadow_common::ldi::BYTES_PER_FRAGMENT;
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::{Scene, SceneError};
+use convshadow_common::scene::{Penumbra, Scene, SceneError};
 use convshadow_cpu::ldi::{BuildLdi, Ldi, LdiError, LdiStats};
 use convshadow_cpu::sweep::{
     ChunkCounts, CpuOptions, SweepError, SweepOptions, SweepPath, sweep_with,
@@ -251,7 +252,9 @@ pub struct MemoryNeed {
     pub grid_pixels: u64,
     /// The LDI's per-pixel arrays.
     pub ldi_pixels: u64,
-    /// The sweep's two light buffers per light and channel (ping-pong), f32.
+    /// The sweep's two light buffers per light and plane (ping-pong), f32: a plane per channel
+    /// and, with the distance penumbra, the occluder-depth plane; then (distance penumbra) the
+    /// two level planes per light, u32.
     pub light_buffers: u64,
     /// The sweep's per-pixel state: layer cursor, inside bits, colour and alpha.
     pub sweep_state: u64,
@@ -261,7 +264,7 @@ pub struct MemoryNeed {
     /// f32 voxels while loading; rendering only) and OBJ files (twice the text: the parsed mesh).
     pub inputs: u64,
     /// Device buffers of the GPU backend before any fragment (0 on the CPU, see
-    /// [`MemoryNeed::on_gpu`]): its two light buffers per light and channel, layer cursors,
+    /// [`MemoryNeed::on_gpu`]): its two light buffers per light and plane, layer cursors,
     /// per-pixel colour, LDI offsets, the image and its read-back copy, and the texture voxels.
     pub gpu_buffers: u64,
     /// Whether the LDI's fragments are also held on the device (the GPU backend): the
@@ -314,10 +317,13 @@ impl MemoryNeed {
         let grid_pixels = guard.grid_pixels(scene.image.width, scene.image.height);
         let image_pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
         let channels: u64 = if scene.is_monochrome() { 1 } else { 3 };
+        // The distance penumbra's depth plane per light (`RenderPlan::depth_planes`), and its
+        // level plane (4 bytes a pixel too): two planes more per light.
+        let depth_planes = u64::from(scene.sweep.penumbra == Penumbra::Distance);
         let lights = scene.lights.len() as u64;
         let (light_buffers, sweep_state, output) = if sweep {
             (
-                2 * lights * channels * 4 * grid_pixels,
+                2 * lights * (channels + 2 * depth_planes) * 4 * grid_pixels,
                 // Cursor, inside bits, colour, alpha; with pre-integration the kept front value.
                 (4 + 4 + 12 + 4 + if scene.sweep.preintegration { 4 } else { 0 }) * grid_pixels,
                 (12 + 3 + 3) * image_pixels,
@@ -434,6 +440,58 @@ impl MemoryNeed {
             budget >> 20
         )))
     }
+}
+
+/// Bytes of the plan's kernel tables while sweeping on `backend` (`Cpu` or `Gpu`), known only
+/// once the plan is built: they grow with the distance penumbra's levels (one tap table per
+/// level, about 100 at 512 slabs). On the host the taps (24 bytes each) and the level tables
+/// (`level_of` and the per-level schedule, 4 bytes an entry); the CPU sweep adds its per-tap
+/// columns (16 bytes of weights, a 4-byte light offset and a 4-byte level-plane offset a tap);
+/// the GPU a device copy of the taps and
+/// level tables (gpu/src/sweep.rs `light_tables`).
+pub fn kernel_table_bytes(plan: &RenderPlan, backend: Backend) -> u64 {
+    let (mut taps, mut words) = (0u64, 0u64);
+    for light in &plan.lights {
+        let t = &light.table;
+        taps += t.taps.len() as u64;
+        words += (t.level_of.len() + t.slab_phase.len()) as u64;
+    }
+    let host = 24 * taps + 4 * words;
+    match backend {
+        Backend::Gpu => 2 * host,
+        _ => host + 24 * taps,
+    }
+}
+
+/// Refuses, after the plan is built, kernel tables that do not fit in what the memory budget
+/// leaves after the LDI's fragments (`left`: the fragment budget [`MemoryNeed::check`] gave).
+fn check_tables(
+    scene: &Scene,
+    plan: &RenderPlan,
+    backend: Backend,
+    left: u64,
+    fragments: u64,
+) -> Result<(), RenderError> {
+    let tables = kernel_table_bytes(plan, backend);
+    let free = left.saturating_sub(fragments.saturating_mul(BYTES_PER_FRAGMENT));
+    if tables <= free {
+        return Ok(());
+    }
+    let levels = plan.lights.first().map_or(1, |l| l.table.levels);
+    Err(RenderError::OutOfMemory(format!(
+        "{}: the kernel tables need {} MiB ({} lights, {levels} kernel levels, {}), more than the \
+         {} MiB the memory budget leaves after the LDI's {fragments} fragments; lower \
+         sweep.slabs or use a smaller kernel (sweep.kernel), or raise --max-memory",
+        scene.source,
+        tables.div_ceil(1 << 20),
+        plan.lights.len(),
+        if backend == Backend::Gpu {
+            "on the host and the device"
+        } else {
+            "with the sweep's tap columns"
+        },
+        free >> 20,
+    )))
 }
 
 /// Opens `backend` and checks the memory need (with `sweep = false`: of the LDI alone) on the
@@ -599,6 +657,13 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
             _ => RenderError::BadPlan(e.to_string()),
         })?;
     let seconds_plan = t_plan.elapsed().as_secs_f64();
+    check_tables(
+        scene,
+        &plan,
+        choice.opened(),
+        fragment_budget,
+        stats.fragments,
+    )?;
     check_cancel(req.cancel)?;
     let t_sweep = Instant::now();
     let chunk_counts = ChunkCounts::default();
@@ -650,6 +715,72 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_distance_penumbra_counts_a_depth_and_a_level_plane_per_light() {
+        // The default scene: two coloured lights, three channels each; the distance penumbra
+        // adds a depth plane and a level plane (4 bytes a pixel each) per light, so its light
+        // buffers are 5/3 of the iterated ones.
+        let mut scene = Scene::default_scene();
+        let g = GuardBand::default();
+        let iterated = MemoryNeed::for_backend(&scene, g, true, Backend::Gpu);
+        scene.sweep.penumbra = Penumbra::Distance;
+        let distance = MemoryNeed::for_backend(&scene, g, true, Backend::Gpu);
+        assert_eq!(3 * distance.light_buffers, 5 * iterated.light_buffers);
+        assert_eq!(
+            distance.light_buffers,
+            2 * 2 * (3 + 1 + 1) * 4 * iterated.grid_pixels
+        );
+        // Both copies count on the GPU: the host's and the device's.
+        assert_eq!(
+            distance.gpu_buffers - iterated.gpu_buffers,
+            distance.light_buffers - iterated.light_buffers
+        );
+    }
+
+    #[test]
+    fn kernel_tables_over_the_budget_left_are_refused_after_the_plan() {
+        let mut scene = Scene::default_scene();
+        scene.image.width = 24;
+        scene.image.height = 24;
+        scene.sweep.slabs = convshadow_common::scene::SlabSpec::Count(48);
+        scene.sweep.penumbra = Penumbra::Distance;
+        scene.revalidate().unwrap();
+        let req = |memory_budget| RenderRequest {
+            threads: 1,
+            memory_budget,
+            ..RenderRequest::default()
+        };
+        let r = render(&scene, &req(1 << 30)).unwrap_or_else(|e| panic!("{e}"));
+        // 48 slabs: levels 1..=16 of one slab, 17..=31 of one, 32..=47 of two, 48 alone.
+        assert_eq!(r.plan.lights[0].table.levels, 16 + 15 + 8 + 1);
+        let tables = kernel_table_bytes(&r.plan, Backend::Cpu);
+        // At least every level's taps, each of 24 + 24 bytes.
+        let min_taps: u64 = r.plan.lights.len() as u64 * 40;
+        assert!(tables >= min_taps * 48, "{tables}");
+        let need = MemoryNeed::for_backend(&scene, r.plan.guard, true, Backend::Cpu).total();
+        let exact = need + r.ldi.fragments * BYTES_PER_FRAGMENT + tables;
+        let err = render(&scene, &req(exact - 1))
+            .err()
+            .expect("one byte short of the tables")
+            .to_string();
+        assert!(err.contains("the kernel tables need"), "{err}");
+        assert!(err.contains("40 kernel levels"), "{err}");
+        let fits = render(&scene, &req(exact)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(fits.image_hash, r.image_hash);
+        // The GPU holds the taps and level tables twice (host and device), without the CPU's
+        // tap columns.
+        let taps: u64 = r
+            .plan
+            .lights
+            .iter()
+            .map(|l| l.table.taps.len() as u64)
+            .sum();
+        assert_eq!(
+            kernel_table_bytes(&r.plan, Backend::Gpu),
+            2 * (tables - 24 * taps)
+        );
+    }
 
     #[test]
     fn gpu_buffers_count_in_the_memory_need_and_are_named() {

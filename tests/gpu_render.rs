@@ -1,14 +1,17 @@
 //! On lavapipe the GPU image is bit-identical to the CPU image (same `image_hash`, same final
 //! light buffers) for every example scene, every kernel, and scenes that reach every shader path
 //! (3D and 4D noise of every kind, 3D textures, specular, jitter off, monochrome light, a fixed
-//! guard band and an automatic one, different on each side, pre-integrated compositing). On other adapters the images must stay within the thresholds of docs/gpu.md.
+//! guard band and an automatic one, different on each side, pre-integrated compositing), with the
+//! iterated and the distance penumbra (every kernel family, volumes, a patterned light; the
+//! distance penumbra's depth planes are part of the final light buffers compared). On other
+//! adapters the images must stay within the thresholds of docs/gpu.md.
 
 mod gpu_common;
 mod support;
 
 use convshadow::common::guard::GuardBandSpec;
 use convshadow::common::metrics::compare;
-use convshadow::common::scene::Scene;
+use convshadow::common::scene::{Penumbra, Scene};
 use convshadow::pipeline::{Backend, RenderRequest, Rendered, render};
 use convshadow_gpu::GpuContext;
 
@@ -22,8 +25,8 @@ fn run(scene: &Scene, backend: Backend) -> Rendered {
     render(scene, &req).unwrap_or_else(|f| panic!("{}: {}", scene.source, f))
 }
 
-/// Renders on both backends and checks the contract for the adapter.
-fn check(ctx: &GpuContext, scene: &Scene, what: &str) {
+/// Renders on both backends and checks the contract for the adapter; returns the CPU render.
+fn check(ctx: &GpuContext, scene: &Scene, what: &str) -> Rendered {
     let cpu = run(scene, Backend::Cpu);
     let gpu = run(scene, Backend::Gpu);
     assert_eq!(cpu.backend, "cpu");
@@ -78,6 +81,50 @@ fn check(ctx: &GpuContext, scene: &Scene, what: &str) {
         .cloned()
         .fold(f32::NEG_INFINITY, f32::max);
     assert!(hi - lo > 0.05, "{what}: the image is flat ({lo}..{hi})");
+    cpu
+}
+
+/// `scene` with `sweep.penumbra = "distance"` (re-validated).
+fn with_distance(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    s.sweep.penumbra = Penumbra::Distance;
+    s.revalidate().unwrap_or_else(|e| panic!("{e}"));
+    s
+}
+
+/// [`check`] with the distance penumbra, after checks that it is live: the CPU image differs
+/// from the iterated penumbra's (so the comparison is not of a path the mode skips), and the
+/// final light buffers hold one depth plane per light after its channels, some of it non-zero
+/// (occluders were recorded and read back from the device).
+fn check_distance(ctx: &GpuContext, scene: &Scene, what: &str) {
+    let iterated = run(scene, Backend::Cpu);
+    let cpu = check(
+        ctx,
+        &with_distance(scene),
+        &format!("{what}, distance penumbra"),
+    );
+    assert_ne!(
+        cpu.image_hash, iterated.image_hash,
+        "{what}: the distance penumbra changed nothing"
+    );
+    let plan = &cpu.plan;
+    assert_eq!(plan.penumbra, Penumbra::Distance);
+    let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
+    let planes = ch + 1;
+    assert_eq!(
+        cpu.light.len(),
+        plan.lights.len() * planes * w * plan.grid_height as usize,
+        "{what}: light buffers of lights × (channels + 1 depth plane) × pixels"
+    );
+    let depth_nonzero = cpu
+        .light
+        .chunks(w)
+        .enumerate()
+        .filter(|(p, _)| p % planes == ch)
+        .flat_map(|(_, plane)| plane)
+        .filter(|&&d| d != 0.0)
+        .count();
+    assert!(depth_nonzero > 0, "{what}: every depth plane is 0");
 }
 
 #[test]
@@ -426,4 +473,129 @@ fn auto_counts_the_memory_of_the_backend_it_picks() {
     assert_eq!(code, Some(0), "{err}");
     assert!(err.contains("rendering on the CPU"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_the_distance_penumbra() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    // The default scene (a cloud, a marble sphere, a wall; two coloured lights) with 40 slabs:
+    // distance levels of one slab up to 16, of two from 32 (docs/gpu.md), so `level_of` maps
+    // several distances to one level.
+    let mut scene = Scene::default_scene();
+    gpu_common::shrink(&mut scene, 48, 40);
+    check_distance(&ctx, &scene, "default scene");
+    // A volume of haze under a plate with a window, one hard light (grey: one channel).
+    let shaft = gpu_common::small(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/shaft.toml"),
+        48,
+        32,
+    );
+    check_distance(&ctx, &shaft, "shaft scene");
+    // Every shader path: 4D noise, a 3D texture, specular, three lights (one of zero variance),
+    // 1- and 3-channel light, jitter on and off, a fixed and an automatic guard band.
+    let dir = support::temp_dir("gpu-distance-paths");
+    for (monochrome, jitter) in [(false, true), (true, false)] {
+        let mut scene = path_scene(&dir, monochrome, jitter);
+        check_distance(
+            &ctx,
+            &scene,
+            &format!("shader paths, monochrome {monochrome}, jitter {jitter}"),
+        );
+        scene.sweep.guard_band = GuardBandSpec::Auto;
+        check_distance(
+            &ctx,
+            &scene,
+            &format!("shader paths, monochrome {monochrome}, jitter {jitter}, automatic band"),
+        );
+    }
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_the_distance_penumbra_for_every_kernel() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    // Per-pixel, per-slab and scheduled phases (a schedule's phase is per level), with and
+    // without variance compensation (the mean carried in whole pixels or not).
+    let mut scene = Scene::default_scene();
+    gpu_common::shrink(&mut scene, 40, 36);
+    for (k, kernel) in support::kernels().into_iter().enumerate() {
+        scene.sweep.kernel = kernel.parse().unwrap();
+        scene.sweep.variance_compensation = k % 2 == 0;
+        check_distance(
+            &ctx,
+            &scene,
+            &format!(
+                "kernel {kernel}, compensation {}",
+                scene.sweep.variance_compensation
+            ),
+        );
+    }
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_a_patterned_light_and_the_distance_penumbra() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-pattern-distance");
+    let (w, h) = (5u32, 4u32);
+    let data: Vec<f32> = (0..w * h * 3)
+        .map(|i| ((i * 41 + 7) % 89) as f32 / 88.0)
+        .collect();
+    convshadow::common::image_io::RgbImage {
+        width: w,
+        height: h,
+        data,
+    }
+    .save(&dir.join("gobo.png"))
+    .unwrap();
+    let mut scene = path_scene(&dir, true, true);
+    scene.lights[1].pattern = Some(convshadow::common::scene::PatternSpec {
+        path: dir.join("gobo.png"),
+        size: [2.7, 3.3],
+        center: [-0.2, 0.5],
+    });
+    // The initial light buffer comes from the pattern, with the depth planes at 0.
+    check_distance(&ctx, &scene, "patterned light");
+}
+
+#[test]
+fn render_backend_gpu_with_the_distance_penumbra_matches_the_cpu() {
+    let Some(_ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-cli-distance");
+    let hash = |backend: &str| {
+        let json = format!("{backend}.json");
+        let (code, out, err) = support::run_cli(
+            &[
+                "render",
+                "--backend",
+                backend,
+                "--penumbra",
+                "distance",
+                "--width",
+                "40",
+                "--height",
+                "40",
+                "--slabs",
+                "20",
+                "-o",
+                &format!("{backend}.png"),
+                "--stats-json",
+                &json,
+            ],
+            &dir,
+        );
+        assert_eq!(code, 0, "{out}{err}");
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join(&json)).unwrap()).unwrap();
+        assert_eq!(stats["backend"], backend);
+        assert_eq!(stats["penumbra"], "distance", "{stats}");
+        stats["image_hash"].as_str().unwrap().to_string()
+    };
+    assert_eq!(hash("gpu"), hash("cpu"));
 }

@@ -107,15 +107,24 @@ pub struct Globals {
     pub bg_g: f32,
     /// Background blue.
     pub bg_b: f32,
-    /// Floats per light-buffer row (`lights · channels · grid_w`).
+    /// Floats per light-buffer row (`lights · planes · grid_w`).
     pub row_len: u32,
     /// Guard band rows above the image (image y = grid y − guard_top).
     pub guard_top: u32,
     /// 1 with pre-integrated compositing (`pre_front` then holds one word per grid pixel).
     pub preintegration: u32,
+    /// Planes per light in the light buffers: its channels, then its depth plane if any.
+    pub planes: u32,
+    /// Depth planes per light: 1 with the distance penumbra (`RenderPlan::depth_planes`), else 0.
+    pub depth_planes: u32,
+    /// Distance penumbra: occluded light at or below this has no mean occluder depth
+    /// (`plan::OCCLUSION_EPS`, uploaded as its f32 bits).
+    pub occlusion_eps: f32,
     /// Uniform structs are a multiple of 16 bytes.
+    pub _pad0: u32,
+    /// See `_pad0`.
     pub _pad1: u32,
-    /// See `_pad1`.
+    /// See `_pad0`.
     pub _pad2: u32,
 }
 
@@ -135,10 +144,20 @@ pub struct Slab {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct LightHeader {
-    /// Index of the light's first tap in the taps buffer.
+    /// Index of the light's first tap in the taps buffer (row r = level · phase_count + phase
+    /// starts `taps_per_phase · r` further).
     pub taps: u32,
-    /// Taps per phase.
+    /// Taps per phase (per row).
     pub taps_per_phase: u32,
+    /// Phases per level (`KernelTable::phase_count`).
+    pub phase_count: u32,
+    /// Distance penumbra: index in the level-table buffer of `KernelTable::level_of[0]`.
+    pub level_of: u32,
+    /// Distance penumbra: the largest distance with a level, `level_of.len() − 1`.
+    pub level_top: u32,
+    /// Distance penumbra, scheduled kernels: index in the level-table buffer of
+    /// `KernelTable::slab_phase[0]` (`level · slabs + slab`).
+    pub level_phases: u32,
     /// Bits of the phase hash used to pick a phase.
     pub phase_bits: u32,
     /// One of the `PHASE_*` codes.
@@ -326,6 +345,9 @@ pub mod slot {
         NORMALS = "normals", 28;
         LIGHT_COLORS = "light_colors", 29;
         PRE_FRONT = "pre_front", 30;
+        LEVEL_TABLE = "level_table", 31;
+        LEVEL_PREV = "level_prev", 32;
+        LEVEL_CUR = "level_cur", 33;
     }
 }
 
@@ -393,6 +415,10 @@ mod tests {
                 row_len,
                 guard_top,
                 preintegration,
+                planes,
+                depth_planes,
+                occlusion_eps,
+                _pad0,
                 _pad1,
                 _pad2,
             }),
@@ -404,6 +430,10 @@ mod tests {
             layout!(LightHeader {
                 taps,
                 taps_per_phase,
+                phase_count,
+                level_of,
+                level_top,
+                level_phases,
                 phase_bits,
                 phase_mode,
                 color,

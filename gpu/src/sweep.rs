@@ -3,15 +3,19 @@
 //!
 //! Every table the sweep reads comes from the [`RenderPlan`] built on the host (kernel taps,
 //! per-slab hashes, phases and shifts, transfer functions, octave tables, detail transforms,
-//! slab faces) and is uploaded as it is, one storage buffer per table, each an array of one of
+//! slab faces, and for the distance penumbra every level's taps, `level_of` and the per-level
+//! slab schedule) and is uploaded as it is, one storage buffer per table, each an array of one of
 //! the `layout` structs: nothing is recomputed on the device. One dispatch per slab, one invocation per
 //! grid pixel; the two light buffers ping-pong; the slab index reaches the shader through a small
 //! uniform filled by a buffer copy before each dispatch, so many slabs go in one submission.
 
+use convshadow_common::kernel::KernelTable;
 use convshadow_common::kernel::PhaseMode;
 use convshadow_common::ldi::Ldi;
 use convshadow_common::noise::{DetailKind, PERLIN4_SCALE};
-use convshadow_common::plan::{FLUSH_BELOW, LightPlan, MaterialPlan, RenderPlan, TF_SIZE, TfEntry};
+use convshadow_common::plan::{
+    FLUSH_BELOW, LIT_LEVEL, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE, TfEntry,
+};
 use convshadow_common::raster::RasterSetup;
 use convshadow_common::scene::MAX_MESHES;
 use convshadow_common::sweep_io::{MAX_LIGHT_CHANNELS, SweepOptions, SweepOutput};
@@ -31,6 +35,10 @@ pub const MAX_TRIANGLES: usize = 1 << (32 - MESH_BITS);
 const SLABS_PER_SUBMIT: u32 = 32;
 /// The sweep's workgroup edge (`@workgroup_size(8, 8)`).
 const TILE: u32 = 8;
+/// Storage buffers the `sweep_slab` entry point binds (the two light buffers and every table of
+/// [`slab_groups`], and the two level planes); checked against the adapter's per-stage limit before the pipeline is made
+/// (lavapipe allows 32), and against the WGSL by a test.
+const SWEEP_STORAGE_BUFFERS: u32 = 22;
 
 /// Everything the sweep reads besides the LDI and the light buffers, as the shader's structs.
 struct Tables {
@@ -39,6 +47,8 @@ struct Tables {
     lights: Vec<LightHeader>,
     light_slabs: Vec<LightSlab>,
     taps: Vec<Tap>,
+    /// Distance penumbra, per light: `level_of`, then the per-level slab phases.
+    level_table: Vec<u32>,
     materials: Vec<MaterialHeader>,
     tf_entries: Vec<TransferEntry>,
     octaves: Vec<Octave>,
@@ -73,12 +83,67 @@ fn check_limits(plan: &RenderPlan, raster: &RasterSetup) -> Result<(), GpuError>
     Ok(())
 }
 
-/// One light's header, appending its taps and per-slab values.
-fn light_tables(light: &LightPlan, slabs: usize, t: &mut Tables) -> LightHeader {
+/// Checks a light's level tables (distance penumbra) against what the shader indexes: `level_of`
+/// covers every distance 1..=slabs with a level below `levels`, and a schedule has a phase
+/// below `phase_count` per level and slab. A malformed plan is refused, not read out of bounds.
+fn check_levels(l: usize, light: &LightPlan, slabs: usize) -> Result<(), GpuError> {
+    let t = &light.table;
+    let bad = |what: String| {
+        Err(GpuError::Unsupported(format!(
+            "light {l}: the distance penumbra's kernel table {what}"
+        )))
+    };
+    if t.level_of.len() < 2 || t.level_of.len() > slabs + 1 {
+        return bad(format!(
+            "has {} level_of entries, expected 2..={}",
+            t.level_of.len(),
+            slabs + 1
+        ));
+    }
+    if let Some(v) = t.level_of.iter().find(|&&v| v >= t.levels) {
+        return bad(format!("maps a distance to level {v} of {}", t.levels));
+    }
+    if t.taps.len() != (t.rows() * t.taps_per_phase) as usize {
+        return bad(format!(
+            "has {} taps, expected {} rows × {}",
+            t.taps.len(),
+            t.rows(),
+            t.taps_per_phase
+        ));
+    }
+    if t.phase_mode == PhaseMode::Schedule
+        && (t.slab_phase.len() != t.levels as usize * slabs
+            || t.slab_phase.iter().any(|&p| p >= t.phase_count))
+    {
+        return bad(format!(
+            "has a schedule of {} phases, expected {} levels × {slabs} slabs below {}",
+            t.slab_phase.len(),
+            t.levels,
+            t.phase_count
+        ));
+    }
+    Ok(())
+}
+
+/// One light's header, appending its taps (every level's rows), per-slab values and, for the
+/// distance penumbra, its level tables.
+fn light_tables(light: &LightPlan, slabs: usize, distance: bool, t: &mut Tables) -> LightHeader {
     let table = &light.table;
+    let level_of = t.level_table.len() as u32;
+    if distance {
+        t.level_table.extend_from_slice(&table.level_of);
+    }
+    let level_phases = t.level_table.len() as u32;
+    if distance && table.phase_mode == PhaseMode::Schedule {
+        t.level_table.extend_from_slice(&table.slab_phase);
+    }
     let header = LightHeader {
         taps: t.taps.len() as u32,
         taps_per_phase: table.taps_per_phase,
+        phase_count: table.phase_count,
+        level_of,
+        level_top: table.level_of.len().saturating_sub(1) as u32,
+        level_phases,
         phase_bits: table.phase_bits(),
         phase_mode: match table.phase_mode {
             PhaseMode::PerPixel => PHASE_PER_PIXEL,
@@ -179,6 +244,9 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             bg_b: plan.background[2],
             row_len: plan.light_row_len() as u32,
             guard_top: plan.guard.top,
+            planes: plan.planes_per_light() as u32,
+            depth_planes: plan.depth_planes() as u32,
+            occlusion_eps: OCCLUSION_EPS,
             preintegration: u32::from(plan.preintegration),
             ..Globals::default()
         },
@@ -192,6 +260,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
         lights: Vec::with_capacity(plan.lights.len()),
         light_slabs: Vec::new(),
         taps: Vec::new(),
+        level_table: Vec::new(),
         materials: Vec::with_capacity(plan.materials.len()),
         tf_entries: Vec::new(),
         octaves: Vec::new(),
@@ -212,8 +281,12 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             .flat_map(|m| m.light_color.iter().copied())
             .collect(),
     };
-    for light in &plan.lights {
-        let header = light_tables(light, slabs, &mut t);
+    let distance = plan.depth_planes() > 0;
+    for (l, light) in plan.lights.iter().enumerate() {
+        if distance {
+            check_levels(l, light, slabs)?;
+        }
+        let header = light_tables(light, slabs, distance, &mut t);
         t.lights.push(header);
     }
     for m in &plan.materials {
@@ -250,10 +323,61 @@ fn grid_size(plan: &RenderPlan) -> Result<GridSize, GpuError> {
     })
 }
 
+/// `convshadow_cpu::kernels::pixel_level` for one pixel (the same f32 operations in the same
+/// order; the GPU's `pixel_level` in kernels.wgsl too): the level of a pixel whose light has the
+/// occluded part `occluded` and the occlusion-weighted depth `depth`, for slab `slab`;
+/// [`LIT_LEVEL`] without an occluder.
+fn pixel_level(table: &KernelTable, occluded: f32, depth: f32, slab: u32) -> u32 {
+    let has_occluder = occluded > OCCLUSION_EPS;
+    let mean_depth = depth / if has_occluder { occluded } else { 1.0 };
+    let mut h = (slab as f32 - mean_depth) + 0.5;
+    let top = table.level_of.len().saturating_sub(1) as f32;
+    // Compare and select, as the lanes do (a NaN passes both unchanged).
+    if h < 1.0 {
+        h = 1.0;
+    }
+    if h > top {
+        h = top;
+    }
+    let h = if has_occluder { h } else { 1.0 };
+    let level = table.level_of[h as i32 as u32 as usize];
+    if has_occluder { level } else { LIT_LEVEL }
+}
+
+/// The level planes before the first slab (distance penumbra), `[row][light][x]`, as the CPU's
+/// `initial_levels`: from the initial light (a pattern's dark parts are occluders at depth 0),
+/// channels summed left to right from 0. One unused word per row with the iterated penumbra.
+fn initial_levels(plan: &RenderPlan, light: &[u32]) -> Vec<u32> {
+    let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
+    let lrl = plan.level_row_len();
+    let mut levels = vec![0u32; lrl * h];
+    if plan.depth_planes() == 0 {
+        return levels;
+    }
+    let (ch, row_len) = (plan.channels as usize, plan.light_row_len());
+    for y in 0..h {
+        for (l, light_plan) in plan.lights.iter().enumerate() {
+            for x in 0..w {
+                let at =
+                    |c: usize| f32::from_bits(light[y * row_len + plan.light_plane(l, c) * w + x]);
+                let mut lit = 0.0f32;
+                for c in 0..ch {
+                    lit += at(c);
+                }
+                let occluded = ch as f32 - lit;
+                levels[y * lrl + l * w + x] = pixel_level(&light_plan.table, occluded, at(ch), 0);
+            }
+        }
+    }
+    levels
+}
+
 /// Every device buffer the sweep binds or copies from.
 struct SweepBuffers {
     light_a: wgpu::Buffer,
     light_b: wgpu::Buffer,
+    level_a: wgpu::Buffer,
+    level_b: wgpu::Buffer,
     cursors: wgpu::Buffer,
     accum: wgpu::Buffer,
     offsets: wgpu::Buffer,
@@ -263,6 +387,7 @@ struct SweepBuffers {
     lights: wgpu::Buffer,
     light_slabs: wgpu::Buffer,
     taps: wgpu::Buffer,
+    level_table: wgpu::Buffer,
     materials: wgpu::Buffer,
     tf_entries: wgpu::Buffer,
     octaves: wgpu::Buffer,
@@ -290,11 +415,20 @@ fn upload_buffers(
     let (pixels, light_words) = (grid.pixels, grid.light_words);
     let initial: Vec<u32> = match options.initial_light {
         Some(v) => v.iter().map(|x| x.to_bits()).collect(),
-        None => vec![1.0f32.to_bits(); light_words as usize],
+        // Light 1 and, with the distance penumbra, occluder depth 0 (as the CPU starts).
+        None => plan
+            .unlit_light_buffer()
+            .into_iter()
+            .map(f32::to_bits)
+            .collect(),
     };
     let light_a = upload(ctx, "light", &initial, true)?;
+    let levels = initial_levels(plan, &initial);
     drop(initial);
     let light_b = zeroed(ctx, "light", light_words)?;
+    let level_a = upload(ctx, "level plane", &levels, false)?;
+    let level_b = zeroed(ctx, "level plane", levels.len() as u64)?;
+    drop(levels);
     let cursors: Vec<Cursor> = ldi.offsets[..pixels as usize]
         .iter()
         .map(|&o| Cursor { next: o, inside: 0 })
@@ -315,6 +449,7 @@ fn upload_buffers(
     let lights = upload(ctx, "light header", &tables.lights, false)?;
     let light_slabs = upload(ctx, "light slab", &tables.light_slabs, false)?;
     let taps = upload(ctx, "kernel tap", &tables.taps, false)?;
+    let level_table = upload(ctx, "kernel level table", &tables.level_table, false)?;
     let materials = upload(ctx, "material header", &tables.materials, false)?;
     let tf_entries = upload(ctx, "transfer function", &tables.tf_entries, false)?;
     let octaves = upload(ctx, "octave", &tables.octaves, false)?;
@@ -338,6 +473,8 @@ fn upload_buffers(
     Ok(SweepBuffers {
         light_a,
         light_b,
+        level_a,
+        level_b,
         cursors,
         accum,
         offsets,
@@ -347,6 +484,7 @@ fn upload_buffers(
         lights,
         light_slabs,
         taps,
+        level_table,
         materials,
         tf_entries,
         octaves,
@@ -393,13 +531,14 @@ fn sweep_pipelines(ctx: &GpuContext) -> (wgpu::ComputePipeline, wgpu::ComputePip
     (slab_pipe, finish_pipe)
 }
 
-/// The per-slab bind groups, `[even, odd]`: each reads one light buffer and writes the other.
+/// The per-slab bind groups, `[even, odd]`: each reads one light buffer and level plane and
+/// writes the other.
 fn slab_groups(
     ctx: &GpuContext,
     slab_pipe: &wgpu::ComputePipeline,
     b: &SweepBuffers,
 ) -> [wgpu::BindGroup; 2] {
-    let common: [(u32, &wgpu::Buffer); 19] = [
+    let common: [(u32, &wgpu::Buffer); 20] = [
         (slot::SLAB_PARAMS, &b.slab_param),
         (slot::GLOBALS, &b.globals),
         (slot::CURSORS, &b.cursors),
@@ -411,6 +550,7 @@ fn slab_groups(
         (slot::LIGHTS, &b.lights),
         (slot::LIGHT_SLABS, &b.light_slabs),
         (slot::TAPS, &b.taps),
+        (slot::LEVEL_TABLE, &b.level_table),
         (slot::MATERIALS, &b.materials),
         (slot::TF_ENTRIES, &b.tf_entries),
         (slot::OCTAVES, &b.octaves),
@@ -420,14 +560,16 @@ fn slab_groups(
         (slot::LIGHT_COLORS, &b.light_colors),
         (slot::PRE_FRONT, &b.pre_front),
     ];
-    let group_for = |prev: &wgpu::Buffer, cur: &wgpu::Buffer| {
+    let group_for = |prev: [&wgpu::Buffer; 2], cur: [&wgpu::Buffer; 2]| {
         let mut e: Vec<(u32, &wgpu::Buffer)> = common.to_vec();
-        e.push((slot::LIGHT_PREV, prev));
-        e.push((slot::LIGHT_CUR, cur));
+        e.push((slot::LIGHT_PREV, prev[0]));
+        e.push((slot::LIGHT_CUR, cur[0]));
+        e.push((slot::LEVEL_PREV, prev[1]));
+        e.push((slot::LEVEL_CUR, cur[1]));
         bind(ctx, slab_pipe, &e)
     };
-    let even = group_for(&b.light_a, &b.light_b);
-    let odd = group_for(&b.light_b, &b.light_a);
+    let even = group_for([&b.light_a, &b.level_a], [&b.light_b, &b.level_b]);
+    let odd = group_for([&b.light_b, &b.level_b], [&b.light_a, &b.level_a]);
     [even, odd]
 }
 
@@ -541,6 +683,13 @@ pub fn sweep(
 ) -> Result<SweepOutput, GpuError> {
     let grid = grid_size(plan)?;
     let tables = build_tables(plan, raster)?;
+    let per_stage = ctx.limits.max_storage_buffers_per_shader_stage;
+    if per_stage < SWEEP_STORAGE_BUFFERS {
+        return Err(GpuError::Unsupported(format!(
+            "the sweep binds {SWEEP_STORAGE_BUFFERS} storage buffers, the adapter allows \
+             {per_stage} per shader stage"
+        )));
+    }
     check_size(ctx, "light", grid.light_words * 4)?;
     check_size(ctx, "per-pixel colour", grid.pixels * 16)?;
     let buffers = upload_buffers(ctx, plan, ldi, options, &tables, &grid)?;
@@ -552,4 +701,100 @@ pub fn sweep(
     )?;
     dispatch_finish(ctx, plan, &buffers, &finish_pipe);
     read_output(ctx, plan, &buffers, grid.light_words)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use convshadow_common::geometry::SceneGeometry;
+    use convshadow_common::scene::{Penumbra, Scene, SlabSpec};
+
+    /// The default scene, small, with the distance penumbra and `kernel`: its geometry and plan.
+    fn distance_plan(kernel: &str) -> (SceneGeometry, RenderPlan) {
+        let mut scene = Scene::default_scene();
+        scene.image.width = 16;
+        scene.image.height = 16;
+        scene.sweep.slabs = SlabSpec::Count(40);
+        scene.sweep.kernel = kernel.parse().expect("kernel");
+        scene.sweep.penumbra = Penumbra::Distance;
+        scene.revalidate().expect("scene");
+        let g = SceneGeometry::build(&scene).expect("geometry");
+        let plan = RenderPlan::new(&scene, &g).expect("plan");
+        (g, plan)
+    }
+
+    #[test]
+    fn level_tables_are_uploaded_where_the_headers_say() {
+        let (g, plan) = distance_plan("box");
+        let t = build_tables(&plan, &g.raster).expect("tables");
+        assert_eq!(t.globals.planes, plan.channels + 1);
+        assert_eq!(t.globals.depth_planes, 1);
+        for (l, light) in plan.lights.iter().enumerate() {
+            let (h, table) = (&t.lights[l], &light.table);
+            let at = |i: u32, n: usize| &t.level_table[i as usize..][..n];
+            assert_eq!(at(h.level_of, 41), &table.level_of[..]);
+            assert_eq!(h.level_top, 40);
+            assert_eq!(
+                at(h.level_phases, table.slab_phase.len()),
+                &table.slab_phase[..]
+            );
+            // 40 slabs: levels 1..=31 of one distance, then 32..=39 in pairs, 40 alone.
+            assert_eq!(table.levels, 31 + 4 + 1);
+            assert_eq!(table.slab_phase.len(), 36 * 40);
+            // Every level's rows, as the table holds them.
+            let n = (table.levels * table.phase_count * table.taps_per_phase) as usize;
+            let uploaded = &t.taps[h.taps as usize..][..n];
+            for (a, b) in uploaded.iter().zip(&table.taps) {
+                assert_eq!((a.dx, a.dy, a.w), (b.dx, b.dy, b.w));
+            }
+            assert_eq!(h.phase_count, table.phase_count);
+        }
+    }
+
+    #[test]
+    fn a_malformed_level_table_is_refused_naming_the_light() {
+        let (g, mut plan) = distance_plan("ellipse2");
+        let levels = plan.lights[1].table.levels;
+        plan.lights[1].table.level_of[7] = levels;
+        let err = build_tables(&plan, &g.raster).err().expect("refused");
+        let msg = err.to_string();
+        assert!(
+            msg.contains("light 1") && msg.contains(&format!("level {levels} of {levels}")),
+            "{msg}"
+        );
+        let (g, mut plan) = distance_plan("gaussian:7");
+        plan.lights[0].table.slab_phase.pop();
+        let msg = build_tables(&plan, &g.raster)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(msg.contains("light 0") && msg.contains("schedule"), "{msg}");
+    }
+
+    #[test]
+    fn the_sweep_binds_the_counted_storage_buffers() {
+        let wgsl = sweep_wgsl();
+        let module = naga::front::wgsl::parse_str(&wgsl).expect("the sweep WGSL parses");
+        let info = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        )
+        .validate(&module)
+        .expect("the sweep WGSL validates");
+        let (index, _) = module
+            .entry_points
+            .iter()
+            .enumerate()
+            .find(|(_, e)| e.name == "sweep_slab")
+            .expect("sweep_slab");
+        let used = info.get_entry_point(index);
+        let storage = module
+            .global_variables
+            .iter()
+            .filter(|(h, g)| {
+                matches!(g.space, naga::AddressSpace::Storage { .. }) && !used[*h].is_empty()
+            })
+            .count();
+        assert_eq!(storage as u32, SWEEP_STORAGE_BUFFERS);
+    }
 }

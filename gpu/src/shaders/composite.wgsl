@@ -15,6 +15,13 @@ fn attenuate(v_in: f32, attenuation: f32) -> f32 {
     return select(v, 0.0, v < globals.flush_below);
 }
 
+// `deepen` (distance penumbra): the occluder-depth plane after a slab, D + slab · removed
+// (`removed`: the light the slab took out, summed over channels), flushed like the light.
+fn deepen(depth: f32, slab: u32, removed: f32) -> f32 {
+    let v = depth + f32(slab) * removed;
+    return select(v, 0.0, v < globals.flush_below);
+}
+
 // `finish`: C += (1 − A)·background.
 fn finish(acc: vec4<f32>) -> vec3<f32> {
     let t = 1.0 - acc.w;

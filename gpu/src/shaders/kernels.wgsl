@@ -1,19 +1,22 @@
 // Stage 1, convolution: mirrors cpu/src/kernels.rs. The gather sums tap by tap, corners
 // (0,0), (1,0), (0,1), (1,1), each term `acc = acc + w·v` (no fma); reads outside the grid see
-// the unoccluded light (1.0). Tap tables come from `KernelTable` (uploaded, never recomputed).
+// the unoccluded light (1.0), or no occluder (0.0) in a depth plane (distance penumbra). Tap
+// tables come from `KernelTable` (uploaded, never recomputed).
 
 #import shared/constants
 #import shared/bindings
 #import hash
 
 const OUTSIDE: f32 = 1.0;
+const OUTSIDE_DEPTH: f32 = 0.0;
 
-// `Plane::fetch` of light-buffer plane `base` (index of its pixel (0, 0)).
-fn fetch(base: u32, x: i32, y: i32) -> f32 {
+// `Plane::fetch` of light-buffer plane `base` (index of its pixel (0, 0)); `outside` beyond the
+// grid (`Plane::outside`: OUTSIDE for light, OUTSIDE_DEPTH for a depth plane).
+fn fetch(base: u32, x: i32, y: i32, outside: f32) -> f32 {
     if x >= 0 && y >= 0 && x < i32(globals.grid_w) && y < i32(globals.grid_h) {
         return light_prev[base + u32(y) * globals.row_len + u32(x)];
     }
-    return OUTSIDE;
+    return outside;
 }
 
 // `phase_at`: the phase of `light` in the slab of `ls` at pixel x given the row hash.
@@ -28,17 +31,77 @@ fn phase_at(light: LightHeader, ls: LightSlab, row: u32, x: u32) -> u32 {
     return ls.phase;
 }
 
-// `gather`: one channel at (x, y) through `count` taps starting at tap `first`, shifted.
-fn gather(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32) -> f32 {
+// `gather`: one plane at (x, y) through `count` taps starting at tap `first`, shifted; reads
+// beyond the grid see `outside`.
+fn gather(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, outside: f32) -> f32 {
     var acc = 0.0;
     for (var k = 0u; k < count; k++) {
         let t = taps[first + k];
         let sx = x + t.dx + shift.x;
         let sy = y + t.dy + shift.y;
-        acc = acc + t.w[0] * fetch(base, sx, sy);
-        acc = acc + t.w[1] * fetch(base, sx + 1, sy);
-        acc = acc + t.w[2] * fetch(base, sx, sy + 1);
-        acc = acc + t.w[3] * fetch(base, sx + 1, sy + 1);
+        acc = acc + t.w[0] * fetch(base, sx, sy, outside);
+        acc = acc + t.w[1] * fetch(base, sx + 1, sy, outside);
+        acc = acc + t.w[2] * fetch(base, sx, sy + 1, outside);
+        acc = acc + t.w[3] * fetch(base, sx + 1, sy + 1, outside);
     }
     return acc;
+}
+
+// `pixel_level` (distance penumbra): the level of a pixel whose light, after a slab, has the
+// occluded part `occluded` (channels − Σ I) and the occlusion-weighted depth `depth`, for slab
+// `slab`: the mean occluder depth depth / occluded, the distance h = slab − depth / occluded
+// rounded (+ ½, truncated) and clamped to 1..=level_top by selects, `level_of[h]` from
+// `level_table`; LIT_LEVEL without an occluder (occluded ≤ OCCLUSION_EPS). The CPU's order.
+fn pixel_level(light: LightHeader, occluded: f32, depth: f32, slab: u32) -> u32 {
+    let has_occluder = occluded > globals.occlusion_eps;
+    let mean_depth = depth / select(1.0, occluded, has_occluder);
+    var h = (f32(slab) - mean_depth) + 0.5;
+    let top = f32(light.level_top);
+    h = select(h, 1.0, h < 1.0);
+    h = select(h, top, h > top);
+    h = select(1.0, h, has_occluder);
+    // h is in [1, level_top] here (finite), where u32() truncates as Rust's `as i32 as u32` does.
+    let level = level_table[light.level_of + u32(h)];
+    return select(LIT_LEVEL, level, has_occluder);
+}
+
+// `level_rows`: the tap row of `level` at `phase`, or for a scheduled kernel the level's own
+// phase of `slab` (`slab_phase[level · slabs + slab]`).
+fn level_row(light: LightHeader, level: u32, phase: u32, slab: u32) -> u32 {
+    if light.phase_mode == PHASE_SCHEDULE {
+        return level * light.phase_count + level_table[light.level_phases + level * globals.slabs + slab];
+    }
+    return level * light.phase_count + phase;
+}
+
+// Light `base`'s level plane of the previous slab at (x, y) (`base`: the light's pixel (0, 0),
+// rows `lights · grid_w` apart); LIT_LEVEL beyond the grid.
+fn fetch_level(base: u32, x: i32, y: i32) -> u32 {
+    if x >= 0 && y >= 0 && x < i32(globals.grid_w) && y < i32(globals.grid_h) {
+        return level_prev[base + u32(y) * globals.lights * globals.grid_w + u32(x)];
+    }
+    return LIT_LEVEL;
+}
+
+// `distance_rows` (distance penumbra): the tap row of light `l` at pixel (x, y) in `slab`. The
+// pixel's own level (level 0's when it has none) gives a row; the smallest level among its own
+// and the levels at the four corners of every tap of that row (slab shift included, padding taps
+// too) is the nearest occluder's in reach, whose row (level 0's when there is none) the pixel
+// gathers through. `phase`: the pixel's phase within a level (PHASE_PER_PIXEL, PHASE_PER_SLAB).
+fn distance_row(light: LightHeader, l: u32, slab: u32, phase: u32, shift: vec2<i32>, x: u32, y: u32) -> u32 {
+    let base = l * globals.grid_w;
+    let own = level_prev[base + y * globals.lights * globals.grid_w + x];
+    let own_row = level_row(light, select(own, 0u, own == LIT_LEVEL), phase, slab);
+    var nearest = own;
+    let first = light.taps + light.taps_per_phase * own_row;
+    for (var k = 0u; k < light.taps_per_phase; k++) {
+        let t = taps[first + k];
+        let sx = i32(x) + t.dx + shift.x;
+        let sy = i32(y) + t.dy + shift.y;
+        nearest = min(nearest, fetch_level(base, sx, sy));
+        nearest = min(nearest, fetch_level(base, sx + 1, sy));
+        nearest = min(nearest, fetch_level(base, sx, sy + 1));
+        nearest = min(nearest, fetch_level(base, sx + 1, sy + 1));
+    }
+    return level_row(light, select(nearest, 0u, nearest == LIT_LEVEL), phase, slab);
 }

@@ -1,6 +1,7 @@
 // The front-to-back slab sweep: mirrors cpu/src/sweep.rs. One dispatch per slab, one invocation
 // per grid pixel, light buffers ping-pong between dispatches. Per pixel, in the CPU's order:
-// 1. convolve every light buffer (kernels.wgsl), 2. advance the layer cursor (parity.wgsl),
+// 1. convolve every light buffer (kernels.wgsl; with the distance penumbra through each pixel's
+// level, depth plane included), 2. advance the layer cursor (parity.wgsl),
 // 3. shade one point (shading.wgsl), 4. composite and 5. attenuate with the flush
 // (composite.wgsl). `finish_image` adds the background and crops the guard band.
 
@@ -16,6 +17,8 @@
 
 // Light-buffer values read by every stage of one pixel (`MAX_LIGHT_CHANNELS` from the Rust side).
 var<private> iin: array<f32, MAX_LIGHT_CHANNELS>;
+// Distance penumbra: each light's gathered occluder-depth plane.
+var<private> depth_in: array<f32, MAX_LIGHTS>;
 
 @compute @workgroup_size(8, 8)
 fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -36,16 +39,26 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     let hx = x - globals.guard_left;
     let hy = y - globals.guard_top;
 
-    // 1. Convolution of every light buffer.
+    // 1. Convolution of every light buffer (and, distance penumbra, its depth plane).
+    let planes = globals.planes;
+    let distance = globals.depth_planes != 0u;
     for (var l = 0u; l < globals.lights; l++) {
         let light = lights[l];
         let ls = light_slabs[l * globals.slabs + slab];
         let row = row_hash(ls.hash, hy);
-        let phase = phase_at(light, ls, row, hx);
+        var phase = phase_at(light, ls, row, hx);
+        let base = l * planes * w;
+        if distance {
+            // The tap row of the nearest occluder's level in the pixel's reach.
+            phase = distance_row(light, l, slab, phase, ls.shift, x, y);
+        }
         let per_phase = light.taps_per_phase;
         let first_tap = light.taps + per_phase * phase;
         for (var c = 0u; c < ch; c++) {
-            iin[l * ch + c] = gather((l * ch + c) * w, first_tap, per_phase, ls.shift, i32(x), i32(y));
+            iin[l * ch + c] = gather(base + c * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE);
+        }
+        if distance {
+            depth_in[l] = gather(base + ch * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE_DEPTH);
         }
     }
 
@@ -101,12 +114,25 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         attenuation = e.attenuation;
     }
 
-    // 5. Attenuate (and flush) into this slab's outgoing light buffer.
+    // 5. Attenuate (and flush) into this slab's outgoing light buffer; distance penumbra: the
+    // light this slab removed, at this slab's depth, into the depth plane (`deepen`).
     let row_base = y * globals.row_len;
     for (var l = 0u; l < globals.lights; l++) {
+        var lit_in = 0.0;
+        var lit_out = 0.0;
         for (var c = 0u; c < ch; c++) {
             let k = l * ch + c;
-            light_cur[row_base + k * w + x] = attenuate(iin[k], attenuation[c]);
+            let out = attenuate(iin[k], attenuation[c]);
+            light_cur[row_base + (l * planes + c) * w + x] = out;
+            lit_in = lit_in + iin[k];
+            lit_out = lit_out + out;
+        }
+        if distance {
+            let depth_out = deepen(depth_in[l], slab, lit_in - lit_out);
+            light_cur[row_base + (l * planes + ch) * w + x] = depth_out;
+            // The level this pixel starts the next slab with.
+            let occluded = f32(ch) - lit_out;
+            level_cur[(y * globals.lights + l) * w + x] = pixel_level(lights[l], occluded, depth_out, slab + 1u);
         }
     }
 }

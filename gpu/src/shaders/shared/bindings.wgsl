@@ -70,9 +70,13 @@ struct Globals {
     bg_r: f32,
     bg_g: f32,
     bg_b: f32,
-    row_len: u32,     // floats per light-buffer row: lights · channels · grid_w
+    row_len: u32,     // floats per light-buffer row: lights · planes · grid_w
     guard_top: u32,   // image y = grid y − guard_top
     preintegration: u32, // 1: pre-integrated compositing (`pre_front` per grid pixel)
+    planes: u32,      // planes per light: channels, then the depth plane (distance penumbra)
+    depth_planes: u32, // 1 with the distance penumbra, else 0
+    occlusion_eps: f32, // OCCLUSION_EPS (its f32 bits from Rust)
+    _pad0: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -83,10 +87,15 @@ struct Slab {
     jitter_hash: u32,
 }
 
-// A light's kernel table (`taps`: its first tap) and shading constants.
+// A light's kernel table (`taps`: its first tap; row level · phase_count + phase), its level
+// tables in `level_table` (distance penumbra) and shading constants.
 struct LightHeader {
     taps: u32,
     taps_per_phase: u32,
+    phase_count: u32,
+    level_of: u32,     // level_table index of level_of[0]
+    level_top: u32,    // level_of.len() − 1
+    level_phases: u32, // level_table index of the per-level slab phases (level · slabs + slab)
     phase_bits: u32,
     phase_mode: u32,  // PHASE_*
     color: array<f32, 3>,
@@ -176,3 +185,11 @@ struct Cursor {
 // Pre-integration: per grid pixel the bits of the detail value at the next slab's front face
 // kept from this slab, or PRE_NONE (one unused word without pre-integration).
 @group(0) @binding(30) var<storage, read_write> pre_front: array<u32>;
+// Distance penumbra, per light from `LightHeader.level_of` and `.level_phases`: the level of each
+// distance in slabs (`KernelTable::level_of`) and, for scheduled kernels, each level's phase per
+// slab (`KernelTable::slab_phase`).
+@group(0) @binding(31) var<storage, read> level_table: array<u32>;
+// Distance penumbra: each light's level per pixel (`pixel_level`, LIT_LEVEL without an occluder),
+// `[row][light][x]`, ping-pong like the light buffers: the previous slab's and this slab's.
+@group(0) @binding(32) var<storage, read> level_prev: array<u32>;
+@group(0) @binding(33) var<storage, read_write> level_cur: array<u32>;
