@@ -722,6 +722,7 @@ mod tests {
         // adds a depth plane and a level plane (4 bytes a pixel each) per light, so its light
         // buffers are 5/3 of the iterated ones.
         let mut scene = Scene::default_scene();
+        scene.sweep.penumbra = Penumbra::Iterated;
         let g = GuardBand::default();
         let iterated = MemoryNeed::for_backend(&scene, g, true, Backend::Gpu);
         scene.sweep.penumbra = Penumbra::Distance;

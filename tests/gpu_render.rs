@@ -97,7 +97,9 @@ fn with_distance(scene: &Scene) -> Scene {
 /// final light buffers hold one depth plane per light after its channels, some of it non-zero
 /// (occluders were recorded and read back from the device).
 fn check_distance(ctx: &GpuContext, scene: &Scene, what: &str) {
-    let iterated = run(scene, Backend::Cpu);
+    let mut iterated = scene.clone();
+    iterated.sweep.penumbra = Penumbra::Iterated;
+    let iterated = run(&iterated, Backend::Cpu);
     let cpu = check(
         ctx,
         &with_distance(scene),
