@@ -7,6 +7,7 @@
 use std::path::Path;
 
 use convshadow::common::geometry::SceneGeometry;
+use convshadow::common::metrics::rmse;
 use convshadow::common::plan::RenderPlan;
 use convshadow::common::scene::{Penumbra, Scene, SlabSpec};
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
@@ -15,17 +16,8 @@ use convshadow::cpu::reference::edge::{
     EdgeSetup, half_crossing, light_at, model_profile, run_light, width_10_90,
 };
 use convshadow::cpu::reference::{Reference, ReferenceOptions};
-use convshadow::cpu::sweep::{CpuOptions, SweepOptions, SweepPath, sweep_with};
-
-/// Root mean square of the differences of paired values.
-fn rmse(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
-    let (mut sum, mut n) = (0.0, 0usize);
-    for (a, b) in pairs {
-        sum += (a - b) * (a - b);
-        n += 1;
-    }
-    (sum / n.max(1) as f64).sqrt()
-}
+use convshadow::cpu::sweep::{CpuOptions, SweepOptions, sweep_with};
+use convshadow::pipeline::{CpuPath, RenderRequest, image_fingerprint, render};
 
 /// The edge at distance d = k·d1 (d1 = 1) with the frame: tilt 30°, pixels of d/64, 256
 /// px across 4d (so the correct penumbra is 64·σ px wide at every distance), `slabs` slabs between
@@ -345,24 +337,6 @@ fn small_default(penumbra: Penumbra) -> Scene {
     s
 }
 
-/// The image of `scene` on `path` with `threads` threads.
-fn image_on(scene: &Scene, path: SweepPath, threads: usize) -> Vec<f32> {
-    let g = SceneGeometry::build(scene).expect("geometry");
-    let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
-    let plan = RenderPlan::new(scene, &g).expect("plan");
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("pool");
-    let cpu = CpuOptions {
-        path,
-        ..CpuOptions::default()
-    };
-    pool.install(|| sweep_with(&plan, &g.raster, &ldi, &SweepOptions::default(), &cpu))
-        .expect("sweep")
-        .image
-}
-
 #[test]
 fn the_default_scene_and_a_cloud_are_no_worse_than_the_iterated_mode() {
     const SAMPLES: u32 = 16;
@@ -377,17 +351,16 @@ fn the_default_scene_and_a_cloud_are_no_worse_than_the_iterated_mode() {
             "{name}: a value is not finite"
         );
         // The same bits on both paths and any thread count.
-        for (path, threads) in [
-            (SweepPath::Scalar, 1),
-            (SweepPath::Simd, 1),
-            (SweepPath::Simd, 3),
-        ] {
-            let other = image_on(&distance, path, threads);
-            assert!(
-                image
-                    .iter()
-                    .zip(&other)
-                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+        for (path, threads) in [(CpuPath::Scalar, 1), (CpuPath::Simd, 1), (CpuPath::Simd, 3)] {
+            let request = RenderRequest {
+                path,
+                threads,
+                ..RenderRequest::default()
+            };
+            let other = render(&distance, &request).expect("render");
+            assert_eq!(
+                other.image_hash,
+                image_fingerprint(&image),
                 "{name}: {path:?} on {threads} threads differs"
             );
         }

@@ -11,6 +11,7 @@ pub mod input;
 pub mod kernel;
 pub mod lane;
 pub mod ldi;
+pub mod levels;
 pub mod mesh;
 pub mod metrics;
 pub mod nifti;

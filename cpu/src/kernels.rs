@@ -8,7 +8,7 @@
 use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
 use convshadow_common::lane::{Lane, MAX_LANES};
-use convshadow_common::plan::{LIT_LEVEL, OCCLUSION_EPS};
+use convshadow_common::plan::LIT_LEVEL;
 
 /// Value read outside the buffer: the unoccluded light.
 pub const OUTSIDE: f32 = 1.0;
@@ -325,26 +325,6 @@ pub fn gather_per_lane<L: Lane>(
             *a = add_bilinear(*a, &w, &v);
         }
     }
-}
-
-/// Distance penumbra: the level a pixel gathers through in slab `slab`, from its light after
-/// the previous slab: the occluded light `occluded = channels − Σ I` and the occlusion-weighted
-/// depth `depth` give the mean occluder depth `z̄ = depth / occluded` (slabs); the distance
-/// `h = slab − z̄` is rounded (`+ ½`, truncated) and clamped to 1..=slabs, and
-/// [`KernelTable::level_of`] maps it to a level. [`LIT_LEVEL`] where `occluded ≤ OCCLUSION_EPS`:
-/// no occluder to speak of (`depth / occluded` would be rounding noise).
-#[inline(always)]
-pub fn pixel_level<L: Lane>(table: &KernelTable, occluded: L, depth: L, slab: u32) -> L::U {
-    let one = L::splat(1.0);
-    let has_occluder = occluded.gt(L::splat(OCCLUSION_EPS));
-    let mean_depth = depth / L::select(has_occluder, occluded, one);
-    let h = (L::splat(slab as f32) - mean_depth) + L::splat(0.5);
-    let top = L::splat(table.level_of.len().saturating_sub(1) as f32);
-    let h = L::select(h.lt(one), one, h);
-    let h = L::select(h.gt(top), top, h);
-    let h = L::select(has_occluder, h, one).trunc_u32();
-    let level = L::u_gather(&table.level_of, h);
-    L::u_select(has_occluder, level, L::u_splat(LIT_LEVEL))
 }
 
 /// One light's level plane of the previous slab (distance penumbra), as the gather reads it.

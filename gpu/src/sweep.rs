@@ -9,12 +9,12 @@
 //! grid pixel; the two light buffers ping-pong; the slab index reaches the shader through a small
 //! uniform filled by a buffer copy before each dispatch, so many slabs go in one submission.
 
-use convshadow_common::kernel::KernelTable;
 use convshadow_common::kernel::PhaseMode;
 use convshadow_common::ldi::Ldi;
+use convshadow_common::levels::initial_levels;
 use convshadow_common::noise::{DetailKind, PERLIN4_SCALE};
 use convshadow_common::plan::{
-    FLUSH_BELOW, LIT_LEVEL, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE, TfEntry,
+    FLUSH_BELOW, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE, TfEntry,
 };
 use convshadow_common::raster::RasterSetup;
 use convshadow_common::scene::MAX_MESHES;
@@ -323,55 +323,6 @@ fn grid_size(plan: &RenderPlan) -> Result<GridSize, GpuError> {
     })
 }
 
-/// `convshadow_cpu::kernels::pixel_level` for one pixel (the same f32 operations in the same
-/// order; the GPU's `pixel_level` in kernels.wgsl too): the level of a pixel whose light has the
-/// occluded part `occluded` and the occlusion-weighted depth `depth`, for slab `slab`;
-/// [`LIT_LEVEL`] without an occluder.
-fn pixel_level(table: &KernelTable, occluded: f32, depth: f32, slab: u32) -> u32 {
-    let has_occluder = occluded > OCCLUSION_EPS;
-    let mean_depth = depth / if has_occluder { occluded } else { 1.0 };
-    let mut h = (slab as f32 - mean_depth) + 0.5;
-    let top = table.level_of.len().saturating_sub(1) as f32;
-    // Compare and select, as the lanes do (a NaN passes both unchanged).
-    if h < 1.0 {
-        h = 1.0;
-    }
-    if h > top {
-        h = top;
-    }
-    let h = if has_occluder { h } else { 1.0 };
-    let level = table.level_of[h as i32 as u32 as usize];
-    if has_occluder { level } else { LIT_LEVEL }
-}
-
-/// The level planes before the first slab (distance penumbra), `[row][light][x]`, as the CPU's
-/// `initial_levels`: from the initial light (a pattern's dark parts are occluders at depth 0),
-/// channels summed left to right from 0. One unused word per row with the iterated penumbra.
-fn initial_levels(plan: &RenderPlan, light: &[u32]) -> Vec<u32> {
-    let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
-    let lrl = plan.level_row_len();
-    let mut levels = vec![0u32; lrl * h];
-    if plan.depth_planes() == 0 {
-        return levels;
-    }
-    let (ch, row_len) = (plan.channels as usize, plan.light_row_len());
-    for y in 0..h {
-        for (l, light_plan) in plan.lights.iter().enumerate() {
-            for x in 0..w {
-                let at =
-                    |c: usize| f32::from_bits(light[y * row_len + plan.light_plane(l, c) * w + x]);
-                let mut lit = 0.0f32;
-                for c in 0..ch {
-                    lit += at(c);
-                }
-                let occluded = ch as f32 - lit;
-                levels[y * lrl + l * w + x] = pixel_level(&light_plan.table, occluded, at(ch), 0);
-            }
-        }
-    }
-    levels
-}
-
 /// Every device buffer the sweep binds or copies from.
 struct SweepBuffers {
     light_a: wgpu::Buffer,
@@ -413,17 +364,18 @@ fn upload_buffers(
     grid: &GridSize,
 ) -> Result<SweepBuffers, GpuError> {
     let (pixels, light_words) = (grid.pixels, grid.light_words);
-    let initial: Vec<u32> = match options.initial_light {
-        Some(v) => v.iter().map(|x| x.to_bits()).collect(),
-        // Light 1 and, with the distance penumbra, occluder depth 0 (as the CPU starts).
-        None => plan
-            .unlit_light_buffer()
-            .into_iter()
-            .map(f32::to_bits)
-            .collect(),
+    // Light 1 and, with the distance penumbra, occluder depth 0 (as the CPU starts).
+    let unlit;
+    let initial_light = match options.initial_light {
+        Some(v) => v,
+        None => {
+            unlit = plan.unlit_light_buffer();
+            &unlit[..]
+        }
     };
+    let levels = initial_levels(plan, initial_light);
+    let initial: Vec<u32> = initial_light.iter().map(|x| x.to_bits()).collect();
     let light_a = upload(ctx, "light", &initial, true)?;
-    let levels = initial_levels(plan, &initial);
     drop(initial);
     let light_b = zeroed(ctx, "light", light_words)?;
     let level_a = upload(ctx, "level plane", &levels, false)?;

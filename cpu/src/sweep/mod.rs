@@ -30,9 +30,10 @@ use convshadow_common::raster::RasterSetup;
 use rayon::prelude::*;
 
 use crate::composite::finish;
-use crate::kernels::{TapColumns, pixel_level};
+use crate::kernels::TapColumns;
 use crate::ldi::Ldi;
-use kit::{Previous, Reach, RowState, SlabContext};
+use convshadow_common::levels::initial_levels;
+use kit::{Previous, Reach, RowState, SlabContext, dark_levels};
 use quiet::{QuietRow, QuietSetup};
 use rows::{sweep_row_scalar, sweep_row_simd};
 
@@ -128,33 +129,6 @@ impl PixelState {
             pre_stride,
         }
     }
-}
-
-/// The level plane before the first slab (distance penumbra): from the initial light (a pattern's
-/// dark parts are occluders at depth 0).
-fn initial_levels(plan: &RenderPlan, light: &[f32]) -> Vec<u32> {
-    let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
-    let lrl = plan.level_row_len();
-    if plan.depth_planes() == 0 {
-        return vec![0u32; lrl * h];
-    }
-    let (ch, row_len) = (plan.channels as usize, plan.light_row_len());
-    let mut levels = vec![0u32; lrl * h];
-    for y in 0..h {
-        for (l, light_plan) in plan.lights.iter().enumerate() {
-            for x in 0..w {
-                let at = |c: usize| light[y * row_len + plan.light_plane(l, c) * w + x];
-                let mut lit = 0.0f32;
-                for c in 0..ch {
-                    lit += at(c);
-                }
-                let occluded = ch as f32 - lit;
-                levels[y * lrl + l * w + x] =
-                    pixel_level::<f32>(&light_plan.table, occluded, at(ch), 0);
-            }
-        }
-    }
-    levels
 }
 
 /// SIMD path: per-row spans of the light that is not exactly 1 / not exactly 0, and per-chunk
@@ -318,6 +292,7 @@ pub fn sweep_with(
             slab,
             back: plan.slab_back[slab as usize],
             front: plan.slab_front[slab as usize],
+            dark_levels: dark_levels(plan, slab),
         };
         sweep_slab(&ctx, &reach, cpu, &mut state, quiet.as_mut());
         (options.progress)(slab);

@@ -11,7 +11,6 @@ use super::kit::{
 };
 use super::quiet::{ChunkCounts, ChunkState, ChunkWork, LANES, QuietRow, RowSpans};
 use super::stage::{ChunkFn, chunk_fn};
-use crate::kernels::pixel_level;
 use crate::parity::{NO_CROSSING, advance};
 use convshadow_common::plan::LIT_LEVEL;
 
@@ -72,16 +71,6 @@ pub(crate) fn sweep_row_simd(
     let planes = plan.lights.len() * plan.channels as usize;
     let all_planes = plan.lights.len() * plan.planes_per_light();
     let distance = plan.depth_planes() > 0;
-    // The level a dark pixel (light 0, depth 0: an occluder at depth 0) starts the next slab with.
-    let dark_levels: Vec<u32> = if distance {
-        let ch = plan.channels as f32;
-        plan.lights
-            .iter()
-            .map(|l| pixel_level::<f32>(&l.table, ch, 0.0, ctx.slab + 1))
-            .collect()
-    } else {
-        Vec::new()
-    };
     let row_hashes = light_row_hashes(ctx, y);
     let jitter_row = jitter_row_hash(ctx, y);
     let mut spans = RowSpans::EMPTY;
@@ -123,7 +112,7 @@ pub(crate) fn sweep_row_simd(
                 for p in 0..all_planes {
                     row.light[p * w + x0..][..LANES].fill(0.0);
                 }
-                for (l, level) in dark_levels.iter().enumerate() {
+                for (l, level) in ctx.dark_levels.iter().enumerate() {
                     row.levels[l * w + x0..][..LANES].fill(*level);
                 }
                 if plan.preintegration {

@@ -13,12 +13,13 @@ use convshadow_common::lane::{Lane, MAX_LANES};
 use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowState, SlabContext};
 use crate::composite::{attenuate, composite, deepen};
 use crate::kernels::{
-    LevelPlane, LightPlanes, distance_rows, gather, gather_per_lane, phase_at, phases, pixel_level,
+    LevelPlane, LightPlanes, distance_rows, gather, gather_per_lane, phase_at, phases,
 };
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
     Specular, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
+use convshadow_common::levels::pixel_level;
 use convshadow_common::plan::TfEntry;
 
 /// [`sweep_chunk`] for one lane type and light-channel capacity.
@@ -562,6 +563,7 @@ mod tests {
                 slab,
                 back: plan.slab_back[slab as usize],
                 front: plan.slab_front[slab as usize],
+                dark_levels: Vec::new(),
             };
             for y in [0, 1, h / 2, h - 1, rng.below(h as u32) as usize] {
                 let row_hashes = light_row_hashes(&ctx, y);

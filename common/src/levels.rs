@@ -1,0 +1,56 @@
+//! Distance penumbra: the level each pixel gathers through (docs/accuracy.md §1b). One
+//! implementation for the CPU sweep (every lane type) and the GPU host (the initial level plane);
+//! `gpu/src/shaders/kernels.wgsl` mirrors [`pixel_level`] operation for operation.
+
+use crate::kernel::KernelTable;
+use crate::lane::Lane;
+use crate::plan::{LIT_LEVEL, OCCLUSION_EPS, RenderPlan};
+
+/// Distance penumbra: the level a pixel gathers through in slab `slab`, from its light after
+/// the previous slab: the occluded light `occluded = channels − Σ I` and the occlusion-weighted
+/// depth `depth` give the mean occluder depth `z̄ = depth / occluded` (slabs); the distance
+/// `h = slab − z̄` is rounded (`+ ½`, truncated) and clamped to 1..=slabs, and
+/// [`KernelTable::level_of`] maps it to a level. [`LIT_LEVEL`] where `occluded ≤ OCCLUSION_EPS`:
+/// no occluder to speak of (`depth / occluded` would be rounding noise).
+#[inline(always)]
+pub fn pixel_level<L: Lane>(table: &KernelTable, occluded: L, depth: L, slab: u32) -> L::U {
+    let one = L::splat(1.0);
+    let has_occluder = occluded.gt(L::splat(OCCLUSION_EPS));
+    let mean_depth = depth / L::select(has_occluder, occluded, one);
+    let h = (L::splat(slab as f32) - mean_depth) + L::splat(0.5);
+    let top = L::splat(table.level_of.len().saturating_sub(1) as f32);
+    let h = L::select(h.lt(one), one, h);
+    let h = L::select(h.gt(top), top, h);
+    let h = L::select(has_occluder, h, one).trunc_u32();
+    let level = L::u_gather(&table.level_of, h);
+    L::u_select(has_occluder, level, L::u_splat(LIT_LEVEL))
+}
+
+/// The level planes before the first slab, `[row][light][x]` (one unused entry per row with the
+/// iterated penumbra): from the initial light `light` (`[row][light][plane][x]`; a pattern's dark
+/// parts are occluders at depth 0), each light's channels summed left to right from 0, as the
+/// sweep sums them after a slab.
+pub fn initial_levels(plan: &RenderPlan, light: &[f32]) -> Vec<u32> {
+    let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
+    let lrl = plan.level_row_len();
+    let mut levels = vec![0u32; lrl * h];
+    if plan.depth_planes() == 0 {
+        return levels;
+    }
+    let (ch, row_len) = (plan.channels as usize, plan.light_row_len());
+    for y in 0..h {
+        for (l, light_plan) in plan.lights.iter().enumerate() {
+            for x in 0..w {
+                let at = |c: usize| light[y * row_len + plan.light_plane(l, c) * w + x];
+                let mut lit = 0.0f32;
+                for c in 0..ch {
+                    lit += at(c);
+                }
+                let occluded = ch as f32 - lit;
+                levels[y * lrl + l * w + x] =
+                    pixel_level::<f32>(&light_plan.table, occluded, at(ch), 0);
+            }
+        }
+    }
+    levels
+}
