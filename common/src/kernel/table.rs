@@ -1,5 +1,7 @@
 //! Tap tables: the bilinear taps every path reads, built once on the host and summed to exactly 1.
 
+use rayon::prelude::*;
+
 use super::*;
 
 /// Number of random phases per light for randomized kernels (a power of two: the phase is the
@@ -364,14 +366,15 @@ pub fn distance_levels(slabs: u32) -> Vec<[u32; 2]> {
 /// round(k·μκ) − round(j·μκ): within 1 px, within ½ px for j = 0).
 pub fn build_distance_table(
     spec: KernelSpec,
-    per_e2: &dyn Fn(f64) -> KernelMoments,
+    per_e2: &(dyn Fn(f64) -> KernelMoments + Sync),
     slabs: u32,
     compensate: bool,
 ) -> KernelTable {
     let ranges = distance_levels(slabs);
     let carry = compensate && carry_mean(&per_e2(1.0));
+    // Levels are independent (their bits do not depend on the thread count): built in parallel.
     let tables: Vec<KernelTable> = ranges
-        .iter()
+        .par_iter()
         .map(|&[a, b]| {
             let m = per_e2(f64::from(a + b - 1));
             build_table_with_carry(spec, &m, slabs, compensate, carry)
