@@ -72,6 +72,9 @@ pub trait Lane:
     fn gather(table: &[f32], i: Self::U) -> Self;
     /// `table[i]` per integer lane (bounds-checked).
     fn u_gather(table: &[u32], i: Self::U) -> Self::U;
+    /// `data[at..at + LANES]` as integer lanes (bounds-checked): [`Lane::u_gather`] at
+    /// `at + u_iota(0)`, as one contiguous load.
+    fn u_load(data: &[u32], at: usize) -> Self::U;
     /// The four floats of `table[i]` per lane, as four values (a transposed gather).
     fn gather4(table: &[[f32; 4]], i: Self::U) -> [Self; 4];
     /// The weights `table[i]` of every lane, for [`Lane::acc_blocks`].
@@ -209,6 +212,10 @@ impl Lane for f32 {
     #[inline(always)]
     fn u_gather(table: &[u32], i: u32) -> u32 {
         table[i as usize]
+    }
+    #[inline(always)]
+    fn u_load(data: &[u32], at: usize) -> u32 {
+        data[at]
     }
     #[inline(always)]
     fn gather4(table: &[[f32; 4]], i: u32) -> [Self; 4] {
@@ -384,6 +391,11 @@ impl Lane for f32x8 {
     #[inline(always)]
     fn u_gather(table: &[u32], i: u32x8) -> u32x8 {
         avx2::gather_u32(table, i)
+    }
+    #[inline(always)]
+    fn u_load(data: &[u32], at: usize) -> u32x8 {
+        let a: [u32; 8] = data[at..at + 8].try_into().expect("8 integers");
+        u32x8::new(a)
     }
     #[inline(always)]
     fn gather4(table: &[[f32; 4]], i: u32x8) -> [Self; 4] {

@@ -133,6 +133,47 @@ fn fetch_corners<L: Lane>(
     ]
 }
 
+/// Whether every bilinear read of the `lanes` pixels x0.. of row y through taps whose top-left
+/// corners span `extent` (`[min dx, max dx, min dy, max dy]`), moved by `shift`, lies inside the
+/// `width` × `height` grid. The sweep's per-chunk test uses the reach of every row of every
+/// table; this one the rows a chunk actually reads, so that chunks near the grid's edge whose
+/// kernels stay inside take the unchecked path (the same values: only reads beyond the grid differ).
+#[inline(always)]
+pub fn reads_inside(
+    extent: [i32; 4],
+    shift: [i32; 2],
+    x0: i32,
+    y: i32,
+    lanes: usize,
+    width: i32,
+    height: i32,
+) -> bool {
+    let (x, y) = (i64::from(x0 + shift[0]), i64::from(y + shift[1]));
+    let e = extent.map(i64::from);
+    x + e[0] >= 0
+        && x + lanes as i64 + e[1] < i64::from(width)
+        && y + e[2] >= 0
+        && y + e[3] + 1 < i64::from(height)
+}
+
+/// The union of the extents ([`TapColumns::extent`]) of the lanes' rows `rows`.
+#[inline(always)]
+pub fn lanes_extent<L: Lane>(columns: &TapColumns, rows: L::U) -> [i32; 4] {
+    let mut r = [0u32; MAX_LANES];
+    L::u_store(rows, &mut r);
+    let mut e = [i32::MAX, i32::MIN, i32::MAX, i32::MIN];
+    for &row in &r[..L::LANES] {
+        let x = columns.extent[row as usize];
+        e = [
+            e[0].min(x[0]),
+            e[1].max(x[1]),
+            e[2].min(x[2]),
+            e[3].max(x[3]),
+        ];
+    }
+    e
+}
+
 /// Gathers every channel of one light at pixels x0.. (one per lane) of row y when every lane
 /// uses the same `taps` (per-slab and scheduled phases, and any 1-lane gather): contiguous loads
 /// when `interior` (every read inside the grid; one bounds check for the taps' whole
@@ -150,7 +191,8 @@ pub fn gather<L: Lane>(
     interior: bool,
     acc: &mut [L],
 ) {
-    if interior {
+    let (w, h) = (planes.width, planes.height);
+    if interior || reads_inside(extent, shift, x0, y, L::LANES, w, h) {
         // The lowest index any tap's top-left corner reads, and the highest bottom-right corner
         // index less one, over every channel; lane loads then end at hi + LANES.
         let rs = planes.row_stride as i64;
@@ -285,7 +327,18 @@ pub fn gather_per_lane<L: Lane>(
         L::u_iota(0),
         L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
     );
-    if interior {
+    let (w, h) = (planes.width, planes.height);
+    if interior
+        || reads_inside(
+            lanes_extent::<L>(columns, phases),
+            shift,
+            x0,
+            y,
+            L::LANES,
+            w,
+            h,
+        )
+    {
         // Every plane's accumulator, in the lane type's layout for pixel-pair loads.
         let mut sums = [L::acc_from(L::splat(0.0)); 4];
         assert!(
@@ -365,7 +418,7 @@ pub fn distance_rows<L: Lane>(
     let lit = L::u_splat(LIT_LEVEL);
     let zero = L::u_splat(0);
     let at = levels.base + y as usize * levels.row_stride + x0 as usize;
-    let own = L::u_gather(&levels.data[at..], L::u_iota(0));
+    let own = L::u_load(levels.data, at);
     let own_rows = level_rows::<L>(
         table,
         L::u_select(L::u_eq(own, lit), zero, own),
@@ -377,7 +430,18 @@ pub fn distance_rows<L: Lane>(
     let n = table.taps_per_phase as usize;
     let pc = columns.phase_count;
     let rs = levels.row_stride;
-    if interior {
+    let (w, h) = (levels.width, levels.height);
+    if interior
+        || reads_inside(
+            lanes_extent::<L>(columns, own_rows),
+            shift,
+            x0,
+            y,
+            L::LANES,
+            w,
+            h,
+        )
+    {
         let lane_shift = L::u_add(
             L::u_iota(at as u32),
             L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),

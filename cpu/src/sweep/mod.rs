@@ -138,6 +138,9 @@ struct QuietState {
     spans_prev: Vec<quiet::RowSpans>,
     spans_cur: Vec<quiet::RowSpans>,
     chunk_states: Vec<quiet::ChunkState>,
+    /// Per chunk, bit b: light buffer b (slab mod 2 writes it) already holds this chunk's
+    /// unoccluded fill, written two slabs ago and not since (see `QuietRow::filled`).
+    filled: Vec<u8>,
     chunks_per_row: usize,
 }
 
@@ -151,7 +154,8 @@ impl QuietState {
                 spans_prev: setup.initial_spans.clone(),
                 spans_cur: setup.initial_spans.clone(),
                 chunk_states: setup.chunks.clone(),
-                chunks_per_row: (plan.grid_width as usize / 8).max(1),
+                filled: vec![0; setup.chunks.len()],
+                chunks_per_row: quiet::chunks_per_row(plan.grid_width as usize),
                 setup,
             }
         })
@@ -210,12 +214,14 @@ fn sweep_slab(
             let setup = &q.setup;
             rows.zip(q.spans_cur.par_iter_mut())
                 .zip(q.chunk_states.par_chunks_mut(q.chunks_per_row))
-                .for_each(|(((y, row), span_out), chunks)| {
+                .zip(q.filled.par_chunks_mut(q.chunks_per_row))
+                .for_each(|((((y, row), span_out), chunks), filled)| {
                     let quiet_row = QuietRow {
                         setup,
                         spans_prev: spans_prev_ref,
                         span_out,
                         chunks,
+                        filled,
                     };
                     sweep_row_simd(
                         ctx,

@@ -56,8 +56,9 @@ impl RowSpans {
     }
 }
 
-/// Whether span `[lo, hi)` meets the closed range `a..=b`.
-#[inline(always)]
+/// Whether span `[lo, hi)` meets the closed range `a..=b` (the per-chunk test [`RowHits`]
+/// answers for a whole row at once).
+#[cfg(test)]
 fn meets(span: (i32, i32), a: i64, b: i64) -> bool {
     i64::from(span.0) <= b && i64::from(span.1) > a
 }
@@ -74,11 +75,12 @@ pub(crate) struct ChunkState {
 }
 
 impl ChunkState {
-    /// The summary of lanes x0..x0+8 of row y.
+    /// The summary of pixels x0..x0 + lanes of row y (8 lanes, fewer for a row's tail).
     pub(crate) fn of(
         ldi: &Ldi,
         y: usize,
         x0: usize,
+        lanes: usize,
         next: &[u32],
         inside: &[u32],
         alpha: &[f32],
@@ -89,7 +91,7 @@ impl ChunkState {
             inside_any: 0,
             opaque: true,
         };
-        for x in x0..x0 + LANES {
+        for x in x0..x0 + lanes {
             let end = ldi.offsets[y * w + x + 1];
             if next[x] < end {
                 s.event_depth = s.event_depth.min(ldi.depth[next[x] as usize]);
@@ -101,13 +103,20 @@ impl ChunkState {
     }
 }
 
+/// Chunk summaries per row: one per 8 pixels, the last for the row's `width mod 8` tail pixels
+/// if any (at least one, so that every row has a slice).
+pub(crate) fn chunks_per_row(width: usize) -> usize {
+    width.div_ceil(LANES).max(1)
+}
+
 /// What the quiet-chunk test needs besides the current rows: set up once per sweep.
 pub(crate) struct QuietSetup {
     /// Every table's phases sum to exactly 1 in the gather's order (else no unoccluded skips).
     ones_exact: bool,
     /// Spans of the initial light buffer.
     pub initial_spans: Vec<RowSpans>,
-    /// Chunk summaries at the start (`max(width / 8, 1)` per row).
+    /// Chunk summaries at the start ([`chunks_per_row`] per row: the last one is the row's tail
+    /// of `width mod 8` pixels, if any).
     pub chunks: Vec<ChunkState>,
 }
 
@@ -147,15 +156,16 @@ impl QuietSetup {
                 s
             })
             .collect();
-        let per_row = (w / LANES).max(1);
+        let per_row = chunks_per_row(w);
         let next = &ldi.offsets[..w * h];
         let zeros = vec![0u32; w];
         let alpha = vec![0.0f32; w];
         let mut chunks = vec![ChunkState::default(); per_row * h];
         for y in 0..h {
-            for c in 0..w / LANES {
-                chunks[y * per_row + c] =
-                    ChunkState::of(ldi, y, c * LANES, &next[y * w..(y + 1) * w], &zeros, &alpha);
+            for c in 0..w.div_ceil(LANES) {
+                let (x0, next) = (c * LANES, &next[y * w..(y + 1) * w]);
+                let lanes = LANES.min(w - x0);
+                chunks[y * per_row + c] = ChunkState::of(ldi, y, x0, lanes, next, &zeros, &alpha);
             }
         }
         QuietSetup {
@@ -175,6 +185,11 @@ pub(crate) struct QuietRow<'a> {
     pub span_out: &'a mut RowSpans,
     /// This row's chunk summaries.
     pub chunks: &'a mut [ChunkState],
+    /// This row's chunks' fill bits: bit `slab mod 2` set when the buffer this slab writes
+    /// already holds the chunk's unoccluded fill (light 1, depth 0, no level), written two slabs
+    /// ago and not overwritten since (each buffer is written only by every other slab). An
+    /// unoccluded chunk then skips its stores: the values are the same bits.
+    pub filled: &'a mut [u8],
 }
 
 /// What a chunk needs this slab.
@@ -187,8 +202,69 @@ pub(crate) enum ChunkWork {
     Dark,
 }
 
+/// For every chunk of one row, whether some row within the kernels' vertical reach has values
+/// that are not exactly 1 (not exactly 0) within the chunk's horizontal reach: what
+/// [`QuietRow::classify`] asks of the previous buffer's spans, answered for the whole row at once.
+pub(crate) struct RowHits {
+    not_one: Vec<bool>,
+    not_zero: Vec<bool>,
+}
+
+impl RowHits {
+    /// The chunks `c` (pixels `8c..8c + 8`) whose reach `[8c + x0, 8c + 7 + x1]` meets `span`:
+    /// `lo ≤ 8c + 7 + x1` and `hi > 8c + x0`, as an inclusive chunk range (empty when first > last).
+    fn chunk_range(span: (i32, i32), reach: &Reach) -> (i64, i64) {
+        let lanes = LANES as i64;
+        let (lo, hi) = (i64::from(span.0), i64::from(span.1));
+        // ⌈(lo − 7 − x1) / 8⌉ and ⌊(hi − x0 − 1) / 8⌋.
+        let first = -((lanes - 1 + i64::from(reach.x1) - lo).div_euclid(lanes));
+        let last = (hi - i64::from(reach.x0) - 1).div_euclid(lanes);
+        (first, last)
+    }
+
+    /// Marks, per chunk, whether any of `spans` meets its reach: each span covers a contiguous
+    /// range of chunks, so a difference array gives every chunk's answer in one pass.
+    fn mark(
+        spans: impl Iterator<Item = (i32, i32)>,
+        reach: &Reach,
+        chunks: usize,
+    ) -> Vec<bool> {
+        let mut diff = vec![0i32; chunks + 1];
+        for span in spans {
+            let (first, last) = Self::chunk_range(span, reach);
+            let (first, last) = (first.max(0), last.min(chunks as i64 - 1));
+            if first <= last {
+                diff[first as usize] += 1;
+                diff[last as usize + 1] -= 1;
+            }
+        }
+        let mut open = 0;
+        diff[..chunks]
+            .iter()
+            .map(|d| {
+                open += d;
+                open > 0
+            })
+            .collect()
+    }
+}
+
 impl QuietRow<'_> {
-    /// Classifies chunk `c` (pixels x0..x0+8) of row y.
+    /// Which chunks of row y can read a value that is not exactly 1 (not exactly 0) in the
+    /// previous buffer.
+    pub(crate) fn hits(&self, reach: &Reach, y: usize, h: usize, chunks: usize) -> RowHits {
+        let lo = (y as i64 + i64::from(reach.y0)).max(0);
+        let hi = (y as i64 + i64::from(reach.y1)).min(h as i64 - 1);
+        let rows = || (lo..=hi).map(|yy| &self.spans_prev[yy as usize]);
+        RowHits {
+            not_one: RowHits::mark(rows().map(|s| s.not_one), reach, chunks),
+            not_zero: RowHits::mark(rows().map(|s| s.not_zero), reach, chunks),
+        }
+    }
+
+    /// Classifies chunk `c` (pixels x0..x0 + lanes, x0 = 8c; fewer than 8 lanes for the row's
+    /// tail) of row y (`hits`: the row's [`QuietRow::hits`], which asks of a tail the reach of 8
+    /// pixels: more than it reads, so it may work where it could skip, never the reverse).
     #[inline(always)]
     pub(crate) fn classify(
         &self,
@@ -196,30 +272,20 @@ impl QuietRow<'_> {
         reach: &Reach,
         y: usize,
         c: usize,
+        lanes: usize,
+        hits: &RowHits,
     ) -> ChunkWork {
         let state = self.chunks[c];
         let w = ctx.plan.grid_width as usize;
         let h = ctx.plan.grid_height as usize;
-        let x0 = (c * LANES) as i64;
-        let (a, b) = (
-            x0 + i64::from(reach.x0),
-            x0 + LANES as i64 - 1 + i64::from(reach.x1),
-        );
-        let rows = |f: &dyn Fn(&RowSpans) -> bool| {
-            let lo = (y as i64 + i64::from(reach.y0)).max(0);
-            let hi = (y as i64 + i64::from(reach.y1)).min(h as i64 - 1);
-            (lo..=hi).any(|yy| f(&self.spans_prev[yy as usize]))
-        };
-        let all_ones = self.setup.ones_exact && !rows(&|s| meets(s.not_one, a, b));
+        let all_ones = self.setup.ones_exact && !hits.not_one[c];
         // Exactly the negation of the cursor's advance test `depth < back` (NaN never advances).
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
         let no_crossing = !(state.event_depth < ctx.back);
         if all_ones && state.inside_any == 0 && no_crossing {
             return ChunkWork::Unoccluded;
         }
-        let all_zeros = !all_ones
-            && reach.interior(c * LANES, LANES, y, w, h)
-            && !rows(&|s| meets(s.not_zero, a, b));
+        let all_zeros = !all_ones && reach.interior(c * LANES, lanes, y, w, h) && !hits.not_zero[c];
         if all_zeros && state.opaque {
             return ChunkWork::Dark;
         }
@@ -260,5 +326,47 @@ impl ChunkCounts {
         self.full.fetch_add(tally[0], Ordering::Relaxed);
         self.unoccluded.fetch_add(tally[1], Ordering::Relaxed);
         self.dark.fetch_add(tally[2], Ordering::Relaxed);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use convshadow_common::hash::TestRng;
+
+    #[test]
+    fn row_hits_answer_the_per_chunk_span_test() {
+        // Against the direct test: some span meets the chunk's reach [8c + x0, 8c + 7 + x1].
+        let mut rng = TestRng::new(5);
+        for _ in 0..2000 {
+            let reach = Reach {
+                x0: -(rng.below(20) as i32),
+                x1: rng.below(20) as i32,
+                y0: 0,
+                y1: 0,
+            };
+            let chunks = 1 + rng.below(12) as usize;
+            let spans: Vec<(i32, i32)> = (0..rng.below(4))
+                .map(|_| match rng.below(5) {
+                    0 => RowSpans::EMPTY.not_one,
+                    _ => {
+                        let lo = rng.below(120) as i32 - 10;
+                        (lo, lo + 1 + rng.below(40) as i32)
+                    }
+                })
+                .collect();
+            let marked = RowHits::mark(spans.iter().copied(), &reach, chunks);
+            for (c, &hit) in marked.iter().enumerate() {
+                let (a, b) = (
+                    (c * LANES) as i64 + i64::from(reach.x0),
+                    (c * LANES + LANES - 1) as i64 + i64::from(reach.x1),
+                );
+                let direct = spans.iter().any(|&s| meets(s, a, b));
+                assert_eq!(
+                    hit, direct,
+                    "chunk {c} of {chunks}, spans {spans:?}, {reach:?}"
+                );
+            }
+        }
     }
 }

@@ -31,7 +31,8 @@ pub(crate) fn sweep_row_scalar(
 }
 
 /// Runs the 1-lane stage on pixels `xs` of row y (`hashes`: the row's light and jitter
-/// hashes), recording their outgoing light in `spans`.
+/// hashes), recording their outgoing light in `spans`. Returns whether some pixel crossed a
+/// fragment or was shaded.
 #[allow(clippy::too_many_arguments)]
 fn sweep_pixels(
     ctx: &SlabContext<'_>,
@@ -42,20 +43,64 @@ fn sweep_pixels(
     row: &mut RowState<'_>,
     hashes: (&[u32; MAX_LIGHT_CHANNELS], u32),
     spans: &mut RowSpans,
-) {
+) -> bool {
     let plan = ctx.plan;
     let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
     let pixel: ChunkFn = chunk_fn::<f32>(plan.lights.len() * plan.channels as usize);
     let (row_hashes, jitter_row) = hashes;
+    let mut moved = false;
     for x in xs {
         let interior = reach.interior(x, 1, y, w, h);
         let out = pixel(ctx, y, x, prev, row, row_hashes, jitter_row, interior, None);
         spans.record(x, 1, out.not_one, out.not_zero);
+        moved |= out.moved;
+    }
+    moved
+}
+
+/// A quiet chunk's outgoing light for pixels x0..x0 + lanes: 1 (unoccluded) or 0 (dark) in every
+/// light plane, 0 in every depth plane, and the levels the stage would have given (see
+/// [`ChunkWork`]).
+fn fill_quiet(ctx: &SlabContext<'_>, row: &mut RowState<'_>, x0: usize, lanes: usize, dark: bool) {
+    let plan = ctx.plan;
+    let w = plan.grid_width as usize;
+    for p in 0..plan.lights.len() * plan.planes_per_light() {
+        let v = if dark || plan.is_depth_plane(p) {
+            0.0
+        } else {
+            1.0
+        };
+        row.light[p * w + x0..][..lanes].fill(v);
+    }
+    if plan.depth_planes() > 0 {
+        for l in 0..plan.lights.len() {
+            let level = if dark { ctx.dark_levels[l] } else { LIT_LEVEL };
+            row.levels[l * w + x0..][..lanes].fill(level);
+        }
     }
 }
 
+/// A dark chunk's cursors (pixels x0..x0 + lanes) advanced through this slab; returns whether
+/// one crossed a fragment.
+fn advance_dark(ctx: &SlabContext<'_>, row: &mut RowState<'_>, y: usize, xs: Range<usize>) -> bool {
+    let w = ctx.plan.grid_width as usize;
+    let mut moved = false;
+    for x in xs.clone() {
+        let end = ctx.ldi.offsets[y * w + x + 1];
+        let first = advance(ctx.ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
+        moved |= first != NO_CROSSING;
+    }
+    if ctx.plan.preintegration {
+        // The cursors may have crossed surfaces: forget the kept front values (a kept value is
+        // only a saved evaluation, see `stage::preintegrated`).
+        row.pre[xs].fill(f32::NAN);
+    }
+    moved
+}
+
 /// Processes one row of one slab, 8 pixels at a time (quiet chunks skipped when `quiet` is
-/// given); the last `width mod 8` pixels go through the 1-lane stage.
+/// given); the last `width mod 8` pixels go through the 1-lane stage, or are skipped as one
+/// quiet chunk.
 pub(crate) fn sweep_row_simd(
     ctx: &SlabContext<'_>,
     reach: &Reach,
@@ -69,87 +114,74 @@ pub(crate) fn sweep_row_simd(
     let w = plan.grid_width as usize;
     let h = plan.grid_height as usize;
     let planes = plan.lights.len() * plan.channels as usize;
-    let all_planes = plan.lights.len() * plan.planes_per_light();
-    let distance = plan.depth_planes() > 0;
     let row_hashes = light_row_hashes(ctx, y);
     let jitter_row = jitter_row_hash(ctx, y);
+    let hashes = (&row_hashes, jitter_row);
     let mut spans = RowSpans::EMPTY;
     let mut tally = [0u64; 3];
-    let full_chunks = w / LANES;
     let chunk: ChunkFn = chunk_fn::<f32x8>(planes);
+    let hits = quiet
+        .as_ref()
+        .map(|q| q.hits(reach, y, h, w.div_ceil(LANES)));
 
-    for c in 0..full_chunks {
+    for c in 0..w.div_ceil(LANES) {
         let x0 = c * LANES;
-        let work = match &quiet {
-            Some(q) => q.classify(ctx, reach, y, c),
-            None => ChunkWork::Full(None),
+        let lanes = LANES.min(w - x0);
+        let work = match (&quiet, &hits) {
+            (Some(q), Some(hits)) => q.classify(ctx, reach, y, c, lanes, hits),
+            _ => ChunkWork::Full(None),
+        };
+        // This slab's buffer's bit in the chunk's fill bits (see `QuietRow::filled`).
+        let buffer_bit = 1u8 << (ctx.slab & 1);
+        let already_filled = match &mut quiet {
+            Some(q) => {
+                let was = q.filled[c] & buffer_bit != 0;
+                let now = matches!(work, ChunkWork::Unoccluded);
+                q.filled[c] = if now {
+                    q.filled[c] | buffer_bit
+                } else {
+                    q.filled[c] & !buffer_bit
+                };
+                was
+            }
+            None => false,
         };
         let moved = match work {
             ChunkWork::Unoccluded => {
                 tally[1] += 1;
-                for p in 0..all_planes {
-                    // Light 1; a depth plane's unoccluded value is 0.
-                    let v = if plan.is_depth_plane(p) { 0.0 } else { 1.0 };
-                    row.light[p * w + x0..][..LANES].fill(v);
+                if !already_filled {
+                    fill_quiet(ctx, &mut row, x0, lanes, false);
                 }
-                if distance {
-                    for l in 0..plan.lights.len() {
-                        row.levels[l * w + x0..][..LANES].fill(LIT_LEVEL);
-                    }
-                }
-                spans.record(x0, LANES, false, true);
+                spans.record(x0, lanes, false, true);
                 continue;
             }
             ChunkWork::Dark => {
                 tally[2] += 1;
-                let mut moved = false;
-                for x in x0..x0 + LANES {
-                    let end = ctx.ldi.offsets[y * w + x + 1];
-                    let first =
-                        advance(ctx.ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
-                    moved |= first != NO_CROSSING;
-                }
-                for p in 0..all_planes {
-                    row.light[p * w + x0..][..LANES].fill(0.0);
-                }
-                for (l, level) in ctx.dark_levels.iter().enumerate() {
-                    row.levels[l * w + x0..][..LANES].fill(*level);
-                }
-                if plan.preintegration {
-                    // The cursors may have crossed surfaces: forget the kept front values (a
-                    // kept value is only a saved evaluation, see `stage::preintegrated`).
-                    row.pre[x0..x0 + LANES].fill(f32::NAN);
-                }
-                spans.record(x0, LANES, true, false);
+                let moved = advance_dark(ctx, &mut row, y, x0..x0 + lanes);
+                fill_quiet(ctx, &mut row, x0, lanes, true);
+                spans.record(x0, lanes, true, false);
                 moved
             }
-            ChunkWork::Full(known_light) => {
+            ChunkWork::Full(known_light) if lanes == LANES => {
                 tally[0] += 1;
                 let interior = reach.interior(x0, LANES, y, w, h);
-                let out = chunk(
-                    ctx,
-                    y,
-                    x0,
-                    prev,
-                    &mut row,
-                    &row_hashes,
-                    jitter_row,
-                    interior,
-                    known_light,
-                );
+                let (rh, jr) = hashes;
+                let out = chunk(ctx, y, x0, prev, &mut row, rh, jr, interior, known_light);
                 spans.record(x0, LANES, out.not_one, out.not_zero);
                 out.moved
+            }
+            // The row's tail: the 1-lane stage, pixel by pixel.
+            ChunkWork::Full(_) => {
+                tally[0] += 1;
+                sweep_pixels(ctx, reach, y, x0..w, prev, &mut row, hashes, &mut spans)
             }
         };
         // A chunk whose cursors, masks and alphas did not change keeps its summary.
         if let (Some(q), true) = (&mut quiet, moved) {
-            q.chunks[c] = ChunkState::of(ctx.ldi, y, x0, row.next, row.inside, row.alpha);
+            q.chunks[c] = ChunkState::of(ctx.ldi, y, x0, lanes, row.next, row.inside, row.alpha);
         }
     }
 
-    let tail = full_chunks * LANES..w;
-    let hashes = (&row_hashes, jitter_row);
-    sweep_pixels(ctx, reach, y, tail, prev, &mut row, hashes, &mut spans);
     if let Some(q) = quiet {
         *q.span_out = spans;
     }
