@@ -847,6 +847,11 @@ mod tests {
             for i in 0..MAX_LANES {
                 assert_eq!(out[i], f32::u_gather(&ints, ph[i]), "u_gather lane {i}");
             }
+            let at = (h[0] % 56) as usize;
+            f32x8::u_store(f32x8::u_load(&ints, at), &mut out);
+            for (i, v) in out.iter().enumerate() {
+                assert_eq!(*v, f32::u_load(&ints, at + i), "u_load lane {i}");
+            }
             let four = f32x8::gather4(&table, phase);
             for (j, v) in four.iter().enumerate() {
                 agree(*v, |i| f32::gather4(&table, ph[i])[j], "gather4");
