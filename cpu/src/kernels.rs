@@ -156,24 +156,6 @@ pub fn reads_inside(
         && y + e[3] + 1 < i64::from(height)
 }
 
-/// The union of the extents ([`TapColumns::extent`]) of the lanes' rows `rows`.
-#[inline(always)]
-pub fn lanes_extent<L: Lane>(columns: &TapColumns, rows: L::U) -> [i32; 4] {
-    let mut r = [0u32; MAX_LANES];
-    L::u_store(rows, &mut r);
-    let mut e = [i32::MAX, i32::MIN, i32::MAX, i32::MIN];
-    for &row in &r[..L::LANES] {
-        let x = columns.extent[row as usize];
-        e = [
-            e[0].min(x[0]),
-            e[1].max(x[1]),
-            e[2].min(x[2]),
-            e[3].max(x[3]),
-        ];
-    }
-    e
-}
-
 /// Gathers every channel of one light at pixels x0.. (one per lane) of row y when every lane
 /// uses the same `taps` (per-slab and scheduled phases, and any 1-lane gather): contiguous loads
 /// when `interior` (every read inside the grid; one bounds check for the taps' whole
@@ -261,6 +243,57 @@ pub struct TapColumns {
     /// `dy · level_stride + dx` (wrapping): the taps' offsets in the level plane (distance
     /// penumbra).
     pub level_offset: Vec<u32>,
+    /// Per row, the taps the light gather must visit: up to the last with a nonzero weight. The
+    /// distance penumbra pads each level's rows to the widest level with zero taps; a zero
+    /// weight adds +0 to a sum that is never −0 (weights and values are ≥ 0 and finite), so
+    /// skipping trailing zero taps keeps every bit.
+    pub gather_taps: Vec<u32>,
+    /// Per row, the taps [`distance_rows`] must visit: up to the last that is not the zero tap at
+    /// (0, 0), plus one such tap if any follows (every padding tap reads the same four level
+    /// corners, so one stands for all: the same minimum).
+    pub level_taps: Vec<u32>,
+}
+
+/// What a chunk's lanes read through their rows: the union of the rows' extents, the most taps
+/// any lane's gather (and level search) visits, and whether every lane has the same row.
+pub struct LaneRows {
+    /// `[min dx, max dx, min dy, max dy]` over the lanes' rows.
+    pub extent: [i32; 4],
+    /// The largest [`TapColumns::gather_taps`] of the lanes' rows.
+    pub gather_taps: usize,
+    /// The largest [`TapColumns::level_taps`] of the lanes' rows.
+    pub level_taps: usize,
+    /// The row of every lane, when they all have the same one.
+    pub uniform: Option<u32>,
+}
+
+impl LaneRows {
+    /// The summary of the lanes' rows `rows` in `columns`.
+    #[inline(always)]
+    pub fn of<L: Lane>(columns: &TapColumns, rows: L::U) -> LaneRows {
+        let mut r = [0u32; MAX_LANES];
+        L::u_store(rows, &mut r);
+        let mut e = [i32::MAX, i32::MIN, i32::MAX, i32::MIN];
+        let (mut gather_taps, mut level_taps) = (0, 0);
+        for &row in &r[..L::LANES] {
+            let (x, row) = (columns.extent[row as usize], row as usize);
+            e = [
+                e[0].min(x[0]),
+                e[1].max(x[1]),
+                e[2].min(x[2]),
+                e[3].max(x[3]),
+            ];
+            gather_taps = gather_taps.max(columns.gather_taps[row] as usize);
+            level_taps = level_taps.max(columns.level_taps[row] as usize);
+        }
+        let uniform = r[..L::LANES].iter().all(|&v| v == r[0]).then_some(r[0]);
+        LaneRows {
+            extent: e,
+            gather_taps,
+            level_taps,
+            uniform,
+        }
+    }
 }
 
 impl TapColumns {
@@ -284,6 +317,21 @@ impl TapColumns {
                 .map(|j| {
                     let t = &table.taps[(j % pc) * n + j / pc];
                     (t.dy as i64 * level_stride as i64 + t.dx as i64) as i32 as u32
+                })
+                .collect(),
+            gather_taps: (0..pc as u32)
+                .map(|p| {
+                    let taps = table.phase(p);
+                    let last = taps.iter().rposition(|t| t.w.iter().any(|&w| w != 0.0));
+                    last.map_or(0, |i| i + 1) as u32
+                })
+                .collect(),
+            level_taps: (0..pc as u32)
+                .map(|p| {
+                    let taps = table.phase(p);
+                    let padding = |t: &Tap| t.dx == 0 && t.dy == 0 && t.w == [0.0; 4];
+                    let real = taps.iter().rposition(|t| !padding(t)).map_or(0, |i| i + 1);
+                    (real + usize::from(real < taps.len())) as u32
                 })
                 .collect(),
             extent: (0..pc as u32)
@@ -318,7 +366,8 @@ pub fn gather_per_lane<L: Lane>(
     interior: bool,
     acc: &mut [L],
 ) {
-    let n = table.taps_per_phase as usize;
+    let lane_rows = LaneRows::of::<L>(columns, phases);
+    let n = lane_rows.gather_taps;
     let pc = columns.phase_count;
     let rs = planes.row_stride;
     // Lane i's pixel, and its offset to the slab's shifted origin.
@@ -328,17 +377,7 @@ pub fn gather_per_lane<L: Lane>(
         L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
     );
     let (w, h) = (planes.width, planes.height);
-    if interior
-        || reads_inside(
-            lanes_extent::<L>(columns, phases),
-            shift,
-            x0,
-            y,
-            L::LANES,
-            w,
-            h,
-        )
-    {
+    if interior || reads_inside(lane_rows.extent, shift, x0, y, L::LANES, w, h) {
         // Every plane's accumulator, in the lane type's layout for pixel-pair loads.
         let mut sums = [L::acc_from(L::splat(0.0)); 4];
         assert!(
@@ -369,7 +408,7 @@ pub fn gather_per_lane<L: Lane>(
         let mut sx = [0i32; MAX_LANES];
         let mut sy = [0i32; MAX_LANES];
         for i in 0..L::LANES {
-            let t = &table.taps[lane_phase[i] as usize * n + k];
+            let t = &table.phase(lane_phase[i])[k];
             sx[i] = x0 + i as i32 + t.dx + shift[0];
             sy[i] = y + t.dy + shift[1];
         }
@@ -427,21 +466,12 @@ pub fn distance_rows<L: Lane>(
         slab,
     );
     let mut nearest = own;
-    let n = table.taps_per_phase as usize;
+    let own_reads = LaneRows::of::<L>(columns, own_rows);
+    let n = own_reads.level_taps;
     let pc = columns.phase_count;
     let rs = levels.row_stride;
     let (w, h) = (levels.width, levels.height);
-    if interior
-        || reads_inside(
-            lanes_extent::<L>(columns, own_rows),
-            shift,
-            x0,
-            y,
-            L::LANES,
-            w,
-            h,
-        )
-    {
+    if interior || reads_inside(own_reads.extent, shift, x0, y, L::LANES, w, h) {
         let lane_shift = L::u_add(
             L::u_iota(at as u32),
             L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
@@ -472,7 +502,8 @@ pub fn distance_rows<L: Lane>(
             }
         };
         for i in 0..L::LANES {
-            for t in table.phase(rows[i]) {
+            let used = columns.level_taps[rows[i] as usize] as usize;
+            for t in &table.phase(rows[i])[..used] {
                 let (sx, sy) = (x0 + i as i32 + t.dx + shift[0], y + t.dy + shift[1]);
                 for (cx, cy) in [(sx, sy), (sx + 1, sy), (sx, sy + 1), (sx + 1, sy + 1)] {
                     near[i] = near[i].min(fetch(cx, cy));
@@ -530,4 +561,115 @@ pub fn phases<L: Lane>(table: &KernelTable, row_hash_v: u32, x0: u32) -> L::U {
         L::u_mul(x, L::u_splat(0x9e37_79b9)),
     ));
     L::u_shr(h, 32 - bits)
+}
+
+#[cfg(test)]
+mod tests {
+    use convshadow_common::hash::TestRng;
+    use convshadow_common::kernel::{KernelMoments, KernelSpec, build_distance_table};
+    use wide::f32x8;
+
+    use super::*;
+
+    /// A distance-penumbra table of `kernel` for 40 slabs (levels of different widths).
+    fn distance_table(kernel: &str) -> KernelTable {
+        let spec: KernelSpec = kernel.parse().expect("kernel");
+        let per_e2 = |f: f64| KernelMoments {
+            mean: [0.3 * f.sqrt(), -0.2],
+            cov: [[0.35 * f, 0.1 * f], [0.1 * f, 0.2 * f]],
+        };
+        build_distance_table(spec, &per_e2, 40, true)
+    }
+
+    #[test]
+    fn skipped_taps_are_zero_and_the_level_search_keeps_one_padding_tap() {
+        for kernel in ["box", "gaussian:7", "ellipse2", "poisson8", "ellipse3:slab"] {
+            let table = distance_table(kernel);
+            let columns = TapColumns::new(&table, 1000, 100);
+            let padding = |t: &Tap| t.dx == 0 && t.dy == 0 && t.w == [0.0; 4];
+            let mut padded_rows = 0;
+            for row in 0..table.rows() {
+                let taps = table.phase(row);
+                let (g, l) = (
+                    columns.gather_taps[row as usize] as usize,
+                    columns.level_taps[row as usize] as usize,
+                );
+                assert!(
+                    g >= 1 && g <= taps.len() && l <= taps.len(),
+                    "{kernel} row {row}"
+                );
+                assert!(
+                    taps[g..].iter().all(|t| t.w == [0.0; 4]),
+                    "{kernel} row {row}"
+                );
+                assert!(taps[l..].iter().all(padding), "{kernel} row {row}");
+                // The level search keeps every read corner: one padding tap stands for the rest.
+                if taps.iter().any(padding) {
+                    assert!(taps[..l].iter().any(padding), "{kernel} row {row}");
+                }
+                padded_rows += usize::from(g < taps.len());
+            }
+            if kernel == "box" || kernel.starts_with("gaussian") {
+                assert!(
+                    padded_rows > 0,
+                    "{kernel}: levels of different widths are padded"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_uniform_row_gathers_the_bits_of_the_per_lane_gather() {
+        let (w, h) = (64usize, 40usize);
+        let mut rng = TestRng::new(9);
+        for kernel in ["box", "gaussian:7", "ellipse2:slab"] {
+            let table = distance_table(kernel);
+            // Three light channels and a depth plane per row.
+            let row_stride = 4 * w;
+            let data: Vec<f32> = (0..row_stride * h)
+                .map(|_| rng.below(1 << 20) as f32 / (1 << 20) as f32)
+                .collect();
+            let columns = TapColumns::new(&table, row_stride, w);
+            let planes = LightPlanes {
+                data: &data,
+                base: 0,
+                channels: 4,
+                light_channels: 3,
+                row_stride,
+                width: w as i32,
+                height: h as i32,
+            };
+            for row in 0..table.rows() {
+                for (x0, y) in [(20, 20), (0, 1), (w as i32 - 8, h as i32 - 2)] {
+                    let shift = [rng.below(3) as i32 - 1, rng.below(3) as i32 - 1];
+                    let (mut uniform, mut per_lane) =
+                        ([f32x8::splat(0.0); 4], [f32x8::splat(0.0); 4]);
+                    let used = columns.gather_taps[row as usize] as usize;
+                    let extent = columns.extent[row as usize];
+                    let taps = &table.phase(row)[..used];
+                    gather(&planes, taps, extent, shift, x0, y, false, &mut uniform);
+                    let rows = f32x8::u_splat(row);
+                    gather_per_lane(
+                        &planes,
+                        &table,
+                        &columns,
+                        rows,
+                        shift,
+                        x0,
+                        y,
+                        false,
+                        &mut per_lane,
+                    );
+                    for c in 0..4 {
+                        let (a, b) = (uniform[c].to_array(), per_lane[c].to_array());
+                        assert_eq!(
+                            a.map(f32::to_bits),
+                            b.map(f32::to_bits),
+                            "{kernel} row {row} at ({x0}, {y}) plane {c}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

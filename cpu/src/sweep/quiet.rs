@@ -224,11 +224,7 @@ impl RowHits {
 
     /// Marks, per chunk, whether any of `spans` meets its reach: each span covers a contiguous
     /// range of chunks, so a difference array gives every chunk's answer in one pass.
-    fn mark(
-        spans: impl Iterator<Item = (i32, i32)>,
-        reach: &Reach,
-        chunks: usize,
-    ) -> Vec<bool> {
+    fn mark(spans: impl Iterator<Item = (i32, i32)>, reach: &Reach, chunks: usize) -> Vec<bool> {
         let mut diff = vec![0i32; chunks + 1];
         for span in spans {
             let (first, last) = Self::chunk_range(span, reach);

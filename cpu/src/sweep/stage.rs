@@ -13,7 +13,7 @@ use convshadow_common::lane::{Lane, MAX_LANES};
 use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowState, SlabContext};
 use crate::composite::{attenuate, composite, deepen};
 use crate::kernels::{
-    LevelPlane, LightPlanes, distance_rows, gather, gather_per_lane, phase_at, phases,
+    LaneRows, LevelPlane, LightPlanes, distance_rows, gather, gather_per_lane, phase_at, phases,
 };
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
@@ -133,17 +133,19 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                         &levels, t, columns, phase, plan.slabs, ctx.slab, shift, x0, yi, interior,
                     );
                     let mut all = [L::splat(0.0); 4];
-                    gather_per_lane(
-                        &planes,
-                        t,
-                        columns,
-                        rows,
-                        shift,
-                        x0,
-                        yi,
-                        interior,
-                        &mut all[..=ch],
-                    );
+                    let gathered = &mut all[..=ch];
+                    match LaneRows::of::<L>(columns, rows).uniform {
+                        // Every lane at the same level and phase: contiguous loads.
+                        Some(row) => {
+                            let (r, used) = (row as usize, columns.gather_taps[row as usize]);
+                            let taps = &t.phase(row)[..used as usize];
+                            let extent = columns.extent[r];
+                            gather(&planes, taps, extent, shift, x0, yi, interior, gathered);
+                        }
+                        None => gather_per_lane(
+                            &planes, t, columns, rows, shift, x0, yi, interior, gathered,
+                        ),
+                    }
                     acc.copy_from_slice(&all[..ch]);
                     depth_in[l] = all[ch];
                     continue;
