@@ -476,6 +476,19 @@ pub fn distance_rows<L: Lane>(
             L::u_iota(at as u32),
             L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
         );
+        if let Some(row) = own_reads.uniform {
+            // Every lane through the same row: each tap's corners are contiguous loads.
+            let origin = at as i64 + shift[1] as i64 * rs as i64 + shift[0] as i64;
+            for k in 0..n {
+                let rel = columns.level_offset[k * pc + row as usize] as i32;
+                let top_left = (origin + i64::from(rel)) as usize;
+                for corner in [top_left, top_left + 1, top_left + rs, top_left + rs + 1] {
+                    nearest = L::u_min(nearest, L::u_load(levels.data, corner));
+                }
+            }
+            let nearest = L::u_select(L::u_eq(nearest, lit), zero, nearest);
+            return level_rows::<L>(table, nearest, phase, slabs, slab);
+        }
         for k in 0..n {
             let rel = L::u_gather(&columns.level_offset[k * pc..(k + 1) * pc], own_rows);
             let top_left = L::u_add(lane_shift, rel);
