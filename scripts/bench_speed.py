@@ -1,7 +1,11 @@
 #!/usr/bin/env python3
 """One benchmark run for docs/performance.md: two convshadow release binaries side by side.
 
-    scripts/bench_speed.py OLD_BIN NEW_BIN [--reps N] [--quick]
+    scripts/bench_speed.py OLD_BIN NEW_BIN [--reps N] [--quick] [--new-args "..."] [--pairs-only]
+
+`--new-args` is appended to the NEW binary's arguments where it runs against OLD (so that both
+render the same image: e.g. `--penumbra iterated --guard-band 0` against a release from before
+those options); `--pairs-only` stops after the old-vs-new tables.
 
 Every comparison alternates the binaries (or paths, or thread counts) run by run, so a shared
 machine's load falls on both alike, and reports medians and their ratio; only ratios from one
@@ -17,6 +21,7 @@ import os
 import pathlib
 import re
 import resource
+import shlex
 import statistics
 import subprocess
 import sys
@@ -89,7 +94,10 @@ def main():
     ap.add_argument("new")
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="smaller images for a smoke run")
+    ap.add_argument("--new-args", default="", help="extra arguments for NEW where it runs against OLD")
+    ap.add_argument("--pairs-only", action="store_true", help="only the old-vs-new tables")
     o = ap.parse_args()
+    new_args = shlex.split(o.new_args)
     old, new, reps = os.path.abspath(o.old), os.path.abspath(o.new), o.reps
     size = ["--size", "128x128", "--slabs", "128"] if o.quick else []
     small = ["--size", "256x256", "--slabs", "256"]
@@ -114,14 +122,39 @@ def main():
         return med
 
     print(f"# bench_speed.py, {time.strftime('%Y-%m-%d %H:%M')} UTC, reps {reps}\n")
-    print(f"old: {old}\nnew: {new}\n")
+    print(f"old: {old}\nnew: {new} {o.new_args}\n")
     rows.append("| case | A | B | B faster by |")
     rows.append("|---|---|---|---|")
     for sc in ["default", "bunny"]:
         pair(f"{sc}: old (A) vs new (B), SIMD, 2 threads, wall",
-             (old, scene(sc) + size + ["--threads", "2"]), (new, scene(sc) + size + ["--threads", "2"]), wall, "s")
+             (old, scene(sc) + size + ["--threads", "2"]), (new, scene(sc) + size + ["--threads", "2"] + new_args), wall, "s")
         pair(f"{sc}: old (A) vs new (B), SIMD, 1 thread, user",
-             (old, scene(sc) + size + ["--threads", "1"]), (new, scene(sc) + size + ["--threads", "1"]), user, "s")
+             (old, scene(sc) + size + ["--threads", "1"]), (new, scene(sc) + size + ["--threads", "1"] + new_args), user, "s")
+    if o.pairs_only:
+        print("## Old against new\n")
+        print("\n".join(rows) + "\n")
+    else:
+        new_only(pair, new, size)
+        print("## The issue's ratios\n")
+        print("\n".join(rows) + "\n")
+
+    rows.clear()
+    rows.append("| kernel (default scene, 256², 256 slabs, 2 threads) | old (A) | new (B) | B faster by |")
+    rows.append("|---|---|---|---|")
+    for k in ["ellipse2", "ellipse3", "ellipse2:slab", "poisson8", "poisson16", "gaussian:19", "box", "dirac"]:
+        pair(f"`{k}`", (old, small + ["--kernel", k, "--threads", "2"]),
+             (new, small + ["--kernel", k, "--threads", "2"] + new_args), rate, "M/s")
+    print("## Every kernel (pixel·slab·light updates per second of the sweep)\n")
+    print("\n".join(rows) + "\n")
+    if o.pairs_only:
+        finish(bad)
+        return
+    scaling_tables(new, reps, small)
+    finish(bad)
+
+
+def new_only(pair, new, size):
+    """The NEW binary against itself: scalar vs SIMD, 1 vs 2 threads."""
     pair("bunny, new: scalar (A) vs SIMD (B), 1 thread, user",
          (new, scene("bunny") + size + ["--threads", "1", "--path", "scalar"]),
          (new, scene("bunny") + size + ["--threads", "1", "--path", "simd"]), user, "s",
@@ -132,18 +165,10 @@ def main():
     pair("default, new: 1 thread (A) vs 2 threads (B), SIMD, wall",
          (new, size + ["--threads", "1"]), (new, size + ["--threads", "2"]), wall, "s",
          names=("t1", "t2"))
-    print("## The issue's ratios\n")
-    print("\n".join(rows) + "\n")
 
-    rows.clear()
-    rows.append("| kernel (default scene, 256², 256 slabs, 2 threads) | old (A) | new (B) | B faster by |")
-    rows.append("|---|---|---|---|")
-    for k in ["ellipse2", "ellipse3", "ellipse2:slab", "poisson8", "poisson16", "gaussian:19", "box", "dirac"]:
-        pair(f"`{k}`", (old, small + ["--kernel", k, "--threads", "2"]),
-             (new, small + ["--kernel", k, "--threads", "2"]), rate, "M/s")
-    print("## Every kernel (pixel·slab·light updates per second of the sweep)\n")
-    print("\n".join(rows) + "\n")
 
+def scaling_tables(new, reps, small):
+    """How the NEW binary's sweep time grows with slabs, pixels and lights."""
     def scaling(title, cases):
         print(f"## {title} (new binary, 2 threads, seconds_sweep, median of {reps})\n")
         print("| case | work (M updates) | sweep s | s per M updates |")
@@ -161,6 +186,10 @@ def main():
             [(f"{n}²", ["--size", f"{n}x{n}", "--slabs", "256"]) for n in [256, 512, 1024]])
     scaling("Time against lights (default scene's lights repeated, 256², 256 slabs)",
             [(f"{n} lights", lights_scene(n) + small) for n in [1, 2, 4, 8]])
+
+
+def finish(bad):
+    """Exits non-zero if some pair wrote different images."""
     if bad:
         print("MISMATCH:\n" + "\n".join(bad))
         sys.exit(1)
