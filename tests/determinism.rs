@@ -126,3 +126,47 @@ fn simd_and_scalar_paths_give_the_same_bits() {
     // Guards the guard: both kinds of skip actually ran, so their exactness was tested.
     assert!(skipped[0] > 0 && skipped[1] > 0, "skips {skipped:?}");
 }
+
+#[test]
+fn simd_and_scalar_paths_give_the_same_bits_with_the_iterated_penumbra() {
+    // The iterated penumbra's one-phase-per-slab kernels gather two neighbouring chunks at once
+    // on the SIMD path (`stage::gather_pair`); width 53 has six chunks, so three such pairs a row.
+    use convshadow::common::scene::Penumbra;
+    let mut compared = 0;
+    for (path, base) in example_scenes() {
+        if base.sweep.optimal_distance.is_none() {
+            continue;
+        }
+        for kernel in ["ellipse2:slab", "gaussian:7", "box", "dirac", "ellipse2"] {
+            let mut scene = base.clone();
+            scene.sweep.kernel = kernel.parse().unwrap();
+            scene.sweep.penumbra = Penumbra::Iterated;
+            let run = |path_kind: CpuPath, threads: usize| {
+                let req = RenderRequest {
+                    threads,
+                    path: path_kind,
+                    ..RenderRequest::default()
+                };
+                render(&scene, &req).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+            };
+            let (scalar, simd) = (run(CpuPath::Scalar, 1), run(CpuPath::Simd, 2));
+            assert_eq!(
+                (
+                    simd.image_hash,
+                    simd.light.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                ),
+                (
+                    scalar.image_hash,
+                    scalar.light.iter().map(|v| v.to_bits()).collect()
+                ),
+                "{} {kernel} iterated: SIMD differs from scalar",
+                path.display()
+            );
+            compared += 1;
+        }
+    }
+    assert!(
+        compared >= 10,
+        "only {compared} scenes had an optimal distance"
+    );
+}

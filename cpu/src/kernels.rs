@@ -175,37 +175,7 @@ pub fn gather<L: Lane>(
 ) {
     let (w, h) = (planes.width, planes.height);
     if interior || reads_inside(extent, shift, x0, y, L::LANES, w, h) {
-        // The lowest index any tap's top-left corner reads, and the highest bottom-right corner
-        // index less one, over every channel; lane loads then end at hi + LANES.
-        let rs = planes.row_stride as i64;
-        let (x, y) = (i64::from(x0 + shift[0]), i64::from(y + shift[1]));
-        let base = planes.base as i64;
-        let lo = base + (y + i64::from(extent[2])) * rs + x + i64::from(extent[0]);
-        let last_plane = (planes.channels as i64 - 1) * i64::from(planes.width);
-        let hi = base + last_plane + (y + i64::from(extent[3]) + 1) * rs + x + i64::from(extent[1]);
-        assert!(
-            lo >= 0 && hi + (L::LANES as i64) < planes.data.len() as i64,
-            "gather footprint {lo}..={hi} outside the light buffer"
-        );
-        for t in taps {
-            let w = [t.w[0], t.w[1], t.w[2], t.w[3]].map(L::splat);
-            let at0 = planes.base as i64 + (y + i64::from(t.dy)) * rs + x + i64::from(t.dx);
-            for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
-                let at = (at0 + c as i64 * i64::from(planes.width)) as usize;
-                let below = at + planes.row_stride;
-                // SAFETY: every load starts at or after lo ≥ 0 and ends at or before
-                // hi + LANES < data.len() (checked above).
-                let v = unsafe {
-                    [
-                        L::load_unchecked(planes.data, at),
-                        L::load_unchecked(planes.data, at + 1),
-                        L::load_unchecked(planes.data, below),
-                        L::load_unchecked(planes.data, below + 1),
-                    ]
-                };
-                *a = add_bilinear(*a, &w, &v);
-            }
-        }
+        gather_inside(planes, taps, extent, shift, x0, y, [acc]);
         return;
     }
     for t in taps {
@@ -224,6 +194,63 @@ pub fn gather<L: Lane>(
             }
             let v = fetch_corners(&planes.plane(c), &xs, &[sy; MAX_LANES]);
             *a = add_bilinear(*a, &w, &v);
+        }
+    }
+}
+
+/// [`gather`] of `K` neighbouring chunks at once (chunk k at pixels x0 + k·LANES..), every read
+/// inside the grid: each tap's weights are splat once for all chunks, and the chunks' sums are
+/// independent chains the processor overlaps (one chunk's sums wait on the add latency). Each
+/// lane's sum has the same terms in the same order as one chunk alone: the same bits.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn gather_inside<L: Lane, const K: usize>(
+    planes: &LightPlanes<'_>,
+    taps: &[Tap],
+    extent: [i32; 4],
+    shift: [i32; 2],
+    x0: i32,
+    y: i32,
+    mut accs: [&mut [L]; K],
+) {
+    // The lowest index any tap's top-left corner reads, and the highest bottom-right corner
+    // index less one, over every channel and chunk; lane loads then end at hi + LANES.
+    let rs = planes.row_stride as i64;
+    let (x, y) = (i64::from(x0 + shift[0]), i64::from(y + shift[1]));
+    let base = planes.base as i64;
+    let lo = base + (y + i64::from(extent[2])) * rs + x + i64::from(extent[0]);
+    let last_plane = (planes.channels as i64 - 1) * i64::from(planes.width);
+    let last_chunk = ((K - 1) * L::LANES) as i64;
+    let hi = base
+        + last_plane
+        + (y + i64::from(extent[3]) + 1) * rs
+        + x
+        + last_chunk
+        + i64::from(extent[1]);
+    assert!(
+        lo >= 0 && hi + (L::LANES as i64) < planes.data.len() as i64,
+        "gather footprint {lo}..={hi} outside the light buffer"
+    );
+    for t in taps {
+        let w = [t.w[0], t.w[1], t.w[2], t.w[3]].map(L::splat);
+        let at0 = planes.base as i64 + (y + i64::from(t.dy)) * rs + x + i64::from(t.dx);
+        for c in 0..planes.channels {
+            let first = (at0 + c as i64 * i64::from(planes.width)) as usize;
+            for (k, acc) in accs.iter_mut().enumerate() {
+                let at = first + k * L::LANES;
+                let below = at + planes.row_stride;
+                // SAFETY: every load starts at or after lo ≥ 0 and ends at or before
+                // hi + LANES < data.len() (checked above).
+                let v = unsafe {
+                    [
+                        L::load_unchecked(planes.data, at),
+                        L::load_unchecked(planes.data, at + 1),
+                        L::load_unchecked(planes.data, below),
+                        L::load_unchecked(planes.data, below + 1),
+                    ]
+                };
+                acc[c] = add_bilinear(acc[c], &w, &v);
+            }
         }
     }
 }

@@ -10,7 +10,7 @@ use super::kit::{
     MAX_LIGHT_CHANNELS, Previous, Reach, RowState, SlabContext, jitter_row_hash, light_row_hashes,
 };
 use super::quiet::{ChunkCounts, ChunkState, ChunkWork, LANES, QuietRow, RowSpans};
-use super::stage::{ChunkFn, chunk_fn};
+use super::stage::{ChunkFn, chunk_fn, gather_pair, pairs_gathers};
 use crate::parity::{NO_CROSSING, advance};
 use convshadow_common::plan::LIT_LEVEL;
 
@@ -51,7 +51,9 @@ fn sweep_pixels(
     let mut moved = false;
     for x in xs {
         let interior = reach.interior(x, 1, y, w, h);
-        let out = pixel(ctx, y, x, prev, row, row_hashes, jitter_row, interior, None);
+        let out = pixel(
+            ctx, y, x, prev, row, row_hashes, jitter_row, interior, None, None,
+        );
         spans.record(x, 1, out.not_one, out.not_zero);
         moved |= out.moved;
     }
@@ -123,6 +125,12 @@ pub(crate) fn sweep_row_simd(
     let hits = quiet
         .as_ref()
         .map(|q| q.hits(reach, y, h, w.div_ceil(LANES)));
+    let pairs = pairs_gathers(plan);
+    // The gathers of a chunk and its right neighbour, computed together when both need them
+    // (`stage::gather_pair`); `paired` names the chunk whose result waits in `pair[1]`.
+    let mut pair = [[0.0f32; 8 * MAX_LIGHT_CHANNELS]; 2];
+    let mut paired = usize::MAX;
+    let full_chunks = w / LANES;
 
     for c in 0..w.div_ceil(LANES) {
         let x0 = c * LANES;
@@ -165,8 +173,28 @@ pub(crate) fn sweep_row_simd(
             ChunkWork::Full(known_light) if lanes == LANES => {
                 tally[0] += 1;
                 let interior = reach.interior(x0, LANES, y, w, h);
+                let gathered = if paired == c {
+                    Some(&pair[1][..])
+                } else if pairs && known_light.is_none() && interior && c + 1 < full_chunks {
+                    // The neighbour's class does not depend on this chunk's work: ask now.
+                    let next = match (&quiet, &hits) {
+                        (Some(q), Some(hits)) => q.classify(ctx, reach, y, c + 1, LANES, hits),
+                        _ => ChunkWork::Full(None),
+                    };
+                    let next_interior = reach.interior(x0 + LANES, LANES, y, w, h);
+                    if matches!(next, ChunkWork::Full(None)) && next_interior {
+                        gather_pair(ctx, y, x0, prev, &mut pair);
+                        paired = c + 1;
+                        Some(&pair[0][..])
+                    } else {
+                        None
+                    }
+                } else {
+                    None
+                };
                 let (rh, jr) = hashes;
-                let out = chunk(ctx, y, x0, prev, &mut row, rh, jr, interior, known_light);
+                let (known, inner) = (known_light, interior);
+                let out = chunk(ctx, y, x0, prev, &mut row, rh, jr, inner, known, gathered);
                 spans.record(x0, LANES, out.not_one, out.not_zero);
                 out.moved
             }

@@ -13,14 +13,16 @@ use convshadow_common::lane::{Lane, MAX_LANES};
 use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowState, SlabContext};
 use crate::composite::{attenuate, composite, deepen};
 use crate::kernels::{
-    LaneRows, LevelPlane, LightPlanes, distance_rows, gather, gather_per_lane, phase_at, phases,
+    LaneRows, LevelPlane, LightPlanes, distance_rows, gather, gather_inside, gather_per_lane,
+    phase_at, phases,
 };
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
     Specular, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
 use convshadow_common::levels::pixel_level;
-use convshadow_common::plan::TfEntry;
+use convshadow_common::plan::{RenderPlan, TfEntry};
+use wide::f32x8;
 
 /// [`sweep_chunk`] for one lane type and light-channel capacity.
 pub(crate) type ChunkFn = fn(
@@ -33,6 +35,7 @@ pub(crate) type ChunkFn = fn(
     u32,
     bool,
     Option<f32>,
+    Option<&[f32]>,
 ) -> ChunkOutcome;
 
 /// What one chunk's stages tell the lane path about their lanes.
@@ -58,9 +61,74 @@ pub(crate) fn chunk_fn<L: Lane>(planes: usize) -> ChunkFn {
     }
 }
 
+/// Whether [`gather_pair`] serves this plan: the iterated penumbra with one phase per slab for
+/// every light (every lane of a chunk, and of its neighbour, reads through the same taps).
+pub(crate) fn pairs_gathers(plan: &RenderPlan) -> bool {
+    plan.depth_planes() == 0
+        && plan
+            .lights
+            .iter()
+            .all(|l| l.table.phase_mode != PhaseMode::PerPixel)
+}
+
+/// The gathers of two neighbouring 8-pixel chunks (pixels x0.. and x0 + 8..) of row y, both
+/// inside the grid, computed together ([`gather_inside`]): light plane i's lanes at
+/// `8i..8i + 8` of each output, as [`sweep_chunk`]'s `gathered` takes them. Only where
+/// [`pairs_gathers`] holds.
+pub(crate) fn gather_pair(
+    ctx: &SlabContext<'_>,
+    y: usize,
+    x0: usize,
+    prev: &Previous<'_>,
+    out: &mut [[f32; 8 * MAX_LIGHT_CHANNELS]; 2],
+) {
+    let plan = ctx.plan;
+    let (w, ch, slab) = (
+        plan.grid_width as usize,
+        plan.channels as usize,
+        ctx.slab as usize,
+    );
+    for (l, light) in plan.lights.iter().enumerate() {
+        let t = &light.table;
+        let planes = LightPlanes {
+            data: prev.light,
+            base: plan.light_plane(l, 0) * w,
+            channels: ch,
+            light_channels: ch,
+            row_stride: plan.light_row_len(),
+            width: w as i32,
+            height: plan.grid_height as i32,
+        };
+        let p = match t.phase_mode {
+            PhaseMode::PerSlab => phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0),
+            _ => t.slab_phase[slab],
+        };
+        let (mut a, mut b) = ([f32x8::splat(0.0); 3], [f32x8::splat(0.0); 3]);
+        let extent = ctx.columns[l].extent[p as usize];
+        let taps = t.phase(p);
+        let shift = t.slab_shift[slab];
+        let (xa, ya) = (x0 as i32, y as i32);
+        gather_inside(
+            &planes,
+            taps,
+            extent,
+            shift,
+            xa,
+            ya,
+            [&mut a[..ch], &mut b[..ch]],
+        );
+        for (k, sums) in [a, b].iter().enumerate() {
+            for (c, v) in sums[..ch].iter().enumerate() {
+                v.store(&mut out[k], (l * ch + c) * 8);
+            }
+        }
+    }
+}
+
 /// All five stages for the pixels x0..x0 + LANES of row y. `interior`: every read of the gather
 /// lies inside the grid; `known_light`: every value the gather reads is this constant (the
-/// gather is skipped).
+/// gather is skipped); `gathered`: the gather's result, already computed (light plane i's lanes
+/// at `i · LANES..`, see [`gather_pair`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
@@ -73,6 +141,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     jitter_row: u32,
     interior: bool,
     known_light: Option<f32>,
+    gathered: Option<&[f32]>,
 ) -> ChunkOutcome {
     let plan = ctx.plan;
     let ldi = ctx.ldi;
@@ -85,10 +154,15 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     let mut iin = [L::splat(0.0); N];
     let mut depth_in = [L::splat(0.0); MAX_LIGHTS];
     let distance = plan.depth_planes() > 0;
-    match known_light {
+    match (known_light, gathered) {
         // Every value read is `v` and every depth read is 0 (the quiet spans track both).
-        Some(v) => iin[..n].fill(L::splat(v)),
-        None => {
+        (Some(v), _) => iin[..n].fill(L::splat(v)),
+        (None, Some(values)) => {
+            for (i, v) in iin[..n].iter_mut().enumerate() {
+                *v = L::load(values, i * L::LANES);
+            }
+        }
+        (None, None) => {
             for (l, light) in plan.lights.iter().enumerate() {
                 let t = &light.table;
                 let planes = LightPlanes {
@@ -604,10 +678,32 @@ mod tests {
                     let (mut a, mut b) = (row.clone(), row.clone());
                     let interior = reach.interior(x0, 8, y, w, h);
                     let (rh, jr) = (&row_hashes, jitter_row);
-                    eight(&ctx, y, x0, &prev, &mut a.state(), rh, jr, interior, None);
+                    eight(
+                        &ctx,
+                        y,
+                        x0,
+                        &prev,
+                        &mut a.state(),
+                        rh,
+                        jr,
+                        interior,
+                        None,
+                        None,
+                    );
                     for x in x0..x0 + 8 {
                         let interior = reach.interior(x, 1, y, w, h);
-                        one(&ctx, y, x, &prev, &mut b.state(), rh, jr, interior, None);
+                        one(
+                            &ctx,
+                            y,
+                            x,
+                            &prev,
+                            &mut b.state(),
+                            rh,
+                            jr,
+                            interior,
+                            None,
+                            None,
+                        );
                     }
                     if let Some(d) = mismatch(&a, &b) {
                         return Some(format!(
@@ -660,8 +756,10 @@ mod tests {
     #[test]
     fn a_lane_that_disagrees_fails_the_comparison() {
         // The 8-lane stage with one lane's first light value off by one bit.
-        let wrong_lane: ChunkFn = |ctx, y, x0, prev, row, hashes, jitter, interior, known| {
-            let r = sweep_chunk::<f32x8, 6>(ctx, y, x0, prev, row, hashes, jitter, interior, known);
+        let wrong_lane: ChunkFn = |ctx, y, x0, prev, row, hashes, jitter, interior, known, got| {
+            let r = sweep_chunk::<f32x8, 6>(
+                ctx, y, x0, prev, row, hashes, jitter, interior, known, got,
+            );
             // (the outcome is returned unchanged: only the light is wrong)
             row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
             r
