@@ -9,6 +9,9 @@
 //! - *dark*: every lane is opaque (alpha exactly 1) and every value its kernels can read is exactly
 //!   0: the gather gives 0, compositing adds `(1 − 1)·α·c = 0`, and the light out is 0. The cursors
 //!   still advance, so a chunk that wakes up has the scalar path's state.
+//! - *dark with depth* (distance penumbra): as *dark*, but the depth planes read are not all 0
+//!   (an occluder's depth stays in the dark behind it): the light planes are 0 as above, and only
+//!   the depth planes and levels are computed (`stage::dark_depth_chunk`); counted as dark.
 //! - *known light*: a chunk with a mesh whose kernels read only exact 1s (or only exact 0s) is
 //!   shaded as usual, but its gather is replaced by that constant (the same bits, as above).
 //!
@@ -34,6 +37,8 @@ pub(crate) const LANES: usize = <f32x8 as Lane>::LANES;
 pub(crate) struct RowSpans {
     pub not_one: (i32, i32),
     pub not_zero: (i32, i32),
+    /// Values of the light planes alone (not the depth planes) that are not exactly 0.
+    pub light_not_zero: (i32, i32),
 }
 
 impl RowSpans {
@@ -41,19 +46,48 @@ impl RowSpans {
     pub(crate) const EMPTY: RowSpans = RowSpans {
         not_one: (i32::MAX, i32::MIN),
         not_zero: (i32::MAX, i32::MIN),
+        light_not_zero: (i32::MAX, i32::MIN),
     };
 
-    /// Records the values of pixels `x..x + n` (not-one / not-zero flags of the whole group).
+    /// Records the values of pixels `x..x + n` (the whole group's flags).
     #[inline(always)]
-    pub(crate) fn record(&mut self, x: usize, n: usize, not_one: bool, not_zero: bool) {
+    pub(crate) fn record(&mut self, x: usize, n: usize, values: Values) {
         let (lo, hi) = (x as i32, (x + n) as i32);
-        if not_one {
-            self.not_one = (self.not_one.0.min(lo), self.not_one.1.max(hi));
-        }
-        if not_zero {
-            self.not_zero = (self.not_zero.0.min(lo), self.not_zero.1.max(hi));
-        }
+        let grow = |span: &mut (i32, i32), flag: bool| {
+            if flag {
+                *span = (span.0.min(lo), span.1.max(hi));
+            }
+        };
+        grow(&mut self.not_one, values.not_one);
+        grow(&mut self.not_zero, values.not_zero);
+        grow(&mut self.light_not_zero, values.light_not_zero);
     }
+}
+
+/// What a group of pixels wrote to the light buffer, as [`RowSpans::record`] takes it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Values {
+    /// Some light value is not exactly 1, or some depth value not exactly 0.
+    pub not_one: bool,
+    /// Some light or depth value is not exactly 0.
+    pub not_zero: bool,
+    /// Some light value (depth planes aside) is not exactly 0.
+    pub light_not_zero: bool,
+}
+
+impl Values {
+    /// Unoccluded: light 1, depth 0.
+    pub(crate) const UNOCCLUDED: Values = Values {
+        not_one: false,
+        not_zero: true,
+        light_not_zero: true,
+    };
+    /// Dark: light 0, depth 0.
+    pub(crate) const DARK: Values = Values {
+        not_one: true,
+        not_zero: false,
+        light_not_zero: false,
+    };
 }
 
 /// Whether span `[lo, hi)` meets the closed range `a..=b` (the per-chunk test [`RowHits`]
@@ -113,6 +147,9 @@ pub(crate) fn chunks_per_row(width: usize) -> usize {
 pub(crate) struct QuietSetup {
     /// Every table's phases sum to exactly 1 in the gather's order (else no unoccluded skips).
     ones_exact: bool,
+    /// The plan has depth planes (distance penumbra): dark chunks with depth may be skipped in
+    /// part ([`ChunkWork::DarkDepth`]).
+    depth_planes: bool,
     /// Spans of the initial light buffer.
     pub initial_spans: Vec<RowSpans>,
     /// Chunk summaries at the start ([`chunks_per_row`] per row: the last one is the row's tail
@@ -146,11 +183,20 @@ impl QuietSetup {
                     for x in 0..w {
                         let v = initial[y * row_len + p * w + x];
                         // A depth plane is quiet at 0 in the light and in the dark.
-                        if plan.is_depth_plane(p) {
-                            s.record(x, 1, v != 0.0, v != 0.0);
+                        let values = if plan.is_depth_plane(p) {
+                            Values {
+                                not_one: v != 0.0,
+                                not_zero: v != 0.0,
+                                light_not_zero: false,
+                            }
                         } else {
-                            s.record(x, 1, v != 1.0, v != 0.0);
-                        }
+                            Values {
+                                not_one: v != 1.0,
+                                not_zero: v != 0.0,
+                                light_not_zero: v != 0.0,
+                            }
+                        };
+                        s.record(x, 1, values);
                     }
                 }
                 s
@@ -170,6 +216,7 @@ impl QuietSetup {
         }
         QuietSetup {
             ones_exact,
+            depth_planes: plan.depth_planes() > 0,
             initial_spans,
             chunks,
         }
@@ -200,6 +247,10 @@ pub(crate) enum ChunkWork {
     Unoccluded,
     /// Opaque in the dark: advance the cursors, light out 0.
     Dark,
+    /// Opaque, every light value read exactly 0 but some depth value not (distance penumbra):
+    /// advance the cursors, light out 0, compute only the depth planes and levels
+    /// (`stage::dark_depth_chunk`).
+    DarkDepth,
 }
 
 /// For every chunk of one row, whether some row within the kernels' vertical reach has values
@@ -208,6 +259,7 @@ pub(crate) enum ChunkWork {
 pub(crate) struct RowHits {
     not_one: Vec<bool>,
     not_zero: Vec<bool>,
+    light_not_zero: Vec<bool>,
 }
 
 impl RowHits {
@@ -255,6 +307,11 @@ impl QuietRow<'_> {
         RowHits {
             not_one: RowHits::mark(rows().map(|s| s.not_one), reach, chunks),
             not_zero: RowHits::mark(rows().map(|s| s.not_zero), reach, chunks),
+            light_not_zero: if self.setup.depth_planes {
+                RowHits::mark(rows().map(|s| s.light_not_zero), reach, chunks)
+            } else {
+                Vec::new()
+            },
         }
     }
 
@@ -281,9 +338,15 @@ impl QuietRow<'_> {
         if all_ones && state.inside_any == 0 && no_crossing {
             return ChunkWork::Unoccluded;
         }
-        let all_zeros = !all_ones && reach.interior(c * LANES, lanes, y, w, h) && !hits.not_zero[c];
+        let interior = reach.interior(c * LANES, lanes, y, w, h);
+        let all_zeros = !all_ones && interior && !hits.not_zero[c];
         if all_zeros && state.opaque {
             return ChunkWork::Dark;
+        }
+        let dark_light =
+            self.setup.depth_planes && !all_ones && interior && !hits.light_not_zero[c];
+        if dark_light && state.opaque {
+            return ChunkWork::DarkDepth;
         }
         // A mesh is here: shade it, but the gather's result may still be known.
         ChunkWork::Full(if all_ones {

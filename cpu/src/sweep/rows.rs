@@ -9,8 +9,8 @@ use wide::f32x8;
 use super::kit::{
     MAX_LIGHT_CHANNELS, Previous, Reach, RowState, SlabContext, jitter_row_hash, light_row_hashes,
 };
-use super::quiet::{ChunkCounts, ChunkState, ChunkWork, LANES, QuietRow, RowSpans};
-use super::stage::{ChunkFn, chunk_fn, gather_pair, pairs_gathers};
+use super::quiet::{ChunkCounts, ChunkState, ChunkWork, LANES, QuietRow, RowSpans, Values};
+use super::stage::{ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, pairs_gathers};
 use crate::parity::{NO_CROSSING, advance};
 use convshadow_common::plan::LIT_LEVEL;
 
@@ -54,7 +54,7 @@ fn sweep_pixels(
         let out = pixel(
             ctx, y, x, prev, row, row_hashes, jitter_row, interior, None, None,
         );
-        spans.record(x, 1, out.not_one, out.not_zero);
+        spans.record(x, 1, out.values());
         moved |= out.moved;
     }
     moved
@@ -160,14 +160,26 @@ pub(crate) fn sweep_row_simd(
                 if !already_filled {
                     fill_quiet(ctx, &mut row, x0, lanes, false);
                 }
-                spans.record(x0, lanes, false, true);
+                spans.record(x0, lanes, Values::UNOCCLUDED);
                 continue;
             }
             ChunkWork::Dark => {
                 tally[2] += 1;
                 let moved = advance_dark(ctx, &mut row, y, x0..x0 + lanes);
                 fill_quiet(ctx, &mut row, x0, lanes, true);
-                spans.record(x0, lanes, true, false);
+                spans.record(x0, lanes, Values::DARK);
+                moved
+            }
+            ChunkWork::DarkDepth if lanes == LANES => {
+                tally[2] += 1;
+                let moved = advance_dark(ctx, &mut row, y, x0..x0 + LANES);
+                let interior = reach.interior(x0, LANES, y, w, h);
+                let not_zero = dark_depth_chunk(ctx, y, x0, prev, &mut row, &row_hashes, interior);
+                let values = Values {
+                    not_zero,
+                    ..Values::DARK
+                };
+                spans.record(x0, LANES, values);
                 moved
             }
             ChunkWork::Full(known_light) if lanes == LANES => {
@@ -195,11 +207,11 @@ pub(crate) fn sweep_row_simd(
                 let (rh, jr) = hashes;
                 let (known, inner) = (known_light, interior);
                 let out = chunk(ctx, y, x0, prev, &mut row, rh, jr, inner, known, gathered);
-                spans.record(x0, LANES, out.not_one, out.not_zero);
+                spans.record(x0, LANES, out.values());
                 out.moved
             }
             // The row's tail: the 1-lane stage, pixel by pixel.
-            ChunkWork::Full(_) => {
+            ChunkWork::Full(_) | ChunkWork::DarkDepth => {
                 tally[0] += 1;
                 sweep_pixels(ctx, reach, y, x0..w, prev, &mut row, hashes, &mut spans)
             }

@@ -11,6 +11,7 @@ use convshadow_common::kernel::PhaseMode;
 use convshadow_common::lane::{Lane, MAX_LANES};
 
 use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowState, SlabContext};
+use super::quiet::Values;
 use crate::composite::{attenuate, composite, deepen};
 use crate::kernels::{
     LaneRows, LevelPlane, LightPlanes, distance_rows, gather, gather_inside, gather_per_lane,
@@ -45,9 +46,22 @@ pub(crate) struct ChunkOutcome {
     pub not_one: bool,
     /// Some outgoing light value is not exactly 0.
     pub not_zero: bool,
+    /// Some outgoing value of a light plane (not a depth plane) is not exactly 0.
+    pub light_not_zero: bool,
     /// Some lane crossed a fragment or was shaded: its cursor, inside mask or alpha may have
     /// changed, so the chunk's quiet summary must be refreshed.
     pub moved: bool,
+}
+
+impl ChunkOutcome {
+    /// What the chunk wrote, as the quiet spans record it.
+    pub(crate) fn values(&self) -> Values {
+        Values {
+            not_one: self.not_one,
+            not_zero: self.not_zero,
+            light_not_zero: self.light_not_zero,
+        }
+    }
 }
 
 /// The [`sweep_chunk`] instance for `planes` light channels: the smallest capacity that holds
@@ -188,38 +202,11 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                         channels: ch + 1,
                         ..planes
                     };
-                    let phase = match t.phase_mode {
-                        PhaseMode::PerPixel => {
-                            phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32))
-                        }
-                        PhaseMode::PerSlab => L::u_splat(uniform.unwrap_or(0)),
-                        PhaseMode::Schedule => L::u_splat(0),
-                    };
-                    let levels = LevelPlane {
-                        data: prev.levels,
-                        base: l * w,
-                        row_stride: plan.level_row_len(),
-                        width: w as i32,
-                        height: plan.grid_height as i32,
-                    };
-                    let columns = &ctx.columns[l];
-                    let rows = distance_rows::<L>(
-                        &levels, t, columns, phase, plan.slabs, ctx.slab, shift, x0, yi, interior,
-                    );
                     let mut all = [L::splat(0.0); 4];
                     let gathered = &mut all[..=ch];
-                    match LaneRows::of::<L>(columns, rows).uniform {
-                        // Every lane at the same level and phase: contiguous loads.
-                        Some(row) => {
-                            let (r, used) = (row as usize, columns.gather_taps[row as usize]);
-                            let taps = &t.phase(row)[..used as usize];
-                            let extent = columns.extent[r];
-                            gather(&planes, taps, extent, shift, x0, yi, interior, gathered);
-                        }
-                        None => gather_per_lane(
-                            &planes, t, columns, rows, shift, x0, yi, interior, gathered,
-                        ),
-                    }
+                    distance_gather(
+                        ctx, l, prev, &planes, row_hashes, x0, yi, interior, gathered,
+                    );
                     acc.copy_from_slice(&all[..ch]);
                     depth_in[l] = all[ch];
                     continue;
@@ -301,12 +288,14 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     let (zero, one) = (L::splat(0.0), L::splat(1.0));
     let mut not_one = zero.ne(zero);
     let mut not_zero = not_one;
+    let mut light_not_zero = not_one;
     for l in 0..plan.lights.len() {
         let (mut lit_in, mut lit_out) = (zero, zero);
         for c in 0..ch {
             let out = attenuate(iin[l * ch + c], attenuation[c]);
             not_one = L::m_or(not_one, out.ne(one));
             not_zero = L::m_or(not_zero, out.ne(zero));
+            light_not_zero = L::m_or(light_not_zero, out.ne(zero));
             out.store(row.light, plan.light_plane(l, c) * w + x0);
             if distance {
                 (lit_in, lit_out) = (lit_in + iin[l * ch + c], lit_out + out);
@@ -314,25 +303,157 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
         }
         if distance {
             // The light this slab removed, at this slab's depth; a depth plane's quiet value is 0.
-            let out = deepen(depth_in[l], ctx.slab, lit_in - lit_out);
-            let moved_depth = out.ne(zero);
+            let moved_depth = finish_depth(ctx, row, l, x0, depth_in[l], lit_in, lit_out);
             not_one = L::m_or(not_one, moved_depth);
             not_zero = L::m_or(not_zero, moved_depth);
-            out.store(row.light, plan.light_plane(l, ch) * w + x0);
-            // The level this pixel starts the next slab with.
-            let occluded = L::splat(ch as f32) - lit_out;
-            let level = pixel_level::<L>(&plan.lights[l].table, occluded, out, ctx.slab + 1);
-            let mut lanes = [0u32; MAX_LANES];
-            L::u_store(level, &mut lanes);
-            row.levels[l * w + x0..][..L::LANES].copy_from_slice(&lanes[..L::LANES]);
         }
     }
 
     ChunkOutcome {
         not_one: L::m_any(not_one),
         not_zero: L::m_any(not_zero),
+        light_not_zero: L::m_any(light_not_zero),
         moved,
     }
+}
+
+/// Distance penumbra: light `l`'s planes `planes` (its channels and depth plane, or the depth
+/// plane alone) gathered at pixels x0.. of row y, each lane through the row of the level its
+/// neighbourhood picks ([`distance_rows`]); contiguous loads when every lane has the same row.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn distance_gather<L: Lane>(
+    ctx: &SlabContext<'_>,
+    l: usize,
+    prev: &Previous<'_>,
+    planes: &LightPlanes<'_>,
+    row_hashes: &[u32; MAX_LIGHT_CHANNELS],
+    x0: i32,
+    y: i32,
+    interior: bool,
+    acc: &mut [L],
+) {
+    let plan = ctx.plan;
+    let light = &plan.lights[l];
+    let t = &light.table;
+    let slab = ctx.slab as usize;
+    let phase = match t.phase_mode {
+        PhaseMode::PerPixel => phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32)),
+        PhaseMode::PerSlab => L::u_splat(phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0)),
+        PhaseMode::Schedule => L::u_splat(0),
+    };
+    let w = plan.grid_width as usize;
+    let levels = LevelPlane {
+        data: prev.levels,
+        base: l * w,
+        row_stride: plan.level_row_len(),
+        width: w as i32,
+        height: plan.grid_height as i32,
+    };
+    let columns = &ctx.columns[l];
+    let shift = t.slab_shift[slab];
+    let rows = distance_rows::<L>(
+        &levels, t, columns, phase, plan.slabs, ctx.slab, shift, x0, y, interior,
+    );
+    match LaneRows::of::<L>(columns, rows).uniform {
+        // Every lane at the same level and phase: contiguous loads.
+        Some(row) => {
+            let used = columns.gather_taps[row as usize] as usize;
+            let extent = columns.extent[row as usize];
+            gather(
+                planes,
+                &t.phase(row)[..used],
+                extent,
+                shift,
+                x0,
+                y,
+                interior,
+                acc,
+            );
+        }
+        None => gather_per_lane(planes, t, columns, rows, shift, x0, y, interior, acc),
+    }
+}
+
+/// Distance penumbra, step 5 for light `l`'s depth plane at pixels x0..: the gathered depth
+/// `depth_in` deepened by the light the slab removed (`lit_in − lit_out`, summed over channels),
+/// stored, and the level each pixel starts the next slab with. Returns the lanes whose depth
+/// is not 0 (a depth plane's quiet value).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn finish_depth<L: Lane>(
+    ctx: &SlabContext<'_>,
+    row: &mut RowState<'_>,
+    l: usize,
+    x0: usize,
+    depth_in: L,
+    lit_in: L,
+    lit_out: L,
+) -> L::M {
+    let plan = ctx.plan;
+    let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
+    let out = deepen(depth_in, ctx.slab, lit_in - lit_out);
+    out.store(row.light, plan.light_plane(l, ch) * w + x0);
+    let occluded = L::splat(ch as f32) - lit_out;
+    let level = pixel_level::<L>(&plan.lights[l].table, occluded, out, ctx.slab + 1);
+    let mut lanes = [0u32; MAX_LANES];
+    L::u_store(level, &mut lanes);
+    row.levels[l * w + x0..][..L::LANES].copy_from_slice(&lanes[..L::LANES]);
+    out.ne(L::splat(0.0))
+}
+
+/// Distance penumbra: a chunk of opaque pixels (alpha exactly 1) whose kernels read only exact
+/// 0s in every light plane, while its depth planes are not 0 (the dark chunk of
+/// [`super::quiet::ChunkWork::Dark`] needs both). Only the depth planes and the levels are
+/// computed: every light value gathered is 0, so attenuated it stays 0, the slab removes
+/// `0 − 0 = 0`, compositing an opaque pixel adds `(1 − 1)·α·c = 0`, and the depth and level are
+/// those of the full stage, bit for bit. The caller advances the cursors. Returns whether some
+/// depth value is not 0.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn dark_depth_chunk(
+    ctx: &SlabContext<'_>,
+    y: usize,
+    x0: usize,
+    prev: &Previous<'_>,
+    row: &mut RowState<'_>,
+    row_hashes: &[u32; MAX_LIGHT_CHANNELS],
+    interior: bool,
+) -> bool {
+    let plan = ctx.plan;
+    let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
+    let zero = f32x8::splat(0.0);
+    let mut not_zero = false;
+    for l in 0..plan.lights.len() {
+        let depth_plane = LightPlanes {
+            data: prev.light,
+            base: plan.light_plane(l, ch) * w,
+            channels: 1,
+            light_channels: 0,
+            row_stride: plan.light_row_len(),
+            width: w as i32,
+            height: plan.grid_height as i32,
+        };
+        let mut depth_in = [zero];
+        let (xi, yi) = (x0 as i32, y as i32);
+        distance_gather(
+            ctx,
+            l,
+            prev,
+            &depth_plane,
+            row_hashes,
+            xi,
+            yi,
+            interior,
+            &mut depth_in,
+        );
+        for c in 0..ch {
+            zero.store(row.light, plan.light_plane(l, c) * w + x0);
+        }
+        // Σ of the gathered and of the attenuated light, as the stage sums them: 0 + 0 + … = 0.
+        let moved = finish_depth(ctx, row, l, x0, depth_in[0], zero, zero);
+        not_zero |= <f32x8 as Lane>::m_any(moved);
+    }
+    not_zero
 }
 
 /// Stages 3–4 for lanes whose shaded pixels all lie in mesh `m` (`mesh[i]` is `None` in lanes
