@@ -64,6 +64,21 @@ def scene(name):
     return [] if name == "default" else [str(ROOT / "scenes" / f"{name}.toml")]
 
 
+def wall(w, u, s):
+    """Wall seconds of the whole command."""
+    return w
+
+
+def user(w, u, s):
+    """User CPU seconds of the command."""
+    return u
+
+
+def rate(w, u, s):
+    """The sweep's pixel·slab·light updates per second, in millions."""
+    return s["pixel_slab_lights_per_second"] / 1e6
+
+
 def lights_scene(n):
     """The default scene with its two lights repeated (directions turned) to n lights."""
     text = (ROOT / "scenes" / "default.toml").read_text()
@@ -101,9 +116,6 @@ def main():
     old, new, reps = os.path.abspath(o.old), os.path.abspath(o.new), o.reps
     size = ["--size", "128x128", "--slabs", "128"] if o.quick else []
     small = ["--size", "256x256", "--slabs", "256"]
-    wall = lambda w, u, s: w
-    user = lambda w, u, s: u
-    rate = lambda w, u, s: s["pixel_slab_lights_per_second"] / 1e6
     bad = []
 
     def check(label, hashes):

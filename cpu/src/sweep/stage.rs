@@ -75,6 +75,21 @@ pub(crate) fn chunk_fn<L: Lane>(planes: usize) -> ChunkFn {
     }
 }
 
+/// Light `l`'s channels in the previous slab's buffer, as the gather reads them.
+#[inline(always)]
+fn light_planes<'a>(plan: &RenderPlan, prev: &Previous<'a>, l: usize) -> LightPlanes<'a> {
+    let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
+    LightPlanes {
+        data: prev.light,
+        base: plan.light_plane(l, 0) * w,
+        channels: ch,
+        light_channels: ch,
+        row_stride: plan.light_row_len(),
+        width: w as i32,
+        height: plan.grid_height as i32,
+    }
+}
+
 /// Whether [`gather_pair`] serves this plan: the iterated penumbra with one phase per slab for
 /// every light (every lane of a chunk, and of its neighbour, reads through the same taps).
 pub(crate) fn pairs_gathers(plan: &RenderPlan) -> bool {
@@ -97,22 +112,10 @@ pub(crate) fn gather_pair(
     out: &mut [[f32; 8 * MAX_LIGHT_CHANNELS]; 2],
 ) {
     let plan = ctx.plan;
-    let (w, ch, slab) = (
-        plan.grid_width as usize,
-        plan.channels as usize,
-        ctx.slab as usize,
-    );
+    let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
     for (l, light) in plan.lights.iter().enumerate() {
         let t = &light.table;
-        let planes = LightPlanes {
-            data: prev.light,
-            base: plan.light_plane(l, 0) * w,
-            channels: ch,
-            light_channels: ch,
-            row_stride: plan.light_row_len(),
-            width: w as i32,
-            height: plan.grid_height as i32,
-        };
+        let planes = light_planes(plan, prev, l);
         let p = match t.phase_mode {
             PhaseMode::PerSlab => phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0),
             _ => t.slab_phase[slab],
@@ -179,15 +182,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
         (None, None) => {
             for (l, light) in plan.lights.iter().enumerate() {
                 let t = &light.table;
-                let planes = LightPlanes {
-                    data: prev.light,
-                    base: plan.light_plane(l, 0) * w,
-                    channels: ch,
-                    light_channels: ch,
-                    row_stride: plan.light_row_len(),
-                    width: w as i32,
-                    height: plan.grid_height as i32,
-                };
+                let planes = light_planes(plan, prev, l);
                 let shift = t.slab_shift[slab];
                 let acc = &mut iin[l * ch..(l + 1) * ch];
                 let uniform = match t.phase_mode {
@@ -425,13 +420,10 @@ pub(crate) fn dark_depth_chunk(
     let mut not_zero = false;
     for l in 0..plan.lights.len() {
         let depth_plane = LightPlanes {
-            data: prev.light,
             base: plan.light_plane(l, ch) * w,
             channels: 1,
             light_channels: 0,
-            row_stride: plan.light_row_len(),
-            width: w as i32,
-            height: plan.grid_height as i32,
+            ..light_planes(plan, prev, l)
         };
         let mut depth_in = [zero];
         let (xi, yi) = (x0 as i32, y as i32);
