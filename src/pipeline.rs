@@ -648,9 +648,11 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     }
     let seconds_ldi = start.elapsed().as_secs_f64();
     let t_plan = Instant::now();
-    // 3D textures (raw and NIfTI) load in chunks and stop once the cancel flag is raised.
-    let plan =
-        RenderPlan::new_cancellable(scene, &geometry, req.cancel).map_err(|e| match e.source {
+    // 3D textures (raw and NIfTI) load in chunks and stop once the cancel flag is raised. In the
+    // request's pool: the distance penumbra builds its levels' tables in parallel.
+    let plan = pool
+        .install(|| RenderPlan::new_cancellable(scene, &geometry, req.cancel))
+        .map_err(|e| match e.source {
             convshadow_common::texture3d::TextureError::Interrupted { .. } => {
                 RenderError::Interrupted
             }
