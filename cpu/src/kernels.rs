@@ -378,7 +378,7 @@ impl TapColumns {
 }
 
 /// [`gather`] where lane i uses phase `phases[i]` of `table` (per-pixel hashed phases; `columns`
-/// is the same table by tap): gathered weights and, inside the grid, gathered loads; lane
+/// is the same table by tap, `lane_rows` its [`LaneRows`] summary of `phases`): gathered weights and, inside the grid, gathered loads; lane
 /// arithmetic in the same order.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -387,13 +387,13 @@ pub fn gather_per_lane<L: Lane>(
     table: &KernelTable,
     columns: &TapColumns,
     phases: L::U,
+    lane_rows: &LaneRows,
     shift: [i32; 2],
     x0: i32,
     y: i32,
     interior: bool,
     acc: &mut [L],
 ) {
-    let lane_rows = LaneRows::of::<L>(columns, phases);
     let n = lane_rows.gather_taps;
     let pc = columns.phase_count;
     let rs = planes.row_stride;
@@ -689,11 +689,13 @@ mod tests {
                     let taps = &table.phase(row)[..used];
                     gather(&planes, taps, extent, shift, x0, y, false, &mut uniform);
                     let rows = f32x8::u_splat(row);
+                    let reads = LaneRows::of::<f32x8>(&columns, rows);
                     gather_per_lane(
                         &planes,
                         &table,
                         &columns,
                         rows,
+                        &reads,
                         shift,
                         x0,
                         y,

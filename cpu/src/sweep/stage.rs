@@ -214,7 +214,10 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                     None => {
                         let ph = phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32));
                         let columns = &ctx.columns[l];
-                        gather_per_lane(&planes, t, columns, ph, shift, x0, yi, interior, acc);
+                        let reads = LaneRows::of::<L>(columns, ph);
+                        gather_per_lane(
+                            &planes, t, columns, ph, &reads, shift, x0, yi, interior, acc,
+                        );
                     }
                 }
             }
@@ -350,7 +353,8 @@ fn distance_gather<L: Lane>(
     let rows = distance_rows::<L>(
         &levels, t, columns, phase, plan.slabs, ctx.slab, shift, x0, y, interior,
     );
-    match LaneRows::of::<L>(columns, rows).uniform {
+    let reads = LaneRows::of::<L>(columns, rows);
+    match reads.uniform {
         // Every lane at the same level and phase: contiguous loads.
         Some(row) => {
             let used = columns.gather_taps[row as usize] as usize;
@@ -366,7 +370,9 @@ fn distance_gather<L: Lane>(
                 acc,
             );
         }
-        None => gather_per_lane(planes, t, columns, rows, shift, x0, y, interior, acc),
+        None => gather_per_lane(
+            planes, t, columns, rows, &reads, shift, x0, y, interior, acc,
+        ),
     }
 }
 
