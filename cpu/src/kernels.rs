@@ -9,6 +9,7 @@ use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
 use convshadow_common::lane::{Lane, MAX_LANES};
 use convshadow_common::plan::LIT_LEVEL;
+use wide::i32x8;
 
 /// Value read outside the buffer: the unoccluded light.
 pub const OUTSIDE: f32 = 1.0;
@@ -279,6 +280,9 @@ pub struct TapColumns {
     /// (0, 0), plus one such tap if any follows (every padding tap reads the same four level
     /// corners, so one stands for all: the same minimum).
     pub level_taps: Vec<u32>,
+    /// Per row, `[−min dx, max dx, −min dy, max dy, gather_taps, level_taps, 0, 0]`: every field
+    /// of [`LaneRows`] is a maximum over lanes, so a chunk's summary is one 8-lane `max` per lane.
+    pub summary: Vec<[i32; 8]>,
 }
 
 /// What a chunk's lanes read through their rows: the union of the rows' extents, the most taps
@@ -300,24 +304,16 @@ impl LaneRows {
     pub fn of<L: Lane>(columns: &TapColumns, rows: L::U) -> LaneRows {
         let mut r = [0u32; MAX_LANES];
         L::u_store(rows, &mut r);
-        let mut e = [i32::MAX, i32::MIN, i32::MAX, i32::MIN];
-        let (mut gather_taps, mut level_taps) = (0, 0);
+        let mut most = i32x8::splat(i32::MIN);
         for &row in &r[..L::LANES] {
-            let (x, row) = (columns.extent[row as usize], row as usize);
-            e = [
-                e[0].min(x[0]),
-                e[1].max(x[1]),
-                e[2].min(x[2]),
-                e[3].max(x[3]),
-            ];
-            gather_taps = gather_taps.max(columns.gather_taps[row] as usize);
-            level_taps = level_taps.max(columns.level_taps[row] as usize);
+            most = most.max(i32x8::new(columns.summary[row as usize]));
         }
+        let m = most.to_array();
         let uniform = r[..L::LANES].iter().all(|&v| v == r[0]).then_some(r[0]);
         LaneRows {
-            extent: e,
-            gather_taps,
-            level_taps,
+            extent: [-m[0], m[1], -m[2], m[3]],
+            gather_taps: m[4] as usize,
+            level_taps: m[5] as usize,
             uniform,
         }
     }
@@ -327,9 +323,23 @@ impl TapColumns {
     /// The columns of `table` for light buffers with rows `row_stride` apart and level planes with
     /// rows `level_stride` apart.
     pub fn new(table: &KernelTable, row_stride: usize, level_stride: usize) -> TapColumns {
+        let mut columns = TapColumns::without_summary(table, row_stride, level_stride);
+        columns.summary = (0..columns.phase_count)
+            .map(|row| {
+                let e = columns.extent[row];
+                let (g, l) = (columns.gather_taps[row], columns.level_taps[row]);
+                [-e[0], e[1], -e[2], e[3], g as i32, l as i32, 0, 0]
+            })
+            .collect();
+        columns
+    }
+
+    /// [`TapColumns::new`] with an empty [`TapColumns::summary`].
+    fn without_summary(table: &KernelTable, row_stride: usize, level_stride: usize) -> TapColumns {
         // Every row of every level: the per-lane gather picks a row per lane.
         let (pc, n) = (table.rows() as usize, table.taps_per_phase as usize);
         TapColumns {
+            summary: Vec::new(),
             phase_count: pc,
             weights: (0..n * pc)
                 .map(|j| table.taps[(j % pc) * n + j / pc].w)
@@ -607,7 +617,7 @@ pub fn phases<L: Lane>(table: &KernelTable, row_hash_v: u32, x0: u32) -> L::U {
 mod tests {
     use convshadow_common::hash::TestRng;
     use convshadow_common::kernel::{KernelMoments, KernelSpec, build_distance_table};
-    use wide::f32x8;
+    use wide::{f32x8, u32x8};
 
     use super::*;
 
@@ -653,6 +663,49 @@ mod tests {
                 assert!(
                     padded_rows > 0,
                     "{kernel}: levels of different widths are padded"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn lane_rows_summarise_the_taps_of_every_lane() {
+        // Against the taps themselves: the union of the lanes' extents, the most taps, uniformity.
+        let mut rng = TestRng::new(3);
+        for kernel in ["box", "gaussian:7", "ellipse2", "poisson8"] {
+            let table = distance_table(kernel);
+            let columns = TapColumns::new(&table, 1000, 100);
+            for _ in 0..200 {
+                let one_row = rng.below(3) == 0;
+                let first = rng.below(table.rows());
+                let rows: [u32; 8] = std::array::from_fn(|_| {
+                    if one_row {
+                        first
+                    } else {
+                        rng.below(table.rows())
+                    }
+                });
+                let got = LaneRows::of::<f32x8>(&columns, u32x8::new(rows));
+                let taps = rows.map(|r| table.phase(r));
+                let all = || taps.iter().flat_map(|t| t.iter());
+                let extent = [
+                    all().map(|t| t.dx).min().unwrap(),
+                    all().map(|t| t.dx).max().unwrap(),
+                    all().map(|t| t.dy).min().unwrap(),
+                    all().map(|t| t.dy).max().unwrap(),
+                ];
+                assert_eq!(got.extent, extent, "{kernel} rows {rows:?}");
+                let nonzero =
+                    |t: &[Tap]| t.iter().rposition(|t| t.w != [0.0; 4]).map_or(0, |i| i + 1);
+                let most = taps.iter().map(|t| nonzero(t)).max().unwrap();
+                assert_eq!(got.gather_taps, most, "{kernel} rows {rows:?}");
+                let level_most = rows.map(|r| columns.level_taps[r as usize]);
+                assert_eq!(got.level_taps, *level_most.iter().max().unwrap() as usize);
+                let same = rows.iter().all(|&r| r == rows[0]);
+                assert_eq!(
+                    got.uniform,
+                    same.then_some(rows[0]),
+                    "{kernel} rows {rows:?}"
                 );
             }
         }
