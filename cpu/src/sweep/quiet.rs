@@ -257,12 +257,37 @@ pub(crate) enum ChunkWork {
 /// that are not exactly 1 (not exactly 0) within the chunk's horizontal reach: what
 /// [`QuietRow::classify`] asks of the previous buffer's spans, answered for the whole row at once.
 pub(crate) struct RowHits {
-    not_one: Vec<bool>,
-    not_zero: Vec<bool>,
-    light_not_zero: Vec<bool>,
+    /// Per chunk, bit k set when a span of kind k meets its reach: 0 not one, 1 not zero, 2 light
+    /// not zero (the order of [`RowHits::kinds`]).
+    bits: Vec<u8>,
 }
 
 impl RowHits {
+    /// A row's spans in the order of [`RowHits::bits`] (light not zero only with depth planes).
+    fn kinds(spans: &RowSpans, depth_planes: bool) -> [(i32, i32); 3] {
+        let light = if depth_planes {
+            spans.light_not_zero
+        } else {
+            RowSpans::EMPTY.light_not_zero
+        };
+        [spans.not_one, spans.not_zero, light]
+    }
+
+    /// Chunk c's bit for spans not exactly 1.
+    fn not_one(&self, c: usize) -> bool {
+        self.bits[c] & 1 != 0
+    }
+
+    /// Chunk c's bit for spans not exactly 0.
+    fn not_zero(&self, c: usize) -> bool {
+        self.bits[c] & 2 != 0
+    }
+
+    /// Chunk c's bit for light (not depth) spans not exactly 0.
+    fn light_not_zero(&self, c: usize) -> bool {
+        self.bits[c] & 4 != 0
+    }
+
     /// The chunks `c` (pixels `8c..8c + 8`) whose reach `[8c + x0, 8c + 7 + x1]` meets `span`:
     /// `lo ≤ 8c + 7 + x1` and `hi > 8c + x0`, as an inclusive chunk range (empty when first > last).
     fn chunk_range(span: (i32, i32), reach: &Reach) -> (i64, i64) {
@@ -274,26 +299,34 @@ impl RowHits {
         (first, last)
     }
 
-    /// Marks, per chunk, whether any of `spans` meets its reach: each span covers a contiguous
-    /// range of chunks, so a difference array gives every chunk's answer in one pass.
-    fn mark(spans: impl Iterator<Item = (i32, i32)>, reach: &Reach, chunks: usize) -> Vec<bool> {
-        let mut diff = vec![0i32; chunks + 1];
-        for span in spans {
-            let (first, last) = Self::chunk_range(span, reach);
-            let (first, last) = (first.max(0), last.min(chunks as i64 - 1));
-            if first <= last {
-                diff[first as usize] += 1;
-                diff[last as usize + 1] -= 1;
+    /// Marks, per chunk and kind, whether any row's span of that kind meets the chunk's reach:
+    /// each span covers a contiguous range of chunks, so one difference array per kind gives
+    /// every chunk's answer in one pass over the rows.
+    fn mark(rows: impl Iterator<Item = [(i32, i32); 3]>, reach: &Reach, chunks: usize) -> RowHits {
+        let mut diff = vec![[0i32; 3]; chunks + 1];
+        for spans in rows {
+            for (k, span) in spans.into_iter().enumerate() {
+                let (first, last) = Self::chunk_range(span, reach);
+                let (first, last) = (first.max(0), last.min(chunks as i64 - 1));
+                if first <= last {
+                    diff[first as usize][k] += 1;
+                    diff[last as usize + 1][k] -= 1;
+                }
             }
         }
-        let mut open = 0;
-        diff[..chunks]
+        let mut open = [0i32; 3];
+        let bits = diff[..chunks]
             .iter()
             .map(|d| {
-                open += d;
-                open > 0
+                let mut bits = 0u8;
+                for k in 0..3 {
+                    open[k] += d[k];
+                    bits |= u8::from(open[k] > 0) << k;
+                }
+                bits
             })
-            .collect()
+            .collect();
+        RowHits { bits }
     }
 }
 
@@ -303,16 +336,9 @@ impl QuietRow<'_> {
     pub(crate) fn hits(&self, reach: &Reach, y: usize, h: usize, chunks: usize) -> RowHits {
         let lo = (y as i64 + i64::from(reach.y0)).max(0);
         let hi = (y as i64 + i64::from(reach.y1)).min(h as i64 - 1);
-        let rows = || (lo..=hi).map(|yy| &self.spans_prev[yy as usize]);
-        RowHits {
-            not_one: RowHits::mark(rows().map(|s| s.not_one), reach, chunks),
-            not_zero: RowHits::mark(rows().map(|s| s.not_zero), reach, chunks),
-            light_not_zero: if self.setup.depth_planes {
-                RowHits::mark(rows().map(|s| s.light_not_zero), reach, chunks)
-            } else {
-                Vec::new()
-            },
-        }
+        let depth_planes = self.setup.depth_planes;
+        let rows = (lo..=hi).map(|yy| RowHits::kinds(&self.spans_prev[yy as usize], depth_planes));
+        RowHits::mark(rows, reach, chunks)
     }
 
     /// Classifies chunk `c` (pixels x0..x0 + lanes, x0 = 8c; fewer than 8 lanes for the row's
@@ -331,7 +357,7 @@ impl QuietRow<'_> {
         let state = self.chunks[c];
         let w = ctx.plan.grid_width as usize;
         let h = ctx.plan.grid_height as usize;
-        let all_ones = self.setup.ones_exact && !hits.not_one[c];
+        let all_ones = self.setup.ones_exact && !hits.not_one(c);
         // Exactly the negation of the cursor's advance test `depth < back` (NaN never advances).
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
         let no_crossing = !(state.event_depth < ctx.back);
@@ -339,12 +365,12 @@ impl QuietRow<'_> {
             return ChunkWork::Unoccluded;
         }
         let interior = reach.interior(c * LANES, lanes, y, w, h);
-        let all_zeros = !all_ones && interior && !hits.not_zero[c];
+        let all_zeros = !all_ones && interior && !hits.not_zero(c);
         if all_zeros && state.opaque {
             return ChunkWork::Dark;
         }
         let dark_light =
-            self.setup.depth_planes && !all_ones && interior && !hits.light_not_zero[c];
+            self.setup.depth_planes && !all_ones && interior && !hits.light_not_zero(c);
         if dark_light && state.opaque {
             return ChunkWork::DarkDepth;
         }
@@ -405,26 +431,35 @@ mod tests {
                 y1: 0,
             };
             let chunks = 1 + rng.below(12) as usize;
-            let spans: Vec<(i32, i32)> = (0..rng.below(4))
-                .map(|_| match rng.below(5) {
-                    0 => RowSpans::EMPTY.not_one,
-                    _ => {
-                        let lo = rng.below(120) as i32 - 10;
-                        (lo, lo + 1 + rng.below(40) as i32)
-                    }
-                })
+            let span = |rng: &mut TestRng| match rng.below(5) {
+                0 => RowSpans::EMPTY.not_one,
+                _ => {
+                    let lo = rng.below(120) as i32 - 10;
+                    (lo, lo + 1 + rng.below(40) as i32)
+                }
+            };
+            let rows: Vec<[(i32, i32); 3]> = (0..rng.below(4))
+                .map(|_| [span(&mut rng), span(&mut rng), span(&mut rng)])
                 .collect();
-            let marked = RowHits::mark(spans.iter().copied(), &reach, chunks);
-            for (c, &hit) in marked.iter().enumerate() {
+            let marked = RowHits::mark(rows.iter().copied(), &reach, chunks);
+            assert_eq!(marked.bits.len(), chunks);
+            for c in 0..chunks {
                 let (a, b) = (
                     (c * LANES) as i64 + i64::from(reach.x0),
                     (c * LANES + LANES - 1) as i64 + i64::from(reach.x1),
                 );
-                let direct = spans.iter().any(|&s| meets(s, a, b));
-                assert_eq!(
-                    hit, direct,
-                    "chunk {c} of {chunks}, spans {spans:?}, {reach:?}"
-                );
+                let got = [
+                    marked.not_one(c),
+                    marked.not_zero(c),
+                    marked.light_not_zero(c),
+                ];
+                for (k, &hit) in got.iter().enumerate() {
+                    let direct = rows.iter().any(|r| meets(r[k], a, b));
+                    assert_eq!(
+                        hit, direct,
+                        "chunk {c} of {chunks}, kind {k}, rows {rows:?}, {reach:?}"
+                    );
+                }
             }
         }
     }
