@@ -114,11 +114,7 @@ fn add_bilinear<L: Lane>(acc: L, w: &[L; 4], v: &[L; 4]) -> L {
 /// The four bilinear corners (0,0), (1,0), (0,1), (1,1) of lane i's sample at
 /// (`sx[i]`, `sy[i]`) in `plane`, with checked fetches (reads outside give [`OUTSIDE`]).
 #[inline(always)]
-fn fetch_corners<L: Lane>(
-    plane: &Plane<'_>,
-    sx: &[i32; MAX_LANES],
-    sy: &[i32; MAX_LANES],
-) -> [L; 4] {
+fn fetch_corners<L: Lane>(plane: &Plane<'_>, sx: &[i32], sy: &[i32]) -> [L; 4] {
     let mut v = [[0.0f32; MAX_LANES]; 4];
     for i in 0..L::LANES {
         v[0][i] = plane.fetch(sx[i], sy[i]);
@@ -441,7 +437,7 @@ pub fn gather_per_lane<L: Lane>(
     L::u_store(phases, &mut lane_phase);
     for k in 0..n {
         let col = k * pc..(k + 1) * pc;
-        let w = L::gather4(&columns.weights[col], phases);
+        let w4 = L::gather4(&columns.weights[col.clone()], phases);
         let mut sx = [0i32; MAX_LANES];
         let mut sy = [0i32; MAX_LANES];
         for i in 0..L::LANES {
@@ -449,9 +445,30 @@ pub fn gather_per_lane<L: Lane>(
             sx[i] = x0 + i as i32 + t.dx + shift[0];
             sy[i] = y + t.dy + shift[1];
         }
+        let (sx, sy) = (&sx[..L::LANES], &sy[..L::LANES]);
+        let lowest = |v: &[i32]| v.iter().fold(i32::MAX, |m, &a| m.min(a));
+        let highest = |v: &[i32]| v.iter().fold(i32::MIN, |m, &a| m.max(a));
+        let tap_inside =
+            lowest(sx) >= 0 && highest(sx) + 1 < w && lowest(sy) >= 0 && highest(sy) + 1 < h;
+        if tap_inside {
+            // Near the edge, a tap whose corners all lie inside takes the interior path's
+            // loads: the same terms in the same order (the accumulator's layout is a shuffle).
+            let weights = L::weights4(&columns.weights[col.clone()], phases);
+            let rel = L::u_add(L::u_gather(&columns.offset[col], phases), lane_shift);
+            let mut sums = [L::acc_from(L::splat(0.0)); 4];
+            let sums = &mut sums[..planes.channels];
+            for (sum, a) in sums.iter_mut().zip(acc.iter()) {
+                *sum = L::acc_from(*a);
+            }
+            L::acc_blocks(sums, &weights, planes.data, pixel, w as usize, rel, rs);
+            for (a, sum) in acc.iter_mut().zip(sums.iter()) {
+                *a = L::acc_finish(*sum);
+            }
+            continue;
+        }
         for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
-            let v = fetch_corners(&planes.plane(c), &sx, &sy);
-            *a = add_bilinear(*a, &w, &v);
+            let v = fetch_corners(&planes.plane(c), sx, sy);
+            *a = add_bilinear(*a, &w4, &v);
         }
     }
 }
