@@ -410,34 +410,20 @@ pub fn gather_per_lane<L: Lane>(
         L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
     );
     let (w, h) = (planes.width, planes.height);
+    let pair_loads = PairLoads {
+        planes,
+        columns,
+        phases,
+        pixel,
+        lane_shift,
+    };
     if interior || reads_inside(lane_rows.extent, shift, x0, y, L::LANES, w, h) {
-        // Every plane's accumulator, in the lane type's layout for pixel-pair loads.
-        let mut sums = [L::acc_from(L::splat(0.0)); 4];
-        assert!(
-            planes.channels <= sums.len(),
-            "a light has 1 or 3 channels and at most one depth plane"
-        );
-        let sums = &mut sums[..planes.channels];
-        for (sum, a) in sums.iter_mut().zip(acc.iter()) {
-            *sum = L::acc_from(*a);
-        }
-        let plane_step = planes.width as usize;
-        for k in 0..n {
-            let col = k * pc..(k + 1) * pc;
-            let w = L::weights4(&columns.weights[col.clone()], phases);
-            let rel = L::u_add(L::u_gather(&columns.offset[col], phases), lane_shift);
-            L::acc_blocks(sums, &w, planes.data, pixel, plane_step, rel, rs);
-        }
-        for (a, sum) in acc.iter_mut().zip(sums.iter()) {
-            *a = L::acc_finish(*sum);
-        }
+        pair_loads.add_taps(0..n, acc);
         return;
     }
     let mut lane_phase = [0u32; MAX_LANES];
     L::u_store(phases, &mut lane_phase);
     for k in 0..n {
-        let col = k * pc..(k + 1) * pc;
-        let w4 = L::gather4(&columns.weights[col.clone()], phases);
         let mut sx = [0i32; MAX_LANES];
         let mut sy = [0i32; MAX_LANES];
         for i in 0..L::LANES {
@@ -452,23 +438,57 @@ pub fn gather_per_lane<L: Lane>(
             lowest(sx) >= 0 && highest(sx) + 1 < w && lowest(sy) >= 0 && highest(sy) + 1 < h;
         if tap_inside {
             // Near the edge, a tap whose corners all lie inside takes the interior path's
-            // loads: the same terms in the same order (the accumulator's layout is a shuffle).
-            let weights = L::weights4(&columns.weights[col.clone()], phases);
-            let rel = L::u_add(L::u_gather(&columns.offset[col], phases), lane_shift);
-            let mut sums = [L::acc_from(L::splat(0.0)); 4];
-            let sums = &mut sums[..planes.channels];
-            for (sum, a) in sums.iter_mut().zip(acc.iter()) {
-                *sum = L::acc_from(*a);
-            }
-            L::acc_blocks(sums, &weights, planes.data, pixel, w as usize, rel, rs);
-            for (a, sum) in acc.iter_mut().zip(sums.iter()) {
-                *a = L::acc_finish(*sum);
-            }
+            // loads: the same terms in the same order.
+            pair_loads.add_taps(k..k + 1, acc);
             continue;
         }
+        let w4 = L::gather4(&columns.weights[k * pc..(k + 1) * pc], phases);
         for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
             let v = fetch_corners(&planes.plane(c), sx, sy);
             *a = add_bilinear(*a, &w4, &v);
+        }
+    }
+}
+
+/// The per-lane gather's reads inside the grid: every plane's two pixel pairs per lane and tap
+/// ([`Lane::acc_blocks`]), lane i at `pixel + lane_shift[i] +` its tap's offset.
+struct PairLoads<'a, L: Lane> {
+    planes: &'a LightPlanes<'a>,
+    columns: &'a TapColumns,
+    phases: L::U,
+    pixel: usize,
+    lane_shift: L::U,
+}
+
+impl<L: Lane> PairLoads<'_, L> {
+    /// Adds taps `taps` (every corner of every lane inside the grid) to `acc`, plane by plane.
+    #[inline(always)]
+    fn add_taps(&self, taps: std::ops::Range<usize>, acc: &mut [L]) {
+        let (planes, columns) = (self.planes, self.columns);
+        let pc = columns.phase_count;
+        // Every plane's accumulator, in the lane type's layout for pixel-pair loads (a shuffle).
+        let mut sums = [L::acc_from(L::splat(0.0)); 4];
+        assert!(
+            planes.channels <= sums.len(),
+            "a light has 1 or 3 channels and at most one depth plane"
+        );
+        let sums = &mut sums[..planes.channels];
+        for (sum, a) in sums.iter_mut().zip(acc.iter()) {
+            *sum = L::acc_from(*a);
+        }
+        let plane_step = planes.width as usize;
+        for k in taps {
+            let col = k * pc..(k + 1) * pc;
+            let w = L::weights4(&columns.weights[col.clone()], self.phases);
+            let rel = L::u_add(
+                L::u_gather(&columns.offset[col], self.phases),
+                self.lane_shift,
+            );
+            let (data, rs) = (planes.data, planes.row_stride);
+            L::acc_blocks(sums, &w, data, self.pixel, plane_step, rel, rs);
+        }
+        for (a, sum) in acc.iter_mut().zip(sums.iter()) {
+            *a = L::acc_finish(*sum);
         }
     }
 }
