@@ -72,6 +72,12 @@ pub trait Lane:
     fn gather(table: &[f32], i: Self::U) -> Self;
     /// `table[i]` per integer lane (bounds-checked).
     fn u_gather(table: &[u32], i: Self::U) -> Self::U;
+    /// [`Lane::u_gather`] without the bounds check, for callers that proved the indices once
+    /// for many gathers.
+    ///
+    /// # Safety
+    /// Every lane's index is below `table.len()`, and `table.len() <= i32::MAX as usize`.
+    unsafe fn u_gather_unchecked(table: &[u32], i: Self::U) -> Self::U;
     /// `data[at..at + LANES]` as integer lanes (bounds-checked): [`Lane::u_gather`] at
     /// `at + u_iota(0)`, as one contiguous load.
     fn u_load(data: &[u32], at: usize) -> Self::U;
@@ -212,6 +218,11 @@ impl Lane for f32 {
     #[inline(always)]
     fn u_gather(table: &[u32], i: u32) -> u32 {
         table[i as usize]
+    }
+    #[inline(always)]
+    unsafe fn u_gather_unchecked(table: &[u32], i: u32) -> u32 {
+        // SAFETY: the caller guarantees `i < table.len()`.
+        unsafe { *table.get_unchecked(i as usize) }
     }
     #[inline(always)]
     fn u_load(data: &[u32], at: usize) -> u32 {
@@ -393,6 +404,11 @@ impl Lane for f32x8 {
         avx2::gather_u32(table, i)
     }
     #[inline(always)]
+    unsafe fn u_gather_unchecked(table: &[u32], i: u32x8) -> u32x8 {
+        // SAFETY: the caller guarantees every index lies in `table` and fits i32.
+        unsafe { avx2::gather_u32_unchecked(table, i) }
+    }
+    #[inline(always)]
     fn u_load(data: &[u32], at: usize) -> u32x8 {
         let a: [u32; 8] = data[at..at + 8].try_into().expect("8 integers");
         u32x8::new(a)
@@ -527,6 +543,28 @@ mod avx2 {
         }
         let a = i.to_array();
         f32x8::new(std::array::from_fn(|k| data[a[k] as usize]))
+    }
+
+    /// `table[i]` per integer lane, unchecked.
+    ///
+    /// # Safety
+    /// Every lane's index lies in `0..table.len()`, and `table.len() <= i32::MAX as usize`.
+    #[inline(always)]
+    pub(super) unsafe fn gather_u32_unchecked(table: &[u32], i: u32x8) -> u32x8 {
+        #[cfg(target_feature = "avx2")]
+        // SAFETY: the caller's contract.
+        unsafe {
+            let base = table.as_ptr().cast::<i32>();
+            cast(_mm256_i32gather_epi32::<4>(base, cast(i)))
+        }
+        #[cfg(not(target_feature = "avx2"))]
+        {
+            let a = i.to_array();
+            // SAFETY: the caller's contract.
+            u32x8::new(std::array::from_fn(|k| unsafe {
+                *table.get_unchecked(a[k] as usize)
+            }))
+        }
     }
 
     /// `table[i]` per integer lane.
@@ -846,6 +884,13 @@ mod tests {
             f32x8::u_store(f32x8::u_gather(&ints, phase), &mut out);
             for i in 0..MAX_LANES {
                 assert_eq!(out[i], f32::u_gather(&ints, ph[i]), "u_gather lane {i}");
+            }
+            // SAFETY: every index is below 64 = ints.len().
+            f32x8::u_store(unsafe { f32x8::u_gather_unchecked(&ints, phase) }, &mut out);
+            for i in 0..MAX_LANES {
+                // SAFETY: as above.
+                let one = unsafe { f32::u_gather_unchecked(&ints, ph[i]) };
+                assert_eq!((out[i], one), (ints[ph[i] as usize], ints[ph[i] as usize]));
             }
             let at = (h[0] % 56) as usize;
             f32x8::u_store(f32x8::u_load(&ints, at), &mut out);

@@ -563,8 +563,14 @@ pub fn distance_rows<L: Lane>(
             let nearest = L::u_select(L::u_eq(nearest, lit), zero, nearest);
             return level_rows::<L>(table, nearest, phase, slabs, slab);
         }
+        // One proof for every gather below: `LaneRows::of` looked each lane's row up in a table
+        // of `pc` rows (so `rel` reads inside its column), and the test above (or the sweep's
+        // reach) put every corner inside the grid, whose rows lie in `levels.data`.
+        assert!(levels.data.len() <= i32::MAX as usize && columns.summary.len() == pc);
         for k in 0..n {
-            let rel = L::u_gather(&columns.level_offset[k * pc..(k + 1) * pc], own_rows);
+            let column = &columns.level_offset[k * pc..(k + 1) * pc];
+            // SAFETY: every lane's row is below `pc` (see above).
+            let rel = unsafe { L::u_gather_unchecked(column, own_rows) };
             let top_left = L::u_add(lane_shift, rel);
             let below = L::u_add(top_left, L::u_splat(rs as u32));
             for corner in [
@@ -573,7 +579,10 @@ pub fn distance_rows<L: Lane>(
                 below,
                 L::u_add(below, L::u_splat(1)),
             ] {
-                nearest = L::u_min(nearest, L::u_gather(levels.data, corner));
+                // SAFETY: every corner lies inside the grid (see above).
+                nearest = L::u_min(nearest, unsafe {
+                    L::u_gather_unchecked(levels.data, corner)
+                });
             }
         }
     } else {
