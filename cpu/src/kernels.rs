@@ -319,22 +319,9 @@ impl TapColumns {
     /// The columns of `table` for light buffers with rows `row_stride` apart and level planes with
     /// rows `level_stride` apart.
     pub fn new(table: &KernelTable, row_stride: usize, level_stride: usize) -> TapColumns {
-        let mut columns = TapColumns::without_summary(table, row_stride, level_stride);
-        columns.summary = (0..columns.phase_count)
-            .map(|row| {
-                let e = columns.extent[row];
-                let (g, l) = (columns.gather_taps[row], columns.level_taps[row]);
-                [-e[0], e[1], -e[2], e[3], g as i32, l as i32, 0, 0]
-            })
-            .collect();
-        columns
-    }
-
-    /// [`TapColumns::new`] with an empty [`TapColumns::summary`].
-    fn without_summary(table: &KernelTable, row_stride: usize, level_stride: usize) -> TapColumns {
         // Every row of every level: the per-lane gather picks a row per lane.
         let (pc, n) = (table.rows() as usize, table.taps_per_phase as usize);
-        TapColumns {
+        let mut columns = TapColumns {
             summary: Vec::new(),
             phase_count: pc,
             weights: (0..n * pc)
@@ -379,7 +366,16 @@ impl TapColumns {
                     ]
                 })
                 .collect(),
-        }
+        };
+        // Each row's summary from the fields above (see `summary`).
+        columns.summary = (0..pc)
+            .map(|row| {
+                let e = columns.extent[row];
+                let (g, l) = (columns.gather_taps[row], columns.level_taps[row]);
+                [-e[0], e[1], -e[2], e[3], g as i32, l as i32, 0, 0]
+            })
+            .collect();
+        columns
     }
 }
 

@@ -185,11 +185,6 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                 let planes = light_planes(plan, prev, l);
                 let shift = t.slab_shift[slab];
                 let acc = &mut iin[l * ch..(l + 1) * ch];
-                let uniform = match t.phase_mode {
-                    PhaseMode::PerPixel => None,
-                    PhaseMode::PerSlab => Some(phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0)),
-                    PhaseMode::Schedule => Some(t.slab_phase[slab]),
-                };
                 let (x0, yi) = (x0 as i32, y as i32);
                 if distance {
                     // The light's channels and its depth plane, each lane through its level's row.
@@ -206,6 +201,11 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                     depth_in[l] = all[ch];
                     continue;
                 }
+                let uniform = match t.phase_mode {
+                    PhaseMode::PerPixel => None,
+                    PhaseMode::PerSlab => Some(phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0)),
+                    PhaseMode::Schedule => Some(t.slab_phase[slab]),
+                };
                 match uniform {
                     Some(p) => {
                         let extent = ctx.columns[l].extent[p as usize];
