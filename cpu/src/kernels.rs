@@ -185,14 +185,48 @@ pub fn gather<L: Lane>(
             L::splat(t.w[3]),
         ];
         for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
-            let mut xs = [0i32; MAX_LANES];
-            for (i, v) in xs.iter_mut().enumerate() {
-                *v = sx + i as i32;
-            }
-            let v = fetch_corners(&planes.plane(c), &xs, &[sy; MAX_LANES]);
+            let plane = planes.plane(c);
+            let v = [
+                row_run(&plane, sx, sy),
+                row_run(&plane, sx + 1, sy),
+                row_run(&plane, sx, sy + 1),
+                row_run(&plane, sx + 1, sy + 1),
+            ];
             *a = add_bilinear(*a, &w, &v);
         }
     }
+}
+
+/// The `LANES` values at (x.., y) of `plane`, each what [`Plane::fetch`] gives: one load when
+/// the run lies inside the grid, the outside value when it lies wholly beyond; where it crosses
+/// the grid's left or right edge, the row's first or last `LANES` values beside `LANES` outside
+/// values in a window, read at the run's place.
+#[inline(always)]
+fn row_run<L: Lane>(plane: &Plane<'_>, x: i32, y: i32) -> L {
+    let (lanes, width) = (L::LANES as i32, plane.width);
+    if y < 0 || y >= plane.height || x >= width || x + lanes <= 0 {
+        return L::splat(plane.outside);
+    }
+    let row = plane.base + y as usize * plane.row_stride;
+    if x >= 0 && x + lanes <= width {
+        return L::load(plane.data, row + x as usize);
+    }
+    let mut window = [plane.outside; 2 * MAX_LANES];
+    if width >= lanes {
+        return if x < 0 {
+            // [outside × LANES, columns 0..LANES]: column x + i at LANES + x + i.
+            L::load(plane.data, row).store(&mut window, L::LANES);
+            L::load(&window, (lanes + x) as usize)
+        } else {
+            // [columns width − LANES..width, outside × LANES]: column x + i at x + i − (width − LANES).
+            L::load(plane.data, row + (width - lanes) as usize).store(&mut window, 0);
+            L::load(&window, (x - (width - lanes)) as usize)
+        };
+    }
+    for (i, value) in window.iter_mut().enumerate().take(L::LANES) {
+        *value = plane.fetch(x + i as i32, y);
+    }
+    L::load(&window, 0)
 }
 
 /// [`gather`] of `K` neighbouring chunks at once (chunk k at pixels x0 + k·LANES..), every read
@@ -803,6 +837,45 @@ mod tests {
                             a.map(f32::to_bits),
                             b.map(f32::to_bits),
                             "{kernel} row {row} at ({x0}, {y}) plane {c}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_row_run_reads_what_fetch_reads_on_either_side_of_the_grid() {
+        // Narrower than, as wide as and wider than 8 lanes; runs wholly beyond, straddling and inside.
+        for width in [3i32, 8, 13] {
+            let (height, stride) = (3i32, width as usize + 5);
+            let data: Vec<f32> = (0..stride * height as usize + 8)
+                .map(|i| i as f32 + 0.5)
+                .collect();
+            for outside in [OUTSIDE, OUTSIDE_DEPTH] {
+                let plane = Plane {
+                    data: &data,
+                    base: 2,
+                    row_stride: stride,
+                    width,
+                    height,
+                    outside,
+                };
+                for y in -1..=height {
+                    for x in -10..=width + 1 {
+                        let run = row_run::<f32x8>(&plane, x, y).to_array();
+                        let fetched: [f32; 8] =
+                            std::array::from_fn(|i| plane.fetch(x + i as i32, y));
+                        assert_eq!(
+                            run.map(f32::to_bits),
+                            fetched.map(f32::to_bits),
+                            "width {width}, ({x}, {y})"
+                        );
+                        let one = row_run::<f32>(&plane, x, y);
+                        assert_eq!(
+                            one.to_bits(),
+                            fetched[0].to_bits(),
+                            "1 lane, width {width}, ({x}, {y})"
                         );
                     }
                 }

@@ -209,7 +209,11 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                 match uniform {
                     Some(p) => {
                         let extent = ctx.columns[l].extent[p as usize];
-                        gather(&planes, t.phase(p), extent, shift, x0, yi, interior, acc);
+                        // Local sums (from 0, as `iin`'s), so they stay in registers.
+                        let mut sums = [L::splat(0.0); 3];
+                        let sums = &mut sums[..ch];
+                        gather(&planes, t.phase(p), extent, shift, x0, yi, interior, sums);
+                        acc.copy_from_slice(sums);
                     }
                     None => {
                         let ph = phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32));
