@@ -127,6 +127,9 @@ pub trait Lane:
     fn u_mix32(a: Self::U) -> Self::U;
     /// Writes the integer lanes to `out[..LANES]`.
     fn u_store(a: Self::U, out: &mut [u32; MAX_LANES]);
+    /// Lane i takes lane `i + by` of `self`, or `fill` where `i + by` is not a lane (a run of
+    /// values moved along a row, in registers).
+    fn shift_lanes(self, by: i32, fill: f32) -> Self;
 }
 
 impl Lane for f32 {
@@ -311,6 +314,10 @@ impl Lane for f32 {
     fn u_store(a: u32, out: &mut [u32; MAX_LANES]) {
         out[0] = a;
     }
+    #[inline(always)]
+    fn shift_lanes(self, by: i32, fill: f32) -> f32 {
+        if by == 0 { self } else { fill }
+    }
 }
 
 impl Lane for f32x8 {
@@ -494,6 +501,10 @@ impl Lane for f32x8 {
     #[inline(always)]
     fn u_store(a: u32x8, out: &mut [u32; MAX_LANES]) {
         *out = a.to_array();
+    }
+    #[inline(always)]
+    fn shift_lanes(self, by: i32, fill: f32) -> f32x8 {
+        avx2::shift_lanes(self, by, fill)
     }
 }
 
@@ -719,6 +730,39 @@ mod avx2 {
         }
     }
 
+    /// [`super::Lane::shift_lanes`]: one permute and one blend.
+    #[inline(always)]
+    pub(super) fn shift_lanes(v: f32x8, by: i32, fill: f32) -> f32x8 {
+        let from = wide::i32x8::new(std::array::from_fn(|i| i as i32)) + wide::i32x8::splat(by);
+        #[cfg(target_feature = "avx2")]
+        // SAFETY: register permutes and compares; this build has AVX2.
+        unsafe {
+            let from: __m256i = cast(from);
+            // Lanes whose source is outside 0..8: all ones where from < 0 or from > 7.
+            let beyond = _mm256_or_si256(
+                _mm256_cmpgt_epi32(_mm256_setzero_si256(), from),
+                _mm256_cmpgt_epi32(from, _mm256_set1_epi32(7)),
+            );
+            let moved = _mm256_permutevar8x32_ps(cast(v), from);
+            cast(_mm256_blendv_ps(
+                moved,
+                _mm256_set1_ps(fill),
+                _mm256_castsi256_ps(beyond),
+            ))
+        }
+        #[cfg(not(target_feature = "avx2"))]
+        {
+            let (a, from) = (v.to_array(), from.to_array());
+            f32x8::new(std::array::from_fn(|i| {
+                if (0..8).contains(&from[i]) {
+                    a[from[i] as usize]
+                } else {
+                    fill
+                }
+            }))
+        }
+    }
+
     /// Lanes 0–3 and 4–7 of `v` in the even slots of two values (odd slots get copies).
     #[inline(always)]
     pub(super) fn acc_from(v: f32x8) -> [f32x8; 2] {
@@ -860,6 +904,27 @@ mod tests {
             0 => 0.0,
             1 => 1.0,
             _ => (h >> 8) as f32 / 16_777_216.0,
+        }
+    }
+
+    #[test]
+    fn shifted_lanes_take_their_neighbours_or_the_fill() {
+        let v = f32x8::new(std::array::from_fn(|i| i as f32 + 0.25));
+        for by in -9..=9 {
+            let got = v.shift_lanes(by, -1.0).to_array();
+            let want: [f32; 8] = std::array::from_fn(|i| {
+                let from = i as i32 + by;
+                if (0..8).contains(&from) {
+                    from as f32 + 0.25
+                } else {
+                    -1.0
+                }
+            });
+            assert_eq!(got, want, "by {by}");
+            assert_eq!(
+                2.5f32.shift_lanes(by, -1.0),
+                if by == 0 { 2.5 } else { -1.0 }
+            );
         }
     }
 

@@ -199,8 +199,8 @@ pub fn gather<L: Lane>(
 
 /// The `LANES` values at (x.., y) of `plane`, each what [`Plane::fetch`] gives: one load when
 /// the run lies inside the grid, the outside value when it lies wholly beyond; where it crosses
-/// the grid's left or right edge, the row's first or last `LANES` values beside `LANES` outside
-/// values in a window, read at the run's place.
+/// the grid's left or right edge, the row's first or last `LANES` values moved into place in
+/// registers ([`Lane::shift_lanes`]).
 #[inline(always)]
 fn row_run<L: Lane>(plane: &Plane<'_>, x: i32, y: i32) -> L {
     let (lanes, width) = (L::LANES as i32, plane.width);
@@ -211,22 +211,18 @@ fn row_run<L: Lane>(plane: &Plane<'_>, x: i32, y: i32) -> L {
     if x >= 0 && x + lanes <= width {
         return L::load(plane.data, row + x as usize);
     }
-    let mut window = [plane.outside; 2 * MAX_LANES];
     if width >= lanes {
-        return if x < 0 {
-            // [outside × LANES, columns 0..LANES]: column x + i at LANES + x + i.
-            L::load(plane.data, row).store(&mut window, L::LANES);
-            L::load(&window, (lanes + x) as usize)
-        } else {
-            // [columns width − LANES..width, outside × LANES]: column x + i at x + i − (width − LANES).
-            L::load(plane.data, row + (width - lanes) as usize).store(&mut window, 0);
-            L::load(&window, (x - (width - lanes)) as usize)
-        };
+        // Columns 0.. (x < 0) or width − LANES.. (the run ends beyond the grid), moved so that
+        // lane i holds column x + i.
+        let first = if x < 0 { 0 } else { width - lanes };
+        let values = L::load(plane.data, row + first as usize);
+        return values.shift_lanes(x - first, plane.outside);
     }
-    for (i, value) in window.iter_mut().enumerate().take(L::LANES) {
+    let mut v = [0.0f32; MAX_LANES];
+    for (i, value) in v.iter_mut().enumerate().take(L::LANES) {
         *value = plane.fetch(x + i as i32, y);
     }
-    L::load(&window, 0)
+    L::load(&v, 0)
 }
 
 /// [`gather`] of `K` neighbouring chunks at once (chunk k at pixels x0 + k·LANES..), every read
