@@ -130,6 +130,33 @@ pub trait Lane:
     /// Lane i takes lane `i + by` of `self`, or `fill` where `i + by` is not a lane (a run of
     /// values moved along a row, in registers).
     fn shift_lanes(self, by: i32, fill: f32) -> Self;
+    /// Lane i: the pixel (x[i], y[i]) (read as `i32`) of the `width` × `height` grid whose pixel
+    /// (x, y) is `data[base + y·stride + x]`, or `outside` beyond the grid. Panics unless the
+    /// grid lies in `data`.
+    #[allow(clippy::too_many_arguments)]
+    fn fetch_grid(
+        data: &[f32],
+        base: usize,
+        stride: usize,
+        width: i32,
+        height: i32,
+        x: Self::U,
+        y: Self::U,
+        outside: f32,
+    ) -> Self;
+}
+
+/// Panics unless the `width` × `height` grid at `base` with rows `stride` apart lies in
+/// `data` (of at most `i32::MAX` values, so that its indices fit a signed 32-bit gather).
+#[inline(always)]
+fn check_grid(len: usize, base: usize, stride: usize, width: i32, height: i32) {
+    let last = (base as u64)
+        .saturating_add((height.max(1) as u64 - 1).saturating_mul(stride as u64))
+        .saturating_add(width.max(0) as u64);
+    assert!(
+        last <= len as u64 && len <= i32::MAX as usize,
+        "grid {width}x{height} at {base} (rows {stride} apart) outside 0..{len}"
+    );
 }
 
 impl Lane for f32 {
@@ -318,6 +345,24 @@ impl Lane for f32 {
     fn shift_lanes(self, by: i32, fill: f32) -> f32 {
         if by == 0 { self } else { fill }
     }
+    #[inline(always)]
+    fn fetch_grid(
+        data: &[f32],
+        base: usize,
+        stride: usize,
+        width: i32,
+        height: i32,
+        x: u32,
+        y: u32,
+        outside: f32,
+    ) -> f32 {
+        let (x, y) = (x as i32, y as i32);
+        if x >= 0 && y >= 0 && x < width && y < height {
+            data[base + y as usize * stride + x as usize]
+        } else {
+            outside
+        }
+    }
 }
 
 impl Lane for f32x8 {
@@ -505,6 +550,23 @@ impl Lane for f32x8 {
     #[inline(always)]
     fn shift_lanes(self, by: i32, fill: f32) -> f32x8 {
         avx2::shift_lanes(self, by, fill)
+    }
+    #[inline(always)]
+    fn fetch_grid(
+        data: &[f32],
+        base: usize,
+        stride: usize,
+        width: i32,
+        height: i32,
+        x: u32x8,
+        y: u32x8,
+        outside: f32,
+    ) -> f32x8 {
+        if width <= 0 || height <= 0 {
+            return f32x8::splat(outside);
+        }
+        check_grid(data.len(), base, stride, width, height);
+        avx2::fetch_grid(data, base, stride, [width, height], x, y, outside)
     }
 }
 
@@ -763,6 +825,53 @@ mod avx2 {
         }
     }
 
+    /// [`super::Lane::fetch_grid`] once the grid (`size` = [width, height], both > 0) has been
+    /// checked to lie in `data`: a masked `vgatherdps` of the lanes inside the grid.
+    #[inline(always)]
+    pub(super) fn fetch_grid(
+        data: &[f32],
+        base: usize,
+        stride: usize,
+        size: [i32; 2],
+        x: u32x8,
+        y: u32x8,
+        outside: f32,
+    ) -> f32x8 {
+        #[cfg(target_feature = "avx2")]
+        // SAFETY: the lanes read are inside the grid (unsigned x < width and y < height: a
+        // negative coordinate reads as ≥ 2^31), whose pixels the caller checked lie in `data`,
+        // of at most i32::MAX values: the signed 32-bit indices are exact.
+        unsafe {
+            let (xi, yi): (__m256i, __m256i) = (cast(x), cast(y));
+            let below = |v: __m256i, n: i32| {
+                _mm256_cmpeq_epi32(_mm256_min_epu32(v, _mm256_set1_epi32(n - 1)), v)
+            };
+            let inside = _mm256_and_si256(below(xi, size[0]), below(yi, size[1]));
+            let at = _mm256_add_epi32(
+                _mm256_add_epi32(_mm256_mullo_epi32(yi, _mm256_set1_epi32(stride as i32)), xi),
+                _mm256_set1_epi32(base as i32),
+            );
+            cast(_mm256_mask_i32gather_ps::<4>(
+                _mm256_set1_ps(outside),
+                data.as_ptr(),
+                at,
+                _mm256_castsi256_ps(inside),
+            ))
+        }
+        #[cfg(not(target_feature = "avx2"))]
+        {
+            let (x, y) = (x.to_array(), y.to_array());
+            f32x8::new(std::array::from_fn(|i| {
+                let (x, y) = (x[i] as i32, y[i] as i32);
+                if x >= 0 && y >= 0 && x < size[0] && y < size[1] {
+                    data[base + y as usize * stride + x as usize]
+                } else {
+                    outside
+                }
+            }))
+        }
+    }
+
     /// Lanes 0–3 and 4–7 of `v` in the even slots of two values (odd slots get copies).
     #[inline(always)]
     pub(super) fn acc_from(v: f32x8) -> [f32x8; 2] {
@@ -924,6 +1033,51 @@ mod tests {
             assert_eq!(
                 2.5f32.shift_lanes(by, -1.0),
                 if by == 0 { 2.5 } else { -1.0 }
+            );
+        }
+    }
+
+    #[test]
+    fn a_grid_fetch_reads_inside_and_gives_the_outside_value_beyond() {
+        let (width, height, stride, base) = (13i32, 5i32, 17usize, 3usize);
+        let data: Vec<f32> = (0..base + 4 * stride + 13)
+            .map(|k| k as f32 + 0.5)
+            .collect();
+        for seed in 0..2000u32 {
+            let h: [u32; MAX_LANES] = std::array::from_fn(|i| mix32(seed * 8 + i as u32));
+            // Coordinates from −4 to width + 3 (and height + 3), and now and then far beyond.
+            let coord = |v: u32, n: i32| match v % 16 {
+                0 => i32::MIN + (v >> 8) as i32,
+                1 => i32::MAX - (v >> 8) as i32,
+                _ => (v >> 4) as i32 % (n + 8) - 4,
+            };
+            let x = h.map(|v| coord(v, width) as u32);
+            let y = h.map(|v| coord(mix32(v), height) as u32);
+            let got = f32x8::fetch_grid(
+                &data,
+                base,
+                stride,
+                width,
+                height,
+                u32x8::new(x),
+                u32x8::new(y),
+                -1.0,
+            );
+            agree(
+                got,
+                |i| {
+                    let (xi, yi) = (x[i] as i32, y[i] as i32);
+                    let inside = (0..width).contains(&xi) && (0..height).contains(&yi);
+                    let want = if inside {
+                        data[base + yi as usize * stride + xi as usize]
+                    } else {
+                        -1.0
+                    };
+                    let one = f32::fetch_grid(&data, base, stride, width, height, x[i], y[i], -1.0);
+                    assert_eq!(one.to_bits(), want.to_bits(), "one lane at ({xi}, {yi})");
+                    want
+                },
+                "fetch_grid",
             );
         }
     }

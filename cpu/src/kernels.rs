@@ -112,21 +112,29 @@ fn add_bilinear<L: Lane>(acc: L, w: &[L; 4], v: &[L; 4]) -> L {
 }
 
 /// The four bilinear corners (0,0), (1,0), (0,1), (1,1) of lane i's sample at
-/// (`sx[i]`, `sy[i]`) in `plane`, with checked fetches (reads outside give [`OUTSIDE`]).
+/// (`sx[i]`, `sy[i]`) in `plane` (reads outside give its outside value; [`Lane::fetch_grid`]).
 #[inline(always)]
-fn fetch_corners<L: Lane>(plane: &Plane<'_>, sx: &[i32], sy: &[i32]) -> [L; 4] {
-    let mut v = [[0.0f32; MAX_LANES]; 4];
-    for i in 0..L::LANES {
-        v[0][i] = plane.fetch(sx[i], sy[i]);
-        v[1][i] = plane.fetch(sx[i] + 1, sy[i]);
-        v[2][i] = plane.fetch(sx[i], sy[i] + 1);
-        v[3][i] = plane.fetch(sx[i] + 1, sy[i] + 1);
-    }
+fn fetch_corners<L: Lane>(plane: &Plane<'_>, sx: L::U, sy: L::U) -> [L; 4] {
+    let one = L::u_splat(1);
+    let (sx1, sy1) = (L::u_add(sx, one), L::u_add(sy, one));
+    let (w, h) = (plane.width, plane.height);
+    let fetch = |x, y| {
+        L::fetch_grid(
+            plane.data,
+            plane.base,
+            plane.row_stride,
+            w,
+            h,
+            x,
+            y,
+            plane.outside,
+        )
+    };
     [
-        L::load(&v[0], 0),
-        L::load(&v[1], 0),
-        L::load(&v[2], 0),
-        L::load(&v[3], 0),
+        fetch(sx, sy),
+        fetch(sx1, sy),
+        fetch(sx, sy1),
+        fetch(sx1, sy1),
     ]
 }
 
@@ -469,6 +477,14 @@ pub fn gather_per_lane<L: Lane>(
             continue;
         }
         let w4 = L::gather4(&columns.weights[k * pc..(k + 1) * pc], phases);
+        let lanes = |v: &[i32]| {
+            let mut u = [0u32; MAX_LANES];
+            for (ui, &vi) in u.iter_mut().zip(v) {
+                *ui = vi as u32;
+            }
+            L::u_load(&u, 0)
+        };
+        let (sx, sy) = (lanes(sx), lanes(sy));
         for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
             let v = fetch_corners(&planes.plane(c), sx, sy);
             *a = add_bilinear(*a, &w4, &v);
