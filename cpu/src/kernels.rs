@@ -164,7 +164,8 @@ pub fn reads_inside(
 /// Gathers every channel of one light at pixels x0.. (one per lane) of row y when every lane
 /// uses the same `taps` (per-slab and scheduled phases, and any 1-lane gather): contiguous loads
 /// when `interior` (every read inside the grid; one bounds check for the taps' whole
-/// `extent`, see [`TapColumns::extent`]), else checked fetches. Adds into `acc[c]` tap by tap,
+/// `extent`, see [`TapColumns::extent`]), else tap by tap: contiguous loads where the tap's
+/// corners lie inside, [`RowRun`]s where they do not. Adds into `acc[c]` tap by tap,
 /// corner by corner, so every lane has the bits of any other lane count.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -183,54 +184,134 @@ pub fn gather<L: Lane>(
         gather_inside(planes, taps, extent, shift, x0, y, [acc]);
         return;
     }
+    match planes.channels {
+        1 => gather_near_edge::<L, 1>(planes, taps, shift, x0, y, acc),
+        2 => gather_near_edge::<L, 2>(planes, taps, shift, x0, y, acc),
+        3 => gather_near_edge::<L, 3>(planes, taps, shift, x0, y, acc),
+        4 => gather_near_edge::<L, 4>(planes, taps, shift, x0, y, acc),
+        n => panic!("a light has 1 or 3 channels and at most one depth plane, not {n} planes"),
+    }
+}
+
+/// [`gather`] of a chunk whose reads may leave the grid, for `C` planes (a constant, so that
+/// the sums stay in registers): tap by tap, contiguous loads where the tap's corners lie inside,
+/// [`RowRun`]s where they do not.
+#[inline(always)]
+fn gather_near_edge<L: Lane, const C: usize>(
+    planes: &LightPlanes<'_>,
+    taps: &[Tap],
+    shift: [i32; 2],
+    x0: i32,
+    y: i32,
+    acc: &mut [L],
+) {
+    let (w, h, rs) = (planes.width, planes.height, planes.row_stride);
+    let lanes = L::LANES as i32;
+    let mut sums = [L::splat(0.0); C];
+    sums.copy_from_slice(&acc[..C]);
     for t in taps {
         let sx = x0 + t.dx + shift[0];
         let sy = y + t.dy + shift[1];
-        let w = [
+        let weights = [
             L::splat(t.w[0]),
             L::splat(t.w[1]),
             L::splat(t.w[2]),
             L::splat(t.w[3]),
         ];
-        for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
+        if sx >= 0 && sx + 1 + lanes <= w && sy >= 0 && sy + 1 < h {
+            // This tap's corners lie inside: contiguous loads, as in the interior.
+            let at = planes.base + sy as usize * rs + sx as usize;
+            for (c, sum) in sums.iter_mut().enumerate() {
+                let at = at + c * w as usize;
+                let v = [
+                    L::load(planes.data, at),
+                    L::load(planes.data, at + 1),
+                    L::load(planes.data, at + rs),
+                    L::load(planes.data, at + rs + 1),
+                ];
+                *sum = add_bilinear(*sum, &weights, &v);
+            }
+            continue;
+        }
+        // The same four runs in every plane: placed once per tap.
+        let runs = [
+            RowRun::at::<L>(w, h, rs, sx, sy),
+            RowRun::at::<L>(w, h, rs, sx + 1, sy),
+            RowRun::at::<L>(w, h, rs, sx, sy + 1),
+            RowRun::at::<L>(w, h, rs, sx + 1, sy + 1),
+        ];
+        for (c, sum) in sums.iter_mut().enumerate() {
             let plane = planes.plane(c);
             let v = [
-                row_run(&plane, sx, sy),
-                row_run(&plane, sx + 1, sy),
-                row_run(&plane, sx, sy + 1),
-                row_run(&plane, sx + 1, sy + 1),
+                runs[0].read(&plane),
+                runs[1].read(&plane),
+                runs[2].read(&plane),
+                runs[3].read(&plane),
             ];
-            *a = add_bilinear(*a, &w, &v);
+            *sum = add_bilinear(*sum, &weights, &v);
         }
     }
+    acc[..C].copy_from_slice(&sums);
 }
 
-/// The `LANES` values at (x.., y) of `plane`, each what [`Plane::fetch`] gives: one load when
-/// the run lies inside the grid, the outside value when it lies wholly beyond; where it crosses
-/// the grid's left or right edge, the row's first or last `LANES` values moved into place in
-/// registers ([`Lane::shift_lanes`]).
-#[inline(always)]
-fn row_run<L: Lane>(plane: &Plane<'_>, x: i32, y: i32) -> L {
-    let (lanes, width) = (L::LANES as i32, plane.width);
-    if y < 0 || y >= plane.height || x >= width || x + lanes <= 0 {
-        return L::splat(plane.outside);
-    }
-    let row = plane.base + y as usize * plane.row_stride;
-    if x >= 0 && x + lanes <= width {
-        return L::load(plane.data, row + x as usize);
-    }
-    if width >= lanes {
-        // Columns 0.. (x < 0) or width − LANES.. (the run ends beyond the grid), moved so that
-        // lane i holds column x + i.
+/// Where the `LANES` values at (x.., y) of a plane come from, each what [`Plane::fetch`] gives;
+/// the same for every plane of a grid, so placed once and read per plane.
+#[derive(Clone, Copy)]
+enum RowRun {
+    /// Wholly beyond the grid: the plane's outside value.
+    Outside,
+    /// `LANES` values from `at` (past the plane's pixel (0, 0)) moved by `by` lanes
+    /// ([`Lane::shift_lanes`]): 0 inside the grid; where the run crosses the grid's left or
+    /// right edge, the row's first or last `LANES` values moved into place.
+    Load { at: usize, by: i32 },
+    /// Crossing an edge of a grid narrower than `LANES`: lane by lane.
+    Fetch { x: i32, y: i32 },
+}
+
+impl RowRun {
+    /// The run at (x.., y) of a `width` × `height` grid with rows `row_stride` apart.
+    #[inline(always)]
+    fn at<L: Lane>(width: i32, height: i32, row_stride: usize, x: i32, y: i32) -> RowRun {
+        let lanes = L::LANES as i32;
+        if y < 0 || y >= height || x >= width || x + lanes <= 0 {
+            return RowRun::Outside;
+        }
+        let row = y as usize * row_stride;
+        if x >= 0 && x + lanes <= width {
+            return RowRun::Load {
+                at: row + x as usize,
+                by: 0,
+            };
+        }
+        if width < lanes {
+            return RowRun::Fetch { x, y };
+        }
+        // Columns 0.. (x < 0) or width − LANES.. (the run ends beyond the grid): lane i then
+        // holds column x + i.
         let first = if x < 0 { 0 } else { width - lanes };
-        let values = L::load(plane.data, row + first as usize);
-        return values.shift_lanes(x - first, plane.outside);
+        RowRun::Load {
+            at: row + first as usize,
+            by: x - first,
+        }
     }
-    let mut v = [0.0f32; MAX_LANES];
-    for (i, value) in v.iter_mut().enumerate().take(L::LANES) {
-        *value = plane.fetch(x + i as i32, y);
+
+    /// The run's values in `plane`.
+    #[inline(always)]
+    fn read<L: Lane>(self, plane: &Plane<'_>) -> L {
+        match self {
+            RowRun::Outside => L::splat(plane.outside),
+            RowRun::Load { at, by } => {
+                L::load(plane.data, plane.base + at).shift_lanes(by, plane.outside)
+            }
+            RowRun::Fetch { x, y } => {
+                let mut v = [0.0f32; MAX_LANES];
+                for (i, value) in v.iter_mut().enumerate().take(L::LANES) {
+                    *value = plane.fetch(x + i as i32, y);
+                }
+                L::load(&v, 0)
+            }
+        }
     }
-    L::load(&v, 0)
 }
 
 /// [`gather`] of `K` neighbouring chunks at once (chunk k at pixels x0 + k·LANES..), every read
@@ -875,7 +956,9 @@ mod tests {
                 };
                 for y in -1..=height {
                     for x in -10..=width + 1 {
-                        let run = row_run::<f32x8>(&plane, x, y).to_array();
+                        let run = RowRun::at::<f32x8>(width, height, stride, x, y)
+                            .read::<f32x8>(&plane)
+                            .to_array();
                         let fetched: [f32; 8] =
                             std::array::from_fn(|i| plane.fetch(x + i as i32, y));
                         assert_eq!(
@@ -883,7 +966,8 @@ mod tests {
                             fetched.map(f32::to_bits),
                             "width {width}, ({x}, {y})"
                         );
-                        let one = row_run::<f32>(&plane, x, y);
+                        let one =
+                            RowRun::at::<f32>(width, height, stride, x, y).read::<f32>(&plane);
                         assert_eq!(
                             one.to_bits(),
                             fetched[0].to_bits(),
