@@ -398,6 +398,12 @@ pub struct TapColumns {
     /// Per row, `[−min dx, max dx, −min dy, max dy, gather_taps, level_taps, 0, 0]`: every field
     /// of [`LaneRows`] is a maximum over lanes, so a chunk's summary is one 8-lane `max` per lane.
     pub summary: Vec<[i32; 8]>,
+    /// Every row's taps with a nonzero weight, row after row, in each row's order. A tap whose
+    /// four weights are 0 adds +0 to a sum that is never −0 (see `gather_taps`), so a gather
+    /// that skips it keeps every bit; a box kernel's phases are padded with many such taps.
+    pub weighted: Vec<Tap>,
+    /// Row r's taps in [`TapColumns::weighted`]: `weighted[start..end]`.
+    pub weighted_rows: Vec<[u32; 2]>,
 }
 
 /// What a chunk's lanes read through their rows: the union of the rows' extents, the most taps
@@ -435,6 +441,14 @@ impl LaneRows {
 }
 
 impl TapColumns {
+    /// The taps of row `row` with a nonzero weight, in the row's order: the taps a gather through
+    /// one row for every lane must visit ([`TapColumns::weighted`]).
+    #[inline(always)]
+    pub fn weighted_taps(&self, row: u32) -> &[Tap] {
+        let [start, end] = self.weighted_rows[row as usize];
+        &self.weighted[start as usize..end as usize]
+    }
+
     /// The columns of `table` for light buffers with rows `row_stride` apart and level planes with
     /// rows `level_stride` apart.
     pub fn new(table: &KernelTable, row_stride: usize, level_stride: usize) -> TapColumns {
@@ -442,6 +456,8 @@ impl TapColumns {
         let (pc, n) = (table.rows() as usize, table.taps_per_phase as usize);
         let mut columns = TapColumns {
             summary: Vec::new(),
+            weighted: Vec::new(),
+            weighted_rows: Vec::with_capacity(pc),
             phase_count: pc,
             weights: (0..n * pc)
                 .map(|j| table.taps[(j % pc) * n + j / pc].w)
@@ -486,6 +502,14 @@ impl TapColumns {
                 })
                 .collect(),
         };
+        for row in 0..pc as u32 {
+            let start = columns.weighted.len() as u32;
+            let weighted = table.phase(row).iter().filter(|t| t.w != [0.0; 4]);
+            columns.weighted.extend(weighted);
+            columns
+                .weighted_rows
+                .push([start, columns.weighted.len() as u32]);
+        }
         // Each row's summary from the fields above (see `summary`).
         columns.summary = (0..pc)
             .map(|row| {
@@ -892,6 +916,13 @@ mod tests {
                 .map(|_| rng.below(1 << 20) as f32 / (1 << 20) as f32)
                 .collect();
             let columns = TapColumns::new(&table, row_stride, w);
+            let skips_inside = (0..table.rows())
+                .any(|r| columns.weighted_taps(r).len() < columns.gather_taps[r as usize] as usize);
+            // A box kernel's phases have zero taps between weighted ones: the skip is exercised.
+            assert!(
+                skips_inside || kernel != "box",
+                "{kernel}: no zero tap to skip"
+            );
             let planes = LightPlanes {
                 data: &data,
                 base: 0,
@@ -906,9 +937,9 @@ mod tests {
                     let shift = [rng.below(3) as i32 - 1, rng.below(3) as i32 - 1];
                     let (mut uniform, mut per_lane) =
                         ([f32x8::splat(0.0); 4], [f32x8::splat(0.0); 4]);
-                    let used = columns.gather_taps[row as usize] as usize;
+                    // The uniform gather skips zero taps; the per-lane one visits them all.
                     let extent = columns.extent[row as usize];
-                    let taps = &table.phase(row)[..used];
+                    let taps = columns.weighted_taps(row);
                     gather(&planes, taps, extent, shift, x0, y, false, &mut uniform);
                     let rows = f32x8::u_splat(row);
                     let reads = LaneRows::of::<f32x8>(&columns, rows);

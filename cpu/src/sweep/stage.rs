@@ -122,7 +122,7 @@ pub(crate) fn gather_pair(
         };
         let (mut a, mut b) = ([f32x8::splat(0.0); 3], [f32x8::splat(0.0); 3]);
         let extent = ctx.columns[l].extent[p as usize];
-        let taps = t.phase(p);
+        let taps = ctx.columns[l].weighted_taps(p);
         let shift = t.slab_shift[slab];
         let (xa, ya) = (x0 as i32, y as i32);
         gather_inside(
@@ -212,7 +212,8 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                         // Local sums (from 0, as `iin`'s), so they stay in registers.
                         let mut sums = [L::splat(0.0); 3];
                         let sums = &mut sums[..ch];
-                        gather(&planes, t.phase(p), extent, shift, x0, yi, interior, sums);
+                        let taps = ctx.columns[l].weighted_taps(p);
+                        gather(&planes, taps, extent, shift, x0, yi, interior, sums);
                         acc.copy_from_slice(sums);
                     }
                     None => {
@@ -361,11 +362,10 @@ fn distance_gather<L: Lane>(
     match reads.uniform {
         // Every lane at the same level and phase: contiguous loads.
         Some(row) => {
-            let used = columns.gather_taps[row as usize] as usize;
             let extent = columns.extent[row as usize];
             gather(
                 planes,
-                &t.phase(row)[..used],
+                columns.weighted_taps(row),
                 extent,
                 shift,
                 x0,
