@@ -611,15 +611,22 @@ impl<L: Lane> PairLoads<'_, L> {
     /// Adds taps `taps` (every corner of every lane inside the grid) to `acc`, plane by plane.
     #[inline(always)]
     fn add_taps(&self, taps: std::ops::Range<usize>, acc: &mut [L]) {
+        match self.planes.channels {
+            1 => self.add_taps_to::<1>(taps, acc),
+            2 => self.add_taps_to::<2>(taps, acc),
+            3 => self.add_taps_to::<3>(taps, acc),
+            4 => self.add_taps_to::<4>(taps, acc),
+            n => panic!("a light has 1 or 3 channels and at most one depth plane, not {n} planes"),
+        }
+    }
+
+    /// [`PairLoads::add_taps`] for `C` planes (a constant, so that the sums stay in registers).
+    #[inline(always)]
+    fn add_taps_to<const C: usize>(&self, taps: std::ops::Range<usize>, acc: &mut [L]) {
         let (planes, columns) = (self.planes, self.columns);
         let pc = columns.phase_count;
         // Every plane's accumulator, in the lane type's layout for pixel-pair loads (a shuffle).
-        let mut sums = [L::acc_from(L::splat(0.0)); 4];
-        assert!(
-            planes.channels <= sums.len(),
-            "a light has 1 or 3 channels and at most one depth plane"
-        );
-        let sums = &mut sums[..planes.channels];
+        let mut sums = [L::acc_from(L::splat(0.0)); C];
         for (sum, a) in sums.iter_mut().zip(acc.iter()) {
             *sum = L::acc_from(*a);
         }
@@ -632,7 +639,7 @@ impl<L: Lane> PairLoads<'_, L> {
                 self.lane_shift,
             );
             let (data, rs) = (planes.data, planes.row_stride);
-            L::acc_blocks(sums, &w, data, self.pixel, plane_step, rel, rs);
+            L::acc_blocks(&mut sums, &w, data, self.pixel, plane_step, rel, rs);
         }
         for (a, sum) in acc.iter_mut().zip(sums.iter()) {
             *a = L::acc_finish(*sum);
