@@ -100,6 +100,21 @@ pub trait Lane:
         rel: Self::U,
         stride: usize,
     );
+    /// [`Lane::acc_blocks`] without its bounds check, for callers that proved the reads of many
+    /// taps at once.
+    ///
+    /// # Safety
+    /// For every plane `c < sums.len()` and lane i, `origin + c·plane_step + rel[i]` (`rel[i]`
+    /// read as `i32`) is at least 0, and that index plus `stride + 1` is below `data.len()`.
+    unsafe fn acc_blocks_unchecked(
+        sums: &mut [Self::Acc],
+        w: &Self::W4,
+        data: &[f32],
+        origin: usize,
+        plane_step: usize,
+        rel: Self::U,
+        stride: usize,
+    );
     /// The accumulated values.
     fn acc_finish(acc: Self::Acc) -> Self;
     /// `self != o` (true for NaN).
@@ -289,6 +304,31 @@ impl Lane for f32 {
                 data[at + stride],
                 data[at + stride + 1],
             ];
+            *acc = (((*acc + w[0] * v[0]) + w[1] * v[1]) + w[2] * v[2]) + w[3] * v[3];
+        }
+    }
+    #[inline(always)]
+    unsafe fn acc_blocks_unchecked(
+        sums: &mut [f32],
+        w: &[f32; 4],
+        data: &[f32],
+        origin: usize,
+        plane_step: usize,
+        rel: u32,
+        stride: usize,
+    ) {
+        let first = origin.wrapping_add_signed(rel as i32 as isize);
+        for (c, acc) in sums.iter_mut().enumerate() {
+            let at = first + c * plane_step;
+            // SAFETY: the caller guarantees that all four reads lie in `data`.
+            let v = unsafe {
+                [
+                    *data.get_unchecked(at),
+                    *data.get_unchecked(at + 1),
+                    *data.get_unchecked(at + stride),
+                    *data.get_unchecked(at + stride + 1),
+                ]
+            };
             *acc = (((*acc + w[0] * v[0]) + w[1] * v[1]) + w[2] * v[2]) + w[3] * v[3];
         }
     }
@@ -488,6 +528,19 @@ impl Lane for f32x8 {
         stride: usize,
     ) {
         avx2::acc_blocks(sums, w, data, origin, plane_step, rel, stride)
+    }
+    #[inline(always)]
+    unsafe fn acc_blocks_unchecked(
+        sums: &mut [[f32x8; 2]],
+        w: &[f32x8; 4],
+        data: &[f32],
+        origin: usize,
+        plane_step: usize,
+        rel: u32x8,
+        stride: usize,
+    ) {
+        // SAFETY: the caller guarantees that every read lies in `data`.
+        unsafe { avx2::acc_blocks_unchecked(sums, w, data, origin, plane_step, rel, stride) }
     }
     #[inline(always)]
     fn acc_finish(acc: [f32x8; 2]) -> Self {
@@ -780,6 +833,24 @@ mod avx2 {
         let o = origin as i64;
         let last_plane = (sums.len().max(1) as i64 - 1) * plane_step as i64;
         check(o + lo, o + last_plane + hi + stride as i64 + 1, data.len());
+        // SAFETY: every read lies in `data` (checked above).
+        unsafe { acc_blocks_unchecked(sums, w, data, origin, plane_step, rel, stride) }
+    }
+
+    /// [`acc_blocks`] without its check: see [`super::Lane::acc_blocks_unchecked`].
+    ///
+    /// # Safety
+    /// As [`super::Lane::acc_blocks_unchecked`].
+    #[inline(always)]
+    pub(super) unsafe fn acc_blocks_unchecked(
+        sums: &mut [[f32x8; 2]],
+        w: &[f32x8; 4],
+        data: &[f32],
+        origin: usize,
+        plane_step: usize,
+        rel: u32x8,
+        stride: usize,
+    ) {
         let rel = rel.to_array();
         for (c, sum) in sums.iter_mut().enumerate() {
             let at = origin + c * plane_step;
@@ -1131,11 +1202,40 @@ mod tests {
                 let w8 = f32x8::weights4(&table, phase + u32x8::splat(0));
                 let mut sums = [eight];
                 f32x8::acc_blocks(&mut sums, &w8, &data, origin, 0, u32x8::new(rel), stride);
+                // The unchecked blocks read the same values (every read here lies in `data`).
+                let mut unchecked = [eight];
+                // SAFETY: origin ± 750 plus stride + 1 lies in 0..4096.
+                unsafe {
+                    f32x8::acc_blocks_unchecked(
+                        &mut unchecked,
+                        &w8,
+                        &data,
+                        origin,
+                        0,
+                        u32x8::new(rel),
+                        stride,
+                    );
+                }
+                agree(
+                    f32x8::acc_finish(unchecked[0]),
+                    |i| f32x8::acc_finish(sums[0]).to_array()[i],
+                    "acc_blocks_unchecked",
+                );
                 eight = sums[0];
                 for i in 0..MAX_LANES {
                     let w1 = f32::weights4(&table, ph[i]);
                     let mut s1 = [one[i]];
                     f32::acc_blocks(&mut s1, &w1, &data, origin, 0, rel[i], stride);
+                    let mut u1 = [one[i]];
+                    // SAFETY: as above.
+                    unsafe {
+                        f32::acc_blocks_unchecked(&mut u1, &w1, &data, origin, 0, rel[i], stride);
+                    }
+                    assert_eq!(
+                        u1[0].to_bits(),
+                        s1[0].to_bits(),
+                        "one-lane unchecked blocks"
+                    );
                     one[i] = s1[0];
                 }
             }

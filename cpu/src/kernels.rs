@@ -373,37 +373,40 @@ pub fn gather_inside<L: Lane, const K: usize>(
 
 /// A light's tap table by tap, as structure-of-arrays for the per-lane gather: tap k of row p
 /// at `k * phase_count + p`, so that one gather by the lanes' rows reads a tap's column. Built
-/// once per sweep from the plan's [`KernelTable`] (same values, another layout).
+/// once per sweep from the plan's [`KernelTable`] (same values, another layout). Its fields are
+/// only built by [`TapColumns::new`] (never changed after), so they agree with one another: the
+/// per-lane gather's unchecked loads rely on it.
 pub struct TapColumns {
     /// Rows of the table (levels × phases).
-    pub phase_count: usize,
+    pub(crate) phase_count: usize,
     /// The four corner weights of each tap, one column per tap.
-    pub weights: Vec<[f32; 4]>,
+    pub(crate) weights: Vec<[f32; 4]>,
     /// `dy · row_stride + dx` (wrapping: an `i32` offset in the light buffer).
-    pub offset: Vec<u32>,
+    pub(crate) offset: Vec<u32>,
     /// Per phase, the taps' `[min dx, max dx, min dy, max dy]` (the top-left corners' extent).
-    pub extent: Vec<[i32; 4]>,
+    pub(crate) extent: Vec<[i32; 4]>,
     /// `dy · level_stride + dx` (wrapping): the taps' offsets in the level plane (distance
     /// penumbra).
-    pub level_offset: Vec<u32>,
+    pub(crate) level_offset: Vec<u32>,
     /// Per row, the taps the light gather must visit: up to the last with a nonzero weight. The
     /// distance penumbra pads each level's rows to the widest level with zero taps; a zero
     /// weight adds +0 to a sum that is never −0 (weights and values are ≥ 0 and finite), so
     /// skipping trailing zero taps keeps every bit.
-    pub gather_taps: Vec<u32>,
+    pub(crate) gather_taps: Vec<u32>,
     /// Per row, the taps [`distance_rows`] must visit: up to the last that is not the zero tap at
     /// (0, 0), plus one such tap if any follows (every padding tap reads the same four level
     /// corners, so one stands for all: the same minimum).
-    pub level_taps: Vec<u32>,
-    /// Per row, `[−min dx, max dx, −min dy, max dy, gather_taps, level_taps, 0, 0]`: every field
-    /// of [`LaneRows`] is a maximum over lanes, so a chunk's summary is one 8-lane `max` per lane.
-    pub summary: Vec<[i32; 8]>,
+    pub(crate) level_taps: Vec<u32>,
+    /// Per row, `[−min dx, max dx, −min dy, max dy, gather_taps, level_taps, −min offset,
+    /// max offset]` (offsets: its taps' [`TapColumns::offset`]s read as `i32`): every field of
+    /// [`LaneRows`] is a maximum over lanes, so a chunk's summary is one 8-lane `max` per lane.
+    pub(crate) summary: Vec<[i32; 8]>,
     /// Every row's taps with a nonzero weight, row after row, in each row's order. A tap whose
     /// four weights are 0 adds +0 to a sum that is never −0 (see `gather_taps`), so a gather
     /// that skips it keeps every bit; a box kernel's phases are padded with many such taps.
-    pub weighted: Vec<Tap>,
+    pub(crate) weighted: Vec<Tap>,
     /// Row r's taps in [`TapColumns::weighted`]: `weighted[start..end]`.
-    pub weighted_rows: Vec<[u32; 2]>,
+    pub(crate) weighted_rows: Vec<[u32; 2]>,
 }
 
 /// What a chunk's lanes read through their rows: the union of the rows' extents, the most taps
@@ -417,6 +420,8 @@ pub struct LaneRows {
     pub level_taps: usize,
     /// The row of every lane, when they all have the same one.
     pub uniform: Option<u32>,
+    /// `[min, max]` over the lanes' rows of their taps' [`TapColumns::offset`]s (as `i32`).
+    pub offset_span: [i64; 2],
 }
 
 impl LaneRows {
@@ -436,6 +441,7 @@ impl LaneRows {
             gather_taps: m[4] as usize,
             level_taps: m[5] as usize,
             uniform,
+            offset_span: [-i64::from(m[6]), i64::from(m[7])],
         }
     }
 }
@@ -458,6 +464,7 @@ impl TapColumns {
             summary: Vec::new(),
             weighted: Vec::new(),
             weighted_rows: Vec::with_capacity(pc),
+
             phase_count: pc,
             weights: (0..n * pc)
                 .map(|j| table.taps[(j % pc) * n + j / pc].w)
@@ -515,7 +522,13 @@ impl TapColumns {
             .map(|row| {
                 let e = columns.extent[row];
                 let (g, l) = (columns.gather_taps[row], columns.level_taps[row]);
-                [-e[0], e[1], -e[2], e[3], g as i32, l as i32, 0, 0]
+                let offsets = (0..n).map(|k| columns.offset[k * pc + row] as i32);
+                let (lo, hi) = (
+                    offsets.clone().min().unwrap_or(0),
+                    offsets.max().unwrap_or(0),
+                );
+                assert!(lo > i32::MIN, "tap offset {lo} out of range");
+                [-e[0], e[1], -e[2], e[3], g as i32, l as i32, -lo, hi]
             })
             .collect();
         columns
@@ -527,7 +540,7 @@ impl TapColumns {
 /// arithmetic in the same order.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn gather_per_lane<L: Lane>(
+pub(crate) fn gather_per_lane<L: Lane>(
     planes: &LightPlanes<'_>,
     table: &KernelTable,
     columns: &TapColumns,
@@ -544,10 +557,8 @@ pub fn gather_per_lane<L: Lane>(
     let rs = planes.row_stride;
     // Lane i's pixel, and its offset to the slab's shifted origin.
     let pixel = planes.base + y as usize * rs + x0 as usize;
-    let lane_shift = L::u_add(
-        L::u_iota(0),
-        L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
-    );
+    let shift_offset = shift[1] as i64 * rs as i64 + shift[0] as i64;
+    let lane_shift = L::u_add(L::u_iota(0), L::u_splat(shift_offset as i32 as u32));
     let (w, h) = (planes.width, planes.height);
     let pair_loads = PairLoads {
         planes,
@@ -555,9 +566,11 @@ pub fn gather_per_lane<L: Lane>(
         phases,
         pixel,
         lane_shift,
+        shift: shift_offset,
+        offset_span: lane_rows.offset_span,
     };
     if interior || reads_inside(lane_rows.extent, shift, x0, y, L::LANES, w, h) {
-        pair_loads.add_taps(0..n, acc);
+        pair_loads.add_taps(0..n, acc, Bounds::WholeRows);
         return;
     }
     let mut lane_phase = [0u32; MAX_LANES];
@@ -578,7 +591,7 @@ pub fn gather_per_lane<L: Lane>(
         if tap_inside {
             // Near the edge, a tap whose corners all lie inside takes the interior path's
             // loads: the same terms in the same order.
-            pair_loads.add_taps(k..k + 1, acc);
+            pair_loads.add_taps(k..k + 1, acc, Bounds::PerTap);
             continue;
         }
         let w4 = L::gather4(&columns.weights[k * pc..(k + 1) * pc], phases);
@@ -597,6 +610,15 @@ pub fn gather_per_lane<L: Lane>(
     }
 }
 
+/// How [`PairLoads::add_taps`] proves its reads lie in the light buffer.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Bounds {
+    /// Every tap of every lane's row reads inside the grid: one proof for them all.
+    WholeRows,
+    /// Only the taps added read inside: a check per tap.
+    PerTap,
+}
+
 /// The per-lane gather's reads inside the grid: every plane's two pixel pairs per lane and tap
 /// ([`Lane::acc_blocks`]), lane i at `pixel + lane_shift[i] +` its tap's offset.
 struct PairLoads<'a, L: Lane> {
@@ -604,25 +626,35 @@ struct PairLoads<'a, L: Lane> {
     columns: &'a TapColumns,
     phases: L::U,
     pixel: usize,
+    /// Lane i's offset `i + shift` to the shifted origin (wrapping; `shift` below).
     lane_shift: L::U,
+    /// The slab's shift as an offset in the light buffer, `shift_y · row_stride + shift_x`.
+    shift: i64,
+    /// [`LaneRows::offset_span`] of the lanes' rows `phases`.
+    offset_span: [i64; 2],
 }
 
 impl<L: Lane> PairLoads<'_, L> {
     /// Adds taps `taps` (every corner of every lane inside the grid) to `acc`, plane by plane.
     #[inline(always)]
-    fn add_taps(&self, taps: std::ops::Range<usize>, acc: &mut [L]) {
+    fn add_taps(&self, taps: std::ops::Range<usize>, acc: &mut [L], bounds: Bounds) {
         match self.planes.channels {
-            1 => self.add_taps_to::<1>(taps, acc),
-            2 => self.add_taps_to::<2>(taps, acc),
-            3 => self.add_taps_to::<3>(taps, acc),
-            4 => self.add_taps_to::<4>(taps, acc),
+            1 => self.add_taps_to::<1>(taps, acc, bounds),
+            2 => self.add_taps_to::<2>(taps, acc, bounds),
+            3 => self.add_taps_to::<3>(taps, acc, bounds),
+            4 => self.add_taps_to::<4>(taps, acc, bounds),
             n => panic!("a light has 1 or 3 channels and at most one depth plane, not {n} planes"),
         }
     }
 
     /// [`PairLoads::add_taps`] for `C` planes (a constant, so that the sums stay in registers).
     #[inline(always)]
-    fn add_taps_to<const C: usize>(&self, taps: std::ops::Range<usize>, acc: &mut [L]) {
+    fn add_taps_to<const C: usize>(
+        &self,
+        taps: std::ops::Range<usize>,
+        acc: &mut [L],
+        bounds: Bounds,
+    ) {
         let (planes, columns) = (self.planes, self.columns);
         let pc = columns.phase_count;
         // Every plane's accumulator, in the lane type's layout for pixel-pair loads (a shuffle).
@@ -631,6 +663,35 @@ impl<L: Lane> PairLoads<'_, L> {
             *sum = L::acc_from(*a);
         }
         let plane_step = planes.width as usize;
+        let (data, rs) = (planes.data, planes.row_stride);
+        if bounds == Bounds::PerTap {
+            for k in taps {
+                let col = k * pc..(k + 1) * pc;
+                let w = L::weights4(&columns.weights[col.clone()], self.phases);
+                let rel = L::u_add(
+                    L::u_gather(&columns.offset[col], self.phases),
+                    self.lane_shift,
+                );
+                L::acc_blocks(&mut sums, &w, data, self.pixel, plane_step, rel, rs);
+            }
+            for (a, sum) in acc.iter_mut().zip(sums.iter()) {
+                *a = L::acc_finish(*sum);
+            }
+            return;
+        }
+        // One bounds proof for every tap: the lanes' rows' offset spans, moved by the lanes'
+        // shifts, with no wrap in the 32-bit offsets `rel`, put every read of every plane in `data`.
+        let [lo, hi] = self.offset_span;
+        let (lo, hi) = (lo + self.shift, hi + self.shift + L::LANES as i64 - 1);
+        let last_plane = (C as i64 - 1) * plane_step as i64;
+        let (first, last) = (self.pixel as i64 + lo, self.pixel as i64 + hi + last_plane);
+        assert!(
+            lo >= i64::from(i32::MIN)
+                && hi <= i64::from(i32::MAX)
+                && first >= 0
+                && last + rs as i64 + 1 < data.len() as i64,
+            "per-lane gather reads {first}..={last} outside the light buffer"
+        );
         for k in taps {
             let col = k * pc..(k + 1) * pc;
             let w = L::weights4(&columns.weights[col.clone()], self.phases);
@@ -638,8 +699,12 @@ impl<L: Lane> PairLoads<'_, L> {
                 L::u_gather(&columns.offset[col], self.phases),
                 self.lane_shift,
             );
-            let (data, rs) = (planes.data, planes.row_stride);
-            L::acc_blocks(&mut sums, &w, data, self.pixel, plane_step, rel, rs);
+            // SAFETY: lane i reads at `pixel + rel[i]` (and + 1, + rs, + rs + 1) in each plane,
+            // and rel[i] = i + shift + the offset of a tap of lane i's row, within the span
+            // proved above (`LaneRows::of` of these rows, from `TapColumns::new`'s summary).
+            unsafe {
+                L::acc_blocks_unchecked(&mut sums, &w, data, self.pixel, plane_step, rel, rs);
+            }
         }
         for (a, sum) in acc.iter_mut().zip(sums.iter()) {
             *a = L::acc_finish(*sum);
@@ -895,6 +960,10 @@ mod tests {
                     all().map(|t| t.dy).max().unwrap(),
                 ];
                 assert_eq!(got.extent, extent, "{kernel} rows {rows:?}");
+                // The offsets the gathers read (row stride 1000, as built above), as signed.
+                let offsets = || all().map(|t| i64::from(t.dy) * 1000 + i64::from(t.dx));
+                let span = [offsets().min().unwrap(), offsets().max().unwrap()];
+                assert_eq!(got.offset_span, span, "{kernel} rows {rows:?}");
                 let nonzero =
                     |t: &[Tap]| t.iter().rposition(|t| t.w != [0.0; 4]).map_or(0, |i| i + 1);
                 let most = taps.iter().map(|t| nonzero(t)).max().unwrap();
@@ -1015,5 +1084,33 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    #[should_panic(expected = "outside the light buffer")]
+    fn a_per_lane_gather_claimed_interior_at_the_corner_panics_not_reads() {
+        // `interior` claimed at pixel (0, 0) with a shift up and left: the one proof per call
+        // must catch the reads before the buffer, not read them unchecked.
+        let table = distance_table("ellipse2");
+        let (w, h) = (64usize, 40usize);
+        let row_stride = 4 * w;
+        let data = vec![0.5f32; row_stride * h];
+        let columns = TapColumns::new(&table, row_stride, w);
+        let planes = LightPlanes {
+            data: &data,
+            base: 0,
+            channels: 4,
+            light_channels: 3,
+            row_stride,
+            width: w as i32,
+            height: h as i32,
+        };
+        let rows = f32x8::u_splat(table.rows() - 1);
+        let reads = LaneRows::of::<f32x8>(&columns, rows);
+        let mut acc = [f32x8::splat(0.0); 4];
+        let shift = [-3, -3];
+        gather_per_lane(
+            &planes, &table, &columns, rows, &reads, shift, 0, 0, true, &mut acc,
+        );
     }
 }
