@@ -295,17 +295,16 @@ impl Lane for f32 {
         rel: u32,
         stride: usize,
     ) {
-        let first = origin.wrapping_add_signed(rel as i32 as isize);
-        for (c, acc) in sums.iter_mut().enumerate() {
-            let at = first + c * plane_step;
-            let v = [
-                data[at],
-                data[at + 1],
-                data[at + stride],
-                data[at + stride + 1],
-            ];
-            *acc = (((*acc + w[0] * v[0]) + w[1] * v[1]) + w[2] * v[2]) + w[3] * v[3];
-        }
+        let first = origin as i64 + i64::from(rel as i32);
+        let last_plane = (sums.len().max(1) as i64 - 1) * plane_step as i64;
+        let last = first + last_plane + stride as i64 + 1;
+        assert!(
+            first >= 0 && last < data.len() as i64,
+            "gather index {first}..={last} outside 0..{}",
+            data.len()
+        );
+        // SAFETY: every plane's four reads lie in `first..=last` (checked above).
+        unsafe { Self::acc_blocks_unchecked(sums, w, data, origin, plane_step, rel, stride) }
     }
     #[inline(always)]
     unsafe fn acc_blocks_unchecked(

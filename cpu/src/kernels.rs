@@ -655,8 +655,7 @@ impl<L: Lane> PairLoads<'_, L> {
         acc: &mut [L],
         bounds: Bounds,
     ) {
-        let (planes, columns) = (self.planes, self.columns);
-        let pc = columns.phase_count;
+        let planes = self.planes;
         // Every plane's accumulator, in the lane type's layout for pixel-pair loads (a shuffle).
         let mut sums = [L::acc_from(L::splat(0.0)); C];
         for (sum, a) in sums.iter_mut().zip(acc.iter()) {
@@ -666,49 +665,50 @@ impl<L: Lane> PairLoads<'_, L> {
         let (data, rs) = (planes.data, planes.row_stride);
         if bounds == Bounds::PerTap {
             for k in taps {
-                let col = k * pc..(k + 1) * pc;
-                let w = L::weights4(&columns.weights[col.clone()], self.phases);
-                let rel = L::u_add(
-                    L::u_gather(&columns.offset[col], self.phases),
-                    self.lane_shift,
-                );
+                let (w, rel) = self.tap(k);
                 L::acc_blocks(&mut sums, &w, data, self.pixel, plane_step, rel, rs);
             }
-            for (a, sum) in acc.iter_mut().zip(sums.iter()) {
-                *a = L::acc_finish(*sum);
-            }
-            return;
-        }
-        // One bounds proof for every tap: the lanes' rows' offset spans, moved by the lanes'
-        // shifts, with no wrap in the 32-bit offsets `rel`, put every read of every plane in `data`.
-        let [lo, hi] = self.offset_span;
-        let (lo, hi) = (lo + self.shift, hi + self.shift + L::LANES as i64 - 1);
-        let last_plane = (C as i64 - 1) * plane_step as i64;
-        let (first, last) = (self.pixel as i64 + lo, self.pixel as i64 + hi + last_plane);
-        assert!(
-            lo >= i64::from(i32::MIN)
-                && hi <= i64::from(i32::MAX)
-                && first >= 0
-                && last + rs as i64 + 1 < data.len() as i64,
-            "per-lane gather reads {first}..={last} outside the light buffer"
-        );
-        for k in taps {
-            let col = k * pc..(k + 1) * pc;
-            let w = L::weights4(&columns.weights[col.clone()], self.phases);
-            let rel = L::u_add(
-                L::u_gather(&columns.offset[col], self.phases),
-                self.lane_shift,
+        } else {
+            // One bounds proof for every tap: the lanes' rows' offset span, moved by the lanes'
+            // shifts, with no wrap in the 32-bit offsets `rel`, puts every read of every plane in
+            // `data`.
+            let [lo, hi] = self.offset_span;
+            let (lo, hi) = (lo + self.shift, hi + self.shift + L::LANES as i64 - 1);
+            let last_plane = (C as i64 - 1) * plane_step as i64;
+            let (first, last) = (self.pixel as i64 + lo, self.pixel as i64 + hi + last_plane);
+            assert!(
+                lo >= i64::from(i32::MIN)
+                    && hi <= i64::from(i32::MAX)
+                    && first >= 0
+                    && last + rs as i64 + 1 < data.len() as i64,
+                "per-lane gather reads {first}..={last} outside the light buffer"
             );
-            // SAFETY: lane i reads at `pixel + rel[i]` (and + 1, + rs, + rs + 1) in each plane,
-            // and rel[i] = i + shift + the offset of a tap of lane i's row, within the span
-            // proved above (`LaneRows::of` of these rows, from `TapColumns::new`'s summary).
-            unsafe {
-                L::acc_blocks_unchecked(&mut sums, &w, data, self.pixel, plane_step, rel, rs);
+            for k in taps {
+                let (w, rel) = self.tap(k);
+                // SAFETY: lane i reads at `pixel + rel[i]` (and + 1, + rs, + rs + 1) in each
+                // plane, and rel[i] = i + shift + the offset of a tap of lane i's row, within the
+                // span proved above (`LaneRows::of` of these rows, from `TapColumns::new`).
+                unsafe {
+                    L::acc_blocks_unchecked(&mut sums, &w, data, self.pixel, plane_step, rel, rs);
+                }
             }
         }
         for (a, sum) in acc.iter_mut().zip(sums.iter()) {
             *a = L::acc_finish(*sum);
         }
+    }
+
+    /// Tap k's weights for the lanes' rows and each lane's offset `rel` from `pixel`.
+    #[inline(always)]
+    fn tap(&self, k: usize) -> (L::W4, L::U) {
+        let columns = self.columns;
+        let col = k * columns.phase_count..(k + 1) * columns.phase_count;
+        let w = L::weights4(&columns.weights[col.clone()], self.phases);
+        let rel = L::u_add(
+            L::u_gather(&columns.offset[col], self.phases),
+            self.lane_shift,
+        );
+        (w, rel)
     }
 }
 
@@ -896,6 +896,19 @@ mod tests {
         build_distance_table(spec, &per_e2, 40, true)
     }
 
+    /// A `w` × `h` light buffer of three channels and a depth plane per row (`4 · w` apart).
+    fn three_channels_and_depth(data: &[f32], w: usize, h: usize) -> LightPlanes<'_> {
+        LightPlanes {
+            data,
+            base: 0,
+            channels: 4,
+            light_channels: 3,
+            row_stride: 4 * w,
+            width: w as i32,
+            height: h as i32,
+        }
+    }
+
     #[test]
     fn skipped_taps_are_zero_and_the_level_search_keeps_one_padding_tap() {
         for kernel in ["box", "gaussian:7", "ellipse2", "poisson8", "ellipse3:slab"] {
@@ -999,15 +1012,7 @@ mod tests {
                 skips_inside || kernel != "box",
                 "{kernel}: no zero tap to skip"
             );
-            let planes = LightPlanes {
-                data: &data,
-                base: 0,
-                channels: 4,
-                light_channels: 3,
-                row_stride,
-                width: w as i32,
-                height: h as i32,
-            };
+            let planes = three_channels_and_depth(&data, w, h);
             for row in 0..table.rows() {
                 for (x0, y) in [(20, 20), (0, 1), (w as i32 - 8, h as i32 - 2)] {
                     let shift = [rng.below(3) as i32 - 1, rng.below(3) as i32 - 1];
@@ -1096,15 +1101,7 @@ mod tests {
         let row_stride = 4 * w;
         let data = vec![0.5f32; row_stride * h];
         let columns = TapColumns::new(&table, row_stride, w);
-        let planes = LightPlanes {
-            data: &data,
-            base: 0,
-            channels: 4,
-            light_channels: 3,
-            row_stride,
-            width: w as i32,
-            height: h as i32,
-        };
+        let planes = three_channels_and_depth(&data, w, h);
         let rows = f32x8::u_splat(table.rows() - 1);
         let reads = LaneRows::of::<f32x8>(&columns, rows);
         let mut acc = [f32x8::splat(0.0); 4];
