@@ -407,6 +407,9 @@ pub struct TapColumns {
     pub(crate) weighted: Vec<Tap>,
     /// Row r's taps in [`TapColumns::weighted`]: `weighted[start..end]`.
     pub(crate) weighted_rows: Vec<[u32; 2]>,
+    /// The light buffer's and the level plane's row strides the offsets were built for: the
+    /// unchecked gathers check them against the buffers they read.
+    pub(crate) strides: [usize; 2],
 }
 
 /// What a chunk's lanes read through their rows: the union of the rows' extents, the most taps
@@ -464,6 +467,7 @@ impl TapColumns {
             summary: Vec::new(),
             weighted: Vec::new(),
             weighted_rows: Vec::with_capacity(pc),
+            strides: [row_stride, level_stride],
 
             phase_count: pc,
             weights: (0..n * pc)
@@ -677,7 +681,8 @@ impl<L: Lane> PairLoads<'_, L> {
             let last_plane = (C as i64 - 1) * plane_step as i64;
             let (first, last) = (self.pixel as i64 + lo, self.pixel as i64 + hi + last_plane);
             assert!(
-                lo >= i64::from(i32::MIN)
+                self.columns.strides[0] == rs
+                    && lo >= i64::from(i32::MIN)
                     && hi <= i64::from(i32::MAX)
                     && first >= 0
                     && last + rs as i64 + 1 < data.len() as i64,
@@ -735,7 +740,7 @@ pub struct LevelPlane<'a> {
 /// that was just crossed does not blur the darkness behind that surface over itself.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn distance_rows<L: Lane>(
+pub(crate) fn distance_rows<L: Lane>(
     levels: &LevelPlane<'_>,
     table: &KernelTable,
     columns: &TapColumns,
@@ -786,6 +791,14 @@ pub fn distance_rows<L: Lane>(
         // of `pc` rows (so `rel` reads inside its column), and the test above (or the sweep's
         // reach) put every corner inside the grid, whose rows lie in `levels.data`.
         assert!(levels.data.len() <= i32::MAX as usize && columns.summary.len() == pc);
+        // Crate-internal invariants (this function is crate-private): the sweep builds the level
+        // plane and the columns from one plan.
+        debug_assert!(
+            columns.strides[1] == rs
+                && levels.base + (levels.height.max(1) as usize - 1) * rs + levels.width as usize
+                    <= levels.data.len(),
+            "level search: a table for another level plane, or a grid beyond its data"
+        );
         for k in 0..n {
             let column = &columns.level_offset[k * pc..(k + 1) * pc];
             // SAFETY: every lane's row is below `pc` (see above).
