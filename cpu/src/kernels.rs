@@ -587,11 +587,11 @@ pub(crate) fn gather_per_lane<L: Lane>(
             sx[i] = x0 + i as i32 + t.dx + shift[0];
             sy[i] = y + t.dy + shift[1];
         }
-        let (sx, sy) = (&sx[..L::LANES], &sy[..L::LANES]);
+        let (xs, ys) = (&sx[..L::LANES], &sy[..L::LANES]);
         let lowest = |v: &[i32]| v.iter().fold(i32::MAX, |m, &a| m.min(a));
         let highest = |v: &[i32]| v.iter().fold(i32::MIN, |m, &a| m.max(a));
         let tap_inside =
-            lowest(sx) >= 0 && highest(sx) + 1 < w && lowest(sy) >= 0 && highest(sy) + 1 < h;
+            lowest(xs) >= 0 && highest(xs) + 1 < w && lowest(ys) >= 0 && highest(ys) + 1 < h;
         if tap_inside {
             // Near the edge, a tap whose corners all lie inside takes the interior path's
             // loads: the same terms in the same order.
@@ -599,14 +599,11 @@ pub(crate) fn gather_per_lane<L: Lane>(
             continue;
         }
         let w4 = L::gather4(&columns.weights[k * pc..(k + 1) * pc], phases);
-        let lanes = |v: &[i32]| {
-            let mut u = [0u32; MAX_LANES];
-            for (ui, &vi) in u.iter_mut().zip(v) {
-                *ui = vi as u32;
-            }
-            L::u_load(&u, 0)
-        };
-        let (sx, sy) = (lanes(sx), lanes(sy));
+        // Signed coordinates as integer lanes ([`Lane::fetch_grid`] reads them back as i32).
+        let (sx, sy) = (
+            L::u_load(&sx.map(|v| v as u32), 0),
+            L::u_load(&sy.map(|v| v as u32), 0),
+        );
         for (c, a) in acc.iter_mut().enumerate().take(planes.channels) {
             let v = fetch_corners(&planes.plane(c), sx, sy);
             *a = add_bilinear(*a, &w4, &v);
