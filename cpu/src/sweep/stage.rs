@@ -23,7 +23,7 @@ use crate::shading::{
 };
 use convshadow_common::levels::pixel_level;
 use convshadow_common::plan::{RenderPlan, TfEntry};
-use wide::f32x8;
+use wide::{f32x8, u32x8};
 
 /// [`sweep_chunk`] for one lane type and light-channel capacity.
 pub(crate) type ChunkFn = fn(
@@ -167,10 +167,35 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     let slab = ctx.slab as usize;
     let n = plan.lights.len() * ch;
 
+    // The stages' independent parts run in the order that hides their latency best (measured):
+    // every light's level search (distance penumbra: chains of dependent gathers), then the
+    // cursors (scalar work while those loads arrive), then the convolution that needs both.
+    let distance = plan.depth_planes() > 0;
+    let mut light_rows = [L::u_splat(0); MAX_LIGHTS];
+    if distance && known_light.is_none() && gathered.is_none() {
+        for (l, rows) in light_rows.iter_mut().enumerate().take(plan.lights.len()) {
+            let (x0, yi) = (x0 as i32, y as i32);
+            *rows = distance_light_rows::<L>(ctx, l, prev, row_hashes, x0, yi, interior);
+        }
+    }
+
+    // 2. Intersection: every lane's cursor.
+    let mut crossed = [NO_CROSSING; MAX_LANES];
+    let mut mesh = [None; MAX_LANES];
+    for i in 0..L::LANES {
+        let x = x0 + i;
+        let end = ldi.offsets[y * w + x + 1];
+        crossed[i] = advance(ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
+        mesh[i] = if crossed[i] != NO_CROSSING {
+            Some(u32::from(ldi.mesh[crossed[i] as usize]))
+        } else {
+            first_mesh(row.inside[x])
+        };
+    }
+
     // 1. Convolution of every light buffer (and, distance penumbra, its depth plane).
     let mut iin = [L::splat(0.0); N];
     let mut depth_in = [L::splat(0.0); MAX_LIGHTS];
-    let distance = plan.depth_planes() > 0;
     match (known_light, gathered) {
         // Every value read is `v` and every depth read is 0 (the quiet spans track both).
         (Some(v), _) => iin[..n].fill(L::splat(v)),
@@ -194,9 +219,8 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                     };
                     let mut all = [L::splat(0.0); 4];
                     let gathered = &mut all[..=ch];
-                    distance_gather(
-                        ctx, l, prev, &planes, row_hashes, x0, yi, interior, gathered,
-                    );
+                    let rows = light_rows[l];
+                    distance_gather(ctx, l, &planes, rows, x0, yi, interior, gathered);
                     acc.copy_from_slice(&all[..ch]);
                     depth_in[l] = all[ch];
                     continue;
@@ -227,20 +251,6 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                 }
             }
         }
-    }
-
-    // 2. Intersection: every lane's cursor.
-    let mut crossed = [NO_CROSSING; MAX_LANES];
-    let mut mesh = [None; MAX_LANES];
-    for i in 0..L::LANES {
-        let x = x0 + i;
-        let end = ldi.offsets[y * w + x + 1];
-        crossed[i] = advance(ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
-        mesh[i] = if crossed[i] != NO_CROSSING {
-            Some(u32::from(ldi.mesh[crossed[i] as usize]))
-        } else {
-            first_mesh(row.inside[x])
-        };
     }
 
     // 3–4. Shading and compositing.
@@ -320,22 +330,19 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     }
 }
 
-/// Distance penumbra: light `l`'s planes `planes` (its channels and depth plane, or the depth
-/// plane alone) gathered at pixels x0.. of row y, each lane through the row of the level its
-/// neighbourhood picks ([`distance_rows`]); contiguous loads when every lane has the same row.
+/// Distance penumbra: the rows (level and phase) that light `l`'s lanes at pixels x0.. of row y
+/// gather through, the level each lane's neighbourhood picks ([`distance_rows`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn distance_gather<L: Lane>(
+fn distance_light_rows<L: Lane>(
     ctx: &SlabContext<'_>,
     l: usize,
     prev: &Previous<'_>,
-    planes: &LightPlanes<'_>,
     row_hashes: &[u32; MAX_LIGHT_CHANNELS],
     x0: i32,
     y: i32,
     interior: bool,
-    acc: &mut [L],
-) {
+) -> L::U {
     let plan = ctx.plan;
     let light = &plan.lights[l];
     let t = &light.table;
@@ -353,11 +360,39 @@ fn distance_gather<L: Lane>(
         width: w as i32,
         height: plan.grid_height as i32,
     };
-    let columns = &ctx.columns[l];
     let shift = t.slab_shift[slab];
-    let rows = distance_rows::<L>(
-        &levels, t, columns, phase, plan.slabs, ctx.slab, shift, x0, y, interior,
-    );
+    distance_rows::<L>(
+        &levels,
+        t,
+        &ctx.columns[l],
+        phase,
+        plan.slabs,
+        ctx.slab,
+        shift,
+        x0,
+        y,
+        interior,
+    )
+}
+
+/// Distance penumbra: light `l`'s planes `planes` (its channels and depth plane, or the depth
+/// plane alone) gathered at pixels x0.. of row y, each lane through its row `rows`
+/// ([`distance_light_rows`]); contiguous loads when every lane has the same row.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn distance_gather<L: Lane>(
+    ctx: &SlabContext<'_>,
+    l: usize,
+    planes: &LightPlanes<'_>,
+    rows: L::U,
+    x0: i32,
+    y: i32,
+    interior: bool,
+    acc: &mut [L],
+) {
+    let t = &ctx.plan.lights[l].table;
+    let columns = &ctx.columns[l];
+    let shift = t.slab_shift[ctx.slab as usize];
     let reads = LaneRows::of::<L>(columns, rows);
     match reads.uniform {
         // Every lane at the same level and phase: contiguous loads.
@@ -428,7 +463,13 @@ pub(crate) fn dark_depth_chunk(
     let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
     let zero = f32x8::splat(0.0);
     let mut not_zero = false;
-    for l in 0..plan.lights.len() {
+    // Every light's level search first (see `sweep_chunk`), then the gathers.
+    let (xi, yi) = (x0 as i32, y as i32);
+    let mut light_rows = [u32x8::splat(0); MAX_LIGHTS];
+    for (l, rows) in light_rows.iter_mut().enumerate().take(plan.lights.len()) {
+        *rows = distance_light_rows::<f32x8>(ctx, l, prev, row_hashes, xi, yi, interior);
+    }
+    for (l, &rows) in light_rows.iter().enumerate().take(plan.lights.len()) {
         let depth_plane = LightPlanes {
             base: plan.light_plane(l, ch) * w,
             channels: 1,
@@ -436,18 +477,7 @@ pub(crate) fn dark_depth_chunk(
             ..light_planes(plan, prev, l)
         };
         let mut depth_in = [zero];
-        let (xi, yi) = (x0 as i32, y as i32);
-        distance_gather(
-            ctx,
-            l,
-            prev,
-            &depth_plane,
-            row_hashes,
-            xi,
-            yi,
-            interior,
-            &mut depth_in,
-        );
+        distance_gather(ctx, l, &depth_plane, rows, xi, yi, interior, &mut depth_in);
         for c in 0..ch {
             zero.store(row.light, plan.light_plane(l, c) * w + x0);
         }
