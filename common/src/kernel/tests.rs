@@ -89,6 +89,29 @@ fn ellipse_variance_ratio_matches_closed_form_limits() {
 }
 
 #[test]
+fn remembered_moments_give_the_bits_of_the_integral() {
+    // The bisection written out with the integral itself: nearby ratios share their first steps,
+    // so the later ones read remembered moments, which must be the integral's bits.
+    let plain = |ratio: f64| {
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            let (vx, vy, _) = ellipse_second_moments(mid);
+            if vy / vx < ratio {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    };
+    for ratio in [0.25, 0.25 + 1e-12, 0.2500001, 0.7, 1e-5, 0.25] {
+        let remembered = ellipse_ratio_for_variance_ratio(ratio);
+        assert_eq!(remembered.to_bits(), plain(ratio).to_bits(), "{ratio}");
+    }
+}
+
+#[test]
 fn ellipse_points_are_equally_spaced_in_arc_length() {
     let pts = ellipse_points(2.0, 0.5, 0.1, 16);
     let mut d: Vec<f64> = Vec::new();
