@@ -2,7 +2,8 @@
 
 use std::collections::HashMap;
 use std::f64::consts::PI;
-use std::sync::{Mutex, OnceLock};
+use std::hash::Hash;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use super::*;
 
@@ -49,32 +50,79 @@ pub(crate) fn ellipse_second_moments(r: f64) -> (f64, f64, f64) {
     (sx / len, sy / len, len * 2.0 * PI / STEPS as f64)
 }
 
-/// (∮x² ds, ∮y² ds, L) of [`ellipse_second_moments`].
-type Moments = (f64, f64, f64);
+/// A process-wide memo of a pure function of the key, which starts afresh at `capacity` entries.
+/// A remembered value is the one computed, so every bit is the same whichever thread computed it
+/// first (or whether it was remembered at all).
+struct Remembered<K, V> {
+    seen: OnceLock<Mutex<HashMap<K, V>>>,
+    capacity: usize,
+}
 
-/// Entries [`remembered_moments`] keeps before it starts afresh (32 bytes each).
-const REMEMBERED_MOMENTS: usize = 1 << 16;
+impl<K: Eq + Hash + Copy, V: Clone> Remembered<K, V> {
+    const fn new(capacity: usize) -> Self {
+        Remembered {
+            seen: OnceLock::new(),
+            capacity,
+        }
+    }
 
-/// [`ellipse_second_moments`] of `r`, remembered by r's bits for the process: the bisections of
+    /// The value of `key`, computed by `compute` unless remembered.
+    fn get_or(&self, key: K, compute: impl FnOnce() -> V) -> V {
+        let seen = self.seen.get_or_init(Default::default);
+        // A panic elsewhere while the lock was held cannot leave a wrong entry (an insert is
+        // whole).
+        let lock = || seen.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some(value) = lock().get(&key) {
+            return value.clone();
+        }
+        let value = compute();
+        let mut seen = lock();
+        if seen.len() >= self.capacity {
+            seen.clear();
+        }
+        seen.insert(key, value.clone());
+        value
+    }
+}
+
+/// [`ellipse_second_moments`] by the axis ratio's bits: the bisections of
 /// [`ellipse_ratio_for_variance_ratio`] for nearby ratios walk the same first steps, and a plan
 /// asks for many nearby ratios (every light and level of the distance penumbra, every round of
-/// compensation). The default scene's plan evaluated 10× fewer integrals. A remembered value is
-/// the one computed, so every bit is the same whichever thread computed it first.
-fn remembered_moments(r: f64) -> Moments {
-    static SEEN: OnceLock<Mutex<HashMap<u64, Moments>>> = OnceLock::new();
-    let seen = SEEN.get_or_init(Default::default);
-    // A panic elsewhere while the lock was held cannot leave a wrong entry (an insert is whole).
-    let lock = || seen.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-    if let Some(&moments) = lock().get(&r.to_bits()) {
-        return moments;
-    }
-    let moments = ellipse_second_moments(r);
-    let mut seen = lock();
-    if seen.len() >= REMEMBERED_MOMENTS {
-        seen.clear();
-    }
-    seen.insert(r.to_bits(), moments);
-    moments
+/// compensation): the default scene's plan evaluated 10× fewer integrals.
+static MOMENTS: Remembered<u64, (f64, f64, f64)> = Remembered::new(1 << 16);
+
+/// [`unit_phases`] by the axis ratio's bits and the point count: most of a plan's ellipse
+/// patterns share one axis ratio (81 of the 102 a small default-scene plan built).
+static UNIT_PHASES: Remembered<(u64, usize), Arc<UnitPhases>> = Remembered::new(1 << 10);
+
+/// The phases of `ellipseN` on the ellipse with semi-axes (1, r) before scaling, and their
+/// points' Σx² and Σy².
+struct UnitPhases {
+    phases: Vec<Vec<[f64; 2]>>,
+    sum_x2: f64,
+    sum_y2: f64,
+}
+
+/// [`UnitPhases`] of `n` points per phase on the ellipse with semi-axes (1, r).
+fn unit_phases(r: f64, n: usize) -> Arc<UnitPhases> {
+    UNIT_PHASES.get_or((r.to_bits(), n), || {
+        let starts: Vec<f64> = (0..PHASES)
+            .map(|p| p as f64 / (PHASES * n) as f64)
+            .collect();
+        let phases = ellipse_point_sets(1.0, r, &starts, n);
+        let (mut sum_x2, mut sum_y2) = (0.0, 0.0);
+        for pts in &phases {
+            for q in pts {
+                sum_x2 += q[0] * q[0];
+                sum_y2 += q[1] * q[1];
+            }
+        }
+        Arc::new(UnitPhases {
+            phases,
+            sum_x2,
+            sum_y2,
+        })
+    })
 }
 
 /// The axis ratio r ∈ [0, 1] whose arc-length-uniform point set has Vy/Vx = `ratio` (≤ 1).
@@ -88,7 +136,7 @@ pub fn ellipse_ratio_for_variance_ratio(ratio: f64) -> f64 {
     let (mut lo, mut hi) = (0.0f64, 1.0f64);
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
-        let (vx, vy, _) = remembered_moments(mid);
+        let (vx, vy, _) = MOMENTS.get_or(mid.to_bits(), || ellipse_second_moments(mid));
         if vy / vx < ratio {
             lo = mid;
         } else {
@@ -156,17 +204,8 @@ pub(crate) fn ellipse_pattern(n: u32, l1: f64, l2: f64, e1: [f64; 2]) -> Pattern
         return vec![vec![([0.0, 0.0], 1.0)]; PHASES];
     }
     let r = ellipse_ratio_for_variance_ratio(l2 / l1);
-    let starts: Vec<f64> = (0..PHASES)
-        .map(|p| p as f64 / (PHASES * n) as f64)
-        .collect();
-    let phases = ellipse_point_sets(1.0, r, &starts, n);
-    let (mut sx, mut sy) = (0.0, 0.0);
-    for pts in &phases {
-        for q in pts {
-            sx += q[0] * q[0];
-            sy += q[1] * q[1];
-        }
-    }
+    let unit = unit_phases(r, n);
+    let (sx, sy) = (unit.sum_x2, unit.sum_y2);
     let count = (PHASES * n) as f64;
     let kx = (l1 / (sx / count)).sqrt();
     let ky = if sy > 0.0 {
@@ -175,12 +214,42 @@ pub(crate) fn ellipse_pattern(n: u32, l1: f64, l2: f64, e1: [f64; 2]) -> Pattern
         0.0
     };
     let w = 1.0 / n as f64;
-    phases
-        .into_iter()
+    unit.phases
+        .iter()
         .map(|pts| {
-            pts.into_iter()
+            pts.iter()
                 .map(|q| (to_pixels(q[0] * kx, q[1] * ky), w))
                 .collect()
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn remembered_unit_phases_are_the_point_sets() {
+        for (r, n) in [(0.633, 2), (0.633, 3), (0.1, 2), (0.633, 2)] {
+            let starts: Vec<f64> = (0..PHASES)
+                .map(|p| p as f64 / (PHASES * n) as f64)
+                .collect();
+            let fresh = ellipse_point_sets(1.0, r, &starts, n);
+            // The first call may compute, the second must remember: both are the point sets.
+            for unit in [unit_phases(r, n), unit_phases(r, n)] {
+                let bits = |sets: &[Vec<[f64; 2]>]| -> Vec<u64> {
+                    sets.iter()
+                        .flatten()
+                        .flatten()
+                        .map(|v| v.to_bits())
+                        .collect()
+                };
+                assert_eq!(bits(&unit.phases), bits(&fresh), "r {r}, n {n}");
+                let sum_x2: f64 = fresh.iter().flatten().fold(0.0, |s, q| s + q[0] * q[0]);
+                let sum_y2: f64 = fresh.iter().flatten().fold(0.0, |s, q| s + q[1] * q[1]);
+                assert_eq!(unit.sum_x2.to_bits(), sum_x2.to_bits());
+                assert_eq!(unit.sum_y2.to_bits(), sum_y2.to_bits());
+            }
+        }
+    }
 }
