@@ -37,6 +37,9 @@ fn the_lane_tests_pass_in_a_build_for_baseline_x86_64() {
     let out = Command::new(cargo)
         .current_dir(root)
         .env("RUSTFLAGS", BASELINE)
+        // Either would take precedence over RUSTFLAGS.
+        .env_remove("CARGO_ENCODED_RUSTFLAGS")
+        .env_remove("CARGO_BUILD_RUSTFLAGS")
         .env("CARGO_TARGET_DIR", root.join("target/baseline-x86-64"))
         .args([
             "test",
