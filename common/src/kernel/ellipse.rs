@@ -88,7 +88,8 @@ impl<K: Eq + Hash + Copy, V: Clone> Remembered<K, V> {
 /// [`ellipse_second_moments`] by the axis ratio's bits: the bisections of
 /// [`ellipse_ratio_for_variance_ratio`] for nearby ratios walk the same first steps, and a plan
 /// asks for many nearby ratios (every light and level of the distance penumbra, every round of
-/// compensation): the default scene's plan evaluated 10× fewer integrals.
+/// compensation): a 64×64 default-scene plan needs about 600 distinct integrals of the 6120 its
+/// bisections evaluate (estimated from the ratios it found).
 static MOMENTS: Remembered<u64, (f64, f64, f64)> = Remembered::new(1 << 16);
 
 /// [`unit_phases`] by the axis ratio's bits and the point count: most of a plan's ellipse
@@ -235,7 +236,8 @@ mod tests {
                 .map(|p| p as f64 / (PHASES * n) as f64)
                 .collect();
             let fresh = ellipse_point_sets(1.0, r, &starts, n);
-            // The first call may compute, the second must remember: both are the point sets.
+            // The first call may compute, a second may read the remembered value: both must be
+            // the point sets.
             for unit in [unit_phases(r, n), unit_phases(r, n)] {
                 let bits = |sets: &[Vec<[f64; 2]>]| -> Vec<u64> {
                     sets.iter()
