@@ -161,6 +161,15 @@ pub trait Lane:
     ) -> Self;
 }
 
+/// Panics unless `lo..=hi` lies inside `0..len` (a gather's or block's index range).
+#[inline(always)]
+fn check(lo: i64, hi: i64, len: usize) {
+    assert!(
+        lo >= 0 && hi < len as i64,
+        "gather index {lo}..={hi} outside 0..{len}"
+    );
+}
+
 /// Panics unless the `width` × `height` grid at `base` with rows `stride` apart lies in
 /// `data` (of at most `i32::MAX` values, so that its indices fit a signed 32-bit gather).
 #[inline(always)]
@@ -297,12 +306,7 @@ impl Lane for f32 {
     ) {
         let first = origin as i64 + i64::from(rel as i32);
         let last_plane = (sums.len().max(1) as i64 - 1) * plane_step as i64;
-        let last = first + last_plane + stride as i64 + 1;
-        assert!(
-            first >= 0 && last < data.len() as i64,
-            "gather index {first}..={last} outside 0..{}",
-            data.len()
-        );
+        check(first, first + last_plane + stride as i64 + 1, data.len());
         // SAFETY: every plane's four reads lie in `first..=last` (checked above).
         unsafe { Self::acc_blocks_unchecked(sums, w, data, origin, plane_step, rel, stride) }
     }
@@ -640,14 +644,7 @@ mod avx2 {
         (i64::from(v.reduce_min()), i64::from(v.reduce_max()))
     }
 
-    /// Panics unless `lo..=hi` lies inside `0..len`.
-    #[inline(always)]
-    fn check(lo: i64, hi: i64, len: usize) {
-        assert!(
-            lo >= 0 && hi < len as i64,
-            "gather index {lo}..={hi} outside 0..{len}"
-        );
-    }
+    use super::check;
 
     /// The highest of the unsigned lane indices `i`, after checking that all lie in `0..len`.
     #[inline(always)]
