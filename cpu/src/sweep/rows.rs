@@ -128,7 +128,12 @@ pub(crate) fn sweep_row_simd(
     let pairs = pairs_gathers(plan);
     // The gathers of a chunk and its right neighbour, computed together when both need them
     // (`stage::gather_pair`); `paired` names the chunk whose result waits in `pair[1]`.
-    let mut pair = [[0.0f32; 8 * MAX_LIGHT_CHANNELS]; 2];
+    // Only where pairs are gathered (3 KiB to zero per row and slab otherwise).
+    let mut pair = if pairs {
+        Some([[0.0f32; 8 * MAX_LIGHT_CHANNELS]; 2])
+    } else {
+        None
+    };
     let mut paired = usize::MAX;
     let full_chunks = w / LANES;
 
@@ -185,24 +190,24 @@ pub(crate) fn sweep_row_simd(
             ChunkWork::Full(known_light) if lanes == LANES => {
                 tally[0] += 1;
                 let interior = reach.interior(x0, LANES, y, w, h);
-                let gathered = if paired == c {
-                    Some(&pair[1][..])
-                } else if pairs && known_light.is_none() && interior && c + 1 < full_chunks {
-                    // The neighbour's class does not depend on this chunk's work: ask now.
-                    let next = match (&quiet, &hits) {
-                        (Some(q), Some(hits)) => q.classify(ctx, reach, y, c + 1, LANES, hits),
-                        _ => ChunkWork::Full(None),
-                    };
-                    let next_interior = reach.interior(x0 + LANES, LANES, y, w, h);
-                    if matches!(next, ChunkWork::Full(None)) && next_interior {
-                        gather_pair(ctx, y, x0, prev, &mut pair);
-                        paired = c + 1;
-                        Some(&pair[0][..])
-                    } else {
-                        None
+                let gathered = match &mut pair {
+                    Some(pair) if paired == c => Some(&pair[1][..]),
+                    Some(pair) if known_light.is_none() && interior && c + 1 < full_chunks => {
+                        // The neighbour's class does not depend on this chunk's work: ask now.
+                        let next = match (&quiet, &hits) {
+                            (Some(q), Some(hits)) => q.classify(ctx, reach, y, c + 1, LANES, hits),
+                            _ => ChunkWork::Full(None),
+                        };
+                        let next_interior = reach.interior(x0 + LANES, LANES, y, w, h);
+                        if matches!(next, ChunkWork::Full(None)) && next_interior {
+                            gather_pair(ctx, y, x0, prev, pair);
+                            paired = c + 1;
+                            Some(&pair[0][..])
+                        } else {
+                            None
+                        }
                     }
-                } else {
-                    None
+                    _ => None,
                 };
                 let (rh, jr) = hashes;
                 let (known, inner) = (known_light, interior);
