@@ -5,8 +5,10 @@
 
 Default render arguments: `--threads 1 --size 384x384 --slabs 256` (the default scene). Runs
 alternate (ABBA…) so a shared machine's load falls on both alike; prints each binary's medians,
-the image hashes it wrote (they must agree) and new/old ratios. For quick checks during speed
-work; `scripts/bench_speed.py` makes the tables of docs/performance.md.
+the image hashes it wrote (they must agree), new/old ratios of the medians, and the paired
+ratios: each round's new/old sweep time (its two runs are adjacent, so slow drifts of the
+machine's load cancel), their median and quartiles. For quick checks during speed work;
+`scripts/bench_speed.py` makes the tables of docs/performance.md.
 """
 import sys, subprocess, resource, json, statistics
 bins = sys.argv[1:3]; reps = int(sys.argv[3]) if len(sys.argv) > 3 else 5
@@ -22,3 +24,7 @@ m = {b: statistics.median(v) for b, v in vals.items()}
 s = {b: statistics.median(v) for b, v in sweeps.items()}
 for b in bins: print(f"{b}: user {m[b]:.3f} s  sweep {s[b]:.3f} s  hashes {hashes[b]}")
 print(f"new/old user {m[bins[1]]/m[bins[0]]:.3f}  sweep {s[bins[1]]/s[bins[0]]:.3f}")
+paired = sorted(n / o for o, n in zip(sweeps[bins[0]], sweeps[bins[1]]))
+if len(paired) >= 2:
+    q = statistics.quantiles(paired, n=4)
+    print(f"paired new/old sweep: median {statistics.median(paired):.3f}  quartiles {q[0]:.3f}..{q[2]:.3f}  ({len(paired)} rounds)")
