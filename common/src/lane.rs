@@ -307,7 +307,7 @@ impl Lane for f32 {
         let first = origin as i64 + i64::from(rel as i32);
         let last_plane = (sums.len().max(1) as i64 - 1) * plane_step as i64;
         check(first, first + last_plane + stride as i64 + 1, data.len());
-        // SAFETY: every plane's four reads lie in `first..=last` (checked above).
+        // SAFETY: every plane's four reads lie in the range checked above.
         unsafe { Self::acc_blocks_unchecked(sums, w, data, origin, plane_step, rel, stride) }
     }
     #[inline(always)]

@@ -328,53 +328,10 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     }
 }
 
-/// Distance penumbra: the rows (level and phase) that light `l`'s lanes at pixels x0.. of row y
-/// gather through, the level each lane's neighbourhood picks ([`distance_rows`]).
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn distance_light_rows<L: Lane>(
-    ctx: &SlabContext<'_>,
-    l: usize,
-    prev: &Previous<'_>,
-    row_hashes: &[u32; MAX_LIGHT_CHANNELS],
-    x0: i32,
-    y: i32,
-    interior: bool,
-) -> L::U {
-    let plan = ctx.plan;
-    let light = &plan.lights[l];
-    let t = &light.table;
-    let slab = ctx.slab as usize;
-    let phase = match t.phase_mode {
-        PhaseMode::PerPixel => phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32)),
-        PhaseMode::PerSlab => L::u_splat(phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0)),
-        PhaseMode::Schedule => L::u_splat(0),
-    };
-    let w = plan.grid_width as usize;
-    let levels = LevelPlane {
-        data: prev.levels,
-        base: l * w,
-        row_stride: plan.level_row_len(),
-        width: w as i32,
-        height: plan.grid_height as i32,
-    };
-    let shift = t.slab_shift[slab];
-    distance_rows::<L>(
-        &levels,
-        t,
-        &ctx.columns[l],
-        phase,
-        plan.slabs,
-        ctx.slab,
-        shift,
-        x0,
-        y,
-        interior,
-    )
-}
-
-/// [`distance_light_rows`] of every light, into `all[l]` (in place: an array returned by value
-/// cost 1.9 % of the sweep's instructions in copies).
+/// Distance penumbra: for every light l, the rows (level and phase) its lanes at pixels x0.. of
+/// row y gather through, the level each lane's neighbourhood picks ([`distance_rows`]), into
+/// `all[l]` (in place: an array returned by value cost 1.9 % of the sweep's instructions in
+/// copies).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn every_light_rows<L: Lane>(
@@ -386,14 +343,32 @@ fn every_light_rows<L: Lane>(
     interior: bool,
     all: &mut [L::U; MAX_LIGHTS],
 ) {
-    for (l, rows) in all.iter_mut().enumerate().take(ctx.plan.lights.len()) {
-        *rows = distance_light_rows::<L>(ctx, l, prev, row_hashes, x0, y, interior);
+    let plan = ctx.plan;
+    let (slab, w) = (ctx.slab as usize, plan.grid_width as usize);
+    for (l, (light, rows)) in plan.lights.iter().zip(all.iter_mut()).enumerate() {
+        let t = &light.table;
+        let phase = match t.phase_mode {
+            PhaseMode::PerPixel => phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32)),
+            PhaseMode::PerSlab => L::u_splat(phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0)),
+            PhaseMode::Schedule => L::u_splat(0),
+        };
+        let levels = LevelPlane {
+            data: prev.levels,
+            base: l * w,
+            row_stride: plan.level_row_len(),
+            width: w as i32,
+            height: plan.grid_height as i32,
+        };
+        let (columns, shift) = (&ctx.columns[l], t.slab_shift[slab]);
+        *rows = distance_rows::<L>(
+            &levels, t, columns, phase, plan.slabs, ctx.slab, shift, x0, y, interior,
+        );
     }
 }
 
 /// Distance penumbra: light `l`'s planes `planes` (its channels and depth plane, or the depth
 /// plane alone) gathered at pixels x0.. of row y, each lane through its row `rows`
-/// ([`distance_light_rows`]); contiguous loads when every lane has the same row.
+/// ([`every_light_rows`]); contiguous loads when every lane has the same row.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn distance_gather<L: Lane>(
