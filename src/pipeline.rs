@@ -179,6 +179,10 @@ pub struct RenderRequest<'a> {
     pub progress: &'a (dyn Fn(u32) + Sync),
     /// Raised to stop the sweep.
     pub cancel: Option<&'a AtomicBool>,
+    /// Sweep every slab even once the image is final, so that [`Rendered::light`] is the light
+    /// after the plan's last slab (`SweepOptions::every_slab`). Off by default: the image is
+    /// the same bits either way.
+    pub every_slab: bool,
 }
 
 impl Default for RenderRequest<'_> {
@@ -192,6 +196,7 @@ impl Default for RenderRequest<'_> {
             allow_open: false,
             progress: &|_| {},
             cancel: None,
+            every_slab: false,
         }
     }
 }
@@ -208,8 +213,11 @@ pub struct Rendered {
     pub ldi_hash: u64,
     /// The plan (tables) used.
     pub plan: RenderPlan,
-    /// Light buffers after the last slab.
+    /// Light buffers after the last slab swept ([`Rendered::slabs_swept`]).
     pub light: Vec<f32>,
+    /// Slabs swept: the plan's count, or fewer when the image was final earlier (see
+    /// [`RenderRequest::every_slab`]); 0 for the shadow-ray reference, which sweeps none.
+    pub slabs_swept: u32,
     /// Threads used.
     pub threads: usize,
     /// Seconds building geometry and the LDI.
@@ -674,6 +682,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
         cancel: req.cancel,
         // A light's pattern (gobo) is its initial light buffer; without one every light starts at 1.
         initial_light: plan.initial_light.as_deref(),
+        every_slab: req.every_slab,
     };
     let cpu = CpuOptions {
         path: req.path.sweep_path(),
@@ -702,6 +711,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
         ldi_hash: ldi.fingerprint(),
         plan,
         light: out.light,
+        slabs_swept: out.slabs_swept,
         threads: pool.current_num_threads(),
         seconds_ldi,
         seconds_plan,

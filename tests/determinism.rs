@@ -99,6 +99,9 @@ fn simd_and_scalar_paths_give_the_same_bits() {
                     threads,
                     path: path_kind,
                     skip_quiet,
+                    // Every slab, so that the light compared is every slab's (the dark chunks
+                    // behind the wall included); tests/early_finish.rs compares the early finish.
+                    every_slab: true,
                     ..RenderRequest::default()
                 };
                 render(&scene, &req).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -145,6 +148,7 @@ fn simd_and_scalar_paths_give_the_same_bits_with_the_iterated_penumbra() {
                 let req = RenderRequest {
                     threads,
                     path: path_kind,
+                    every_slab: true,
                     ..RenderRequest::default()
                 };
                 render(&scene, &req).unwrap_or_else(|e| panic!("{}: {e}", path.display()))

@@ -64,6 +64,8 @@ fn compare(
     let run = |path: SweepPath, counts: Option<&ChunkCounts>| {
         let options = SweepOptions {
             initial_light: Some(&initial),
+            // The light of every slab is compared, not only up to an early finish.
+            every_slab: true,
             ..SweepOptions::default()
         };
         let cpu = CpuOptions {

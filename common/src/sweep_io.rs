@@ -22,18 +22,30 @@ pub enum SweepError {
 pub struct SweepOutput {
     /// Linear RGB, `width·height·3`, the guard band cropped away.
     pub image: Vec<f32>,
-    /// The light buffers after the last slab (grid-sized, row-major `[row][light][channel][x]`).
+    /// The light buffers after the last slab swept (grid-sized, row-major
+    /// `[row][light][channel][x]`): the plan's last slab unless the sweep finished early (see
+    /// [`SweepOptions::every_slab`]).
     pub light: Vec<f32>,
+    /// How many slabs were swept: the plan's slab count, or fewer when the image was final
+    /// earlier (every image pixel opaque).
+    pub slabs_swept: u32,
 }
 
 /// Options of a sweep run that every backend honours.
 pub struct SweepOptions<'a> {
-    /// Called after every slab with the slab index.
+    /// Called after every slab swept with the slab index; after an early finish, once more with
+    /// the plan's last slab index (nothing is left to sweep).
     pub progress: &'a (dyn Fn(u32) + Sync),
     /// Checked between slabs; when raised the sweep stops with [`SweepError::Interrupted`].
     pub cancel: Option<&'a AtomicBool>,
     /// Initial light value per light and channel (`None` = 1, the unoccluded light).
     pub initial_light: Option<&'a [f32]>,
+    /// Sweep every slab, for callers that read [`SweepOutput::light`] as the light after the
+    /// plan's last slab. Otherwise (the default) a backend may stop after the first slab after
+    /// which every image pixel is opaque (alpha exactly 1): compositing then adds exactly 0 to
+    /// every image pixel, so no later slab can change an image bit. The CPU sweep stops there;
+    /// the GPU sweep always sweeps every slab.
+    pub every_slab: bool,
 }
 
 impl Default for SweepOptions<'_> {
@@ -42,6 +54,7 @@ impl Default for SweepOptions<'_> {
             progress: &|_| {},
             cancel: None,
             initial_light: None,
+            every_slab: false,
         }
     }
 }

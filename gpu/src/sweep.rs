@@ -620,12 +620,15 @@ fn read_output(
     Ok(SweepOutput {
         image: image.into_iter().map(f32::from_bits).collect(),
         light: light.into_iter().map(f32::from_bits).collect(),
+        // The GPU sweeps every slab (`SweepOptions::every_slab` permits, never asks, an early
+        // finish): its image is the CPU's either way.
+        slabs_swept: plan.slabs,
     })
 }
 
-/// Runs the sweep on the GPU: the same image and final light buffers as
-/// `convshadow_cpu::sweep::sweep` (bit for bit on lavapipe; docs/gpu.md lists every source of
-/// difference on other adapters).
+/// Runs the sweep on the GPU, every slab: the same image as `convshadow_cpu::sweep::sweep`, and
+/// the same final light buffers as the CPU sweep run with `SweepOptions::every_slab` (bit for
+/// bit on lavapipe; docs/gpu.md lists every source of difference on other adapters).
 pub fn sweep(
     ctx: &GpuContext,
     plan: &RenderPlan,

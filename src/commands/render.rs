@@ -228,6 +228,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         progress: &progress,
         // SIGINT/SIGTERM raise it: the sweep stops and nothing is written (exit code 130).
         cancel: Some(exit::install_interrupt_handler()),
+        every_slab: false,
     };
     let Some(list) = frame_list else {
         let r = render(&scene, &request)?;
@@ -626,12 +627,13 @@ fn finish(
     let throughput = throughput(r);
     if !args.quiet {
         println!(
-            "rendered {}x{} px, {} slabs{}, {}, {}, guard band {}, {} fragments: {:.2} s (LDI \
+            "rendered {}x{} px, {} slabs{}{}, {}, {}, guard band {}, {} fragments: {:.2} s (LDI \
              {:.2} s, sweep {:.2} s, {:.1} M pixel·slab·light/s, {}) → {}",
             scene.image.width,
             scene.image.height,
             r.plan.slabs,
             auto_note(r),
+            early_note(r),
             plural(r.plan.lights.len(), "light"),
             scene.sweep.kernel,
             r.plan.guard,
@@ -673,7 +675,20 @@ fn auto_note(r: &Rendered) -> String {
     }
 }
 
-/// Pixel·slab·light updates per second of the sweep.
+/// ` (N swept: …)` after the slab count when the sweep finished early, else nothing.
+fn early_note(r: &Rendered) -> String {
+    if r.slabs_swept > 0 && r.slabs_swept < r.plan.slabs {
+        format!(
+            " ({} swept: every image pixel opaque after them)",
+            r.slabs_swept
+        )
+    } else {
+        String::new()
+    }
+}
+
+/// The plan's pixel·slab·light updates per second of the sweep: the frame's rate, counting the
+/// slabs an early finish left out (there is nothing in them to compute).
 fn throughput(r: &Rendered) -> f64 {
     let updates = f64::from(r.plan.grid_width)
         * f64::from(r.plan.grid_height)
@@ -695,6 +710,7 @@ fn stats_value(
             "width": scene.image.width,
             "height": scene.image.height,
             "slabs": r.plan.slabs,
+            "slabs_swept": r.slabs_swept,
             "slabs_auto": r.plan.auto_slabs.as_ref().map(|a| json!({
                 "finest_period": a.finest_period,
                 "limited_by": a.limited_by,
@@ -800,6 +816,8 @@ fn render_reference(
         ldi_hash: ldi.fingerprint(),
         plan,
         light: Vec::new(),
+        // The reference traces shadow rays: it sweeps no slab.
+        slabs_swept: 0,
         threads: pool.current_num_threads(),
         seconds_ldi,
         seconds_plan,

@@ -212,6 +212,8 @@ pub fn run_light(
     let init = initial.map(|f| f(&plan));
     let options = SweepOptions {
         initial_light: init.as_deref(),
+        // The light after the plan's last slab is what the callers read.
+        every_slab: true,
         ..SweepOptions::default()
     };
     let t = std::time::Instant::now();

@@ -5,7 +5,9 @@
 //! the previous slab's buffer, ping-pong), advances its layer cursor, shades one point if it is
 //! inside a mesh or crossed a surface, composites front to back and attenuates its light.
 //! A pixel's result depends only on the previous slab and its own state, so the image is the
-//! same bits for any thread count.
+//! same bits for any thread count. The sweep stops after the first slab after which every image
+//! pixel is opaque (alpha exactly 1; no later slab can change an image bit) unless
+//! [`SweepOptions::every_slab`] asks for every slab.
 //!
 //! Two code paths run the same stage code: [`SweepPath::Scalar`], one pixel at a time (its 1-lane
 //! instance), and [`SweepPath::Simd`], eight pixels at a time with `wide` (its 8-lane instance),
@@ -262,6 +264,62 @@ fn finish_image(plan: &RenderPlan, color: &[f32], alpha: &[f32]) -> Vec<f32> {
     image
 }
 
+/// Which image pixels are opaque (alpha exactly 1), tracked between slabs: once every one is,
+/// the image is final. An opaque pixel stays opaque and its colour stays the same bits:
+/// compositing adds `(1 − 1)·α·c = 0` (α and the shaded colour are finite: scene validation
+/// bounds every colour, `MAX_COLOR`), and the image reads only image pixels' colour and alpha.
+struct OpaqueImage {
+    /// The grid's width: the row stride of the alpha plane.
+    grid_width: usize,
+    /// The image's first pixel in the grid: (guard band left, guard band top).
+    origin: (usize, usize),
+    /// The image's width.
+    width: usize,
+    /// Per image row, how many of its first pixels are known to be opaque.
+    known: Vec<usize>,
+    /// Image rows with every pixel known to be opaque.
+    rows_done: usize,
+}
+
+impl OpaqueImage {
+    /// Nothing known yet about the image of `plan`.
+    fn new(plan: &RenderPlan) -> OpaqueImage {
+        let origin = (plan.guard.left as usize, plan.guard.top as usize);
+        let (grid_width, width) = (plan.grid_width as usize, plan.width as usize);
+        OpaqueImage::of_image(grid_width, origin, width, plan.height as usize)
+    }
+
+    /// Nothing known yet about the `width`×`height` image at `origin` of a grid `grid_width` wide.
+    fn of_image(grid_width: usize, origin: (usize, usize), width: usize, height: usize) -> Self {
+        OpaqueImage {
+            grid_width,
+            origin,
+            width,
+            known: vec![0; height],
+            rows_done: 0,
+        }
+    }
+
+    /// Whether every image pixel is opaque in `alpha` (the grid's, row-major): each row is read
+    /// from its first pixel not yet known to be opaque, so a render reads each pixel about once
+    /// plus once per row and slab.
+    fn is_final(&mut self, alpha: &[f32]) -> bool {
+        let (left, top) = self.origin;
+        for (y, known) in self.known.iter_mut().enumerate() {
+            if *known == self.width {
+                continue;
+            }
+            let row = &alpha[(top + y) * self.grid_width + left..][..self.width];
+            *known += row[*known..].iter().take_while(|&&a| a == 1.0).count();
+            if *known < self.width {
+                return false;
+            }
+            self.rows_done += 1;
+        }
+        self.rows_done == self.known.len()
+    }
+}
+
 /// Runs the sweep on the current rayon pool with the path and knobs chosen in `cpu`.
 pub fn sweep_with(
     plan: &RenderPlan,
@@ -286,6 +344,8 @@ pub fn sweep_with(
         .map(|l| TapColumns::new(&l.table, plan.light_row_len(), plan.level_row_len()))
         .collect();
 
+    let mut opaque = OpaqueImage::new(plan);
+    let mut slabs_swept = plan.slabs;
     for slab in 0..plan.slabs {
         if options.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             return Err(SweepError::Interrupted);
@@ -302,11 +362,66 @@ pub fn sweep_with(
         };
         sweep_slab(&ctx, &reach, cpu, &mut state, quiet.as_mut());
         (options.progress)(slab);
+        if !options.every_slab && slab + 1 < plan.slabs && opaque.is_final(&state.alpha) {
+            // No later slab can change an image bit (see `OpaqueImage`).
+            slabs_swept = slab + 1;
+            (options.progress)(plan.slabs - 1);
+            break;
+        }
     }
 
     let image = finish_image(plan, &state.color, &state.alpha);
     Ok(SweepOutput {
         image,
         light: state.prev,
+        slabs_swept,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::OpaqueImage;
+
+    /// A 6×4 grid with a 3×2 image at (2, 1), every pixel opaque.
+    fn opaque_grid() -> (OpaqueImage, Vec<f32>) {
+        (OpaqueImage::of_image(6, (2, 1), 3, 2), vec![1.0; 6 * 4])
+    }
+
+    #[test]
+    fn one_image_pixel_short_of_opaque_keeps_the_image_open() {
+        let (mut image, mut alpha) = opaque_grid();
+        alpha[2 * 6 + 4] = 1.0 - f32::EPSILON / 2.0; // the image's last pixel: one ulp below 1
+        assert!(!image.is_final(&alpha));
+        alpha[2 * 6 + 4] = 1.0;
+        assert!(image.is_final(&alpha));
+    }
+
+    #[test]
+    fn guard_band_pixels_do_not_count() {
+        let (mut image, mut alpha) = opaque_grid();
+        for (i, a) in alpha.iter_mut().enumerate() {
+            let (x, y) = (i % 6, i / 6);
+            if !(2..5).contains(&x) || !(1..3).contains(&y) {
+                *a = 0.0;
+            }
+        }
+        assert!(image.is_final(&alpha));
+    }
+
+    #[test]
+    fn rows_are_rechecked_from_their_first_open_pixel() {
+        let (mut image, mut alpha) = opaque_grid();
+        alpha[6 + 3] = 0.5;
+        alpha[2 * 6 + 2] = 0.5;
+        assert!(!image.is_final(&alpha));
+        assert_eq!(image.known, [1, 0]);
+        alpha[6 + 3] = 1.0;
+        assert!(!image.is_final(&alpha));
+        assert_eq!(
+            (image.known.as_slice(), image.rows_done),
+            ([3, 0].as_slice(), 1)
+        );
+        alpha[2 * 6 + 2] = 1.0;
+        assert!(image.is_final(&alpha));
+    }
 }
