@@ -657,6 +657,9 @@ impl<L: Lane> PairLoads<'_, L> {
         bounds: Bounds,
     ) {
         let planes = self.planes;
+        // C sums, a constant length: copied back in registers (a run-time length was a `memcpy`
+        // call, two per chunk of the default scene).
+        let acc = &mut acc[..C];
         // Every plane's accumulator, in the lane type's layout for pixel-pair loads (a shuffle).
         let mut sums = [L::acc_from(L::splat(0.0)); C];
         for (sum, a) in sums.iter_mut().zip(acc.iter()) {

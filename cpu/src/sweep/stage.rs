@@ -171,7 +171,8 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     // every light's level search (distance penumbra: chains of dependent gathers), then the
     // cursors (scalar work while those loads arrive), then the convolution that needs both.
     let distance = plan.depth_planes() > 0;
-    let mut light_rows = [L::u_splat(0); MAX_LIGHTS];
+    // Per light, sized N (lights ≤ lights · channels ≤ N): zeroing MAX_LIGHTS entries costs.
+    let mut light_rows = [L::u_splat(0); N];
     if distance && known_light.is_none() && gathered.is_none() {
         let (xi, yi) = (x0 as i32, y as i32);
         every_light_rows::<L>(ctx, prev, row_hashes, xi, yi, interior, &mut light_rows);
@@ -193,7 +194,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
 
     // 1. Convolution of every light buffer (and, distance penumbra, its depth plane).
     let mut iin = [L::splat(0.0); N];
-    let mut depth_in = [L::splat(0.0); MAX_LIGHTS];
+    let mut depth_in = [L::splat(0.0); N];
     match (known_light, gathered) {
         // Every value read is `v` and every depth read is 0 (the quiet spans track both).
         (Some(v), _) => iin[..n].fill(L::splat(v)),
@@ -219,7 +220,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                     let gathered = &mut all[..=ch];
                     let rows = light_rows[l];
                     distance_gather(ctx, l, &planes, rows, x0, yi, interior, gathered);
-                    acc.copy_from_slice(&all[..ch]);
+                    copy_channels(acc, &all[..ch]);
                     depth_in[l] = all[ch];
                     continue;
                 }
@@ -236,7 +237,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                         let sums = &mut sums[..ch];
                         let taps = ctx.columns[l].weighted_taps(p);
                         gather(&planes, taps, extent, shift, x0, yi, interior, sums);
-                        acc.copy_from_slice(sums);
+                        copy_channels(acc, sums);
                     }
                     None => {
                         let ph = phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32));
@@ -328,6 +329,17 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     }
 }
 
+/// `dst = src` for a light's channels, as fixed-length copies for 1 and 3 channels (a run-time
+/// length is a `memcpy` call per light and chunk).
+#[inline(always)]
+fn copy_channels<L: Lane>(dst: &mut [L], src: &[L]) {
+    match (dst, src) {
+        ([d], [s]) => *d = *s,
+        ([d0, d1, d2], [s0, s1, s2]) => (*d0, *d1, *d2) = (*s0, *s1, *s2),
+        (dst, src) => dst.copy_from_slice(src),
+    }
+}
+
 /// Distance penumbra: for every light l, the rows (level and phase) its lanes at pixels x0.. of
 /// row y gather through, the level each lane's neighbourhood picks ([`distance_rows`]), into
 /// `all[l]` (in place: an array returned by value cost 1.9 % of the sweep's instructions in
@@ -341,7 +353,7 @@ fn every_light_rows<L: Lane>(
     x0: i32,
     y: i32,
     interior: bool,
-    all: &mut [L::U; MAX_LIGHTS],
+    all: &mut [L::U],
 ) {
     let plan = ctx.plan;
     let (slab, w) = (ctx.slab as usize, plan.grid_width as usize);
