@@ -140,6 +140,10 @@ struct QuietState {
     spans_prev: Vec<quiet::RowSpans>,
     spans_cur: Vec<quiet::RowSpans>,
     chunk_states: Vec<quiet::ChunkState>,
+    /// Per row, the hull of `spans_prev` over the rows within the kernels' vertical reach
+    /// (`quiet::window_hulls`), and that function's scratch buffers.
+    windows: Vec<quiet::RowSpans>,
+    window_scratch: [Vec<quiet::RowSpans>; 2],
     /// Per chunk, bit b: light buffer b (slab mod 2 writes it) already holds this chunk's
     /// unoccluded fill, written two slabs ago and not since (see `QuietRow::filled`).
     filled: Vec<u8>,
@@ -149,18 +153,34 @@ struct QuietState {
 impl QuietState {
     /// The quiet-chunk state for the initial light `prev`, when `cpu` asks for skipping on the
     /// SIMD path.
-    fn new(plan: &RenderPlan, ldi: &Ldi, prev: &[f32], cpu: &CpuOptions<'_>) -> Option<QuietState> {
+    fn new(
+        plan: &RenderPlan,
+        ldi: &Ldi,
+        prev: &[f32],
+        reach: &Reach,
+        cpu: &CpuOptions<'_>,
+    ) -> Option<QuietState> {
         (cpu.path == SweepPath::Simd && cpu.skip_quiet).then(|| {
             let setup = QuietSetup::new(plan, ldi, prev);
-            QuietState {
+            let mut q = QuietState {
                 spans_prev: setup.initial_spans.clone(),
                 spans_cur: setup.initial_spans.clone(),
                 chunk_states: setup.chunks.clone(),
+                windows: Vec::new(),
+                window_scratch: [Vec::new(), Vec::new()],
                 filled: vec![0; setup.chunks.len()],
                 chunks_per_row: quiet::chunks_per_row(plan.grid_width as usize),
                 setup,
-            }
+            };
+            q.update_windows(reach);
+            q
         })
+    }
+
+    /// `windows` for the current `spans_prev`.
+    fn update_windows(&mut self, reach: &Reach) {
+        let (spans, out) = (&self.spans_prev, &mut self.windows);
+        quiet::window_hulls(spans, reach.y0, reach.y1, out, &mut self.window_scratch);
     }
 }
 
@@ -212,15 +232,15 @@ fn sweep_slab(
             sweep_row_simd(ctx, reach, y, prev_ref, row, None, cpu.chunk_counts);
         }),
         (SweepPath::Simd, Some(q)) => {
-            let spans_prev_ref = &q.spans_prev;
             let setup = &q.setup;
             rows.zip(q.spans_cur.par_iter_mut())
                 .zip(q.chunk_states.par_chunks_mut(q.chunks_per_row))
                 .zip(q.filled.par_chunks_mut(q.chunks_per_row))
-                .for_each(|((((y, row), span_out), chunks), filled)| {
+                .zip(q.windows.par_iter())
+                .for_each(|(((((y, row), span_out), chunks), filled), window)| {
                     let quiet_row = QuietRow {
                         setup,
-                        spans_prev: spans_prev_ref,
+                        window,
                         span_out,
                         chunks,
                         filled,
@@ -236,6 +256,7 @@ fn sweep_slab(
                     );
                 });
             std::mem::swap(&mut q.spans_prev, &mut q.spans_cur);
+            q.update_windows(reach);
         }
     }
     std::mem::swap(&mut state.prev, &mut state.cur);
@@ -336,8 +357,8 @@ pub fn sweep_with(
     );
 
     let mut state = PixelState::new(plan, ldi, options);
-    let mut quiet = QuietState::new(plan, ldi, &state.prev, cpu);
     let reach = Reach::of(plan);
+    let mut quiet = QuietState::new(plan, ldi, &state.prev, &reach, cpu);
     let columns: Vec<TapColumns> = plan
         .lights
         .iter()

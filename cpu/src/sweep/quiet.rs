@@ -64,6 +64,63 @@ impl RowSpans {
     }
 }
 
+impl RowSpans {
+    /// Kind by kind, the smallest span holding both `self` and `other` (an empty span adds
+    /// nothing: its `lo` is `i32::MAX` and its `hi` `i32::MIN`).
+    fn hull(self, other: RowSpans) -> RowSpans {
+        let join = |a: (i32, i32), b: (i32, i32)| (a.0.min(b.0), a.1.max(b.1));
+        RowSpans {
+            not_one: join(self.not_one, other.not_one),
+            not_zero: join(self.not_zero, other.not_zero),
+            light_not_zero: join(self.light_not_zero, other.light_not_zero),
+        }
+    }
+}
+
+/// Per row y, the [`RowSpans::hull`] of `spans[y + y0 ..= y + y1]` (rows outside the buffer add
+/// nothing; `y0 ≤ y1`): one span per kind holding every value that the rows within a kernel's
+/// vertical reach hold, so that a row's quiet test reads one span per kind, not one per row in
+/// reach. In O(rows) for any reach (van Herk / Gil-Werman: hulls from the start and to the end
+/// of blocks of `y1 − y0 + 1` rows; a window is the end of one block and the start of the next).
+/// `scratch` keeps its buffers from one slab to the next.
+pub(crate) fn window_hulls(
+    spans: &[RowSpans],
+    y0: i32,
+    y1: i32,
+    out: &mut Vec<RowSpans>,
+    scratch: &mut [Vec<RowSpans>; 2],
+) {
+    let (h, width) = (spans.len(), (i64::from(y1) - i64::from(y0) + 1) as usize);
+    // Row k of the padded sequence is buffer row k + y0 (EMPTY outside the buffer); window y is
+    // padded rows y ..= y + width − 1.
+    let padded = h + width - 1;
+    let row = |k: usize| {
+        let r = k as i64 + i64::from(y0);
+        if (0..h as i64).contains(&r) {
+            spans[r as usize]
+        } else {
+            RowSpans::EMPTY
+        }
+    };
+    let [from_start, to_end] = scratch;
+    from_start.clear();
+    to_end.clear();
+    from_start.extend((0..padded).map(row));
+    to_end.extend((0..padded).map(row));
+    for k in 1..padded {
+        if k % width != 0 {
+            from_start[k] = from_start[k - 1].hull(from_start[k]);
+        }
+    }
+    for k in (0..padded.saturating_sub(1)).rev() {
+        if (k + 1) % width != 0 {
+            to_end[k] = to_end[k].hull(to_end[k + 1]);
+        }
+    }
+    out.clear();
+    out.extend((0..h).map(|y| to_end[y].hull(from_start[y + width - 1])));
+}
+
 /// What a group of pixels wrote to the light buffer, as [`RowSpans::record`] takes it.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Values {
@@ -226,8 +283,9 @@ impl QuietSetup {
 /// One row's view of the quiet-chunk state.
 pub(crate) struct QuietRow<'a> {
     pub setup: &'a QuietSetup,
-    /// Spans of the previous buffer, every row.
-    pub spans_prev: &'a [RowSpans],
+    /// The hull of the previous buffer's spans in the rows within reach of this row
+    /// ([`window_hulls`]).
+    pub window: &'a RowSpans,
     /// This row's spans in the buffer being written.
     pub span_out: &'a mut RowSpans,
     /// This row's chunk summaries.
@@ -255,15 +313,17 @@ pub(crate) enum ChunkWork {
 
 /// For every chunk of one row, whether some row within the kernels' vertical reach has values
 /// that are not exactly 1 (not exactly 0) within the chunk's horizontal reach: what
-/// [`QuietRow::classify`] asks of the previous buffer's spans, answered for the whole row at once.
+/// [`QuietRow::classify`] asks of the previous buffer's spans, answered from the row's
+/// [`window_hulls`] span per kind (a hull may hold chunks no row's span meets: then a chunk is
+/// computed that could have been skipped, never the reverse).
 pub(crate) struct RowHits {
-    /// Per chunk, bit k set when a span of kind k meets its reach: 0 not one, 1 not zero, 2 light
-    /// not zero (the order of [`RowHits::kinds`]).
-    bits: Vec<u8>,
+    /// Per kind (0 not one, 1 not zero, 2 light not zero: the order of [`RowHits::kinds`]), the
+    /// chunks `first..=last` whose reach meets the window's span (empty when first > last).
+    ranges: [(i64, i64); 3],
 }
 
 impl RowHits {
-    /// A row's spans in the order of [`RowHits::bits`] (light not zero only with depth planes).
+    /// A row's spans in the order of [`RowHits::ranges`] (light not zero only with depth planes).
     fn kinds(spans: &RowSpans, depth_planes: bool) -> [(i32, i32); 3] {
         let light = if depth_planes {
             spans.light_not_zero
@@ -273,19 +333,35 @@ impl RowHits {
         [spans.not_one, spans.not_zero, light]
     }
 
+    /// The hits of a row whose rows in reach hold `window` (its [`window_hulls`] entry), for a row
+    /// of `chunks` chunks.
+    fn of(window: &RowSpans, depth_planes: bool, reach: &Reach, chunks: usize) -> RowHits {
+        let ranges = Self::kinds(window, depth_planes).map(|span| {
+            let (first, last) = Self::chunk_range(span, reach);
+            (first.max(0), last.min(chunks as i64 - 1))
+        });
+        RowHits { ranges }
+    }
+
+    /// Whether chunk c's reach meets kind k's span.
+    fn hit(&self, k: usize, c: usize) -> bool {
+        let (first, last) = self.ranges[k];
+        (first..=last).contains(&(c as i64))
+    }
+
     /// Chunk c's bit for spans not exactly 1.
     fn not_one(&self, c: usize) -> bool {
-        self.bits[c] & 1 != 0
+        self.hit(0, c)
     }
 
     /// Chunk c's bit for spans not exactly 0.
     fn not_zero(&self, c: usize) -> bool {
-        self.bits[c] & 2 != 0
+        self.hit(1, c)
     }
 
     /// Chunk c's bit for light (not depth) spans not exactly 0.
     fn light_not_zero(&self, c: usize) -> bool {
-        self.bits[c] & 4 != 0
+        self.hit(2, c)
     }
 
     /// The chunks `c` (pixels `8c..8c + 8`) whose reach `[8c + x0, 8c + 7 + x1]` meets `span`:
@@ -298,47 +374,13 @@ impl RowHits {
         let last = (hi - i64::from(reach.x0) - 1).div_euclid(lanes);
         (first, last)
     }
-
-    /// Marks, per chunk and kind, whether any row's span of that kind meets the chunk's reach:
-    /// each span covers a contiguous range of chunks, so one difference array per kind gives
-    /// every chunk's answer in one pass over the rows.
-    fn mark(rows: impl Iterator<Item = [(i32, i32); 3]>, reach: &Reach, chunks: usize) -> RowHits {
-        let mut diff = vec![[0i32; 3]; chunks + 1];
-        for spans in rows {
-            for (k, span) in spans.into_iter().enumerate() {
-                let (first, last) = Self::chunk_range(span, reach);
-                let (first, last) = (first.max(0), last.min(chunks as i64 - 1));
-                if first <= last {
-                    diff[first as usize][k] += 1;
-                    diff[last as usize + 1][k] -= 1;
-                }
-            }
-        }
-        let mut open = [0i32; 3];
-        let bits = diff[..chunks]
-            .iter()
-            .map(|d| {
-                let mut bits = 0u8;
-                for k in 0..3 {
-                    open[k] += d[k];
-                    bits |= u8::from(open[k] > 0) << k;
-                }
-                bits
-            })
-            .collect();
-        RowHits { bits }
-    }
 }
 
 impl QuietRow<'_> {
-    /// Which chunks of row y can read a value that is not exactly 1 (not exactly 0) in the
-    /// previous buffer.
-    pub(crate) fn hits(&self, reach: &Reach, y: usize, h: usize, chunks: usize) -> RowHits {
-        let lo = (y as i64 + i64::from(reach.y0)).max(0);
-        let hi = (y as i64 + i64::from(reach.y1)).min(h as i64 - 1);
-        let depth_planes = self.setup.depth_planes;
-        let rows = (lo..=hi).map(|yy| RowHits::kinds(&self.spans_prev[yy as usize], depth_planes));
-        RowHits::mark(rows, reach, chunks)
+    /// Which of this row's `chunks` chunks can read a value that is not exactly 1 (not exactly 0)
+    /// in the previous buffer.
+    pub(crate) fn hits(&self, reach: &Reach, chunks: usize) -> RowHits {
+        RowHits::of(self.window, self.setup.depth_planes, reach, chunks)
     }
 
     /// Classifies chunk `c` (pixels x0..x0 + lanes, x0 = 8c; fewer than 8 lanes for the row's
@@ -419,9 +461,66 @@ mod tests {
     use super::*;
     use convshadow_common::hash::TestRng;
 
+    /// A random span of one kind: empty one time in five.
+    fn random_span(rng: &mut TestRng) -> (i32, i32) {
+        match rng.below(5) {
+            0 => RowSpans::EMPTY.not_one,
+            _ => {
+                let lo = rng.below(120) as i32 - 10;
+                (lo, lo + 1 + rng.below(40) as i32)
+            }
+        }
+    }
+
+    fn random_spans(rng: &mut TestRng) -> RowSpans {
+        RowSpans {
+            not_one: random_span(rng),
+            not_zero: random_span(rng),
+            light_not_zero: random_span(rng),
+        }
+    }
+
+    fn kinds(s: &RowSpans) -> [(i32, i32); 3] {
+        [s.not_one, s.not_zero, s.light_not_zero]
+    }
+
+    /// Chunk c's reach `[8c + x0, 8c + 7 + x1]`.
+    fn chunk_reach(c: usize, reach: &Reach) -> (i64, i64) {
+        (
+            (c * LANES) as i64 + i64::from(reach.x0),
+            (c * LANES + LANES - 1) as i64 + i64::from(reach.x1),
+        )
+    }
+
+    #[test]
+    fn window_hulls_are_the_hulls_of_the_rows_in_reach() {
+        // Against the direct fold over the rows `y + y0 ..= y + y1` inside the buffer.
+        let mut rng = TestRng::new(7);
+        let mut scratch = [Vec::new(), Vec::new()];
+        let mut out = Vec::new();
+        for _ in 0..500 {
+            let h = 1 + rng.below(40) as usize;
+            let (y0, y1) = (-(rng.below(13) as i32), rng.below(13) as i32);
+            let spans: Vec<RowSpans> = (0..h).map(|_| random_spans(&mut rng)).collect();
+            window_hulls(&spans, y0, y1, &mut out, &mut scratch);
+            assert_eq!(out.len(), h);
+            for (y, got) in out.iter().enumerate() {
+                let lo = (y as i64 + i64::from(y0)).max(0) as usize;
+                let hi = (y as i64 + i64::from(y1)).min(h as i64 - 1) as usize;
+                let mut want = [(i32::MAX, i32::MIN); 3];
+                for row in &spans[lo..=hi] {
+                    for (w, r) in want.iter_mut().zip(kinds(row)) {
+                        *w = (w.0.min(r.0), w.1.max(r.1));
+                    }
+                }
+                assert_eq!(kinds(got), want, "row {y} of {h}, reach {y0}..={y1}");
+            }
+        }
+    }
+
     #[test]
     fn row_hits_answer_the_per_chunk_span_test() {
-        // Against the direct test: some span meets the chunk's reach [8c + x0, 8c + 7 + x1].
+        // Against the direct test: the window's span meets the chunk's reach [8c + x0, 8c + 7 + x1].
         let mut rng = TestRng::new(5);
         for _ in 0..2000 {
             let reach = Reach {
@@ -431,34 +530,53 @@ mod tests {
                 y1: 0,
             };
             let chunks = 1 + rng.below(12) as usize;
-            let span = |rng: &mut TestRng| match rng.below(5) {
-                0 => RowSpans::EMPTY.not_one,
-                _ => {
-                    let lo = rng.below(120) as i32 - 10;
-                    (lo, lo + 1 + rng.below(40) as i32)
-                }
-            };
-            let rows: Vec<[(i32, i32); 3]> = (0..rng.below(4))
-                .map(|_| [span(&mut rng), span(&mut rng), span(&mut rng)])
-                .collect();
-            let marked = RowHits::mark(rows.iter().copied(), &reach, chunks);
-            assert_eq!(marked.bits.len(), chunks);
+            let window = random_spans(&mut rng);
+            let hits = RowHits::of(&window, true, &reach, chunks);
             for c in 0..chunks {
-                let (a, b) = (
-                    (c * LANES) as i64 + i64::from(reach.x0),
-                    (c * LANES + LANES - 1) as i64 + i64::from(reach.x1),
-                );
-                let got = [
-                    marked.not_one(c),
-                    marked.not_zero(c),
-                    marked.light_not_zero(c),
-                ];
+                let (a, b) = chunk_reach(c, &reach);
+                let got = [hits.not_one(c), hits.not_zero(c), hits.light_not_zero(c)];
                 for (k, &hit) in got.iter().enumerate() {
-                    let direct = rows.iter().any(|r| meets(r[k], a, b));
+                    let direct = meets(kinds(&window)[k], a, b);
                     assert_eq!(
                         hit, direct,
-                        "chunk {c} of {chunks}, kind {k}, rows {rows:?}, {reach:?}"
+                        "chunk {c} of {chunks}, kind {k}, {window:?}, {reach:?}"
                     );
+                }
+            }
+            // Without depth planes the light-not-zero kind is never asked: no hits.
+            let no_depth = RowHits::of(&window, false, &reach, chunks);
+            assert!((0..chunks).all(|c| !no_depth.light_not_zero(c)));
+        }
+    }
+
+    #[test]
+    fn a_chunk_that_some_row_in_reach_meets_is_a_hit() {
+        // The skip's safety: every chunk whose reach meets a span of any row within the vertical
+        // reach is a hit (the hull may add chunks, never drop one).
+        let mut rng = TestRng::new(11);
+        let (mut scratch, mut windows) = ([Vec::new(), Vec::new()], Vec::new());
+        for _ in 0..300 {
+            let h = 1 + rng.below(20) as usize;
+            let reach = Reach {
+                x0: -(rng.below(20) as i32),
+                x1: rng.below(20) as i32,
+                y0: -(rng.below(6) as i32),
+                y1: rng.below(6) as i32,
+            };
+            let chunks = 1 + rng.below(12) as usize;
+            let spans: Vec<RowSpans> = (0..h).map(|_| random_spans(&mut rng)).collect();
+            window_hulls(&spans, reach.y0, reach.y1, &mut windows, &mut scratch);
+            for (y, window) in windows.iter().enumerate() {
+                let hits = RowHits::of(window, true, &reach, chunks);
+                let lo = (y as i64 + i64::from(reach.y0)).max(0) as usize;
+                let hi = (y as i64 + i64::from(reach.y1)).min(h as i64 - 1) as usize;
+                for c in 0..chunks {
+                    let (a, b) = chunk_reach(c, &reach);
+                    let got = [hits.not_one(c), hits.not_zero(c), hits.light_not_zero(c)];
+                    for (k, &hit) in got.iter().enumerate() {
+                        let some_row = spans[lo..=hi].iter().any(|r| meets(kinds(r)[k], a, b));
+                        assert!(hit || !some_row, "row {y}, chunk {c}, kind {k}, {reach:?}");
+                    }
                 }
             }
         }

@@ -122,9 +122,7 @@ pub(crate) fn sweep_row_simd(
     let mut spans = RowSpans::EMPTY;
     let mut tally = [0u64; 3];
     let chunk: ChunkFn = chunk_fn::<f32x8>(planes);
-    let hits = quiet
-        .as_ref()
-        .map(|q| q.hits(reach, y, h, w.div_ceil(LANES)));
+    let hits = quiet.as_ref().map(|q| q.hits(reach, w.div_ceil(LANES)));
     let pairs = pairs_gathers(plan);
     // The gathers of a chunk and its right neighbour, computed together when both need them
     // (`stage::gather_pair`); `paired` names the chunk whose result waits in `pair[1]`.
