@@ -156,6 +156,9 @@ fn preintegration_keeps_the_bits_across_paths_threads_and_quiet_chunk_skipping()
                 path,
                 threads,
                 skip_quiet: skip,
+                // Every slab: the dark chunks behind the plate, whose skipping this test covers,
+                // come after the early finish (every image pixel opaque).
+                every_slab: true,
                 ..RenderRequest::default()
             };
             let r = render(&scene, &req).unwrap();
