@@ -87,10 +87,11 @@ pub trait Lane:
     fn weights4(table: &[[f32; 4]], i: Self::U) -> Self::W4;
     /// An accumulator holding `v`'s lanes.
     fn acc_from(v: Self) -> Self::Acc;
-    /// Adds lane i's bilinear tap to each plane's accumulator `sums[c]`: `acc + w0·v00 + w1·v10
-    /// + w2·v01 + w3·v11`, left to right, where `v00, v10` are `data[at], data[at + 1]` and
-    /// `v01, v11` the same `stride` further, `at = origin + c·plane_step + rel[i]` (`rel`
-    /// signed); one bounds check for all planes and lanes, panicking outside `data`.
+    /// Adds lane i's bilinear tap to each plane's accumulator `sums[c]`:
+    /// `acc + w0·v00 + w1·v10 + w2·v01 + w3·v11`, left to right, where `v00, v10` are
+    /// `data[at], data[at + 1]` and `v01, v11` the same `stride` further,
+    /// `at = origin + c·plane_step + rel[i]` (`rel` signed); one bounds check for all planes and
+    /// lanes, panicking outside `data`.
     fn acc_blocks(
         sums: &mut [Self::Acc],
         w: &Self::W4,
@@ -145,7 +146,7 @@ pub trait Lane:
     /// Lane i takes lane `i + by` of `self`, or `fill` where `i + by` is not a lane (a run of
     /// values moved along a row, in registers).
     fn shift_lanes(self, by: i32, fill: f32) -> Self;
-    /// Lane i: the pixel (x[i], y[i]) (read as `i32`) of the `width` × `height` grid whose pixel
+    /// Lane i: the pixel `(x[i], y[i])` (read as `i32`) of the `width` × `height` grid whose pixel
     /// (x, y) is `data[base + y·stride + x]`, or `outside` beyond the grid. Panics unless the
     /// grid lies in `data`.
     #[allow(clippy::too_many_arguments)]

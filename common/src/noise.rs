@@ -2,7 +2,7 @@
 //! turbulence, bit-exact between the scalar path, the 8-lane SIMD path and the WGSL port.
 //!
 //! # Bit-exactness rules
-//! Every function here is written **once**, generically over [`Lane`](crate::lane::Lane), and
+//! Every function here is written **once**, generically over [`Lane`], and
 //! instantiated for `f32` (scalar) and `wide::f32x8` (SIMD). Both instantiations therefore run
 //! the identical sequence of IEEE operations, lane by lane. Only these operations are used:
 //! f32 add, sub, mul, floor, sign-bit clear (`abs`), sign-bit xor, compare + select, f32 → i32

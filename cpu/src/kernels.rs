@@ -164,8 +164,8 @@ pub fn reads_inside(
 /// Gathers every channel of one light at pixels x0.. (one per lane) of row y when every lane
 /// uses the same `taps` (per-slab and scheduled phases, and any 1-lane gather): contiguous loads
 /// when `interior` (every read inside the grid; one bounds check for the taps' whole
-/// `extent`, see [`TapColumns::extent`]), else tap by tap: contiguous loads where the tap's
-/// corners lie inside, [`RowRun`]s where they do not. Adds into `acc[c]` tap by tap,
+/// `extent`, see `TapColumns::extent`), else tap by tap: contiguous loads where the tap's
+/// corners lie inside, `RowRun`s where they do not. Adds into `acc[c]` tap by tap,
 /// corner by corner, so every lane has the bits of any other lane count.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -417,13 +417,13 @@ pub struct TapColumns {
 pub struct LaneRows {
     /// `[min dx, max dx, min dy, max dy]` over the lanes' rows.
     pub extent: [i32; 4],
-    /// The largest [`TapColumns::gather_taps`] of the lanes' rows.
+    /// The largest `TapColumns::gather_taps` of the lanes' rows.
     pub gather_taps: usize,
-    /// The largest [`TapColumns::level_taps`] of the lanes' rows.
+    /// The largest `TapColumns::level_taps` of the lanes' rows.
     pub level_taps: usize,
     /// The row of every lane, when they all have the same one.
     pub uniform: Option<u32>,
-    /// `[min, max]` over the lanes' rows of their taps' [`TapColumns::offset`]s (as `i32`).
+    /// `[min, max]` over the lanes' rows of their taps' `TapColumns::offset`s (as `i32`).
     pub offset_span: [i64; 2],
 }
 
@@ -451,7 +451,7 @@ impl LaneRows {
 
 impl TapColumns {
     /// The taps of row `row` with a nonzero weight, in the row's order: the taps a gather through
-    /// one row for every lane must visit ([`TapColumns::weighted`]).
+    /// one row for every lane must visit (`TapColumns::weighted`).
     #[inline(always)]
     pub fn weighted_taps(&self, row: u32) -> &[Tap] {
         let [start, end] = self.weighted_rows[row as usize];
