@@ -55,7 +55,7 @@ impl RowSpans {
         let (lo, hi) = (x as i32, (x + n) as i32);
         let grow = |span: &mut (i32, i32), flag: bool| {
             if flag {
-                *span = (span.0.min(lo), span.1.max(hi));
+                *span = join(*span, (lo, hi));
             }
         };
         grow(&mut self.not_one, values.not_one);
@@ -68,13 +68,18 @@ impl RowSpans {
     /// Kind by kind, the smallest span holding both `self` and `other` (an empty span adds
     /// nothing: its `lo` is `i32::MAX` and its `hi` `i32::MIN`).
     fn hull(self, other: RowSpans) -> RowSpans {
-        let join = |a: (i32, i32), b: (i32, i32)| (a.0.min(b.0), a.1.max(b.1));
         RowSpans {
             not_one: join(self.not_one, other.not_one),
             not_zero: join(self.not_zero, other.not_zero),
             light_not_zero: join(self.light_not_zero, other.light_not_zero),
         }
     }
+}
+
+/// The smallest span `(lo, hi)` holding spans `a` and `b`.
+#[inline(always)]
+fn join(a: (i32, i32), b: (i32, i32)) -> (i32, i32) {
+    (a.0.min(b.0), a.1.max(b.1))
 }
 
 /// Per row y, the [`RowSpans::hull`] of `spans[y + y0 ..= y + y1]` (rows outside the buffer add
