@@ -222,10 +222,16 @@ pub fn gaussian_in_polygon(poly: &[[f64; 2]], mean: [f64; 2], cov: [[f64; 2]; 2]
     let (s1, s2) = (l1.sqrt(), l2.sqrt());
     let umin = q.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
     let umax = q.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max);
-    // The v-extent of the polygon at u (convex: the min and max over edge intersections).
-    let slice = |u: f64| -> (f64, f64) {
+    let edges: Vec<([f64; 2], [f64; 2])> = q
+        .iter()
+        .copied()
+        .zip(q.iter().copied().cycle().skip(1))
+        .collect();
+    // The v-extent of the polygon at u over `edges` (convex: the min and max over edge
+    // intersections).
+    let slice = |edges: &[([f64; 2], [f64; 2])], u: f64| -> (f64, f64) {
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for (&a, &b) in q.iter().zip(q.iter().cycle().skip(1)) {
+        for &(a, b) in edges {
             let (ua, ub) = (a[0].min(b[0]), a[0].max(b[0]));
             if u < ua || u > ub {
                 continue;
@@ -242,8 +248,8 @@ pub fn gaussian_in_polygon(poly: &[[f64; 2]], mean: [f64; 2], cov: [[f64; 2]; 2]
         }
         (lo, hi)
     };
-    let inner = |u: f64| -> f64 {
-        let (lo, hi) = slice(u);
+    let inner = |edges: &[([f64; 2], [f64; 2])], u: f64| -> f64 {
+        let (lo, hi) = slice(edges, u);
         if lo > hi {
             return 0.0;
         }
@@ -257,7 +263,7 @@ pub fn gaussian_in_polygon(poly: &[[f64; 2]], mean: [f64; 2], cov: [[f64; 2]; 2]
     };
     if s1 == 0.0 {
         return if (umin..=umax).contains(&0.0) {
-            inner(0.0)
+            inner(&edges, 0.0)
         } else {
             0.0
         };
@@ -289,11 +295,21 @@ pub fn gaussian_in_polygon(poly: &[[f64; 2]], mean: [f64; 2], cov: [[f64; 2]; 2]
     let norm = 1.0 / (s1 * (2.0 * std::f64::consts::PI).sqrt());
     GL.with(|gl| {
         let mut total = 0.0;
+        let mut crossing = Vec::with_capacity(edges.len());
         for w in cuts.windows(2) {
             let (c0, c1) = (w[0], w[1]);
             if c1 <= c0 {
                 continue;
             }
+            // No vertex lies between two cuts, so the edges that cross u are the same for every
+            // u inside: found once, at the middle.
+            let middle = 0.5 * (c0 + c1);
+            crossing.clear();
+            crossing.extend(
+                edges
+                    .iter()
+                    .filter(|(a, b)| a[0].min(b[0]) <= middle && middle <= a[0].max(b[0])),
+            );
             let pieces = ((c1 - c0) / (0.25 * s1)).ceil().max(1.0) as usize;
             let hw = 0.5 * (c1 - c0) / pieces as f64;
             for k in 0..pieces {
@@ -301,7 +317,7 @@ pub fn gaussian_in_polygon(poly: &[[f64; 2]], mean: [f64; 2], cov: [[f64; 2]; 2]
                 for (x, wt) in gl {
                     let u = mid + hw * x;
                     let g = norm * (-0.5 * (u / s1) * (u / s1)).exp();
-                    total += wt * hw * g * inner(u);
+                    total += wt * hw * g * inner(&crossing, u);
                 }
             }
         }
