@@ -3,8 +3,9 @@
 //! a build for an older processor runs (`RUSTFLAGS="-C target-cpu=native"`, as the config file
 //! advises there): this test builds the lane module's tests for baseline x86-64 (a target folder
 //! of its own, `target/baseline-x86-64`) and runs them, so a portable branch that disagrees with
-//! the 1-lane path fails here as the AVX2 branches fail in the normal build. A few minutes on a
-//! fresh machine, seconds once built.
+//! the 1-lane path fails here as the AVX2 branches fail in the normal build. It builds with the
+//! unoptimised `baseline-lanes` profile (Cargo.toml; optimisation changes no float result): about
+//! a minute on a fresh machine, seconds once built.
 
 use std::path::Path;
 use std::process::Command;
@@ -43,7 +44,8 @@ fn the_lane_tests_pass_in_a_build_for_baseline_x86_64() {
         .env("CARGO_TARGET_DIR", root.join("target/baseline-x86-64"))
         .args([
             "test",
-            "--release",
+            "--profile",
+            "baseline-lanes",
             "-p",
             "convshadow-common",
             "--lib",
