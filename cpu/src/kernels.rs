@@ -401,6 +401,12 @@ pub struct TapColumns {
     /// max offset]` (offsets: its taps' [`TapColumns::offset`]s read as `i32`): every field of
     /// [`LaneRows`] is a maximum over lanes, so a chunk's summary is one 8-lane `max` per lane.
     pub(crate) summary: Vec<[i32; 8]>,
+    /// The largest of every row's summary, field by field: a summary of any lanes' rows (wider
+    /// extents and offset spans than theirs, which only proofs read), exact in its tap counts
+    /// where `same_counts` holds.
+    pub(crate) whole_summary: [i32; 8],
+    /// Whether every row has the same `gather_taps` and the same `level_taps`.
+    pub(crate) same_counts: bool,
     /// Every row's taps with a nonzero weight, row after row, in each row's order. A tap whose
     /// four weights are 0 adds +0 to a sum that is never −0 (see `gather_taps`), so a gather
     /// that skips it keeps every bit; a box kernel's phases are padded with many such taps.
@@ -437,8 +443,36 @@ impl LaneRows {
         for &row in &r[..L::LANES] {
             most = most.max(i32x8::new(columns.summary[row as usize]));
         }
-        let m = most.to_array();
         let uniform = r[..L::LANES].iter().all(|&v| v == r[0]).then_some(r[0]);
+        LaneRows::from_summary(most.to_array(), uniform)
+    }
+
+    /// [`LaneRows::of`] for lanes whose every read the caller knows to lie inside the grid
+    /// (`interior`): where every row of `columns` visits as many taps as any other, the table's
+    /// [`TapColumns::whole_summary`] without a lookup per lane (the same tap counts; its wider
+    /// extent and offset span hold for any rows, and inside the grid they only prove reads).
+    #[inline(always)]
+    pub fn within<L: Lane>(columns: &TapColumns, rows: L::U, interior: bool) -> LaneRows {
+        if !(interior && columns.same_counts) {
+            return LaneRows::of::<L>(columns, rows);
+        }
+        let mut r = [0u32; MAX_LANES];
+        L::u_store(rows, &mut r);
+        let lanes = &r[..L::LANES];
+        // Every lane's row is a row of the table, as `of`'s lookup checks (unchecked gathers
+        // by these rows rely on it).
+        let highest = lanes.iter().fold(0, |m, &v| m.max(v));
+        assert!(
+            (highest as usize) < columns.phase_count,
+            "row {highest} beyond the table"
+        );
+        let uniform = lanes.iter().all(|&v| v == r[0]).then_some(r[0]);
+        LaneRows::from_summary(columns.whole_summary, uniform)
+    }
+
+    /// A summary from the fieldwise largest of rows' [`TapColumns::summary`] entries.
+    #[inline(always)]
+    fn from_summary(m: [i32; 8], uniform: Option<u32>) -> LaneRows {
         LaneRows {
             extent: [-m[0], m[1], -m[2], m[3]],
             gather_taps: m[4] as usize,
@@ -465,6 +499,8 @@ impl TapColumns {
         let (pc, n) = (table.rows() as usize, table.taps_per_phase as usize);
         let mut columns = TapColumns {
             summary: Vec::new(),
+            whole_summary: [i32::MIN; 8],
+            same_counts: false,
             weighted: Vec::new(),
             weighted_rows: Vec::with_capacity(pc),
             strides: [row_stride, level_stride],
@@ -535,6 +571,12 @@ impl TapColumns {
                 [-e[0], e[1], -e[2], e[3], g as i32, l as i32, -lo, hi]
             })
             .collect();
+        for row in &columns.summary {
+            let most = i32x8::new(columns.whole_summary).max(i32x8::new(*row));
+            columns.whole_summary = most.to_array();
+        }
+        let counts = |v: &[u32]| v.iter().all(|&c| c == v[0]);
+        columns.same_counts = counts(&columns.gather_taps) && counts(&columns.level_taps);
         columns
     }
 }
@@ -692,7 +734,7 @@ impl<L: Lane> PairLoads<'_, L> {
                 let (w, rel) = self.tap(k);
                 // SAFETY: lane i reads at `pixel + rel[i]` (and + 1, + rs, + rs + 1) in each
                 // plane, and rel[i] = i + shift + the offset of a tap of lane i's row, within the
-                // span proved above (`LaneRows::of` of these rows, from `TapColumns::new`).
+                // span proved above (`LaneRows::within` of these rows, from `TapColumns::new`).
                 unsafe {
                     L::acc_blocks_unchecked(&mut sums, &w, data, self.pixel, plane_step, rel, rs);
                 }
@@ -764,7 +806,7 @@ pub(crate) fn distance_rows<L: Lane>(
         slab,
     );
     let mut nearest = own;
-    let own_reads = LaneRows::of::<L>(columns, own_rows);
+    let own_reads = LaneRows::within::<L>(columns, own_rows, interior);
     let n = own_reads.level_taps;
     let pc = columns.phase_count;
     let rs = levels.row_stride;
@@ -787,8 +829,8 @@ pub(crate) fn distance_rows<L: Lane>(
             let nearest = L::u_select(L::u_eq(nearest, lit), zero, nearest);
             return level_rows::<L>(table, nearest, phase, slabs, slab);
         }
-        // One proof for every gather below: `LaneRows::of` looked each lane's row up in a table
-        // of `pc` rows (so `rel` reads inside its column), and the test above (or the sweep's
+        // One proof for every gather below: `LaneRows::within` checked each lane's row against
+        // a table of `pc` rows (so `rel` reads inside its column), and the test above (or the sweep's
         // reach) put every corner inside the grid, whose rows lie in `levels.data`.
         assert!(levels.data.len() <= i32::MAX as usize && columns.summary.len() == pc);
         // Crate-internal invariants (this function is crate-private): the sweep builds the level
@@ -1004,6 +1046,57 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_summary_inside_the_grid_visits_the_taps_of_the_lanes_own() {
+        // `within` against `of`: the same row and tap counts, extents and offset spans that hold
+        // theirs; and `of` itself where the reads are not known to lie inside.
+        let mut rng = TestRng::new(5);
+        let mut fast = 0;
+        for kernel in ["box", "gaussian:7", "ellipse2", "ellipse3:slab", "poisson8"] {
+            let table = distance_table(kernel);
+            let columns = TapColumns::new(&table, 1000, 100);
+            fast += usize::from(columns.same_counts);
+            for _ in 0..200 {
+                let one_row = rng.below(3) == 0;
+                let first = rng.below(table.rows());
+                let rows: [u32; 8] = std::array::from_fn(|_| {
+                    if one_row {
+                        first
+                    } else {
+                        rng.below(table.rows())
+                    }
+                });
+                let rows = u32x8::new(rows);
+                let own = LaneRows::of::<f32x8>(&columns, rows);
+                for interior in [false, true] {
+                    let got = LaneRows::within::<f32x8>(&columns, rows, interior);
+                    let why = format!("{kernel} rows {rows:?} interior {interior}");
+                    assert_eq!(got.uniform, own.uniform, "{why}");
+                    assert_eq!(got.gather_taps, own.gather_taps, "{why}");
+                    assert_eq!(got.level_taps, own.level_taps, "{why}");
+                    let (e, o) = (got.extent, own.extent);
+                    assert!(e[0] <= o[0] && e[1] >= o[1] && e[2] <= o[2] && e[3] >= o[3]);
+                    let (s, t) = (got.offset_span, own.offset_span);
+                    assert!(s[0] <= t[0] && s[1] >= t[1], "{why}");
+                    if !interior {
+                        assert_eq!((e, s), (o, t), "{why}");
+                    }
+                }
+            }
+        }
+        // The default kernel's levels all visit the same taps: it takes the path without lookups.
+        assert!(TapColumns::new(&distance_table("ellipse2"), 1000, 100).same_counts);
+        assert!(fast < 5, "the padded kernels keep the lookup per lane");
+    }
+
+    #[test]
+    #[should_panic(expected = "beyond the table")]
+    fn a_row_beyond_the_table_panics_without_a_lookup_too() {
+        let table = distance_table("ellipse2");
+        let columns = TapColumns::new(&table, 1000, 100);
+        LaneRows::within::<f32x8>(&columns, f32x8::u_splat(table.rows()), true);
     }
 
     #[test]

@@ -242,7 +242,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
                     None => {
                         let ph = phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32));
                         let columns = &ctx.columns[l];
-                        let reads = LaneRows::of::<L>(columns, ph);
+                        let reads = LaneRows::within::<L>(columns, ph, interior);
                         gather_per_lane(
                             &planes, t, columns, ph, &reads, shift, x0, yi, interior, acc,
                         );
@@ -396,7 +396,7 @@ fn distance_gather<L: Lane>(
     let t = &ctx.plan.lights[l].table;
     let columns = &ctx.columns[l];
     let shift = t.slab_shift[ctx.slab as usize];
-    let reads = LaneRows::of::<L>(columns, rows);
+    let reads = LaneRows::within::<L>(columns, rows, interior);
     match reads.uniform {
         // Every lane at the same level and phase: contiguous loads.
         Some(row) => {
