@@ -46,12 +46,41 @@ pub fn scene(text: &str, base: &Path) -> Scene {
     Scene::parse(text, "test-scene.toml", base).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// A unique temporary folder for one test.
-pub fn temp_dir(name: &str) -> PathBuf {
+/// A unique temporary folder for one test, removed when the test passes (a failing test keeps
+/// it, and says where, so its files can be looked at).
+pub fn temp_dir(name: &str) -> TestDir {
     let d = std::env::temp_dir().join(format!("convshadow-test-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    TestDir(d)
+}
+
+/// A test's temporary folder ([`temp_dir`]): a path that removes its folder when dropped,
+/// unless the test is failing.
+#[derive(Debug)]
+pub struct TestDir(PathBuf);
+
+impl std::ops::Deref for TestDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for TestDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TestDir {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("kept the failing test's files in {}", self.0.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
 }
 
 /// Runs the binary with arguments; returns (exit code, stdout, stderr).
