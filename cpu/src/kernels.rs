@@ -1001,6 +1001,19 @@ mod tests {
         }
     }
 
+    /// Eight rows of `table`: one row for every lane a third of the time, else each its own.
+    fn random_rows(rng: &mut TestRng, table: &KernelTable) -> [u32; 8] {
+        let one_row = rng.below(3) == 0;
+        let first = rng.below(table.rows());
+        std::array::from_fn(|_| {
+            if one_row {
+                first
+            } else {
+                rng.below(table.rows())
+            }
+        })
+    }
+
     #[test]
     fn lane_rows_summarise_the_taps_of_every_lane() {
         // Against the taps themselves: the union of the lanes' extents, the most taps, uniformity.
@@ -1009,15 +1022,7 @@ mod tests {
             let table = distance_table(kernel);
             let columns = TapColumns::new(&table, 1000, 100);
             for _ in 0..200 {
-                let one_row = rng.below(3) == 0;
-                let first = rng.below(table.rows());
-                let rows: [u32; 8] = std::array::from_fn(|_| {
-                    if one_row {
-                        first
-                    } else {
-                        rng.below(table.rows())
-                    }
-                });
+                let rows = random_rows(&mut rng, &table);
                 let got = LaneRows::of::<f32x8>(&columns, u32x8::new(rows));
                 let taps = rows.map(|r| table.phase(r));
                 let all = || taps.iter().flat_map(|t| t.iter());
@@ -1059,15 +1064,7 @@ mod tests {
             let columns = TapColumns::new(&table, 1000, 100);
             fast += usize::from(columns.same_counts);
             for _ in 0..200 {
-                let one_row = rng.below(3) == 0;
-                let first = rng.below(table.rows());
-                let rows: [u32; 8] = std::array::from_fn(|_| {
-                    if one_row {
-                        first
-                    } else {
-                        rng.below(table.rows())
-                    }
-                });
+                let rows = random_rows(&mut rng, &table);
                 let rows = u32x8::new(rows);
                 let own = LaneRows::of::<f32x8>(&columns, rows);
                 for interior in [false, true] {
