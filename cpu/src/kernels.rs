@@ -451,6 +451,7 @@ impl LaneRows {
     /// (`interior`): where every row of `columns` visits as many taps as any other, the table's
     /// [`TapColumns::whole_summary`] without a lookup per lane (the same tap counts; its wider
     /// extent and offset span hold for any rows, and inside the grid they only prove reads).
+    /// Kept apart from `of`'s body: one shared body measured +3.7 % sweep instructions.
     #[inline(always)]
     pub fn within<L: Lane>(columns: &TapColumns, rows: L::U, interior: bool) -> LaneRows {
         if !(interior && columns.same_counts) {
@@ -830,8 +831,8 @@ pub(crate) fn distance_rows<L: Lane>(
             return level_rows::<L>(table, nearest, phase, slabs, slab);
         }
         // One proof for every gather below: `LaneRows::within` checked each lane's row against
-        // a table of `pc` rows (so `rel` reads inside its column), and the test above (or the sweep's
-        // reach) put every corner inside the grid, whose rows lie in `levels.data`.
+        // a table of `pc` rows (so `rel` reads inside its column), and the test above (or the
+        // sweep's reach) put every corner inside the grid, whose rows lie in `levels.data`.
         assert!(levels.data.len() <= i32::MAX as usize && columns.summary.len() == pc);
         // Crate-internal invariants (this function is crate-private): the sweep builds the level
         // plane and the columns from one plan.
@@ -1074,7 +1075,8 @@ mod tests {
                     assert_eq!(got.gather_taps, own.gather_taps, "{why}");
                     assert_eq!(got.level_taps, own.level_taps, "{why}");
                     let (e, o) = (got.extent, own.extent);
-                    assert!(e[0] <= o[0] && e[1] >= o[1] && e[2] <= o[2] && e[3] >= o[3]);
+                    let holds = e[0] <= o[0] && e[1] >= o[1] && e[2] <= o[2] && e[3] >= o[3];
+                    assert!(holds, "{why}");
                     let (s, t) = (got.offset_span, own.offset_span);
                     assert!(s[0] <= t[0] && s[1] >= t[1], "{why}");
                     if !interior {
