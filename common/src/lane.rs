@@ -118,6 +118,16 @@ pub trait Lane:
     );
     /// The accumulated values.
     fn acc_finish(acc: Self::Acc) -> Self;
+    /// `C` planes of `LANES` pixels (lane i: pixel i) in pixel-interleaved order: value j's
+    /// lane m holds plane `(j·LANES + m) mod C` of pixel `(j·LANES + m) div C`. Moves only.
+    fn pixel_order<const C: usize>(planes: [Self; C]) -> [Self; C];
+    /// The inverse of [`Lane::pixel_order`].
+    fn plane_order<const C: usize>(pixels: [Self; C]) -> [Self; C];
+    /// Plane c's lane i from slot c of `sums[i]` (per-lane sums of pixel-interleaved planes).
+    fn from_lane_sums<const C: usize>(sums: &[f32x8; MAX_LANES]) -> [Self; C];
+    /// The inverse of [`Lane::from_lane_sums`]: lane i's planes in slots 0..C of value i (the
+    /// other slots 0, and the values of lanes beyond `LANES`).
+    fn to_lane_sums<const C: usize>(planes: &[Self; C]) -> [f32x8; MAX_LANES];
     /// `self != o` (true for NaN).
     fn ne(self, o: Self) -> Self::M;
     /// Lane-wise or of two masks.
@@ -147,13 +157,14 @@ pub trait Lane:
     /// values moved along a row, in registers).
     fn shift_lanes(self, by: i32, fill: f32) -> Self;
     /// Lane i: the pixel `(x[i], y[i])` (read as `i32`) of the `width` × `height` grid whose pixel
-    /// (x, y) is `data[base + y·stride + x]`, or `outside` beyond the grid. Panics unless the
+    /// (x, y) is `data[base + y·stride + x·step]`, or `outside` beyond the grid. Panics unless the
     /// grid lies in `data`.
     #[allow(clippy::too_many_arguments)]
     fn fetch_grid(
         data: &[f32],
         base: usize,
         stride: usize,
+        step: usize,
         width: i32,
         height: i32,
         x: Self::U,
@@ -171,13 +182,15 @@ fn check(lo: i64, hi: i64, len: usize) {
     );
 }
 
-/// Panics unless the `width` × `height` grid at `base` with rows `stride` apart lies in
-/// `data` (of at most `i32::MAX` values, so that its indices fit a signed 32-bit gather).
+/// Panics unless the `width` × `height` grid at `base` with rows `stride` and pixels `step`
+/// apart lies in `data` (of at most `i32::MAX` values, so that its indices fit a signed 32-bit
+/// gather).
 #[inline(always)]
-fn check_grid(len: usize, base: usize, stride: usize, width: i32, height: i32) {
+fn check_grid(len: usize, base: usize, [stride, step]: [usize; 2], width: i32, height: i32) {
     let last = (base as u64)
         .saturating_add((height.max(1) as u64 - 1).saturating_mul(stride as u64))
-        .saturating_add(width.max(0) as u64);
+        .saturating_add((width.max(1) as u64 - 1).saturating_mul(step as u64))
+        .saturating_add(1);
     assert!(
         last <= len as u64 && len <= i32::MAX as usize,
         "grid {width}x{height} at {base} (rows {stride} apart) outside 0..{len}"
@@ -341,6 +354,25 @@ impl Lane for f32 {
         acc
     }
     #[inline(always)]
+    fn pixel_order<const C: usize>(planes: [f32; C]) -> [f32; C] {
+        planes
+    }
+    #[inline(always)]
+    fn plane_order<const C: usize>(pixels: [f32; C]) -> [f32; C] {
+        pixels
+    }
+    #[inline(always)]
+    fn from_lane_sums<const C: usize>(sums: &[f32x8; MAX_LANES]) -> [f32; C] {
+        let v = sums[0].to_array();
+        std::array::from_fn(|c| v[c])
+    }
+    #[inline(always)]
+    fn to_lane_sums<const C: usize>(planes: &[f32; C]) -> [f32x8; MAX_LANES] {
+        let mut sums = [f32x8::splat(0.0); MAX_LANES];
+        sums[0] = f32x8::new(std::array::from_fn(|s| if s < C { planes[s] } else { 0.0 }));
+        sums
+    }
+    #[inline(always)]
     fn ne(self, o: Self) -> bool {
         self != o
     }
@@ -394,6 +426,7 @@ impl Lane for f32 {
         data: &[f32],
         base: usize,
         stride: usize,
+        step: usize,
         width: i32,
         height: i32,
         x: u32,
@@ -402,7 +435,7 @@ impl Lane for f32 {
     ) -> f32 {
         let (x, y) = (x as i32, y as i32);
         if x >= 0 && y >= 0 && x < width && y < height {
-            data[base + y as usize * stride + x as usize]
+            data[base + y as usize * stride + x as usize * step]
         } else {
             outside
         }
@@ -551,6 +584,22 @@ impl Lane for f32x8 {
         avx2::acc_finish(acc)
     }
     #[inline(always)]
+    fn pixel_order<const C: usize>(planes: [f32x8; C]) -> [f32x8; C] {
+        avx2::pixel_order(planes)
+    }
+    #[inline(always)]
+    fn plane_order<const C: usize>(pixels: [f32x8; C]) -> [f32x8; C] {
+        avx2::plane_order(pixels)
+    }
+    #[inline(always)]
+    fn from_lane_sums<const C: usize>(sums: &[f32x8; MAX_LANES]) -> [f32x8; C] {
+        avx2::from_lane_sums(sums)
+    }
+    #[inline(always)]
+    fn to_lane_sums<const C: usize>(planes: &[f32x8; C]) -> [f32x8; MAX_LANES] {
+        avx2::to_lane_sums(planes)
+    }
+    #[inline(always)]
     fn ne(self, o: Self) -> f32x8 {
         self.simd_ne(o)
     }
@@ -613,6 +662,7 @@ impl Lane for f32x8 {
         data: &[f32],
         base: usize,
         stride: usize,
+        step: usize,
         width: i32,
         height: i32,
         x: u32x8,
@@ -622,9 +672,28 @@ impl Lane for f32x8 {
         if width <= 0 || height <= 0 {
             return f32x8::splat(outside);
         }
-        check_grid(data.len(), base, stride, width, height);
-        avx2::fetch_grid(data, base, stride, [width, height], x, y, outside)
+        check_grid(data.len(), base, [stride, step], width, height);
+        avx2::fetch_grid(data, base, [stride, step], [width, height], x, y, outside)
     }
+}
+
+/// One pixel's planes in a pixel-interleaved buffer (pixel x's plane c at `x·planes + c`):
+/// `acc + p + (p moved down by planes slots)`, so that slot c (c < planes) adds `p[c]` and then
+/// `p[planes + c]`: the terms of a horizontal pixel pair, left pixel first, in the fixed sum
+/// order. Slots from `planes` on hold values nobody reads.
+#[inline(always)]
+pub fn add_pixel_pair<const PLANES: usize>(acc: f32x8, p: f32x8) -> f32x8 {
+    (acc + p) + avx2::rotate_down::<PLANES>(p)
+}
+
+/// `data[at..at + 8]` as one value.
+///
+/// # Safety
+/// `at + 8 <= data.len()`.
+#[inline(always)]
+pub unsafe fn load8_unchecked(data: &[f32], at: usize) -> f32x8 {
+    // SAFETY: the caller's contract; an unaligned read of 8 floats.
+    f32x8::new(unsafe { data.as_ptr().add(at).cast::<[f32; 8]>().read_unaligned() })
 }
 
 /// Gathers for the 8-lane type where the build has AVX2 (`.cargo/config.toml`): one bounds check
@@ -860,6 +929,218 @@ mod avx2 {
         }
     }
 
+    /// A 4×4 transpose in each 128-bit half: value r's slot c (per half) takes value c's slot r.
+    #[cfg(target_feature = "avx2")]
+    #[inline(always)]
+    unsafe fn transpose_halves(v: [__m256; 4]) -> [__m256; 4] {
+        // SAFETY: register shuffles; this build has AVX2.
+        unsafe {
+            let t0 = _mm256_unpacklo_ps(v[0], v[1]);
+            let t1 = _mm256_unpackhi_ps(v[0], v[1]);
+            let t2 = _mm256_unpacklo_ps(v[2], v[3]);
+            let t3 = _mm256_unpackhi_ps(v[2], v[3]);
+            [
+                _mm256_shuffle_ps::<0x44>(t0, t2),
+                _mm256_shuffle_ps::<0xEE>(t0, t2),
+                _mm256_shuffle_ps::<0x44>(t1, t3),
+                _mm256_shuffle_ps::<0xEE>(t1, t3),
+            ]
+        }
+    }
+
+    /// Where slot m of pixel-ordered value j comes from: (plane, pixel) = ((8j + m) mod C,
+    /// (8j + m) div C).
+    const fn pixel_slot(c_count: usize, j: usize, m: usize) -> (usize, usize) {
+        ((8 * j + m) % c_count, (8 * j + m) / c_count)
+    }
+
+    /// [`super::Lane::pixel_order`]: a transpose by halves for 4 planes, unpacks for 2, one
+    /// permute per plane and value (and blends) for 3.
+    #[inline(always)]
+    pub(super) fn pixel_order<const C: usize>(planes: [f32x8; C]) -> [f32x8; C] {
+        #[cfg(target_feature = "avx2")]
+        // SAFETY: register shuffles; this build has AVX2.
+        unsafe {
+            let p: [__m256; C] = planes.map(cast);
+            match C {
+                1 => return planes,
+                2 => {
+                    let lo = _mm256_unpacklo_ps(p[0], p[1]);
+                    let hi = _mm256_unpackhi_ps(p[0], p[1]);
+                    let out = [
+                        _mm256_permute2f128_ps::<0x20>(lo, hi),
+                        _mm256_permute2f128_ps::<0x31>(lo, hi),
+                    ];
+                    return std::array::from_fn(|j| cast(out[j]));
+                }
+                4 => {
+                    let u = transpose_halves([p[0], p[1], p[2], p[3]]);
+                    let out = [
+                        _mm256_permute2f128_ps::<0x20>(u[0], u[1]),
+                        _mm256_permute2f128_ps::<0x20>(u[2], u[3]),
+                        _mm256_permute2f128_ps::<0x31>(u[0], u[1]),
+                        _mm256_permute2f128_ps::<0x31>(u[2], u[3]),
+                    ];
+                    return std::array::from_fn(|j| cast(out[j]));
+                }
+                _ => {
+                    let mut out = [f32x8::splat(0.0); C];
+                    for (j, value) in out.iter_mut().enumerate() {
+                        let (mut from, mut masks) = ([0i32; 8], [[0i32; 8]; C]);
+                        for m in 0..8 {
+                            let (c, i) = pixel_slot(C, j, m);
+                            (from[m], masks[c][m]) = (i as i32, -1);
+                        }
+                        let mut v = _mm256_setzero_ps();
+                        for (plane, mask) in p.iter().zip(&masks) {
+                            let moved = _mm256_permutevar8x32_ps(*plane, cast(from));
+                            v = _mm256_blendv_ps(v, moved, cast(*mask));
+                        }
+                        *value = cast(v);
+                    }
+                    return out;
+                }
+            }
+        }
+        #[allow(unreachable_code)]
+        {
+            let a = planes.map(|v| v.to_array());
+            std::array::from_fn(|j| {
+                f32x8::new(std::array::from_fn(|m| {
+                    let (c, i) = pixel_slot(C, j, m);
+                    a[c][i]
+                }))
+            })
+        }
+    }
+
+    /// [`super::Lane::plane_order`]: the inverse of [`pixel_order`], the same way.
+    #[inline(always)]
+    pub(super) fn plane_order<const C: usize>(pixels: [f32x8; C]) -> [f32x8; C] {
+        #[cfg(target_feature = "avx2")]
+        // SAFETY: register shuffles; this build has AVX2.
+        unsafe {
+            let v: [__m256; C] = pixels.map(cast);
+            match C {
+                1 => return pixels,
+                2 => {
+                    let u0 = _mm256_permute2f128_ps::<0x20>(v[0], v[1]);
+                    let u1 = _mm256_permute2f128_ps::<0x31>(v[0], v[1]);
+                    let out = [
+                        _mm256_shuffle_ps::<0x88>(u0, u1),
+                        _mm256_shuffle_ps::<0xDD>(u0, u1),
+                    ];
+                    return std::array::from_fn(|c| cast(out[c]));
+                }
+                4 => {
+                    let out = transpose_halves([
+                        _mm256_permute2f128_ps::<0x20>(v[0], v[2]),
+                        _mm256_permute2f128_ps::<0x31>(v[0], v[2]),
+                        _mm256_permute2f128_ps::<0x20>(v[1], v[3]),
+                        _mm256_permute2f128_ps::<0x31>(v[1], v[3]),
+                    ]);
+                    return std::array::from_fn(|c| cast(out[c]));
+                }
+                _ => {
+                    let mut out = [f32x8::splat(0.0); C];
+                    for (c, plane) in out.iter_mut().enumerate() {
+                        // Plane c's pixel i is slot (iC + c) mod 8 of value (iC + c) div 8.
+                        let (mut from, mut masks) = ([0i32; 8], [[0i32; 8]; C]);
+                        for i in 0..8 {
+                            let at = i * C + c;
+                            (from[i], masks[at / 8][i]) = ((at % 8) as i32, -1);
+                        }
+                        let mut p = _mm256_setzero_ps();
+                        for (value, mask) in v.iter().zip(&masks) {
+                            let moved = _mm256_permutevar8x32_ps(*value, cast(from));
+                            p = _mm256_blendv_ps(p, moved, cast(*mask));
+                        }
+                        *plane = cast(p);
+                    }
+                    return out;
+                }
+            }
+        }
+        #[allow(unreachable_code)]
+        {
+            let a = pixels.map(|v| v.to_array());
+            std::array::from_fn(|c| {
+                f32x8::new(std::array::from_fn(|i| {
+                    let at = i * C + c;
+                    a[at / 8][at % 8]
+                }))
+            })
+        }
+    }
+
+    /// [`super::Lane::from_lane_sums`]: lanes i and i + 4 side by side, then a transpose by
+    /// halves (C ≤ 4).
+    #[inline(always)]
+    pub(super) fn from_lane_sums<const C: usize>(sums: &[f32x8; 8]) -> [f32x8; C] {
+        #[cfg(target_feature = "avx2")]
+        // SAFETY: register shuffles; this build has AVX2.
+        unsafe {
+            let s: [__m256; 8] = sums.map(cast);
+            let pair = |i: usize| _mm256_permute2f128_ps::<0x20>(s[i], s[i + 4]);
+            let out = transpose_halves([pair(0), pair(1), pair(2), pair(3)]);
+            return std::array::from_fn(|c| cast(out[c]));
+        }
+        #[allow(unreachable_code)]
+        {
+            let a = sums.map(|v| v.to_array());
+            std::array::from_fn(|c| f32x8::new(std::array::from_fn(|i| a[i][c])))
+        }
+    }
+
+    /// [`super::Lane::to_lane_sums`]: the inverse of [`from_lane_sums`] (slots from C on 0).
+    #[inline(always)]
+    pub(super) fn to_lane_sums<const C: usize>(planes: &[f32x8; C]) -> [f32x8; 8] {
+        #[cfg(target_feature = "avx2")]
+        // SAFETY: register shuffles; this build has AVX2.
+        unsafe {
+            let p: [__m256; 4] = std::array::from_fn(|c| {
+                if c < C {
+                    cast(planes[c])
+                } else {
+                    _mm256_setzero_ps()
+                }
+            });
+            let u = transpose_halves(p);
+            let zero = _mm256_setzero_ps();
+            return std::array::from_fn(|i| {
+                if i < 4 {
+                    _mm256_permute2f128_ps::<0x80>(u[i], zero)
+                } else {
+                    _mm256_permute2f128_ps::<0x81>(u[i - 4], zero)
+                }
+            })
+            .map(cast);
+        }
+        #[allow(unreachable_code)]
+        {
+            let a = planes.map(|v| v.to_array());
+            std::array::from_fn(|i| {
+                f32x8::new(std::array::from_fn(|s| if s < C { a[s][i] } else { 0.0 }))
+            })
+        }
+    }
+
+    /// Slot i takes slot `(i + BY) mod 8`: one permute.
+    #[inline(always)]
+    pub(super) fn rotate_down<const BY: usize>(v: f32x8) -> f32x8 {
+        #[cfg(target_feature = "avx2")]
+        // SAFETY: a register permute; this build has AVX2.
+        unsafe {
+            let from = wide::i32x8::new(std::array::from_fn(|i| ((i + BY) % 8) as i32));
+            cast(_mm256_permutevar8x32_ps(cast(v), cast(from)))
+        }
+        #[cfg(not(target_feature = "avx2"))]
+        {
+            let a = v.to_array();
+            f32x8::new(std::array::from_fn(|i| a[(i + BY) % 8]))
+        }
+    }
+
     /// [`super::Lane::shift_lanes`]: one permute and one blend.
     #[inline(always)]
     pub(super) fn shift_lanes(v: f32x8, by: i32, fill: f32) -> f32x8 {
@@ -899,7 +1180,7 @@ mod avx2 {
     pub(super) fn fetch_grid(
         data: &[f32],
         base: usize,
-        stride: usize,
+        [stride, step]: [usize; 2],
         size: [i32; 2],
         x: u32x8,
         y: u32x8,
@@ -915,8 +1196,9 @@ mod avx2 {
                 _mm256_cmpeq_epi32(_mm256_min_epu32(v, _mm256_set1_epi32(n - 1)), v)
             };
             let inside = _mm256_and_si256(below(xi, size[0]), below(yi, size[1]));
+            let times = |v: __m256i, n: usize| _mm256_mullo_epi32(v, _mm256_set1_epi32(n as i32));
             let at = _mm256_add_epi32(
-                _mm256_add_epi32(_mm256_mullo_epi32(yi, _mm256_set1_epi32(stride as i32)), xi),
+                _mm256_add_epi32(times(yi, stride), times(xi, step)),
                 _mm256_set1_epi32(base as i32),
             );
             cast(_mm256_mask_i32gather_ps::<4>(
@@ -932,7 +1214,7 @@ mod avx2 {
             f32x8::new(std::array::from_fn(|i| {
                 let (x, y) = (x[i] as i32, y[i] as i32);
                 if x >= 0 && y >= 0 && x < size[0] && y < size[1] {
-                    data[base + y as usize * stride + x as usize]
+                    data[base + y as usize * stride + x as usize * step]
                 } else {
                     outside
                 }
@@ -1107,11 +1389,12 @@ mod tests {
 
     #[test]
     fn a_grid_fetch_reads_inside_and_gives_the_outside_value_beyond() {
-        let (width, height, stride, base) = (13i32, 5i32, 17usize, 3usize);
-        let data: Vec<f32> = (0..base + 4 * stride + 13)
+        let (width, height, stride, base) = (13i32, 5i32, 53usize, 3usize);
+        let data: Vec<f32> = (0..base + 4 * stride + 13 * 4)
             .map(|k| k as f32 + 0.5)
             .collect();
-        for seed in 0..2000u32 {
+        // Planar rows (pixels 1 apart) and pixel-interleaved ones (pixels 4 apart).
+        for (seed, step) in (0..2000u32).flat_map(|s| [(s, 1usize), (s, 4)]) {
             let h: [u32; MAX_LANES] = std::array::from_fn(|i| mix32(seed * 8 + i as u32));
             // Coordinates from −4 to width + 3 (and height + 3), and now and then far beyond.
             let coord = |v: u32, n: i32| match v % 16 {
@@ -1125,6 +1408,7 @@ mod tests {
                 &data,
                 base,
                 stride,
+                step,
                 width,
                 height,
                 u32x8::new(x),
@@ -1137,16 +1421,78 @@ mod tests {
                     let (xi, yi) = (x[i] as i32, y[i] as i32);
                     let inside = (0..width).contains(&xi) && (0..height).contains(&yi);
                     let want = if inside {
-                        data[base + yi as usize * stride + xi as usize]
+                        data[base + yi as usize * stride + xi as usize * step]
                     } else {
                         -1.0
                     };
-                    let one = f32::fetch_grid(&data, base, stride, width, height, x[i], y[i], -1.0);
+                    let (w, h) = (width, height);
+                    let one = f32::fetch_grid(&data, base, stride, step, w, h, x[i], y[i], -1.0);
                     assert_eq!(one.to_bits(), want.to_bits(), "one lane at ({xi}, {yi})");
                     want
                 },
                 "fetch_grid",
             );
+        }
+    }
+
+    /// [`Lane::pixel_order`], [`Lane::plane_order`], [`Lane::from_lane_sums`] and
+    /// [`Lane::to_lane_sums`] of `C` planes against their definitions, element by element.
+    fn check_orders<const C: usize>() {
+        let planes: [f32x8; C] =
+            std::array::from_fn(|c| f32x8::new(std::array::from_fn(|i| (10 * c + i) as f32)));
+        let pixels = f32x8::pixel_order(planes);
+        for (j, v) in pixels.iter().enumerate() {
+            for (m, got) in v.to_array().into_iter().enumerate() {
+                let (c, i) = ((8 * j + m) % C, (8 * j + m) / C);
+                assert_eq!(got, (10 * c + i) as f32, "{C} planes: value {j} slot {m}");
+            }
+        }
+        let back = f32x8::plane_order(pixels).map(|v| v.to_array());
+        assert_eq!(back, planes.map(|v| v.to_array()), "{C} planes back");
+        let sums = f32x8::to_lane_sums(&planes);
+        for (i, v) in sums.iter().enumerate() {
+            for (s, got) in v.to_array().into_iter().enumerate() {
+                let want = if s < C { (10 * s + i) as f32 } else { 0.0 };
+                assert_eq!(got, want, "{C} planes: lane {i} slot {s}");
+            }
+        }
+        let from = f32x8::from_lane_sums::<C>(&sums).map(|v| v.to_array());
+        assert_eq!(
+            from,
+            planes.map(|v| v.to_array()),
+            "{C} planes from lane sums"
+        );
+        // One lane: plane order is pixel order, and lane 0's sums are its planes.
+        let one: [f32; C] = std::array::from_fn(|c| c as f32 + 0.5);
+        assert_eq!(f32::pixel_order(one), one);
+        assert_eq!(f32::plane_order(one), one);
+        assert_eq!(f32::from_lane_sums::<C>(&f32::to_lane_sums(&one)), one);
+    }
+
+    #[test]
+    fn orders_of_pixel_interleaved_planes_move_every_value_where_defined() {
+        check_orders::<1>();
+        check_orders::<2>();
+        check_orders::<3>();
+        check_orders::<4>();
+    }
+
+    #[test]
+    fn a_pixel_pair_adds_its_left_pixel_then_its_right_one() {
+        let v = |seed: u32| f32x8::new(std::array::from_fn(|i| unit(mix32(seed * 8 + i as u32))));
+        for seed in 0..200u32 {
+            let (acc, p) = (v(2 * seed), v(2 * seed + 1) * f32x8::splat(3e5));
+            let (a, q) = (acc.to_array(), p.to_array());
+            let check = |got: f32x8, planes: usize| {
+                for (c, g) in got.to_array().into_iter().enumerate().take(planes) {
+                    let want = (a[c] + q[c]) + q[planes + c];
+                    assert_eq!(g.to_bits(), want.to_bits(), "{planes} planes, slot {c}");
+                }
+            };
+            check(add_pixel_pair::<1>(acc, p), 1);
+            check(add_pixel_pair::<2>(acc, p), 2);
+            check(add_pixel_pair::<3>(acc, p), 3);
+            check(add_pixel_pair::<4>(acc, p), 4);
         }
     }
 

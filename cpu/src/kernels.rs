@@ -7,9 +7,9 @@
 
 use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
-use convshadow_common::lane::{Lane, MAX_LANES};
+use convshadow_common::lane::{Lane, MAX_LANES, add_pixel_pair, load8_unchecked};
 use convshadow_common::plan::LIT_LEVEL;
-use wide::i32x8;
+use wide::{f32x8, i32x8};
 
 /// Value read outside the buffer: the unoccluded light.
 pub const OUTSIDE: f32 = 1.0;
@@ -25,6 +25,9 @@ pub struct Plane<'a> {
     pub base: usize,
     /// Distance between rows in `data`.
     pub row_stride: usize,
+    /// Distance between a row's neighbouring pixels in `data` (1 in a planar buffer, the planes
+    /// per pixel in a pixel-interleaved one).
+    pub pixel_step: usize,
     /// Grid width.
     pub width: i32,
     /// Grid height.
@@ -38,7 +41,7 @@ impl Plane<'_> {
     #[inline(always)]
     pub fn fetch(&self, x: i32, y: i32) -> f32 {
         if x >= 0 && y >= 0 && x < self.width && y < self.height {
-            self.data[self.base + y as usize * self.row_stride + x as usize]
+            self.data[self.base + y as usize * self.row_stride + x as usize * self.pixel_step]
         } else {
             self.outside
         }
@@ -62,7 +65,10 @@ pub fn light_row_hash(slab_hash: u32, y: u32) -> u32 {
 }
 
 /// The light buffers of one light as the gather reads them: `channels` planes of one
-/// row-major grid, interleaved by row (`[row][light][channel][x]`).
+/// row-major grid, plane c's pixel (x, y) at `base + y·row_stride + x·pixel_step +
+/// c·plane_step`. The sweep's buffer is pixel-interleaved (`[row][light][x][plane]`:
+/// `pixel_step` = the light's planes, `plane_step` = 1), so that one lane's horizontal pixel
+/// pair of every plane is one contiguous read; planar grids (`pixel_step` = 1) read the same.
 #[derive(Clone, Copy)]
 pub struct LightPlanes<'a> {
     /// The whole buffer (all rows).
@@ -76,7 +82,11 @@ pub struct LightPlanes<'a> {
     pub light_channels: usize,
     /// Distance between rows in `data`.
     pub row_stride: usize,
-    /// Grid width (and the distance between a row's channel planes).
+    /// Distance between a row's neighbouring pixels of one plane.
+    pub pixel_step: usize,
+    /// Distance between a pixel's planes.
+    pub plane_step: usize,
+    /// Grid width.
     pub width: i32,
     /// Grid height.
     pub height: i32,
@@ -88,8 +98,9 @@ impl LightPlanes<'_> {
     pub fn plane(&self, c: usize) -> Plane<'_> {
         Plane {
             data: self.data,
-            base: self.base + c * self.width as usize,
+            base: self.base + c * self.plane_step,
             row_stride: self.row_stride,
+            pixel_step: self.pixel_step,
             width: self.width,
             height: self.height,
             outside: if c < self.light_channels {
@@ -123,6 +134,7 @@ fn fetch_corners<L: Lane>(plane: &Plane<'_>, sx: L::U, sy: L::U) -> [L; 4] {
             plane.data,
             plane.base,
             plane.row_stride,
+            plane.pixel_step,
             w,
             h,
             x,
@@ -195,7 +207,8 @@ pub fn gather<L: Lane>(
 
 /// [`gather`] of a chunk whose reads may leave the grid, for `C` planes (a constant, so that
 /// the sums stay in registers): tap by tap, contiguous loads where the tap's corners lie inside,
-/// [`RowRun`]s where they do not.
+/// [`RowRun`]s where they do not. Every plane of a pixel-interleaved buffer is summed in the
+/// buffer's order (the runs' values put in it), as [`gather_inside`] sums it.
 #[inline(always)]
 fn gather_near_edge<L: Lane, const C: usize>(
     planes: &LightPlanes<'_>,
@@ -206,9 +219,14 @@ fn gather_near_edge<L: Lane, const C: usize>(
     acc: &mut [L],
 ) {
     let (w, h, rs) = (planes.width, planes.height, planes.row_stride);
+    let (step, plane_step) = (planes.pixel_step, planes.plane_step);
+    let interleaved = C > 1 && step == C && plane_step == 1;
     let lanes = L::LANES as i32;
     let mut sums = [L::splat(0.0); C];
     sums.copy_from_slice(&acc[..C]);
+    if interleaved {
+        sums = L::pixel_order(sums);
+    }
     for t in taps {
         let sx = x0 + t.dx + shift[0];
         let sy = y + t.dy + shift[1];
@@ -219,37 +237,53 @@ fn gather_near_edge<L: Lane, const C: usize>(
             L::splat(t.w[3]),
         ];
         if sx >= 0 && sx + 1 + lanes <= w && sy >= 0 && sy + 1 < h {
-            // This tap's corners lie inside: contiguous loads, as in the interior.
-            let at = planes.base + sy as usize * rs + sx as usize;
+            // This tap's corners lie inside: the interior's loads.
+            let at = planes.base + sy as usize * rs + sx as usize * step;
             for (c, sum) in sums.iter_mut().enumerate() {
-                let at = at + c * w as usize;
-                let v = [
-                    L::load(planes.data, at),
-                    L::load(planes.data, at + 1),
-                    L::load(planes.data, at + rs),
-                    L::load(planes.data, at + rs + 1),
-                ];
+                let v = if interleaved {
+                    let at = at + c * L::LANES;
+                    let load = |at| L::load(planes.data, at);
+                    [load(at), load(at + C), load(at + rs), load(at + rs + C)]
+                } else {
+                    let at = at + c * plane_step;
+                    let load = |at| load_step::<L>(planes.data, at, step);
+                    [
+                        load(at),
+                        load(at + step),
+                        load(at + rs),
+                        load(at + rs + step),
+                    ]
+                };
                 *sum = add_bilinear(*sum, &weights, &v);
             }
             continue;
         }
         // The same four runs in every plane: placed once per tap.
         let runs = [
-            RowRun::at::<L>(w, h, rs, sx, sy),
-            RowRun::at::<L>(w, h, rs, sx + 1, sy),
-            RowRun::at::<L>(w, h, rs, sx, sy + 1),
-            RowRun::at::<L>(w, h, rs, sx + 1, sy + 1),
+            RowRun::at::<L>(w, h, [rs, step], sx, sy),
+            RowRun::at::<L>(w, h, [rs, step], sx + 1, sy),
+            RowRun::at::<L>(w, h, [rs, step], sx, sy + 1),
+            RowRun::at::<L>(w, h, [rs, step], sx + 1, sy + 1),
         ];
-        for (c, sum) in sums.iter_mut().enumerate() {
+        let mut corners = [[L::splat(0.0); C]; 4];
+        for c in 0..C {
             let plane = planes.plane(c);
-            let v = [
-                runs[0].read(&plane),
-                runs[1].read(&plane),
-                runs[2].read(&plane),
-                runs[3].read(&plane),
-            ];
+            for (corner, run) in corners.iter_mut().zip(&runs) {
+                corner[c] = run.read(&plane);
+            }
+        }
+        if interleaved {
+            for corner in corners.iter_mut() {
+                *corner = L::pixel_order(*corner);
+            }
+        }
+        for (j, sum) in sums.iter_mut().enumerate() {
+            let v = [corners[0][j], corners[1][j], corners[2][j], corners[3][j]];
             *sum = add_bilinear(*sum, &weights, &v);
         }
+    }
+    if interleaved {
+        sums = L::plane_order(sums);
     }
     acc[..C].copy_from_slice(&sums);
 }
@@ -269,9 +303,11 @@ enum RowRun {
 }
 
 impl RowRun {
-    /// The run at (x.., y) of a `width` × `height` grid with rows `row_stride` apart.
+    /// The run at (x.., y) of a `width` × `height` grid with rows and pixels `[row_stride,
+    /// pixel_step]` apart.
     #[inline(always)]
-    fn at<L: Lane>(width: i32, height: i32, row_stride: usize, x: i32, y: i32) -> RowRun {
+    fn at<L: Lane>(width: i32, height: i32, strides: [usize; 2], x: i32, y: i32) -> RowRun {
+        let [row_stride, step] = strides;
         let lanes = L::LANES as i32;
         if y < 0 || y >= height || x >= width || x + lanes <= 0 {
             return RowRun::Outside;
@@ -279,7 +315,7 @@ impl RowRun {
         let row = y as usize * row_stride;
         if x >= 0 && x + lanes <= width {
             return RowRun::Load {
-                at: row + x as usize,
+                at: row + x as usize * step,
                 by: 0,
             };
         }
@@ -290,7 +326,7 @@ impl RowRun {
         // holds column x + i.
         let first = if x < 0 { 0 } else { width - lanes };
         RowRun::Load {
-            at: row + first as usize,
+            at: row + first as usize * step,
             by: x - first,
         }
     }
@@ -301,7 +337,8 @@ impl RowRun {
         match self {
             RowRun::Outside => L::splat(plane.outside),
             RowRun::Load { at, by } => {
-                L::load(plane.data, plane.base + at).shift_lanes(by, plane.outside)
+                load_step::<L>(plane.data, plane.base + at, plane.pixel_step)
+                    .shift_lanes(by, plane.outside)
             }
             RowRun::Fetch { x, y } => {
                 let mut v = [0.0f32; MAX_LANES];
@@ -314,10 +351,56 @@ impl RowRun {
     }
 }
 
+/// `data[at + i·step]` in lane i: one contiguous load when `step` is 1, else a gather (a plane
+/// of a pixel-interleaved buffer read on its own).
+#[inline(always)]
+fn load_step<L: Lane>(data: &[f32], at: usize, step: usize) -> L {
+    if step == 1 {
+        return L::load(data, at);
+    }
+    assert!(
+        at <= u32::MAX as usize,
+        "load at {at} beyond 32-bit indices"
+    );
+    let lanes = L::u_mul(L::u_iota(0), L::u_splat(step as u32));
+    L::gather(data, L::u_add(L::u_splat(at as u32), lanes))
+}
+
+/// Writes planes `planes` of pixels x.. (lane i: pixel x + i) to a pixel-interleaved buffer
+/// whose pixel x's plane 0 is `data[at]` (the planes of a pixel side by side, `planes.len()` of
+/// them).
+#[inline(always)]
+pub fn store_pixels<L: Lane>(planes: &[L], data: &mut [f32], at: usize) {
+    let lanes = L::LANES;
+    match planes {
+        [p] => p.store(data, at),
+        [a, b] => store_in_pixel_order(&[*a, *b], data, at, lanes),
+        [a, b, c] => store_in_pixel_order(&[*a, *b, *c], data, at, lanes),
+        [a, b, c, d] => store_in_pixel_order(&[*a, *b, *c, *d], data, at, lanes),
+        _ => panic!("a light has 1 to 4 planes, not {}", planes.len()),
+    }
+}
+
+/// [`store_pixels`] for `C` planes.
+#[inline(always)]
+fn store_in_pixel_order<L: Lane, const C: usize>(
+    planes: &[L; C],
+    data: &mut [f32],
+    at: usize,
+    lanes: usize,
+) {
+    for (j, v) in L::pixel_order(*planes).iter().enumerate() {
+        v.store(data, at + j * lanes);
+    }
+}
+
 /// [`gather`] of `K` neighbouring chunks at once (chunk k at pixels x0 + k·LANES..), every read
 /// inside the grid: each tap's weights are splat once for all chunks, and the chunks' sums are
 /// independent chains the processor overlaps (one chunk's sums wait on the add latency). Each
-/// lane's sum has the same terms in the same order as one chunk alone: the same bits.
+/// lane's sum has the same terms in the same order as one chunk alone: the same bits. A
+/// pixel-interleaved buffer whose every plane is gathered is summed in its own order (every
+/// value's sum apart, so the same terms) and put back in plane order once
+/// ([`Lane::plane_order`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn gather_inside<L: Lane, const K: usize>(
@@ -327,47 +410,114 @@ pub fn gather_inside<L: Lane, const K: usize>(
     shift: [i32; 2],
     x0: i32,
     y: i32,
-    mut accs: [&mut [L]; K],
+    accs: [&mut [L]; K],
 ) {
-    // The lowest index any tap's top-left corner reads, and the highest bottom-right corner
-    // index less one, over every channel and chunk; lane loads then end at hi + LANES.
+    // The lowest index any tap's top-left corner reads, and the highest index any read reaches,
+    // over every plane and chunk.
     let rs = planes.row_stride as i64;
+    let (step, plane_step) = (planes.pixel_step as i64, planes.plane_step as i64);
     let (x, y) = (i64::from(x0 + shift[0]), i64::from(y + shift[1]));
     let base = planes.base as i64;
-    let lo = base + (y + i64::from(extent[2])) * rs + x + i64::from(extent[0]);
-    let last_plane = (planes.channels as i64 - 1) * i64::from(planes.width);
-    let last_chunk = ((K - 1) * L::LANES) as i64;
-    let hi = base
-        + last_plane
-        + (y + i64::from(extent[3]) + 1) * rs
-        + x
-        + last_chunk
-        + i64::from(extent[1]);
+    let lo = base + (y + i64::from(extent[2])) * rs + (x + i64::from(extent[0])) * step;
+    let last_plane = (planes.channels as i64 - 1) * plane_step;
+    let last_pixel = x + i64::from(extent[1]) + (K * L::LANES) as i64;
+    let hi = base + last_plane + (y + i64::from(extent[3]) + 1) * rs + last_pixel * step;
     assert!(
-        lo >= 0 && hi + (L::LANES as i64) < planes.data.len() as i64,
+        lo >= 0 && hi < planes.data.len() as i64,
         "gather footprint {lo}..={hi} outside the light buffer"
     );
+    let interleaved = plane_step == 1 && step == planes.channels as i64;
+    match planes.channels {
+        2 if interleaved => gather_pixels::<L, K, 2>(planes, taps, x, y, accs),
+        3 if interleaved => gather_pixels::<L, K, 3>(planes, taps, x, y, accs),
+        4 if interleaved => gather_pixels::<L, K, 4>(planes, taps, x, y, accs),
+        _ => gather_planes(planes, taps, x, y, accs),
+    }
+}
+
+/// [`gather_inside`] plane by plane, after its bounds proof (`x`, `y`: the chunks' shifted
+/// origin): contiguous loads in a planar buffer, strided ones otherwise.
+#[inline(always)]
+fn gather_planes<L: Lane, const K: usize>(
+    planes: &LightPlanes<'_>,
+    taps: &[Tap],
+    x: i64,
+    y: i64,
+    mut accs: [&mut [L]; K],
+) {
+    let (rs, step) = (planes.row_stride, planes.pixel_step);
     for t in taps {
         let w = [t.w[0], t.w[1], t.w[2], t.w[3]].map(L::splat);
-        let at0 = planes.base as i64 + (y + i64::from(t.dy)) * rs + x + i64::from(t.dx);
+        let at0 = planes.base as i64
+            + (y + i64::from(t.dy)) * rs as i64
+            + (x + i64::from(t.dx)) * step as i64;
         for c in 0..planes.channels {
-            let first = (at0 + c as i64 * i64::from(planes.width)) as usize;
+            let first = (at0 + (c * planes.plane_step) as i64) as usize;
             for (k, acc) in accs.iter_mut().enumerate() {
-                let at = first + k * L::LANES;
-                let below = at + planes.row_stride;
-                // SAFETY: every load starts at or after lo ≥ 0 and ends at or before
-                // hi + LANES < data.len() (checked above).
-                let v = unsafe {
-                    [
-                        L::load_unchecked(planes.data, at),
-                        L::load_unchecked(planes.data, at + 1),
-                        L::load_unchecked(planes.data, below),
-                        L::load_unchecked(planes.data, below + 1),
-                    ]
+                let at = first + k * L::LANES * step;
+                let below = at + rs;
+                let v = if step == 1 {
+                    // SAFETY: every load lies in the footprint `gather_inside` checked.
+                    unsafe {
+                        [
+                            L::load_unchecked(planes.data, at),
+                            L::load_unchecked(planes.data, at + 1),
+                            L::load_unchecked(planes.data, below),
+                            L::load_unchecked(planes.data, below + 1),
+                        ]
+                    }
+                } else {
+                    let load = |at| load_step::<L>(planes.data, at, step);
+                    [load(at), load(at + step), load(below), load(below + step)]
                 };
                 acc[c] = add_bilinear(acc[c], &w, &v);
             }
         }
+    }
+}
+
+/// [`gather_inside`] of every plane of a pixel-interleaved buffer (`C` planes per pixel), after
+/// its bounds proof: `C` contiguous loads per corner and chunk, summed value by value in the
+/// buffer's order, then put in plane order.
+#[inline(always)]
+fn gather_pixels<L: Lane, const K: usize, const C: usize>(
+    planes: &LightPlanes<'_>,
+    taps: &[Tap],
+    x: i64,
+    y: i64,
+    accs: [&mut [L]; K],
+) {
+    let rs = planes.row_stride;
+    let mut sums = [[L::splat(0.0); C]; K];
+    for (sum, acc) in sums.iter_mut().zip(&accs) {
+        sum.copy_from_slice(&acc[..C]);
+        *sum = L::pixel_order(*sum);
+    }
+    for t in taps {
+        let w = [t.w[0], t.w[1], t.w[2], t.w[3]].map(L::splat);
+        let at0 = (planes.base as i64
+            + (y + i64::from(t.dy)) * rs as i64
+            + (x + i64::from(t.dx)) * C as i64) as usize;
+        for (k, chunk) in sums.iter_mut().enumerate() {
+            for (j, sum) in chunk.iter_mut().enumerate() {
+                let at = at0 + (k * C + j) * L::LANES;
+                let below = at + rs;
+                // SAFETY: every load lies in the footprint `gather_inside` checked (pixel x + 1's
+                // planes of the chunk's last pixel end at its highest index).
+                let v = unsafe {
+                    [
+                        L::load_unchecked(planes.data, at),
+                        L::load_unchecked(planes.data, at + C),
+                        L::load_unchecked(planes.data, below),
+                        L::load_unchecked(planes.data, below + C),
+                    ]
+                };
+                *sum = add_bilinear(*sum, &w, &v);
+            }
+        }
+    }
+    for (acc, chunk) in accs.into_iter().zip(&sums) {
+        acc[..C].copy_from_slice(&L::plane_order(*chunk));
     }
 }
 
@@ -381,7 +531,11 @@ pub struct TapColumns {
     pub(crate) phase_count: usize,
     /// The four corner weights of each tap, one column per tap.
     pub(crate) weights: Vec<[f32; 4]>,
-    /// `dy · row_stride + dx` (wrapping: an `i32` offset in the light buffer).
+    /// The weights for a pixel-interleaved buffer of `P` planes (`strides[2]`; empty when it
+    /// is 1), one column per tap: `[w0 ×P, w1 ×P, 0…]` for a tap's top pixel pair and
+    /// `[w2 ×P, w3 ×P, 0…]` for its bottom one.
+    pub(crate) pair_weights: Vec<[[f32; 8]; 2]>,
+    /// `dy · row_stride + dx · pixel_step` (wrapping: an `i32` offset in the light buffer).
     pub(crate) offset: Vec<u32>,
     /// Per phase, the taps' `[min dx, max dx, min dy, max dy]` (the top-left corners' extent).
     pub(crate) extent: Vec<[i32; 4]>,
@@ -413,9 +567,10 @@ pub struct TapColumns {
     pub(crate) weighted: Vec<Tap>,
     /// Row r's taps in [`TapColumns::weighted`]: `weighted[start..end]`.
     pub(crate) weighted_rows: Vec<[u32; 2]>,
-    /// The light buffer's and the level plane's row strides the offsets were built for: the
-    /// unchecked gathers check them against the buffers they read.
-    pub(crate) strides: [usize; 2],
+    /// The light buffer's and the level plane's row strides and the light buffer's pixel step
+    /// the offsets were built for: the unchecked gathers check them against the buffers they
+    /// read.
+    pub(crate) strides: [usize; 3],
 }
 
 /// What a chunk's lanes read through their rows: the union of the rows' extents, the most taps
@@ -493,9 +648,18 @@ impl TapColumns {
         &self.weighted[start as usize..end as usize]
     }
 
-    /// The columns of `table` for light buffers with rows `row_stride` apart and level planes with
-    /// rows `level_stride` apart.
-    pub fn new(table: &KernelTable, row_stride: usize, level_stride: usize) -> TapColumns {
+    /// The columns of `table` for light buffers with rows `row_stride` and pixels `pixel_step`
+    /// apart and level planes with rows `level_stride` apart.
+    pub fn new(
+        table: &KernelTable,
+        row_stride: usize,
+        pixel_step: usize,
+        level_stride: usize,
+    ) -> TapColumns {
+        assert!(
+            (1..=4).contains(&pixel_step),
+            "a pixel pair of {pixel_step} planes exceeds 8 floats"
+        );
         // Every row of every level: the per-lane gather picks a row per lane.
         let (pc, n) = (table.rows() as usize, table.taps_per_phase as usize);
         let mut columns = TapColumns {
@@ -504,16 +668,31 @@ impl TapColumns {
             same_counts: false,
             weighted: Vec::new(),
             weighted_rows: Vec::with_capacity(pc),
-            strides: [row_stride, level_stride],
+            strides: [row_stride, level_stride, pixel_step],
 
             phase_count: pc,
             weights: (0..n * pc)
                 .map(|j| table.taps[(j % pc) * n + j / pc].w)
                 .collect(),
+            pair_weights: (0..n * pc)
+                .filter(|_| pixel_step > 1)
+                .map(|j| {
+                    let w = table.taps[(j % pc) * n + j / pc].w;
+                    let pair = |a: f32, b: f32| -> [f32; 8] {
+                        std::array::from_fn(|s| match s / pixel_step {
+                            0 => a,
+                            1 => b,
+                            _ => 0.0,
+                        })
+                    };
+                    [pair(w[0], w[1]), pair(w[2], w[3])]
+                })
+                .collect(),
             offset: (0..n * pc)
                 .map(|j| {
                     let t = &table.taps[(j % pc) * n + j / pc];
-                    (t.dy as i64 * row_stride as i64 + t.dx as i64) as i32 as u32
+                    let dx = t.dx as i64 * pixel_step as i64;
+                    (t.dy as i64 * row_stride as i64 + dx) as i32 as u32
                 })
                 .collect(),
             level_offset: (0..n * pc)
@@ -601,11 +780,12 @@ pub(crate) fn gather_per_lane<L: Lane>(
 ) {
     let n = lane_rows.gather_taps;
     let pc = columns.phase_count;
-    let rs = planes.row_stride;
-    // Lane i's pixel, and its offset to the slab's shifted origin.
-    let pixel = planes.base + y as usize * rs + x0 as usize;
-    let shift_offset = shift[1] as i64 * rs as i64 + shift[0] as i64;
-    let lane_shift = L::u_add(L::u_iota(0), L::u_splat(shift_offset as i32 as u32));
+    let (rs, step) = (planes.row_stride, planes.pixel_step);
+    // Lane 0's pixel, and lane i's offset to its pixel at the slab's shifted origin.
+    let pixel = planes.base + y as usize * rs + x0 as usize * step;
+    let shift_offset = shift[1] as i64 * rs as i64 + shift[0] as i64 * step as i64;
+    let lane_step = L::u_mul(L::u_iota(0), L::u_splat(step as u32));
+    let lane_shift = L::u_add(lane_step, L::u_splat(shift_offset as i32 as u32));
     let (w, h) = (planes.width, planes.height);
     let pair_loads = PairLoads {
         planes,
@@ -691,9 +871,29 @@ impl<L: Lane> PairLoads<'_, L> {
         }
     }
 
-    /// [`PairLoads::add_taps`] for `C` planes (a constant, so that the sums stay in registers).
+    /// [`PairLoads::add_taps`] for `C` planes (a constant, so that the sums stay in registers):
+    /// by pixel pairs of one plane in a planar buffer, of all planes in a pixel-interleaved one
+    /// whose every plane is gathered, else by gathers.
     #[inline(always)]
     fn add_taps_to<const C: usize>(
+        &self,
+        taps: std::ops::Range<usize>,
+        acc: &mut [L],
+        bounds: Bounds,
+    ) {
+        let planes = self.planes;
+        if planes.pixel_step == 1 {
+            self.add_plane_pairs::<C>(taps, acc, bounds);
+        } else if planes.pixel_step == C && planes.plane_step == 1 {
+            self.add_pixel_pairs::<C>(taps, acc, bounds);
+        } else {
+            self.add_gathered::<C>(taps, acc);
+        }
+    }
+
+    /// [`PairLoads::add_taps_to`] in a planar buffer: every plane's two pixel pairs per lane.
+    #[inline(always)]
+    fn add_plane_pairs<const C: usize>(
         &self,
         taps: std::ops::Range<usize>,
         acc: &mut [L],
@@ -708,7 +908,7 @@ impl<L: Lane> PairLoads<'_, L> {
         for (sum, a) in sums.iter_mut().zip(acc.iter()) {
             *sum = L::acc_from(*a);
         }
-        let plane_step = planes.width as usize;
+        let plane_step = planes.plane_step;
         let (data, rs) = (planes.data, planes.row_stride);
         if bounds == Bounds::PerTap {
             for k in taps {
@@ -725,6 +925,7 @@ impl<L: Lane> PairLoads<'_, L> {
             let (first, last) = (self.pixel as i64 + lo, self.pixel as i64 + hi + last_plane);
             assert!(
                 self.columns.strides[0] == rs
+                    && self.columns.strides[2] == 1
                     && lo >= i64::from(i32::MIN)
                     && hi <= i64::from(i32::MAX)
                     && first >= 0
@@ -743,6 +944,112 @@ impl<L: Lane> PairLoads<'_, L> {
         }
         for (a, sum) in acc.iter_mut().zip(sums.iter()) {
             *a = L::acc_finish(*sum);
+        }
+    }
+
+    /// [`PairLoads::add_taps_to`] in a pixel-interleaved buffer of `C` planes, all gathered: per
+    /// lane and tap, the top and the bottom pixel pair of every plane as one 8-float read each,
+    /// times the pair's weights ([`TapColumns::pair_weights`]), added to the lane's sums
+    /// ([`add_pixel_pair`]: each plane's four terms in the fixed order).
+    #[inline(always)]
+    fn add_pixel_pairs<const C: usize>(
+        &self,
+        taps: std::ops::Range<usize>,
+        acc: &mut [L],
+        bounds: Bounds,
+    ) {
+        let columns = self.columns;
+        let (data, rs, pc) = (
+            self.planes.data,
+            self.planes.row_stride,
+            columns.phase_count,
+        );
+        let mut rows = [0u32; MAX_LANES];
+        let mut lane_shift = [0u32; MAX_LANES];
+        L::u_store(self.phases, &mut rows);
+        L::u_store(self.lane_shift, &mut lane_shift);
+        // Lane i's sums in slots 0..C of `sums[i]`.
+        let mut sums = L::to_lane_sums::<C>(&std::array::from_fn(|c| acc[c]));
+        let checked = bounds == Bounds::PerTap;
+        if !checked {
+            // One bounds proof for every tap (as `add_plane_pairs`'): lane i reads 8 floats at
+            // `pixel + rel[i]` and `rs` further.
+            let [lo, hi] = self.offset_span;
+            let lane_span = ((L::LANES - 1) * C) as i64;
+            let (lo, hi) = (lo + self.shift, hi + self.shift + lane_span);
+            let (first, last) = (
+                self.pixel as i64 + lo,
+                self.pixel as i64 + hi + rs as i64 + 7,
+            );
+            assert!(
+                columns.strides[0] == rs
+                    && columns.strides[2] == C
+                    && columns.pair_weights.len() == columns.weights.len()
+                    && lo >= i64::from(i32::MIN)
+                    && hi <= i64::from(i32::MAX)
+                    && first >= 0
+                    && last < data.len() as i64,
+                "per-lane gather reads {first}..={last} outside the light buffer"
+            );
+        }
+        // Every lane's entry `k·pc + row` lies in the columns: rows below `pc`, taps below the
+        // columns' count.
+        let highest = rows[..L::LANES].iter().fold(0, |m, &r| m.max(r));
+        assert!(
+            (highest as usize) < pc
+                && taps.end * pc <= columns.offset.len()
+                && columns.pair_weights.len() == columns.offset.len(),
+            "per-lane gather: row {highest} or tap {} beyond the columns",
+            taps.end
+        );
+        for k in taps {
+            for (i, sum) in sums.iter_mut().enumerate().take(L::LANES) {
+                let entry = k * pc + rows[i] as usize;
+                // SAFETY: `entry` lies in both columns (checked above).
+                let (offset, weights) = unsafe {
+                    (
+                        *columns.offset.get_unchecked(entry),
+                        columns.pair_weights.get_unchecked(entry),
+                    )
+                };
+                let rel = offset.wrapping_add(lane_shift[i]) as i32;
+                let at = (self.pixel as i64 + i64::from(rel)) as usize;
+                let [top, bottom] = weights.map(f32x8::new);
+                let (t, b) = if checked {
+                    let load = |at: usize| f32x8::new(data[at..at + 8].try_into().unwrap());
+                    (load(at), load(at + rs))
+                } else {
+                    // SAFETY: within the span proved above: rel[i] = i·C + shift + the offset
+                    // of a tap of lane i's row (`LaneRows::within`, from `TapColumns::new`).
+                    unsafe { (load8_unchecked(data, at), load8_unchecked(data, at + rs)) }
+                };
+                *sum = add_pixel_pair::<C>(*sum, t * top);
+                *sum = add_pixel_pair::<C>(*sum, b * bottom);
+            }
+        }
+        acc[..C].copy_from_slice(&L::from_lane_sums::<C>(&sums));
+    }
+
+    /// [`PairLoads::add_taps_to`] by one gather per corner, plane and tap (some planes of a
+    /// pixel-interleaved buffer: a depth plane alone), each checked.
+    #[inline(always)]
+    fn add_gathered<const C: usize>(&self, taps: std::ops::Range<usize>, acc: &mut [L]) {
+        let planes = self.planes;
+        let (step, rs) = (planes.pixel_step as u32, planes.row_stride as u32);
+        for k in taps {
+            let col = k * self.columns.phase_count..(k + 1) * self.columns.phase_count;
+            let w = L::gather4(&self.columns.weights[col.clone()], self.phases);
+            let rel = L::u_add(
+                L::u_gather(&self.columns.offset[col], self.phases),
+                self.lane_shift,
+            );
+            for (c, a) in acc.iter_mut().enumerate().take(C) {
+                let origin = (self.pixel + c * planes.plane_step) as u32;
+                let top_left = L::u_add(L::u_splat(origin), rel);
+                let corner = |by: u32| L::gather(planes.data, L::u_add(top_left, L::u_splat(by)));
+                let v = [corner(0), corner(step), corner(rs), corner(rs + step)];
+                *a = add_bilinear(*a, &w, &v);
+            }
         }
     }
 
@@ -960,6 +1267,8 @@ mod tests {
             channels: 4,
             light_channels: 3,
             row_stride: 4 * w,
+            pixel_step: 1,
+            plane_step: w,
             width: w as i32,
             height: h as i32,
         }
@@ -969,7 +1278,7 @@ mod tests {
     fn skipped_taps_are_zero_and_the_level_search_keeps_one_padding_tap() {
         for kernel in ["box", "gaussian:7", "ellipse2", "poisson8", "ellipse3:slab"] {
             let table = distance_table(kernel);
-            let columns = TapColumns::new(&table, 1000, 100);
+            let columns = TapColumns::new(&table, 1000, 1, 100);
             let padding = |t: &Tap| t.dx == 0 && t.dy == 0 && t.w == [0.0; 4];
             let mut padded_rows = 0;
             for row in 0..table.rows() {
@@ -1021,7 +1330,7 @@ mod tests {
         let mut rng = TestRng::new(3);
         for kernel in ["box", "gaussian:7", "ellipse2", "poisson8"] {
             let table = distance_table(kernel);
-            let columns = TapColumns::new(&table, 1000, 100);
+            let columns = TapColumns::new(&table, 1000, 1, 100);
             for _ in 0..200 {
                 let rows = random_rows(&mut rng, &table);
                 let got = LaneRows::of::<f32x8>(&columns, u32x8::new(rows));
@@ -1062,7 +1371,7 @@ mod tests {
         let mut fast = 0;
         for kernel in ["box", "gaussian:7", "ellipse2", "ellipse3:slab", "poisson8"] {
             let table = distance_table(kernel);
-            let columns = TapColumns::new(&table, 1000, 100);
+            let columns = TapColumns::new(&table, 1000, 1, 100);
             fast += usize::from(columns.same_counts);
             for _ in 0..200 {
                 let rows = random_rows(&mut rng, &table);
@@ -1086,7 +1395,7 @@ mod tests {
             }
         }
         // The default kernel's levels all visit the same taps: it takes the path without lookups.
-        assert!(TapColumns::new(&distance_table("ellipse2"), 1000, 100).same_counts);
+        assert!(TapColumns::new(&distance_table("ellipse2"), 1000, 1, 100).same_counts);
         assert!(fast < 5, "the padded kernels keep the lookup per lane");
     }
 
@@ -1094,7 +1403,7 @@ mod tests {
     #[should_panic(expected = "beyond the table")]
     fn a_row_beyond_the_table_panics_without_a_lookup_too() {
         let table = distance_table("ellipse2");
-        let columns = TapColumns::new(&table, 1000, 100);
+        let columns = TapColumns::new(&table, 1000, 1, 100);
         LaneRows::within::<f32x8>(&columns, f32x8::u_splat(table.rows()), true);
     }
 
@@ -1109,7 +1418,7 @@ mod tests {
             let data: Vec<f32> = (0..row_stride * h)
                 .map(|_| rng.below(1 << 20) as f32 / (1 << 20) as f32)
                 .collect();
-            let columns = TapColumns::new(&table, row_stride, w);
+            let columns = TapColumns::new(&table, row_stride, 1, w);
             let skips_inside = (0..table.rows())
                 .any(|r| columns.weighted_taps(r).len() < columns.gather_taps[r as usize] as usize);
             // A box kernel's phases have zero taps between weighted ones: the skip is exercised.
@@ -1154,6 +1463,173 @@ mod tests {
         }
     }
 
+    /// `planar` (`planes` planes per row, each `w` wide, rows `planes · w` apart) with its pixels
+    /// interleaved (pixel x's plane c at `x · planes + c`), and 8 floats of slack after it.
+    fn interleave(planar: &[f32], w: usize, planes: usize) -> Vec<f32> {
+        let mut out = vec![f32::NAN; planar.len() + 8];
+        for (k, &v) in planar.iter().enumerate() {
+            let (row, at) = (k / (planes * w), k % (planes * w));
+            let (c, x) = (at / w, at % w);
+            out[row * planes * w + x * planes + c] = v;
+        }
+        out
+    }
+
+    #[test]
+    fn a_pixel_interleaved_buffer_gathers_the_bits_of_a_planar_one() {
+        let (w, h) = (48usize, 40usize);
+        let mut rng = TestRng::new(21);
+        for kernel in ["ellipse2", "poisson8", "box", "gaussian:7", "ellipse2:slab"] {
+            let table = distance_table(kernel);
+            // Per case: the planes per pixel, the planes gathered (a depth plane alone: the
+            // last) and the first of them.
+            for (per_pixel, gathered, first) in [(4, 4, 0), (3, 3, 0), (2, 2, 0), (4, 1, 3)] {
+                let row_stride = per_pixel * w;
+                let planar: Vec<f32> = (0..row_stride * h + 8)
+                    .map(|_| rng.below(1 << 20) as f32 / (1 << 20) as f32)
+                    .collect();
+                let pixels = interleave(&planar[..row_stride * h], w, per_pixel);
+                let light = gathered.min(3 - first.min(3));
+                let by_plane = LightPlanes {
+                    data: &planar,
+                    base: first * w,
+                    channels: gathered,
+                    light_channels: light,
+                    row_stride,
+                    pixel_step: 1,
+                    plane_step: w,
+                    width: w as i32,
+                    height: h as i32,
+                };
+                let by_pixel = LightPlanes {
+                    data: &pixels,
+                    base: first,
+                    pixel_step: per_pixel,
+                    plane_step: 1,
+                    ..by_plane
+                };
+                let planar_columns = TapColumns::new(&table, row_stride, 1, w);
+                let pixel_columns = TapColumns::new(&table, row_stride, per_pixel, w);
+                for _ in 0..60 {
+                    let rows = f32x8::u_load(&random_rows(&mut rng, &table), 0);
+                    let x0 = rng.below(w as u32 - 7) as i32;
+                    let y = rng.below(h as u32) as i32;
+                    let shift = [rng.below(3) as i32 - 1, rng.below(3) as i32 - 1];
+                    let gather_with = |planes: &LightPlanes<'_>, columns: &TapColumns| {
+                        let reads = LaneRows::of::<f32x8>(columns, rows);
+                        let inside =
+                            reads_inside(reads.extent, shift, x0, y, 8, w as i32, h as i32);
+                        let mut per_lane = [f32x8::splat(0.0); 4];
+                        let args = (shift, x0, y, inside);
+                        gather_per_lane(
+                            planes,
+                            &table,
+                            columns,
+                            rows,
+                            &reads,
+                            args.0,
+                            args.1,
+                            args.2,
+                            args.3,
+                            &mut per_lane[..gathered],
+                        );
+                        // The first lane's row for every lane: the uniform gather.
+                        let row = rows.to_array()[0];
+                        let (taps, extent) =
+                            (columns.weighted_taps(row), columns.extent[row as usize]);
+                        let mut uniform = [f32x8::splat(0.0); 4];
+                        gather(
+                            planes,
+                            taps,
+                            extent,
+                            shift,
+                            x0,
+                            y,
+                            false,
+                            &mut uniform[..gathered],
+                        );
+                        // And one pixel at a time (the scalar path's gathers).
+                        let mut one = [[0.0f32; 8]; 4];
+                        for i in 0..8 {
+                            let r = rows.to_array()[i];
+                            let lane_reads = LaneRows::of::<f32>(columns, r);
+                            let mut sums = [0.0f32; 4];
+                            let x = x0 + i as i32;
+                            gather_per_lane(
+                                planes,
+                                &table,
+                                columns,
+                                r,
+                                &lane_reads,
+                                shift,
+                                x,
+                                y,
+                                false,
+                                &mut sums[..gathered],
+                            );
+                            for c in 0..gathered {
+                                one[c][i] = sums[c];
+                            }
+                        }
+                        let bits = |v: [f32x8; 4]| v.map(|p| p.to_array().map(f32::to_bits));
+                        (
+                            bits(per_lane),
+                            bits(uniform),
+                            one.map(|p| p.map(f32::to_bits)),
+                        )
+                    };
+                    let want = gather_with(&by_plane, &planar_columns);
+                    let got = gather_with(&by_pixel, &pixel_columns);
+                    assert_eq!(
+                        got, want,
+                        "{kernel}, {gathered} of {per_pixel} planes, at ({x0}, {y})"
+                    );
+                }
+                // Two chunks at once, inside the grid.
+                let row = rng.below(table.rows());
+                let (x0, y) = (12, 20);
+                let pair = |planes: &LightPlanes<'_>, columns: &TapColumns| {
+                    let (mut a, mut b) = ([f32x8::splat(0.0); 4], [f32x8::splat(0.0); 4]);
+                    let (taps, extent) = (columns.weighted_taps(row), columns.extent[row as usize]);
+                    let accs = [&mut a[..gathered], &mut b[..gathered]];
+                    gather_inside(planes, taps, extent, [1, -1], x0, y, accs);
+                    [a, b].map(|v| v.map(|p| p.to_array().map(f32::to_bits)))
+                };
+                assert_eq!(
+                    pair(&by_pixel, &pixel_columns),
+                    pair(&by_plane, &planar_columns),
+                    "{kernel}, {gathered} of {per_pixel} planes, two chunks"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn stored_pixels_land_where_the_interleaved_layout_puts_them() {
+        for planes in 1..=4usize {
+            let values: [f32x8; 4] =
+                std::array::from_fn(|c| f32x8::new(std::array::from_fn(|i| (10 * c + i) as f32)));
+            let mut data = vec![-1.0f32; 3 + 8 * planes + 2];
+            store_pixels(&values[..planes], &mut data, 3);
+            for i in 0..8 {
+                for c in 0..planes {
+                    assert_eq!(
+                        data[3 + i * planes + c],
+                        (10 * c + i) as f32,
+                        "{planes} planes"
+                    );
+                }
+            }
+            assert_eq!(&data[..3], &[-1.0; 3]);
+            assert_eq!(&data[3 + 8 * planes..], &[-1.0; 2]);
+            // The one-lane store writes one pixel's planes.
+            let mut one = vec![-1.0f32; planes];
+            let scalar: Vec<f32> = (0..planes).map(|c| c as f32).collect();
+            store_pixels(&scalar, &mut one, 0);
+            assert_eq!(one, scalar);
+        }
+    }
+
     #[test]
     fn a_row_run_reads_what_fetch_reads_on_either_side_of_the_grid() {
         // Narrower than, as wide as and wider than 8 lanes; runs wholly beyond, straddling and inside.
@@ -1167,13 +1643,14 @@ mod tests {
                     data: &data,
                     base: 2,
                     row_stride: stride,
+                    pixel_step: 1,
                     width,
                     height,
                     outside,
                 };
                 for y in -1..=height {
                     for x in -10..=width + 1 {
-                        let run = RowRun::at::<f32x8>(width, height, stride, x, y)
+                        let run = RowRun::at::<f32x8>(width, height, [stride, 1], x, y)
                             .read::<f32x8>(&plane)
                             .to_array();
                         let fetched: [f32; 8] =
@@ -1184,7 +1661,7 @@ mod tests {
                             "width {width}, ({x}, {y})"
                         );
                         let one =
-                            RowRun::at::<f32>(width, height, stride, x, y).read::<f32>(&plane);
+                            RowRun::at::<f32>(width, height, [stride, 1], x, y).read::<f32>(&plane);
                         assert_eq!(
                             one.to_bits(),
                             fetched[0].to_bits(),
@@ -1205,7 +1682,7 @@ mod tests {
         let (w, h) = (64usize, 40usize);
         let row_stride = 4 * w;
         let data = vec![0.5f32; row_stride * h];
-        let columns = TapColumns::new(&table, row_stride, w);
+        let columns = TapColumns::new(&table, row_stride, 1, w);
         let planes = three_channels_and_depth(&data, w, h);
         let rows = f32x8::u_splat(table.rows() - 1);
         let reads = LaneRows::of::<f32x8>(&columns, rows);

@@ -85,8 +85,9 @@ pub fn sweep(
     sweep_with(plan, raster, ldi, options, &CpuOptions::default())
 }
 
-/// The sweep's per-pixel state: the two light buffers (ping-pong: `prev` is read, `cur` written),
-/// the layer cursors and the composited colour (planar per row) and alpha.
+/// The sweep's per-pixel state: the two light buffers (ping-pong: `prev` is read, `cur` written;
+/// pixel-interleaved, see [`to_pixel_rows`]), the layer cursors and the composited colour
+/// (planar per row) and alpha.
 struct PixelState {
     prev: Vec<f32>,
     cur: Vec<f32>,
@@ -104,25 +105,22 @@ struct PixelState {
 }
 
 impl PixelState {
-    /// The state before the first slab: the initial light (1 unless given), each cursor at its
-    /// pixel's first fragment, nothing composited.
-    fn new(plan: &RenderPlan, ldi: &Ldi, options: &SweepOptions<'_>) -> PixelState {
+    /// The state before the first slab: the initial light `initial` (planar, as
+    /// [`SweepOptions::initial_light`]), each cursor at its pixel's first fragment, nothing
+    /// composited.
+    fn new(plan: &RenderPlan, ldi: &Ldi, initial: &[f32]) -> PixelState {
         let w = plan.grid_width as usize;
         let h = plan.grid_height as usize;
-        let row_len = plan.light_row_len();
         // One float per pixel with pre-integration, one per row (unused) without: every row
         // needs a slice.
         let pre_stride = if plan.preintegration { w } else { 1 };
-        let prev = match options.initial_light {
-            Some(v) => v.to_vec(),
-            None => plan.unlit_light_buffer(),
-        };
-        let levels_prev = initial_levels(plan, &prev);
+        let levels_prev = initial_levels(plan, initial);
+        let prev = to_pixel_rows(plan, initial);
         PixelState {
             levels_cur: vec![0u32; levels_prev.len()],
             levels_prev,
+            cur: vec![0.0f32; prev.len()],
             prev,
-            cur: vec![0.0f32; row_len * h],
             next: ldi.offsets[..w * h].to_vec(),
             inside: vec![0u32; w * h],
             color: vec![0.0f32; w * h * 3],
@@ -131,6 +129,46 @@ impl PixelState {
             pre_stride,
         }
     }
+}
+
+/// Floats after the last light-buffer row: the per-lane gather reads 8 floats at a pixel pair of
+/// 2 or 3 planes, up to 4 beyond the pair.
+const LIGHT_SLACK: usize = 8;
+
+/// A planar light buffer (`[row][light][plane][x]`, the sweep's input and output) as the sweep
+/// keeps it, pixel-interleaved (`[row][light][x][plane]`, see `kernels::LightPlanes`), with
+/// [`LIGHT_SLACK`] zeros after it.
+fn to_pixel_rows(plan: &RenderPlan, planar: &[f32]) -> Vec<f32> {
+    let (w, planes) = (plan.grid_width as usize, plan.planes_per_light());
+    let rows = planar.len() / plan.light_row_len().max(1);
+    let mut out = vec![0.0f32; planar.len() + LIGHT_SLACK];
+    for (block, from) in out.chunks_mut(w * planes).zip(planar.chunks(w * planes)) {
+        for (x, pixel) in block.chunks_mut(planes).enumerate() {
+            for (c, v) in pixel.iter_mut().enumerate() {
+                *v = from[c * w + x];
+            }
+        }
+    }
+    debug_assert_eq!(rows * plan.light_row_len(), planar.len());
+    out
+}
+
+/// The inverse of [`to_pixel_rows`]: the sweep's buffer back in planar order.
+fn to_plane_rows(plan: &RenderPlan, pixels: &[f32]) -> Vec<f32> {
+    let (w, planes) = (plan.grid_width as usize, plan.planes_per_light());
+    let len = pixels.len() - LIGHT_SLACK;
+    let mut out = vec![0.0f32; len];
+    for (block, from) in out
+        .chunks_mut(w * planes)
+        .zip(pixels[..len].chunks(w * planes))
+    {
+        for (x, pixel) in from.chunks(planes).enumerate() {
+            for (c, v) in pixel.iter().enumerate() {
+                block[c * w + x] = *v;
+            }
+        }
+    }
+    out
 }
 
 /// SIMD path: per-row spans of the light that is not exactly 1 / not exactly 0, and per-chunk
@@ -198,8 +236,7 @@ fn sweep_slab(
         light: &state.prev,
         levels: &state.levels_prev,
     };
-    let rows = state
-        .cur
+    let rows = state.cur[..state.prev.len() - LIGHT_SLACK]
         .par_chunks_mut(row_len)
         .zip(state.levels_cur.par_chunks_mut(ctx.plan.level_row_len()))
         .zip(state.next.par_chunks_mut(w))
@@ -353,13 +390,24 @@ pub fn sweep_with(
         "scene validation caps the light count"
     );
 
-    let mut state = PixelState::new(plan, ldi, options);
+    let unlit;
+    let initial = match options.initial_light {
+        Some(v) => v,
+        None => {
+            unlit = plan.unlit_light_buffer();
+            &unlit
+        }
+    };
+    let mut state = PixelState::new(plan, ldi, initial);
     let reach = Reach::of(plan);
-    let mut quiet = QuietState::new(plan, ldi, &state.prev, &reach, cpu);
+    let mut quiet = QuietState::new(plan, ldi, initial, &reach, cpu);
     let columns: Vec<TapColumns> = plan
         .lights
         .iter()
-        .map(|l| TapColumns::new(&l.table, plan.light_row_len(), plan.level_row_len()))
+        .map(|l| {
+            let (row_len, planes) = (plan.light_row_len(), plan.planes_per_light());
+            TapColumns::new(&l.table, row_len, planes, plan.level_row_len())
+        })
         .collect();
 
     let mut opaque = OpaqueImage::new(plan);
@@ -391,7 +439,7 @@ pub fn sweep_with(
     let image = finish_image(plan, &state.color, &state.alpha);
     Ok(SweepOutput {
         image,
-        light: state.prev,
+        light: to_plane_rows(plan, &state.prev),
         slabs_swept,
     })
 }

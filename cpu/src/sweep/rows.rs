@@ -10,7 +10,7 @@ use super::kit::{
     MAX_LIGHT_CHANNELS, Previous, Reach, RowState, SlabContext, jitter_row_hash, light_row_hashes,
 };
 use super::quiet::{ChunkCounts, ChunkState, ChunkWork, LANES, QuietRow, RowSpans, Values};
-use super::stage::{ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, pairs_gathers};
+use super::stage::{ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, light_block, pairs_gathers};
 use crate::parity::{NO_CROSSING, advance};
 use convshadow_common::plan::LIT_LEVEL;
 
@@ -66,13 +66,17 @@ fn sweep_pixels(
 fn fill_quiet(ctx: &SlabContext<'_>, row: &mut RowState<'_>, x0: usize, lanes: usize, dark: bool) {
     let plan = ctx.plan;
     let w = plan.grid_width as usize;
-    for p in 0..plan.lights.len() * plan.planes_per_light() {
-        let v = if dark || plan.is_depth_plane(p) {
-            0.0
-        } else {
-            1.0
-        };
-        row.light[p * w + x0..][..lanes].fill(v);
+    let planes = plan.planes_per_light();
+    // Pixel-interleaved (see `LightPlanes`): each light's pixels x0.. are one run.
+    for l in 0..plan.lights.len() {
+        let run = &mut row.light[light_block(plan, l) + x0 * planes..][..lanes * planes];
+        for (k, v) in run.iter_mut().enumerate() {
+            *v = if dark || plan.is_depth_plane(k % planes) {
+                0.0
+            } else {
+                1.0
+            };
+        }
     }
     if plan.depth_planes() > 0 {
         for l in 0..plan.lights.len() {

@@ -15,7 +15,7 @@ use super::quiet::Values;
 use crate::composite::{attenuate, composite, deepen};
 use crate::kernels::{
     LaneRows, LevelPlane, LightPlanes, distance_rows, gather, gather_inside, gather_per_lane,
-    phase_at, phases,
+    phase_at, phases, store_pixels,
 };
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
@@ -75,16 +75,25 @@ pub(crate) fn chunk_fn<L: Lane>(planes: usize) -> ChunkFn {
     }
 }
 
+/// Where light `l`'s pixel (0, 0) starts in a pixel-interleaved light-buffer row (see
+/// [`LightPlanes`]): its planes side by side per pixel, `planes_per_light` of them.
+#[inline(always)]
+pub(crate) fn light_block(plan: &RenderPlan, l: usize) -> usize {
+    plan.light_plane(l, 0) * plan.grid_width as usize
+}
+
 /// Light `l`'s channels in the previous slab's buffer, as the gather reads them.
 #[inline(always)]
 fn light_planes<'a>(plan: &RenderPlan, prev: &Previous<'a>, l: usize) -> LightPlanes<'a> {
     let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
     LightPlanes {
         data: prev.light,
-        base: plan.light_plane(l, 0) * w,
+        base: light_block(plan, l),
         channels: ch,
         light_channels: ch,
         row_stride: plan.light_row_len(),
+        pixel_step: plan.planes_per_light(),
+        plane_step: 1,
         width: w as i32,
         height: plan.grid_height as i32,
     }
@@ -301,24 +310,33 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     let mut not_one = zero.ne(zero);
     let mut not_zero = not_one;
     let mut light_not_zero = not_one;
+    let planes = plan.planes_per_light();
     for l in 0..plan.lights.len() {
         let (mut lit_in, mut lit_out) = (zero, zero);
+        let mut outs = [zero; 4];
         for c in 0..ch {
             let out = attenuate(iin[l * ch + c], attenuation[c]);
             not_one = L::m_or(not_one, out.ne(one));
             not_zero = L::m_or(not_zero, out.ne(zero));
             light_not_zero = L::m_or(light_not_zero, out.ne(zero));
-            out.store(row.light, plan.light_plane(l, c) * w + x0);
+            outs[c] = out;
             if distance {
                 (lit_in, lit_out) = (lit_in + iin[l * ch + c], lit_out + out);
             }
         }
         if distance {
             // The light this slab removed, at this slab's depth; a depth plane's quiet value is 0.
-            let moved_depth = finish_depth(ctx, row, l, x0, depth_in[l], lit_in, lit_out);
+            let depth = finish_depth(ctx, row, l, x0, depth_in[l], lit_in, lit_out);
+            let moved_depth = depth.ne(zero);
             not_one = L::m_or(not_one, moved_depth);
             not_zero = L::m_or(not_zero, moved_depth);
+            outs[ch] = depth;
         }
+        store_pixels(
+            &outs[..planes],
+            row.light,
+            light_block(plan, l) + x0 * planes,
+        );
     }
 
     ChunkOutcome {
@@ -420,8 +438,8 @@ fn distance_gather<L: Lane>(
 
 /// Distance penumbra, step 5 for light `l`'s depth plane at pixels x0..: the gathered depth
 /// `depth_in` deepened by the light the slab removed (`lit_in − lit_out`, summed over channels),
-/// stored, and the level each pixel starts the next slab with. Returns the lanes whose depth
-/// is not 0 (a depth plane's quiet value).
+/// and the level each pixel starts the next slab with (stored). Returns the outgoing depth,
+/// for the caller to store with the light's channels.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn finish_depth<L: Lane>(
@@ -432,17 +450,16 @@ fn finish_depth<L: Lane>(
     depth_in: L,
     lit_in: L,
     lit_out: L,
-) -> L::M {
+) -> L {
     let plan = ctx.plan;
     let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
     let out = deepen(depth_in, ctx.slab, lit_in - lit_out);
-    out.store(row.light, plan.light_plane(l, ch) * w + x0);
     let occluded = L::splat(ch as f32) - lit_out;
     let level = pixel_level::<L>(&plan.lights[l].table, occluded, out, ctx.slab + 1);
     let mut lanes = [0u32; MAX_LANES];
     L::u_store(level, &mut lanes);
     row.levels[l * w + x0..][..L::LANES].copy_from_slice(&lanes[..L::LANES]);
-    out.ne(L::splat(0.0))
+    out
 }
 
 /// Distance penumbra: a chunk of opaque pixels (alpha exactly 1) whose kernels read only exact
@@ -463,7 +480,7 @@ pub(crate) fn dark_depth_chunk(
     interior: bool,
 ) -> bool {
     let plan = ctx.plan;
-    let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
+    let ch = plan.channels as usize;
     let zero = f32x8::splat(0.0);
     let mut not_zero = false;
     // Every light's level search first (see `sweep_chunk`), then the gathers.
@@ -471,20 +488,22 @@ pub(crate) fn dark_depth_chunk(
     let mut light_rows = [<f32x8 as Lane>::u_splat(0); MAX_LIGHTS];
     every_light_rows::<f32x8>(ctx, prev, row_hashes, xi, yi, interior, &mut light_rows);
     for (l, &rows) in light_rows.iter().enumerate().take(plan.lights.len()) {
+        let planes = light_planes(plan, prev, l);
         let depth_plane = LightPlanes {
-            base: plan.light_plane(l, ch) * w,
+            base: planes.base + ch,
             channels: 1,
             light_channels: 0,
-            ..light_planes(plan, prev, l)
+            ..planes
         };
         let mut depth_in = [zero];
         distance_gather(ctx, l, &depth_plane, rows, xi, yi, interior, &mut depth_in);
-        for c in 0..ch {
-            zero.store(row.light, plan.light_plane(l, c) * w + x0);
-        }
         // Σ of the gathered and of the attenuated light, as the stage sums them: 0 + 0 + … = 0.
-        let moved = finish_depth(ctx, row, l, x0, depth_in[0], zero, zero);
-        not_zero |= <f32x8 as Lane>::m_any(moved);
+        let depth = finish_depth(ctx, row, l, x0, depth_in[0], zero, zero);
+        let mut outs = [zero; 4];
+        outs[ch] = depth;
+        let block = light_block(plan, l) + x0 * (ch + 1);
+        store_pixels(&outs[..=ch], row.light, block);
+        not_zero |= <f32x8 as Lane>::m_any(depth.ne(zero));
     }
     not_zero
 }
@@ -765,7 +784,10 @@ mod tests {
         let one: ChunkFn = chunk_fn::<f32>(planes);
         let reach = Reach::of(&plan);
         let mut rng = TestRng::new(seed);
-        let light: Vec<f32> = (0..row_len * h).map(|_| value(&mut rng)).collect();
+        // Pixel-interleaved, with the sweep's slack after the last row.
+        let light: Vec<f32> = (0..row_len * h + crate::sweep::LIGHT_SLACK)
+            .map(|_| value(&mut rng))
+            .collect();
         // Distance penumbra: each pixel's level any of the table's, or none (one in four).
         let lrl = plan.level_row_len();
         let levels: Vec<u32> = (0..lrl * h)
@@ -782,7 +804,7 @@ mod tests {
         let columns: Vec<TapColumns> = plan
             .lights
             .iter()
-            .map(|l| TapColumns::new(&l.table, row_len, lrl))
+            .map(|l| TapColumns::new(&l.table, row_len, plan.planes_per_light(), lrl))
             .collect();
         for slab in 0..plan.slabs {
             let ctx = SlabContext {
