@@ -948,6 +948,26 @@ mod avx2 {
         }
     }
 
+    /// Slot m of the result: slot `from[m]` of the source whose mask has slot m set (one
+    /// permute per source, one blend each).
+    #[cfg(target_feature = "avx2")]
+    #[inline(always)]
+    unsafe fn permute_and_pick<const C: usize>(
+        sources: &[__m256; C],
+        from: [i32; 8],
+        masks: &[[i32; 8]; C],
+    ) -> __m256 {
+        // SAFETY: register permutes and blends; this build has AVX2.
+        unsafe {
+            let mut out = _mm256_setzero_ps();
+            for (source, mask) in sources.iter().zip(masks) {
+                let moved = _mm256_permutevar8x32_ps(*source, cast(from));
+                out = _mm256_blendv_ps(out, moved, cast(*mask));
+            }
+            out
+        }
+    }
+
     /// Where slot m of pixel-ordered value j comes from: (plane, pixel) = ((8j + m) mod C,
     /// (8j + m) div C).
     const fn pixel_slot(c_count: usize, j: usize, m: usize) -> (usize, usize) {
@@ -991,12 +1011,7 @@ mod avx2 {
                             let (c, i) = pixel_slot(C, j, m);
                             (from[m], masks[c][m]) = (i as i32, -1);
                         }
-                        let mut v = _mm256_setzero_ps();
-                        for (plane, mask) in p.iter().zip(&masks) {
-                            let moved = _mm256_permutevar8x32_ps(*plane, cast(from));
-                            v = _mm256_blendv_ps(v, moved, cast(*mask));
-                        }
-                        *value = cast(v);
+                        *value = cast(permute_and_pick(&p, from, &masks));
                     }
                     return out;
                 }
@@ -1050,12 +1065,7 @@ mod avx2 {
                             let at = i * C + c;
                             (from[i], masks[at / 8][i]) = ((at % 8) as i32, -1);
                         }
-                        let mut p = _mm256_setzero_ps();
-                        for (value, mask) in v.iter().zip(&masks) {
-                            let moved = _mm256_permutevar8x32_ps(*value, cast(from));
-                            p = _mm256_blendv_ps(p, moved, cast(*mask));
-                        }
-                        *plane = cast(p);
+                        *plane = cast(permute_and_pick(&v, from, &masks));
                     }
                     return out;
                 }

@@ -178,7 +178,7 @@ pub struct RenderPlan {
     pub jitter_slab_hash: Vec<u32>,
     /// Background colour.
     pub background: [f32; 3],
-    /// The light buffer before the first slab (`[row][light][channel][x]`, like the sweep's),
+    /// The light buffer before the first slab (`[row][light][channel][x]`, the sweep's input),
     /// when a light has a pattern; `None`: every light starts at 1.
     pub initial_light: Option<Vec<f32>>,
     /// Pre-integrated compositing (`sweep.preintegration`): materials with a
