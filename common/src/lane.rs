@@ -686,6 +686,20 @@ pub fn add_pixel_pair<const PLANES: usize>(acc: f32x8, p: f32x8) -> f32x8 {
     (acc + p) + avx2::rotate_down::<PLANES>(p)
 }
 
+/// A tap's corner weights `[w0, w1, w2, w3]` for pixel pairs of `PLANES` planes
+/// ([`add_pixel_pair`]): `[w0 ×PLANES, w1 ×PLANES, …]` for its top pair and `[w2 ×PLANES,
+/// w3 ×PLANES, …]` for its bottom one; slots from `2·PLANES` hold weights no plane's sum reads.
+/// Spread in registers (one 16-byte read, two permutes): a table of spread weights, 64 bytes per
+/// tap and row, was slower.
+#[inline(always)]
+pub fn pair_weights<const PLANES: usize>(w: [f32; 4]) -> [f32x8; 2] {
+    let both = f32x8::new([w[0], w[1], w[2], w[3], w[0], w[1], w[2], w[3]]);
+    [
+        avx2::spread::<PLANES>(both, 0),
+        avx2::spread::<PLANES>(both, 2),
+    ]
+}
+
 /// `data[at..at + 8]` as one value.
 ///
 /// # Safety
@@ -1135,6 +1149,23 @@ mod avx2 {
         }
     }
 
+    /// Slot s takes slot `first + s / PLANES` (mod 8): one permute.
+    #[inline(always)]
+    pub(super) fn spread<const PLANES: usize>(v: f32x8, first: usize) -> f32x8 {
+        let from = |s: usize| (first + s / PLANES) % 8;
+        #[cfg(target_feature = "avx2")]
+        // SAFETY: a register permute; this build has AVX2.
+        unsafe {
+            let from = wide::i32x8::new(std::array::from_fn(|s| from(s) as i32));
+            cast(_mm256_permutevar8x32_ps(cast(v), cast(from)))
+        }
+        #[cfg(not(target_feature = "avx2"))]
+        {
+            let a = v.to_array();
+            f32x8::new(std::array::from_fn(|s| a[from(s)]))
+        }
+    }
+
     /// Slot i takes slot `(i + BY) mod 8`: one permute.
     #[inline(always)]
     pub(super) fn rotate_down<const BY: usize>(v: f32x8) -> f32x8 {
@@ -1485,6 +1516,23 @@ mod tests {
         check_orders::<2>();
         check_orders::<3>();
         check_orders::<4>();
+    }
+
+    #[test]
+    fn pair_weights_spread_each_corner_over_its_pixel_planes() {
+        fn check<const P: usize>() {
+            let w = [0.5f32, 0.25, 0.125, 0.0625];
+            let [top, bottom] = pair_weights::<P>(w);
+            let (top, bottom) = (top.to_array(), bottom.to_array());
+            for s in 0..2 * P {
+                assert_eq!(top[s], w[s / P], "{P} planes, top slot {s}");
+                assert_eq!(bottom[s], w[2 + s / P], "{P} planes, bottom slot {s}");
+            }
+        }
+        check::<1>();
+        check::<2>();
+        check::<3>();
+        check::<4>();
     }
 
     #[test]

@@ -7,7 +7,7 @@
 
 use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
-use convshadow_common::lane::{Lane, MAX_LANES, add_pixel_pair, load8_unchecked};
+use convshadow_common::lane::{Lane, MAX_LANES, add_pixel_pair, load8_unchecked, pair_weights};
 use convshadow_common::plan::LIT_LEVEL;
 use wide::{f32x8, i32x8};
 
@@ -531,10 +531,6 @@ pub struct TapColumns {
     pub(crate) phase_count: usize,
     /// The four corner weights of each tap, one column per tap.
     pub(crate) weights: Vec<[f32; 4]>,
-    /// The weights for a pixel-interleaved buffer of `P` planes (`strides[2]`; empty when it
-    /// is 1), one column per tap: `[w0 ×P, w1 ×P, 0…]` for a tap's top pixel pair and
-    /// `[w2 ×P, w3 ×P, 0…]` for its bottom one.
-    pub(crate) pair_weights: Vec<[[f32; 8]; 2]>,
     /// `dy · row_stride + dx · pixel_step` (wrapping: an `i32` offset in the light buffer).
     pub(crate) offset: Vec<u32>,
     /// Per phase, the taps' `[min dx, max dx, min dy, max dy]` (the top-left corners' extent).
@@ -673,20 +669,6 @@ impl TapColumns {
             phase_count: pc,
             weights: (0..n * pc)
                 .map(|j| table.taps[(j % pc) * n + j / pc].w)
-                .collect(),
-            pair_weights: (0..n * pc)
-                .filter(|_| pixel_step > 1)
-                .map(|j| {
-                    let w = table.taps[(j % pc) * n + j / pc].w;
-                    let pair = |a: f32, b: f32| -> [f32; 8] {
-                        std::array::from_fn(|s| match s / pixel_step {
-                            0 => a,
-                            1 => b,
-                            _ => 0.0,
-                        })
-                    };
-                    [pair(w[0], w[1]), pair(w[2], w[3])]
-                })
                 .collect(),
             offset: (0..n * pc)
                 .map(|j| {
@@ -949,7 +931,7 @@ impl<L: Lane> PairLoads<'_, L> {
 
     /// [`PairLoads::add_taps_to`] in a pixel-interleaved buffer of `C` planes, all gathered: per
     /// lane and tap, the top and the bottom pixel pair of every plane as one 8-float read each,
-    /// times the pair's weights ([`TapColumns::pair_weights`]), added to the lane's sums
+    /// times the pair's weights ([`pair_weights`]), added to the lane's sums
     /// ([`add_pixel_pair`]: each plane's four terms in the fixed order).
     #[inline(always)]
     fn add_pixel_pairs<const C: usize>(
@@ -984,7 +966,6 @@ impl<L: Lane> PairLoads<'_, L> {
             assert!(
                 columns.strides[0] == rs
                     && columns.strides[2] == C
-                    && columns.pair_weights.len() == columns.weights.len()
                     && lo >= i64::from(i32::MIN)
                     && hi <= i64::from(i32::MAX)
                     && first >= 0
@@ -998,7 +979,7 @@ impl<L: Lane> PairLoads<'_, L> {
         assert!(
             (highest as usize) < pc
                 && taps.end * pc <= columns.offset.len()
-                && columns.pair_weights.len() == columns.offset.len(),
+                && columns.weights.len() == columns.offset.len(),
             "per-lane gather: row {highest} or tap {} beyond the columns",
             taps.end
         );
@@ -1009,12 +990,12 @@ impl<L: Lane> PairLoads<'_, L> {
                 let (offset, weights) = unsafe {
                     (
                         *columns.offset.get_unchecked(entry),
-                        columns.pair_weights.get_unchecked(entry),
+                        *columns.weights.get_unchecked(entry),
                     )
                 };
                 let rel = offset.wrapping_add(lane_shift[i]) as i32;
                 let at = (self.pixel as i64 + i64::from(rel)) as usize;
-                let [top, bottom] = weights.map(f32x8::new);
+                let [top, bottom] = pair_weights::<C>(weights);
                 let (t, b) = if checked {
                     let load = |at: usize| f32x8::new(data[at..at + 8].try_into().unwrap());
                     (load(at), load(at + rs))
