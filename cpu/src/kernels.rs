@@ -93,6 +93,13 @@ pub struct LightPlanes<'a> {
 }
 
 impl LightPlanes<'_> {
+    /// Whether the planes gathered are every plane of a pixel-interleaved buffer (more than
+    /// one): then one contiguous read gives a pixel's every plane.
+    #[inline(always)]
+    pub fn every_plane_interleaved(&self) -> bool {
+        self.channels > 1 && self.pixel_step == self.channels && self.plane_step == 1
+    }
+
     /// Plane `c` as a scalar [`Plane`].
     #[inline(always)]
     pub fn plane(&self, c: usize) -> Plane<'_> {
@@ -220,7 +227,7 @@ fn gather_near_edge<L: Lane, const C: usize>(
 ) {
     let (w, h, rs) = (planes.width, planes.height, planes.row_stride);
     let (step, plane_step) = (planes.pixel_step, planes.plane_step);
-    let interleaved = C > 1 && step == C && plane_step == 1;
+    let interleaved = planes.every_plane_interleaved();
     let lanes = L::LANES as i32;
     let mut sums = [L::splat(0.0); C];
     sums.copy_from_slice(&acc[..C]);
@@ -371,26 +378,20 @@ fn load_step<L: Lane>(data: &[f32], at: usize, step: usize) -> L {
 /// them).
 #[inline(always)]
 pub fn store_pixels<L: Lane>(planes: &[L], data: &mut [f32], at: usize) {
-    let lanes = L::LANES;
     match planes {
         [p] => p.store(data, at),
-        [a, b] => store_in_pixel_order(&[*a, *b], data, at, lanes),
-        [a, b, c] => store_in_pixel_order(&[*a, *b, *c], data, at, lanes),
-        [a, b, c, d] => store_in_pixel_order(&[*a, *b, *c, *d], data, at, lanes),
+        [a, b] => store_in_pixel_order(&[*a, *b], data, at),
+        [a, b, c] => store_in_pixel_order(&[*a, *b, *c], data, at),
+        [a, b, c, d] => store_in_pixel_order(&[*a, *b, *c, *d], data, at),
         _ => panic!("a light has 1 to 4 planes, not {}", planes.len()),
     }
 }
 
 /// [`store_pixels`] for `C` planes.
 #[inline(always)]
-fn store_in_pixel_order<L: Lane, const C: usize>(
-    planes: &[L; C],
-    data: &mut [f32],
-    at: usize,
-    lanes: usize,
-) {
+fn store_in_pixel_order<L: Lane, const C: usize>(planes: &[L; C], data: &mut [f32], at: usize) {
     for (j, v) in L::pixel_order(*planes).iter().enumerate() {
-        v.store(data, at + j * lanes);
+        v.store(data, at + j * L::LANES);
     }
 }
 
@@ -426,7 +427,7 @@ pub fn gather_inside<L: Lane, const K: usize>(
         lo >= 0 && hi < planes.data.len() as i64,
         "gather footprint {lo}..={hi} outside the light buffer"
     );
-    let interleaved = plane_step == 1 && step == planes.channels as i64;
+    let interleaved = planes.every_plane_interleaved();
     match planes.channels {
         2 if interleaved => gather_pixels::<L, K, 2>(planes, taps, x, y, accs),
         3 if interleaved => gather_pixels::<L, K, 3>(planes, taps, x, y, accs),
@@ -866,7 +867,7 @@ impl<L: Lane> PairLoads<'_, L> {
         let planes = self.planes;
         if planes.pixel_step == 1 {
             self.add_plane_pairs::<C>(taps, acc, bounds);
-        } else if planes.pixel_step == C && planes.plane_step == 1 {
+        } else if planes.every_plane_interleaved() {
             self.add_pixel_pairs::<C>(taps, acc, bounds);
         } else {
             self.add_gathered::<C>(taps, acc);

@@ -140,7 +140,6 @@ const LIGHT_SLACK: usize = 8;
 /// [`LIGHT_SLACK`] zeros after it.
 fn to_pixel_rows(plan: &RenderPlan, planar: &[f32]) -> Vec<f32> {
     let (w, planes) = (plan.grid_width as usize, plan.planes_per_light());
-    let rows = planar.len() / plan.light_row_len().max(1);
     let mut out = vec![0.0f32; planar.len() + LIGHT_SLACK];
     for (block, from) in out.chunks_mut(w * planes).zip(planar.chunks(w * planes)) {
         for (x, pixel) in block.chunks_mut(planes).enumerate() {
@@ -149,7 +148,7 @@ fn to_pixel_rows(plan: &RenderPlan, planar: &[f32]) -> Vec<f32> {
             }
         }
     }
-    debug_assert_eq!(rows * plan.light_row_len(), planar.len());
+    debug_assert_eq!(planar.len() % plan.light_row_len().max(1), 0, "whole rows");
     out
 }
 
