@@ -10,7 +10,10 @@ use super::kit::{
     MAX_LIGHT_CHANNELS, Previous, Reach, RowState, SlabContext, jitter_row_hash, light_row_hashes,
 };
 use super::quiet::{ChunkCounts, ChunkState, ChunkWork, LANES, QuietRow, RowSpans, Values};
-use super::stage::{ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, light_block, pairs_gathers};
+use super::stage::{
+    ANY_SHAPE, ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, light_block, pairs_gathers,
+    shape_of,
+};
 use crate::parity::{NO_CROSSING, advance};
 use convshadow_common::plan::LIT_LEVEL;
 
@@ -46,7 +49,7 @@ fn sweep_pixels(
 ) -> bool {
     let plan = ctx.plan;
     let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
-    let pixel: ChunkFn = chunk_fn::<f32>(plan.lights.len() * plan.channels as usize);
+    let pixel: ChunkFn = chunk_fn::<f32>(plan.lights.len() * plan.channels as usize, ANY_SHAPE);
     let (row_hashes, jitter_row) = hashes;
     let mut moved = false;
     for x in xs {
@@ -125,7 +128,8 @@ pub(crate) fn sweep_row_simd(
     let hashes = (&row_hashes, jitter_row);
     let mut spans = RowSpans::EMPTY;
     let mut tally = [0u64; 3];
-    let chunk: ChunkFn = chunk_fn::<f32x8>(planes);
+    // The SIMD path takes the instance that knows the plan's shape, where there is one.
+    let chunk: ChunkFn = chunk_fn::<f32x8>(planes, shape_of(plan));
     let hits = quiet.as_ref().map(|q| q.hits(reach, w.div_ceil(LANES)));
     let pairs = pairs_gathers(plan);
     // The gathers of a chunk and its right neighbour, computed together when both need them

@@ -64,14 +64,38 @@ impl ChunkOutcome {
     }
 }
 
-/// The [`sweep_chunk`] instance for `planes` light channels: the smallest capacity that holds
-/// them (zeroing a 48-entry array per chunk costs).
-pub(crate) fn chunk_fn<L: Lane>(planes: usize) -> ChunkFn {
-    match planes {
-        0..=2 => sweep_chunk::<L, 2>,
-        3..=6 => sweep_chunk::<L, 6>,
-        7..=12 => sweep_chunk::<L, 12>,
-        _ => sweep_chunk::<L, MAX_LIGHT_CHANNELS>,
+/// A [`sweep_chunk`] instance's `SHAPE`: it reads the light channels and the penumbra model from
+/// the plan.
+pub(crate) const ANY_SHAPE: u8 = 0;
+/// A [`sweep_chunk`] instance's `SHAPE`: three light channels, iterated penumbra.
+pub(crate) const RGB_ITERATED: u8 = 1;
+/// A [`sweep_chunk`] instance's `SHAPE`: three light channels, distance penumbra (the default
+/// scene's).
+pub(crate) const RGB_DISTANCE: u8 = 2;
+
+/// The `SHAPE` of the [`sweep_chunk`] instance that knows `plan`'s channels and penumbra model
+/// at compile time, where there is one (three channels, at most two lights): its loops over
+/// channels have fixed lengths (measured: 10 % of the default frame's sweep). Others read them
+/// from the plan.
+pub(crate) fn shape_of(plan: &RenderPlan) -> u8 {
+    match (plan.channels, plan.lights.len(), plan.depth_planes() > 0) {
+        (3, 1..=2, false) => RGB_ITERATED,
+        (3, 1..=2, true) => RGB_DISTANCE,
+        _ => ANY_SHAPE,
+    }
+}
+
+/// The [`sweep_chunk`] instance for `planes` light channels and the shape `shape` (see
+/// [`shape_of`]; [`ANY_SHAPE`] always serves): the smallest capacity that holds them (zeroing a
+/// 48-entry array per chunk costs).
+pub(crate) fn chunk_fn<L: Lane>(planes: usize, shape: u8) -> ChunkFn {
+    match (planes, shape) {
+        (3..=6, RGB_ITERATED) => sweep_chunk::<L, 6, RGB_ITERATED>,
+        (3..=6, RGB_DISTANCE) => sweep_chunk::<L, 6, RGB_DISTANCE>,
+        (0..=2, _) => sweep_chunk::<L, 2, ANY_SHAPE>,
+        (3..=6, _) => sweep_chunk::<L, 6, ANY_SHAPE>,
+        (7..=12, _) => sweep_chunk::<L, 12, ANY_SHAPE>,
+        _ => sweep_chunk::<L, MAX_LIGHT_CHANNELS, ANY_SHAPE>,
     }
 }
 
@@ -157,7 +181,7 @@ pub(crate) fn gather_pair(
 /// at `i · LANES..`, see [`gather_pair`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
+pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
     ctx: &SlabContext<'_>,
     y: usize,
     x0: usize,
@@ -172,14 +196,24 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize>(
     let plan = ctx.plan;
     let ldi = ctx.ldi;
     let w = plan.grid_width as usize;
-    let ch = plan.channels as usize;
+    debug_assert!(
+        SHAPE == ANY_SHAPE || SHAPE == shape_of(plan),
+        "an instance for another plan"
+    );
+    let ch = match SHAPE {
+        ANY_SHAPE => plan.channels as usize,
+        _ => 3,
+    };
     let slab = ctx.slab as usize;
     let n = plan.lights.len() * ch;
 
     // The stages' independent parts run in the order that hides their latency best (measured):
     // every light's level search (distance penumbra: chains of dependent gathers), then the
     // cursors (scalar work while those loads arrive), then the convolution that needs both.
-    let distance = plan.depth_planes() > 0;
+    let distance = match SHAPE {
+        ANY_SHAPE => plan.depth_planes() > 0,
+        shape => shape == RGB_DISTANCE,
+    };
     // Per light, sized N (lights ≤ lights · channels ≤ N): zeroing MAX_LIGHTS entries costs.
     let mut light_rows = [L::u_splat(0); N];
     if distance && known_light.is_none() && gathered.is_none() {
@@ -781,7 +815,7 @@ mod tests {
         let meshes = plan.mesh_material.len() as u32;
         let planes = plan.lights.len() * plan.channels as usize;
         assert_eq!(planes, 6, "two lights, three channels");
-        let one: ChunkFn = chunk_fn::<f32>(planes);
+        let one: ChunkFn = chunk_fn::<f32>(planes, ANY_SHAPE);
         let reach = Reach::of(&plan);
         let mut rng = TestRng::new(seed);
         // Pixel-interleaved, with the sweep's slack after the last row.
@@ -906,12 +940,16 @@ mod tests {
             .iter()
             .enumerate()
         {
-            for penumbra in ["iterated", "distance"] {
-                let eight = chunk_fn::<f32x8>(6);
-                assert_eq!(
-                    compare_lanes(kernel, penumbra, false, 17 + k as u32, eight),
-                    None
-                );
+            for (penumbra, shape) in [("iterated", RGB_ITERATED), ("distance", RGB_DISTANCE)] {
+                // The instance that reads the shape from the plan and the one that knows it.
+                for shape in [ANY_SHAPE, shape] {
+                    let eight = chunk_fn::<f32x8>(6, shape);
+                    assert_eq!(
+                        compare_lanes(kernel, penumbra, false, 17 + k as u32, eight),
+                        None,
+                        "shape {shape}"
+                    );
+                }
             }
         }
     }
@@ -919,12 +957,15 @@ mod tests {
     #[test]
     fn eight_lanes_and_one_lane_give_the_same_bits_with_preintegration() {
         for (k, kernel) in ["ellipse2", "gaussian:7"].iter().enumerate() {
-            for penumbra in ["iterated", "distance"] {
-                let eight = chunk_fn::<f32x8>(6);
-                assert_eq!(
-                    compare_lanes(kernel, penumbra, true, 41 + k as u32, eight),
-                    None
-                );
+            for (penumbra, shape) in [("iterated", RGB_ITERATED), ("distance", RGB_DISTANCE)] {
+                for shape in [ANY_SHAPE, shape] {
+                    let eight = chunk_fn::<f32x8>(6, shape);
+                    assert_eq!(
+                        compare_lanes(kernel, penumbra, true, 41 + k as u32, eight),
+                        None,
+                        "shape {shape}"
+                    );
+                }
             }
         }
     }
@@ -933,7 +974,7 @@ mod tests {
     fn a_lane_that_disagrees_fails_the_comparison() {
         // The 8-lane stage with one lane's first light value off by one bit.
         let wrong_lane: ChunkFn = |ctx, y, x0, prev, row, hashes, jitter, interior, known, got| {
-            let r = sweep_chunk::<f32x8, 6>(
+            let r = sweep_chunk::<f32x8, 6, ANY_SHAPE>(
                 ctx, y, x0, prev, row, hashes, jitter, interior, known, got,
             );
             // (the outcome is returned unchanged: only the light is wrong)
