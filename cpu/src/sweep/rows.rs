@@ -55,7 +55,7 @@ fn sweep_pixels(
     for x in xs {
         let interior = reach.interior(x, 1, y, w, h);
         let out = pixel(
-            ctx, y, x, prev, row, row_hashes, jitter_row, interior, None, None,
+            ctx, y, x, prev, row, row_hashes, jitter_row, interior, None, None, None,
         );
         spans.record(x, 1, out.values());
         moved |= out.moved;
@@ -217,7 +217,11 @@ pub(crate) fn sweep_row_simd(
                 };
                 let (rh, jr) = hashes;
                 let (known, inner) = (known_light, interior);
-                let out = chunk(ctx, y, x0, prev, &mut row, rh, jr, inner, known, gathered);
+                // The chunk's cursor summary, current: refreshed whenever its cursors move.
+                let summary = quiet.as_ref().map(|q| q.chunks[c]);
+                let out = chunk(
+                    ctx, y, x0, prev, &mut row, rh, jr, inner, known, gathered, summary,
+                );
                 spans.record(x0, LANES, out.values());
                 out.moved
             }

@@ -11,7 +11,7 @@ use convshadow_common::kernel::PhaseMode;
 use convshadow_common::lane::{Lane, MAX_LANES};
 
 use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowState, SlabContext};
-use super::quiet::Values;
+use super::quiet::{ChunkState, Values};
 use crate::composite::{attenuate, composite, deepen};
 use crate::kernels::{
     LaneRows, LevelPlane, LightPlanes, distance_rows, gather, gather_inside, gather_per_lane,
@@ -37,6 +37,7 @@ pub(crate) type ChunkFn = fn(
     bool,
     Option<f32>,
     Option<&[f32]>,
+    Option<ChunkState>,
 ) -> ChunkOutcome;
 
 /// What one chunk's stages tell the lane path about their lanes.
@@ -178,7 +179,8 @@ pub(crate) fn gather_pair(
 /// All five stages for the pixels x0..x0 + LANES of row y. `interior`: every read of the gather
 /// lies inside the grid; `known_light`: every value the gather reads is this constant (the
 /// gather is skipped); `gathered`: the gather's result, already computed (light plane i's lanes
-/// at `i · LANES..`, see [`gather_pair`]).
+/// at `i · LANES..`, see [`gather_pair`]); `summary`: the chunk's cursor summary, current (its
+/// lanes' cursors are not visited when it shows that none crosses a fragment in this slab).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
@@ -192,6 +194,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
     interior: bool,
     known_light: Option<f32>,
     gathered: Option<&[f32]>,
+    summary: Option<ChunkState>,
 ) -> ChunkOutcome {
     let plan = ctx.plan;
     let ldi = ctx.ldi;
@@ -224,15 +227,27 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
     // 2. Intersection: every lane's cursor.
     let mut crossed = [NO_CROSSING; MAX_LANES];
     let mut mesh = [None; MAX_LANES];
-    for i in 0..L::LANES {
-        let x = x0 + i;
-        let end = ldi.offsets[y * w + x + 1];
-        crossed[i] = advance(ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
-        mesh[i] = if crossed[i] != NO_CROSSING {
-            Some(u32::from(ldi.mesh[crossed[i] as usize]))
-        } else {
-            first_mesh(row.inside[x])
-        };
+    match summary {
+        // No lane inside a mesh, none with a fragment before the back face: nothing moves.
+        Some(s) if s.event_depth >= ctx.back && s.inside_any == 0 => {}
+        // No lane crosses a fragment (`advance` would not enter its loop).
+        Some(s) if s.event_depth >= ctx.back => {
+            for (m, &inside) in mesh.iter_mut().zip(&row.inside[x0..x0 + L::LANES]) {
+                *m = first_mesh(inside);
+            }
+        }
+        _ => {
+            for i in 0..L::LANES {
+                let x = x0 + i;
+                let end = ldi.offsets[y * w + x + 1];
+                crossed[i] = advance(ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
+                mesh[i] = if crossed[i] != NO_CROSSING {
+                    Some(u32::from(ldi.mesh[crossed[i] as usize]))
+                } else {
+                    first_mesh(row.inside[x])
+                };
+            }
+        }
     }
 
     // 1. Convolution of every light buffer (and, distance penumbra, its depth plane).
@@ -835,6 +850,8 @@ mod tests {
             levels: &levels,
         };
         let mut counts = [0u32; 9];
+        // Chunks whose summary skipped their cursors, and chunks with a summary that did not.
+        let mut summaries = [0u32; 2];
         let columns: Vec<TapColumns> = plan
             .lights
             .iter()
@@ -887,6 +904,14 @@ mod tests {
                 for x0 in 0..=w - 8 {
                     let (mut a, mut b) = (row.clone(), row.clone());
                     let interior = reach.interior(x0, 8, y, w, h);
+                    // Every other chunk with its cursor summary (the 1-lane stage visits every
+                    // cursor).
+                    let summary = (x0 % 2 == 0).then(|| {
+                        ChunkState::of(&ldi, y, x0, 8, &row.next, &row.inside, &row.alpha)
+                    });
+                    if let Some(s) = summary {
+                        summaries[usize::from(s.event_depth >= ctx.back)] += 1;
+                    }
                     let (rh, jr) = (&row_hashes, jitter_row);
                     eight(
                         &ctx,
@@ -899,6 +924,7 @@ mod tests {
                         interior,
                         None,
                         None,
+                        summary,
                     );
                     for x in x0..x0 + 8 {
                         let interior = reach.interior(x, 1, y, w, h);
@@ -911,6 +937,7 @@ mod tests {
                             rh,
                             jr,
                             interior,
+                            None,
                             None,
                             None,
                         );
@@ -929,6 +956,11 @@ mod tests {
         assert!(
             counts[0] > 0 && counts[8] > 0 && counts[1..8].iter().sum::<u32>() > 0,
             "{kernel}: chunks by shaded lanes {counts:?}"
+        );
+        // And both cursor paths: summaries that skip the cursors and summaries that do not.
+        assert!(
+            summaries[0] > 0 && summaries[1] > 0,
+            "{kernel}: summaries (visit, skip) {summaries:?}"
         );
         None
     }
@@ -973,9 +1005,9 @@ mod tests {
     #[test]
     fn a_lane_that_disagrees_fails_the_comparison() {
         // The 8-lane stage with one lane's first light value off by one bit.
-        let wrong_lane: ChunkFn = |ctx, y, x0, prev, row, hashes, jitter, interior, known, got| {
+        let wrong_lane: ChunkFn = |ctx, y, x0, prev, row, hashes, jitter, inner, known, got, s| {
             let r = sweep_chunk::<f32x8, 6, ANY_SHAPE>(
-                ctx, y, x0, prev, row, hashes, jitter, interior, known, got,
+                ctx, y, x0, prev, row, hashes, jitter, inner, known, got, s,
             );
             // (the outcome is returned unchanged: only the light is wrong)
             row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
