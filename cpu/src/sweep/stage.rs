@@ -965,19 +965,15 @@ mod tests {
         None
     }
 
-    #[test]
-    fn eight_lanes_and_one_lane_give_the_same_bits() {
-        // Per-pixel, per-slab and scheduled phases, both penumbra models.
-        for (k, kernel) in ["ellipse2", "ellipse2:slab", "gaussian:7", "poisson8"]
-            .iter()
-            .enumerate()
-        {
+    /// [`compare_lanes`] for `kernels` (seeds from `seed`), both penumbra models, and for each
+    /// both 8-lane instances: the one that reads the shape from the plan and the one that knows it.
+    fn compare_every_instance(kernels: &[&str], pre: bool, seed: u32) {
+        for (k, kernel) in kernels.iter().enumerate() {
             for (penumbra, shape) in [("iterated", RGB_ITERATED), ("distance", RGB_DISTANCE)] {
-                // The instance that reads the shape from the plan and the one that knows it.
                 for shape in [ANY_SHAPE, shape] {
                     let eight = chunk_fn::<f32x8>(6, shape);
                     assert_eq!(
-                        compare_lanes(kernel, penumbra, false, 17 + k as u32, eight),
+                        compare_lanes(kernel, penumbra, pre, seed + k as u32, eight),
                         None,
                         "shape {shape}"
                     );
@@ -987,19 +983,15 @@ mod tests {
     }
 
     #[test]
+    fn eight_lanes_and_one_lane_give_the_same_bits() {
+        // Per-pixel, per-slab and scheduled phases.
+        let kernels = ["ellipse2", "ellipse2:slab", "gaussian:7", "poisson8"];
+        compare_every_instance(&kernels, false, 17);
+    }
+
+    #[test]
     fn eight_lanes_and_one_lane_give_the_same_bits_with_preintegration() {
-        for (k, kernel) in ["ellipse2", "gaussian:7"].iter().enumerate() {
-            for (penumbra, shape) in [("iterated", RGB_ITERATED), ("distance", RGB_DISTANCE)] {
-                for shape in [ANY_SHAPE, shape] {
-                    let eight = chunk_fn::<f32x8>(6, shape);
-                    assert_eq!(
-                        compare_lanes(kernel, penumbra, true, 41 + k as u32, eight),
-                        None,
-                        "shape {shape}"
-                    );
-                }
-            }
-        }
+        compare_every_instance(&["ellipse2", "gaussian:7"], true, 41);
     }
 
     #[test]
