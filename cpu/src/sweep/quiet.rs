@@ -197,6 +197,16 @@ impl ChunkState {
         }
         s
     }
+
+    /// Whether no lane's cursor crosses a fragment before `back_face`: exactly the negation of
+    /// the cursor's advance test `depth < back_face` at the nearest next fragment (NaN never
+    /// advances).
+    #[inline(always)]
+    pub(crate) fn crosses_nothing(&self, back_face: f32) -> bool {
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        let none = !(self.event_depth < back_face);
+        none
+    }
 }
 
 /// Chunk summaries per row: one per 8 pixels, the last for the row's `width mod 8` tail pixels
@@ -405,10 +415,7 @@ impl QuietRow<'_> {
         let w = ctx.plan.grid_width as usize;
         let h = ctx.plan.grid_height as usize;
         let all_ones = self.setup.ones_exact && !hits.not_one(c);
-        // Exactly the negation of the cursor's advance test `depth < back` (NaN never advances).
-        #[allow(clippy::neg_cmp_op_on_partial_ord)]
-        let no_crossing = !(state.event_depth < ctx.back);
-        if all_ones && state.inside_any == 0 && no_crossing {
+        if all_ones && state.inside_any == 0 && state.crosses_nothing(ctx.back) {
             return ChunkWork::Unoccluded;
         }
         let interior = reach.interior(c * LANES, lanes, y, w, h);

@@ -228,12 +228,13 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
     let mut crossed = [NO_CROSSING; MAX_LANES];
     let mut mesh = [None; MAX_LANES];
     match summary {
-        // No lane inside a mesh, none with a fragment before the back face: nothing moves.
-        Some(s) if s.event_depth >= ctx.back && s.inside_any == 0 => {}
-        // No lane crosses a fragment (`advance` would not enter its loop).
-        Some(s) if s.event_depth >= ctx.back => {
-            for (m, &inside) in mesh.iter_mut().zip(&row.inside[x0..x0 + L::LANES]) {
-                *m = first_mesh(inside);
+        // No lane crosses a fragment (`advance` would not enter its loop): meshes from the
+        // inside masks, none where no lane is inside one.
+        Some(s) if s.crosses_nothing(ctx.back) => {
+            if s.inside_any != 0 {
+                for (m, &inside) in mesh.iter_mut().zip(&row.inside[x0..x0 + L::LANES]) {
+                    *m = first_mesh(inside);
+                }
             }
         }
         _ => {
@@ -910,7 +911,7 @@ mod tests {
                         ChunkState::of(&ldi, y, x0, 8, &row.next, &row.inside, &row.alpha)
                     });
                     if let Some(s) = summary {
-                        summaries[usize::from(s.event_depth >= ctx.back)] += 1;
+                        summaries[usize::from(s.crosses_nothing(ctx.back))] += 1;
                     }
                     let (rh, jr) = (&row_hashes, jitter_row);
                     eight(
