@@ -1136,18 +1136,9 @@ pub(crate) fn distance_rows<L: Lane>(
             // SAFETY: every lane's row is below `pc` (see above).
             let rel = unsafe { L::u_gather_unchecked(column, own_rows) };
             let top_left = L::u_add(lane_shift, rel);
-            let below = L::u_add(top_left, L::u_splat(rs as u32));
-            for corner in [
-                top_left,
-                L::u_add(top_left, L::u_splat(1)),
-                below,
-                L::u_add(below, L::u_splat(1)),
-            ] {
-                // SAFETY: every corner lies inside the grid (see above).
-                nearest = L::u_min(nearest, unsafe {
-                    L::u_gather_unchecked(levels.data, corner)
-                });
-            }
+            // SAFETY: every corner lies inside the grid (see above).
+            let block = unsafe { L::u_min_block_unchecked(levels.data, top_left, rs) };
+            nearest = L::u_min(nearest, block);
         }
     } else {
         let mut rows = [0u32; MAX_LANES];
