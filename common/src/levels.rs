@@ -22,7 +22,16 @@ pub fn pixel_level<L: Lane>(table: &KernelTable, occluded: L, depth: L, slab: u3
     let h = L::select(h.lt(one), one, h);
     let h = L::select(h.gt(top), top, h);
     let h = L::select(has_occluder, h, one).trunc_u32();
-    let level = L::u_gather(&table.level_of, h);
+    // h ≤ top already (NaN truncates to 0): the minimum changes no index and proves the bounds
+    // once, where a checked gather reduced the lanes to their largest per chunk.
+    let entries = table.level_of.len();
+    assert!(
+        (1..=i32::MAX as usize).contains(&entries),
+        "a level table of {entries} entries"
+    );
+    let h = L::u_min(h, L::u_splat(entries as u32 - 1));
+    // SAFETY: every lane's index is below `level_of.len()` (checked not empty above).
+    let level = unsafe { L::u_gather_unchecked(&table.level_of, h) };
     L::u_select(has_occluder, level, L::u_splat(LIT_LEVEL))
 }
 
