@@ -161,6 +161,10 @@ pub trait Lane:
     fn u_mix32(a: Self::U) -> Self::U;
     /// Writes the integer lanes to `out[..LANES]`.
     fn u_store(a: Self::U, out: &mut [u32; MAX_LANES]);
+    /// The largest lane.
+    fn u_largest(a: Self::U) -> u32;
+    /// The lanes' value when every lane holds the same one.
+    fn u_uniform(a: Self::U) -> Option<u32>;
     /// Lane i takes lane `i + by` of `self`, or `fill` where `i + by` is not a lane (a run of
     /// values moved along a row, in registers).
     fn shift_lanes(self, by: i32, fill: f32) -> Self;
@@ -436,6 +440,14 @@ impl Lane for f32 {
         out[0] = a;
     }
     #[inline(always)]
+    fn u_largest(a: u32) -> u32 {
+        a
+    }
+    #[inline(always)]
+    fn u_uniform(a: u32) -> Option<u32> {
+        Some(a)
+    }
+    #[inline(always)]
     fn shift_lanes(self, by: i32, fill: f32) -> f32 {
         if by == 0 { self } else { fill }
     }
@@ -675,6 +687,16 @@ impl Lane for f32x8 {
     #[inline(always)]
     fn u_store(a: u32x8, out: &mut [u32; MAX_LANES]) {
         *out = a.to_array();
+    }
+    #[inline(always)]
+    fn u_largest(a: u32x8) -> u32 {
+        a.reduce_max()
+    }
+    #[inline(always)]
+    fn u_uniform(a: u32x8) -> Option<u32> {
+        // Every lane equal to lane 0: a compare with lane 0 broadcast, one mask test.
+        let first = a.as_array()[0];
+        a.simd_eq(u32x8::splat(first)).all().then_some(first)
     }
     #[inline(always)]
     fn shift_lanes(self, by: i32, fill: f32) -> f32x8 {
@@ -1719,6 +1741,24 @@ mod tests {
                 }
             }
             agree(f32x8::acc_finish(eight), |i| one[i], "acc_blocks");
+        }
+    }
+
+    #[test]
+    fn the_largest_lane_and_a_uniform_value_are_those_of_the_lanes() {
+        for seed in 0..300u32 {
+            // Small values, so that equal lanes are common; some chunks all equal.
+            let h: [u32; MAX_LANES] = std::array::from_fn(|i| mix32(seed * 8 + i as u32) % 3);
+            let lanes = if seed % 4 == 0 { [h[0]; MAX_LANES] } else { h };
+            let lanes = lanes.map(|v| v.wrapping_mul(0x8000_0001));
+            let v = u32x8::new(lanes);
+            assert_eq!(f32x8::u_largest(v), *lanes.iter().max().unwrap());
+            let same = lanes.iter().all(|&x| x == lanes[0]);
+            assert_eq!(f32x8::u_uniform(v), same.then_some(lanes[0]), "{lanes:?}");
+            assert_eq!(
+                (f32::u_largest(lanes[3]), f32::u_uniform(lanes[3])),
+                (lanes[3], Some(lanes[3]))
+            );
         }
     }
 

@@ -595,8 +595,7 @@ impl LaneRows {
         for &row in &r[..L::LANES] {
             most = most.max(i32x8::new(columns.summary[row as usize]));
         }
-        let uniform = r[..L::LANES].iter().all(|&v| v == r[0]).then_some(r[0]);
-        LaneRows::from_summary(most.to_array(), uniform)
+        LaneRows::from_summary(most.to_array(), L::u_uniform(rows))
     }
 
     /// [`LaneRows::of`] for lanes whose every read the caller knows to lie inside the grid
@@ -609,18 +608,14 @@ impl LaneRows {
         if !(interior && columns.same_counts) {
             return LaneRows::of::<L>(columns, rows);
         }
-        let mut r = [0u32; MAX_LANES];
-        L::u_store(rows, &mut r);
-        let lanes = &r[..L::LANES];
         // Every lane's row is a row of the table, as `of`'s lookup checks (unchecked gathers
         // by these rows rely on it).
-        let highest = lanes.iter().fold(0, |m, &v| m.max(v));
+        let highest = L::u_largest(rows);
         assert!(
             (highest as usize) < columns.phase_count,
             "row {highest} beyond the table"
         );
-        let uniform = lanes.iter().all(|&v| v == r[0]).then_some(r[0]);
-        LaneRows::from_summary(columns.whole_summary, uniform)
+        LaneRows::from_summary(columns.whole_summary, L::u_uniform(rows))
     }
 
     /// A summary from the fieldwise largest of rows' [`TapColumns::summary`] entries.
