@@ -70,15 +70,18 @@ fn fill_quiet(ctx: &SlabContext<'_>, row: &mut RowState<'_>, x0: usize, lanes: u
     let plan = ctx.plan;
     let w = plan.grid_width as usize;
     let planes = plan.planes_per_light();
+    // One pixel's planes: its channels at 1 (0 when dark), its depth plane at 0.
+    let mut pixel = [0.0f32; 4];
+    pixel[..plan.channels as usize].fill(if dark { 0.0 } else { 1.0 });
     // Pixel-interleaved (see `LightPlanes`): each light's pixels x0.. are one run.
     for l in 0..plan.lights.len() {
         let run = &mut row.light[light_block(plan, l) + x0 * planes..][..lanes * planes];
-        for (k, v) in run.iter_mut().enumerate() {
-            *v = if dark || plan.is_depth_plane(k % planes) {
-                0.0
-            } else {
-                1.0
-            };
+        match planes {
+            1 => fill_pixels::<1>(run, pixel),
+            2 => fill_pixels::<2>(run, pixel),
+            3 => fill_pixels::<3>(run, pixel),
+            4 => fill_pixels::<4>(run, pixel),
+            n => panic!("a light has 1 or 3 channels and at most one depth plane, not {n} planes"),
         }
     }
     if plan.depth_planes() > 0 {
@@ -86,6 +89,16 @@ fn fill_quiet(ctx: &SlabContext<'_>, row: &mut RowState<'_>, x0: usize, lanes: u
             let level = if dark { ctx.dark_levels[l] } else { LIT_LEVEL };
             row.levels[l * w + x0..][..lanes].fill(level);
         }
+    }
+}
+
+/// `run`'s pixels of `P` planes each set to `pixel`'s first `P` values (fixed-length copies: a
+/// plane test per value cost two integer divisions).
+#[inline(always)]
+fn fill_pixels<const P: usize>(run: &mut [f32], pixel: [f32; 4]) {
+    let pixel: [f32; P] = std::array::from_fn(|k| pixel[k]);
+    for px in run.chunks_exact_mut(P) {
+        px.copy_from_slice(&pixel);
     }
 }
 
