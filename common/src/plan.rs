@@ -8,6 +8,7 @@
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3};
+use rayon::prelude::*;
 
 use crate::geometry::SceneGeometry;
 use crate::guard::GuardBand;
@@ -204,9 +205,11 @@ impl RenderPlan {
         let e = geometry.slab_distance;
         let px = geometry.camera.pixel_size;
         let seed = scene.sweep.seed;
+        // Lights are independent (their tables' bits do not depend on the thread count): built
+        // in parallel, each with its levels in parallel (`build_distance_table`).
         let lights = scene
             .lights
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(l, spec)| {
                 let moments_for = |d1: f64| {
