@@ -23,7 +23,8 @@ pub fn pixel_level<L: Lane>(table: &KernelTable, occluded: L, depth: L, slab: u3
     let h = L::select(h.gt(top), top, h);
     let h = L::select(has_occluder, h, one).trunc_u32();
     // h ≤ top already (NaN truncates to 0): the minimum changes no index and proves the bounds
-    // once, where a checked gather reduced the lanes to their largest per chunk.
+    // once, where a checked gather reduced the lanes to their largest per chunk. A proof, not an
+    // operation on the value: the WGSL mirror has no counterpart.
     let entries = table.level_of.len();
     assert!(
         (1..=i32::MAX as usize).contains(&entries),
