@@ -5,7 +5,8 @@
 
 Default render arguments: `--threads 1 --size 384x384 --slabs 256` (the default scene). Runs
 alternate (ABBA…) so a shared machine's load falls on both alike; prints each binary's medians,
-the image hashes it wrote (they must agree), new/old ratios of the medians, and the paired
+the image hashes it wrote (they must agree), new/old ratios of the medians, of the fastest runs
+and of the 10th percentiles (a second view: the runs least slowed by other load), and the paired
 ratios: each round's new/old sweep time (its two runs are adjacent, so slow drifts of the
 machine's load cancel), their median and quartiles. For quick checks during speed work;
 `scripts/bench_speed.py` makes the tables of docs/performance.md.
@@ -24,6 +25,10 @@ m = {b: statistics.median(v) for b, v in vals.items()}
 s = {b: statistics.median(v) for b, v in sweeps.items()}
 for b in bins: print(f"{b}: user {m[b]:.3f} s  sweep {s[b]:.3f} s  hashes {hashes[b]}")
 print(f"new/old user {m[bins[1]]/m[bins[0]]:.3f}  sweep {s[bins[1]]/s[bins[0]]:.3f}")
+# The fastest runs: those least slowed by the machine's other load.
+lo = {b: sorted(v) for b, v in sweeps.items()}
+p10 = {b: v[len(v) // 10] for b, v in lo.items()}
+print(f"new/old sweep by the fastest run {lo[bins[1]][0]/lo[bins[0]][0]:.3f}  by the 10th percentile {p10[bins[1]]/p10[bins[0]]:.3f}")
 paired = sorted(n / o for o, n in zip(sweeps[bins[0]], sweeps[bins[1]]))
 if len(paired) >= 2:
     q = statistics.quantiles(paired, n=4)
