@@ -185,6 +185,21 @@ pub trait Lane:
     ) -> Self;
 }
 
+/// The smallest of `table[i]`, `table[i + 1]`, `table[i + stride]`, `table[i + stride + 1]`:
+/// one lane of [`Lane::u_min_block_unchecked`].
+///
+/// # Safety
+/// `i + stride + 1 < table.len()`.
+#[inline(always)]
+unsafe fn min_block_at(table: &[u32], i: usize, stride: usize) -> u32 {
+    // SAFETY: the caller's contract.
+    let at = |k: usize| unsafe { *table.get_unchecked(k) };
+    at(i)
+        .min(at(i + 1))
+        .min(at(i + stride))
+        .min(at(i + stride + 1))
+}
+
 /// Panics unless `lo..=hi` lies inside `0..len` (a gather's or block's index range).
 #[inline(always)]
 fn check(lo: i64, hi: i64, len: usize) {
@@ -306,13 +321,8 @@ impl Lane for f32 {
     }
     #[inline(always)]
     unsafe fn u_min_block_unchecked(table: &[u32], i: u32, stride: usize) -> u32 {
-        let i = i as usize;
         // SAFETY: the caller guarantees `i + stride + 1 < table.len()`.
-        let at = |k: usize| unsafe { *table.get_unchecked(k) };
-        at(i)
-            .min(at(i + 1))
-            .min(at(i + stride))
-            .min(at(i + stride + 1))
+        unsafe { min_block_at(table, i as usize, stride) }
     }
     #[inline(always)]
     fn u_load(data: &[u32], at: usize) -> u32 {
@@ -861,15 +871,8 @@ mod avx2 {
         #[cfg(not(target_feature = "avx2"))]
         {
             let a = i.to_array();
-            // SAFETY: the caller's contract.
-            let at = |k: usize| unsafe { *table.get_unchecked(k) };
-            u32x8::new(std::array::from_fn(|k| {
-                let i = a[k] as usize;
-                at(i)
-                    .min(at(i + 1))
-                    .min(at(i + stride))
-                    .min(at(i + stride + 1))
-            }))
+            // SAFETY: the caller's contract, lane by lane.
+            u32x8::new(a.map(|i| unsafe { super::min_block_at(table, i as usize, stride) }))
         }
     }
 

@@ -18,20 +18,22 @@ pub fn pixel_level<L: Lane>(table: &KernelTable, occluded: L, depth: L, slab: u3
     let has_occluder = occluded.gt(L::splat(OCCLUSION_EPS));
     let mean_depth = depth / L::select(has_occluder, occluded, one);
     let h = (L::splat(slab as f32) - mean_depth) + L::splat(0.5);
-    let top = L::splat(table.level_of.len().saturating_sub(1) as f32);
+    // The table's last entry bounds the distance (a value) and the index (a proof, below).
+    let entries = table.level_of.len();
+    assert!(
+        (1..=i32::MAX as usize).contains(&entries),
+        "a level table of {entries} entries"
+    );
+    let last = entries - 1;
+    let top = L::splat(last as f32);
     let h = L::select(h.lt(one), one, h);
     let h = L::select(h.gt(top), top, h);
     let h = L::select(has_occluder, h, one).trunc_u32();
     // h ≤ top already (NaN truncates to 0): the minimum changes no index and proves the bounds
     // once, where a checked gather reduced the lanes to their largest per chunk. A proof, not an
     // operation on the value: the WGSL mirror has no counterpart.
-    let entries = table.level_of.len();
-    assert!(
-        (1..=i32::MAX as usize).contains(&entries),
-        "a level table of {entries} entries"
-    );
-    let h = L::u_min(h, L::u_splat(entries as u32 - 1));
-    // SAFETY: every lane's index is below `level_of.len()` (checked not empty above).
+    let h = L::u_min(h, L::u_splat(last as u32));
+    // SAFETY: every lane's index is at most `last`, below `level_of.len()`.
     let level = unsafe { L::u_gather_unchecked(&table.level_of, h) };
     L::u_select(has_occluder, level, L::u_splat(LIT_LEVEL))
 }

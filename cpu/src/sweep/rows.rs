@@ -71,8 +71,13 @@ fn fill_quiet(ctx: &SlabContext<'_>, row: &mut RowState<'_>, x0: usize, lanes: u
     let w = plan.grid_width as usize;
     let planes = plan.planes_per_light();
     // One pixel's planes: its channels at 1 (0 when dark), its depth plane at 0.
-    let mut pixel = [0.0f32; 4];
-    pixel[..plan.channels as usize].fill(if dark { 0.0 } else { 1.0 });
+    let pixel: [f32; 4] = std::array::from_fn(|k| {
+        if dark || plan.is_depth_plane(k) {
+            0.0
+        } else {
+            1.0
+        }
+    });
     // Pixel-interleaved (see `LightPlanes`): each light's pixels x0.. are one run.
     for l in 0..plan.lights.len() {
         let run = &mut row.light[light_block(plan, l) + x0 * planes..][..lanes * planes];
