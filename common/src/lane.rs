@@ -131,11 +131,13 @@ pub trait Lane:
     fn pixel_order<const C: usize>(planes: [Self; C]) -> [Self; C];
     /// The inverse of [`Lane::pixel_order`].
     fn plane_order<const C: usize>(pixels: [Self; C]) -> [Self; C];
-    /// Plane c's lane i from slot c of `sums[i]` (per-lane sums of pixel-interleaved planes).
-    fn from_lane_sums<const C: usize>(sums: &[f32x8; MAX_LANES]) -> [Self; C];
-    /// The inverse of [`Lane::from_lane_sums`]: lane i's planes in slots 0..C of value i (the
-    /// other slots 0, and the values of lanes beyond `LANES`).
-    fn to_lane_sums<const C: usize>(planes: &[Self; C]) -> [f32x8; MAX_LANES];
+    /// Plane c's lane i from slot c of half `i / 4` of `pairs[i % 4]`: per-lane sums of
+    /// pixel-interleaved planes (C ≤ 4), two lanes to a value (lanes i and i + 4), as
+    /// [`load_halves`] reads them.
+    fn from_lane_pairs<const C: usize>(pairs: &[f32x8; 4]) -> [Self; C];
+    /// The inverse of [`Lane::from_lane_pairs`] (the other slots 0, and those of lanes beyond
+    /// `LANES`).
+    fn to_lane_pairs<const C: usize>(planes: &[Self; C]) -> [f32x8; 4];
     /// `self != o` (true for NaN).
     fn ne(self, o: Self) -> Self::M;
     /// Lane-wise or of two masks.
@@ -394,15 +396,16 @@ impl Lane for f32 {
         pixels
     }
     #[inline(always)]
-    fn from_lane_sums<const C: usize>(sums: &[f32x8; MAX_LANES]) -> [f32; C] {
-        let v = sums[0].to_array();
+    fn from_lane_pairs<const C: usize>(pairs: &[f32x8; 4]) -> [f32; C] {
+        let v = pairs[0].to_array();
         std::array::from_fn(|c| v[c])
     }
     #[inline(always)]
-    fn to_lane_sums<const C: usize>(planes: &[f32; C]) -> [f32x8; MAX_LANES] {
-        let mut sums = [f32x8::splat(0.0); MAX_LANES];
-        sums[0] = f32x8::new(std::array::from_fn(|s| if s < C { planes[s] } else { 0.0 }));
-        sums
+    fn to_lane_pairs<const C: usize>(planes: &[f32; C]) -> [f32x8; 4] {
+        const { assert!(C <= 4, "a lane pair holds at most 4 planes per lane") };
+        let mut pairs = [f32x8::splat(0.0); 4];
+        pairs[0] = f32x8::new(std::array::from_fn(|s| if s < C { planes[s] } else { 0.0 }));
+        pairs
     }
     #[inline(always)]
     fn ne(self, o: Self) -> bool {
@@ -637,12 +640,12 @@ impl Lane for f32x8 {
         avx2::plane_order(pixels)
     }
     #[inline(always)]
-    fn from_lane_sums<const C: usize>(sums: &[f32x8; MAX_LANES]) -> [f32x8; C] {
-        avx2::from_lane_sums(sums)
+    fn from_lane_pairs<const C: usize>(pairs: &[f32x8; 4]) -> [f32x8; C] {
+        avx2::from_lane_pairs(pairs)
     }
     #[inline(always)]
-    fn to_lane_sums<const C: usize>(planes: &[f32x8; C]) -> [f32x8; MAX_LANES] {
-        avx2::to_lane_sums(planes)
+    fn to_lane_pairs<const C: usize>(planes: &[f32x8; C]) -> [f32x8; 4] {
+        avx2::to_lane_pairs(planes)
     }
     #[inline(always)]
     fn ne(self, o: Self) -> f32x8 {
@@ -732,37 +735,29 @@ impl Lane for f32x8 {
     }
 }
 
-/// One pixel's planes in a pixel-interleaved buffer (pixel x's plane c at `x·planes + c`):
-/// `acc + p + (p moved down by planes slots)`, so that slot c (c < planes) adds `p[c]` and then
-/// `p[planes + c]`: the terms of a horizontal pixel pair, left pixel first, in the fixed sum
-/// order. Slots from `planes` on hold values nobody reads.
-#[inline(always)]
-pub fn add_pixel_pair<const PLANES: usize>(acc: f32x8, p: f32x8) -> f32x8 {
-    (acc + p) + avx2::rotate_down::<PLANES>(p)
-}
-
-/// A tap's corner weights `[w0, w1, w2, w3]` for pixel pairs of `PLANES` planes
-/// ([`add_pixel_pair`]): `[w0 ×PLANES, w1 ×PLANES, …]` for its top pair and `[w2 ×PLANES,
-/// w3 ×PLANES, …]` for its bottom one; slots from `2·PLANES` hold weights no plane's sum reads.
-/// Spread in registers (one 16-byte read, two permutes): a table of spread weights, 64 bytes per
-/// tap and row, was slower.
-#[inline(always)]
-pub fn pair_weights<const PLANES: usize>(w: [f32; 4]) -> [f32x8; 2] {
-    let both = f32x8::new([w[0], w[1], w[2], w[3], w[0], w[1], w[2], w[3]]);
-    [
-        avx2::spread::<PLANES>(both, 0),
-        avx2::spread::<PLANES>(both, 2),
-    ]
-}
-
-/// `data[at..at + 8]` as one value.
+/// The 4 floats at `a` in the low half and the 4 at `b` in the high half: two lanes' pixels
+/// (up to 4 planes each) side by side, as [`Lane::to_lane_pairs`] lays out their sums.
 ///
 /// # Safety
-/// `at + 8 <= data.len()`.
+/// `a..a + 4` and `b..b + 4` are readable.
 #[inline(always)]
-pub unsafe fn load8_unchecked(data: &[f32], at: usize) -> f32x8 {
-    // SAFETY: the caller's contract; an unaligned read of 8 floats.
-    f32x8::new(unsafe { data.as_ptr().add(at).cast::<[f32; 8]>().read_unaligned() })
+pub unsafe fn load_halves(a: *const f32, b: *const f32) -> f32x8 {
+    // SAFETY: the caller's contract.
+    unsafe { avx2::load_halves(a, b) }
+}
+
+/// [`load_halves`] of two lanes' corner weights `[w0, w1, w2, w3]`.
+#[inline(always)]
+pub fn weight_halves(a: &[f32; 4], b: &[f32; 4]) -> f32x8 {
+    // SAFETY: each reference holds 4 floats.
+    unsafe { avx2::load_halves(a.as_ptr(), b.as_ptr()) }
+}
+
+/// Slot k of each half of `w` spread over its half, for k = 0..4: two lanes' corner weights
+/// ([`weight_halves`]) as factors for their pixels ([`load_halves`]). One in-half permute each.
+#[inline(always)]
+pub fn splat_within_halves(w: f32x8) -> [f32x8; 4] {
+    avx2::splat_within_halves(w)
 }
 
 /// Gathers for the 8-lane type where the build has AVX2 (`.cargo/config.toml`): one bounds check
@@ -1200,28 +1195,26 @@ mod avx2 {
         }
     }
 
-    /// [`super::Lane::from_lane_sums`]: lanes i and i + 4 side by side, then a transpose by
-    /// halves (C ≤ 4).
+    /// [`super::Lane::from_lane_pairs`]: a transpose by halves (C ≤ 4).
     #[inline(always)]
-    pub(super) fn from_lane_sums<const C: usize>(sums: &[f32x8; 8]) -> [f32x8; C] {
+    pub(super) fn from_lane_pairs<const C: usize>(pairs: &[f32x8; 4]) -> [f32x8; C] {
         #[cfg(target_feature = "avx2")]
         // SAFETY: register shuffles; this build has AVX2.
         unsafe {
-            let s: [__m256; 8] = sums.map(cast);
-            let pair = |i: usize| _mm256_permute2f128_ps::<0x20>(s[i], s[i + 4]);
-            let out = transpose_halves([pair(0), pair(1), pair(2), pair(3)]);
+            let out = transpose_halves(pairs.map(cast));
             return std::array::from_fn(|c| cast(out[c]));
         }
         #[allow(unreachable_code)]
         {
-            let a = sums.map(|v| v.to_array());
-            std::array::from_fn(|c| f32x8::new(std::array::from_fn(|i| a[i][c])))
+            let a = pairs.map(|v| v.to_array());
+            std::array::from_fn(|c| f32x8::new(std::array::from_fn(|i| a[i % 4][4 * (i / 4) + c])))
         }
     }
 
-    /// [`super::Lane::to_lane_sums`]: the inverse of [`from_lane_sums`] (slots from C on 0).
+    /// [`super::Lane::to_lane_pairs`]: the inverse of [`from_lane_pairs`] (slots from C on 0).
     #[inline(always)]
-    pub(super) fn to_lane_sums<const C: usize>(planes: &[f32x8; C]) -> [f32x8; 8] {
+    pub(super) fn to_lane_pairs<const C: usize>(planes: &[f32x8; C]) -> [f32x8; 4] {
+        const { assert!(C <= 4, "a lane pair holds at most 4 planes per lane") };
         #[cfg(target_feature = "avx2")]
         // SAFETY: register shuffles; this build has AVX2.
         unsafe {
@@ -1232,56 +1225,60 @@ mod avx2 {
                     _mm256_setzero_ps()
                 }
             });
-            let u = transpose_halves(p);
-            let zero = _mm256_setzero_ps();
-            return std::array::from_fn(|i| {
-                if i < 4 {
-                    _mm256_permute2f128_ps::<0x80>(u[i], zero)
-                } else {
-                    _mm256_permute2f128_ps::<0x81>(u[i - 4], zero)
-                }
-            })
-            .map(cast);
+            return transpose_halves(p).map(cast);
         }
         #[allow(unreachable_code)]
         {
             let a = planes.map(|v| v.to_array());
-            std::array::from_fn(|i| {
-                f32x8::new(std::array::from_fn(|s| if s < C { a[s][i] } else { 0.0 }))
+            std::array::from_fn(|k| {
+                f32x8::new(std::array::from_fn(|s| {
+                    let (lane, c) = (k + 4 * (s / 4), s % 4);
+                    if c < C { a[c][lane] } else { 0.0 }
+                }))
             })
         }
     }
 
-    /// Slot s takes slot `first + s / PLANES` (mod 8): one permute.
+    /// [`super::load_halves`]: one 16-byte load and one inserted.
+    ///
+    /// # Safety
+    /// `a..a + 4` and `b..b + 4` are readable.
     #[inline(always)]
-    pub(super) fn spread<const PLANES: usize>(v: f32x8, first: usize) -> f32x8 {
-        let from = |s: usize| (first + s / PLANES) % 8;
+    pub(super) unsafe fn load_halves(a: *const f32, b: *const f32) -> f32x8 {
         #[cfg(target_feature = "avx2")]
-        // SAFETY: a register permute; this build has AVX2.
+        // SAFETY: the caller's contract; unaligned 16-byte reads.
         unsafe {
-            let from = wide::i32x8::new(std::array::from_fn(|s| from(s) as i32));
-            cast(_mm256_permutevar8x32_ps(cast(v), cast(from)))
+            return cast(_mm256_loadu2_m128(b, a));
         }
-        #[cfg(not(target_feature = "avx2"))]
-        {
-            let a = v.to_array();
-            f32x8::new(std::array::from_fn(|s| a[from(s)]))
+        #[allow(unreachable_code)]
+        // SAFETY: the caller's contract.
+        unsafe {
+            let (lo, hi) = (
+                a.cast::<[f32; 4]>().read_unaligned(),
+                b.cast::<[f32; 4]>().read_unaligned(),
+            );
+            f32x8::new([lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]])
         }
     }
 
-    /// Slot i takes slot `(i + BY) mod 8`: one permute.
+    /// [`super::splat_within_halves`]: one in-half permute per slot.
     #[inline(always)]
-    pub(super) fn rotate_down<const BY: usize>(v: f32x8) -> f32x8 {
+    pub(super) fn splat_within_halves(w: f32x8) -> [f32x8; 4] {
         #[cfg(target_feature = "avx2")]
-        // SAFETY: a register permute; this build has AVX2.
+        // SAFETY: register permutes; this build has AVX2.
         unsafe {
-            let from = wide::i32x8::new(std::array::from_fn(|i| ((i + BY) % 8) as i32));
-            cast(_mm256_permutevar8x32_ps(cast(v), cast(from)))
+            let v: __m256 = cast(w);
+            return [
+                cast(_mm256_permute_ps::<0x00>(v)),
+                cast(_mm256_permute_ps::<0x55>(v)),
+                cast(_mm256_permute_ps::<0xAA>(v)),
+                cast(_mm256_permute_ps::<0xFF>(v)),
+            ];
         }
-        #[cfg(not(target_feature = "avx2"))]
+        #[allow(unreachable_code)]
         {
-            let a = v.to_array();
-            f32x8::new(std::array::from_fn(|i| a[(i + BY) % 8]))
+            let a = w.to_array();
+            std::array::from_fn(|k| f32x8::new(std::array::from_fn(|s| a[4 * (s / 4) + k])))
         }
     }
 
@@ -1579,8 +1576,8 @@ mod tests {
         }
     }
 
-    /// [`Lane::pixel_order`], [`Lane::plane_order`], [`Lane::from_lane_sums`] and
-    /// [`Lane::to_lane_sums`] of `C` planes against their definitions, element by element.
+    /// [`Lane::pixel_order`], [`Lane::plane_order`], [`Lane::from_lane_pairs`] and
+    /// [`Lane::to_lane_pairs`] of `C` planes against their definitions, element by element.
     fn check_orders<const C: usize>() {
         let planes: [f32x8; C] =
             std::array::from_fn(|c| f32x8::new(std::array::from_fn(|i| (10 * c + i) as f32)));
@@ -1593,24 +1590,25 @@ mod tests {
         }
         let back = f32x8::plane_order(pixels).map(|v| v.to_array());
         assert_eq!(back, planes.map(|v| v.to_array()), "{C} planes back");
-        let sums = f32x8::to_lane_sums(&planes);
-        for (i, v) in sums.iter().enumerate() {
+        let pairs = f32x8::to_lane_pairs(&planes);
+        for (k, v) in pairs.iter().enumerate() {
             for (s, got) in v.to_array().into_iter().enumerate() {
-                let want = if s < C { (10 * s + i) as f32 } else { 0.0 };
-                assert_eq!(got, want, "{C} planes: lane {i} slot {s}");
+                let (lane, c) = (k + 4 * (s / 4), s % 4);
+                let want = if c < C { (10 * c + lane) as f32 } else { 0.0 };
+                assert_eq!(got, want, "{C} planes: value {k} slot {s}");
             }
         }
-        let from = f32x8::from_lane_sums::<C>(&sums).map(|v| v.to_array());
+        let from = f32x8::from_lane_pairs::<C>(&pairs).map(|v| v.to_array());
         assert_eq!(
             from,
             planes.map(|v| v.to_array()),
-            "{C} planes from lane sums"
+            "{C} planes from lane pairs"
         );
         // One lane: plane order is pixel order, and lane 0's sums are its planes.
         let one: [f32; C] = std::array::from_fn(|c| c as f32 + 0.5);
         assert_eq!(f32::pixel_order(one), one);
         assert_eq!(f32::plane_order(one), one);
-        assert_eq!(f32::from_lane_sums::<C>(&f32::to_lane_sums(&one)), one);
+        assert_eq!(f32::from_lane_pairs::<C>(&f32::to_lane_pairs(&one)), one);
     }
 
     #[test]
@@ -1622,38 +1620,24 @@ mod tests {
     }
 
     #[test]
-    fn pair_weights_spread_each_corner_over_its_pixel_planes() {
-        fn check<const P: usize>() {
-            let w = [0.5f32, 0.25, 0.125, 0.0625];
-            let [top, bottom] = pair_weights::<P>(w);
-            let (top, bottom) = (top.to_array(), bottom.to_array());
-            for s in 0..2 * P {
-                assert_eq!(top[s], w[s / P], "{P} planes, top slot {s}");
-                assert_eq!(bottom[s], w[2 + s / P], "{P} planes, bottom slot {s}");
-            }
+    fn halves_hold_two_lanes_reads_and_each_halfs_weights_spread_over_it() {
+        let data: Vec<f32> = (0..64u32).map(|k| unit(mix32(k ^ 0x77))).collect();
+        for (a, b) in [(0usize, 60usize), (13, 2), (7, 7), (59, 31)] {
+            // SAFETY: a + 4 and b + 4 are at most 64 = data.len().
+            let got = unsafe { load_halves(data.as_ptr().add(a), data.as_ptr().add(b)) };
+            let want: [f32; 8] =
+                std::array::from_fn(|s| data[if s < 4 { a + s } else { b + s - 4 }]);
+            assert_eq!(got.to_array(), want, "reads at {a} and {b}");
         }
-        check::<1>();
-        check::<2>();
-        check::<3>();
-        check::<4>();
-    }
-
-    #[test]
-    fn a_pixel_pair_adds_its_left_pixel_then_its_right_one() {
-        let v = |seed: u32| f32x8::new(std::array::from_fn(|i| unit(mix32(seed * 8 + i as u32))));
-        for seed in 0..200u32 {
-            let (acc, p) = (v(2 * seed), v(2 * seed + 1) * f32x8::splat(3e5));
-            let (a, q) = (acc.to_array(), p.to_array());
-            let check = |got: f32x8, planes: usize| {
-                for (c, g) in got.to_array().into_iter().enumerate().take(planes) {
-                    let want = (a[c] + q[c]) + q[planes + c];
-                    assert_eq!(g.to_bits(), want.to_bits(), "{planes} planes, slot {c}");
-                }
-            };
-            check(add_pixel_pair::<1>(acc, p), 1);
-            check(add_pixel_pair::<2>(acc, p), 2);
-            check(add_pixel_pair::<3>(acc, p), 3);
-            check(add_pixel_pair::<4>(acc, p), 4);
+        let (wa, wb) = ([0.5f32, 0.25, 0.125, 0.0625], [1.0f32, 2.0, 3.0, 4.0]);
+        let both = weight_halves(&wa, &wb);
+        assert_eq!(
+            both.to_array(),
+            [0.5, 0.25, 0.125, 0.0625, 1.0, 2.0, 3.0, 4.0]
+        );
+        for (k, spread) in splat_within_halves(both).iter().enumerate() {
+            let want: [f32; 8] = std::array::from_fn(|s| if s < 4 { wa[k] } else { wb[k] });
+            assert_eq!(spread.to_array(), want, "corner {k}");
         }
     }
 

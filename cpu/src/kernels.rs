@@ -7,7 +7,7 @@
 
 use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
-use convshadow_common::lane::{Lane, MAX_LANES, add_pixel_pair, load8_unchecked, pair_weights};
+use convshadow_common::lane::{Lane, MAX_LANES, load_halves, splat_within_halves, weight_halves};
 use convshadow_common::plan::LIT_LEVEL;
 use wide::{f32x8, i32x8};
 
@@ -925,10 +925,12 @@ impl<L: Lane> PairLoads<'_, L> {
         }
     }
 
-    /// [`PairLoads::add_taps_to`] in a pixel-interleaved buffer of `C` planes, all gathered: per
-    /// lane and tap, the top and the bottom pixel pair of every plane as one 8-float read each,
-    /// times the pair's weights ([`pair_weights`]), added to the lane's sums
-    /// ([`add_pixel_pair`]: each plane's four terms in the fixed order).
+    /// [`PairLoads::add_taps_to`] in a pixel-interleaved buffer of `C` planes (C ≤ 4), all
+    /// gathered: two lanes to a value (lanes i and i + 4, [`Lane::to_lane_pairs`]), each corner
+    /// pixel's planes one 16-byte read per lane ([`load_halves`]), times its weight spread over
+    /// the lane's half ([`splat_within_halves`]), added in the fixed order: top left, top right,
+    /// bottom left, bottom right. Each lane's arithmetic is its own, so any pairing gives the
+    /// same bits; pairs halve the multiplies and adds of one value per lane.
     #[inline(always)]
     fn add_pixel_pairs<const C: usize>(
         &self,
@@ -946,12 +948,14 @@ impl<L: Lane> PairLoads<'_, L> {
         let mut lane_shift = [0u32; MAX_LANES];
         L::u_store(self.phases, &mut rows);
         L::u_store(self.lane_shift, &mut lane_shift);
-        // Lane i's sums in slots 0..C of `sums[i]`.
-        let mut sums = L::to_lane_sums::<C>(&std::array::from_fn(|c| acc[c]));
+        let mut sums = L::to_lane_pairs::<C>(&std::array::from_fn(|c| acc[c]));
+        // One value per pair of lanes (i, i + 4); one lane alone shares its value with itself
+        // (the high half's sums are dropped).
+        let (pairs, partner) = if L::LANES == 8 { (4, 4) } else { (L::LANES, 0) };
         let checked = bounds == Bounds::PerTap;
         if !checked {
-            // One bounds proof for every tap (as `add_plane_pairs`'): lane i reads 8 floats at
-            // `pixel + rel[i]` and `rs` further.
+            // One bounds proof for every tap (as `add_plane_pairs`'): lane i reads 4 floats at
+            // `pixel + rel[i]`, `+ C`, `+ rs` and `+ rs + C`, all below `+ rs + 8`.
             let [lo, hi] = self.offset_span;
             let lane_span = ((L::LANES - 1) * C) as i64;
             let (lo, hi) = (lo + self.shift, hi + self.shift + lane_span);
@@ -979,32 +983,51 @@ impl<L: Lane> PairLoads<'_, L> {
             "per-lane gather: row {highest} or tap {} beyond the columns",
             taps.end
         );
+        // Lane j's reads start `rel[j]` past `pixel`.
+        let rel = |entry: usize, j: usize| {
+            // SAFETY: `entry` lies in the columns (checked above).
+            let offset = unsafe { *columns.offset.get_unchecked(entry) };
+            offset.wrapping_add(lane_shift[j]) as i32 as isize
+        };
+        let origin = data.as_ptr().wrapping_add(self.pixel);
         for k in taps {
-            for (i, sum) in sums.iter_mut().enumerate().take(L::LANES) {
-                let entry = k * pc + rows[i] as usize;
-                // SAFETY: `entry` lies in both columns (checked above).
-                let (offset, weights) = unsafe {
-                    (
-                        *columns.offset.get_unchecked(entry),
-                        *columns.weights.get_unchecked(entry),
+            for (i, sum) in sums.iter_mut().enumerate().take(pairs) {
+                let (ea, eb) = (
+                    k * pc + rows[i] as usize,
+                    k * pc + rows[i + partner] as usize,
+                );
+                let (ra, rb) = (rel(ea, i), rel(eb, i + partner));
+                // SAFETY: both entries lie in the weights column (checked above).
+                let w = unsafe {
+                    weight_halves(
+                        columns.weights.get_unchecked(ea),
+                        columns.weights.get_unchecked(eb),
                     )
                 };
-                let rel = offset.wrapping_add(lane_shift[i]) as i32;
-                let at = (self.pixel as i64 + i64::from(rel)) as usize;
-                let [top, bottom] = pair_weights::<C>(weights);
-                let (t, b) = if checked {
-                    let load = |at: usize| f32x8::new(data[at..at + 8].try_into().unwrap());
-                    (load(at), load(at + rs))
-                } else {
-                    // SAFETY: within the span proved above: rel[i] = i·C + shift + the offset
-                    // of a tap of lane i's row (`LaneRows::within`, from `TapColumns::new`).
-                    unsafe { (load8_unchecked(data, at), load8_unchecked(data, at + rs)) }
+                let w = splat_within_halves(w);
+                let corner = |by: usize| {
+                    if checked {
+                        let (a, b) = (self.pixel as isize + ra, self.pixel as isize + rb);
+                        let (a, b) = (a as usize + by, b as usize + by);
+                        let (lo, hi) = (&data[a..a + 4], &data[b..b + 4]);
+                        f32x8::new(std::array::from_fn(
+                            |s| if s < 4 { lo[s] } else { hi[s - 4] },
+                        ))
+                    } else {
+                        // SAFETY: within the span proved above: rel[i] = i·C + shift + the
+                        // offset of a tap of lane i's row (`LaneRows::within`, from
+                        // `TapColumns::new`), and `by + 4 ≤ rs + 8`.
+                        unsafe { load_halves(origin.offset(ra).add(by), origin.offset(rb).add(by)) }
+                    }
                 };
-                *sum = add_pixel_pair::<C>(*sum, t * top);
-                *sum = add_pixel_pair::<C>(*sum, b * bottom);
+                // `a += p` is `a = a + p`: no fused multiply-add (DESIGN §3).
+                *sum += corner(0) * w[0];
+                *sum += corner(C) * w[1];
+                *sum += corner(rs) * w[2];
+                *sum += corner(rs + C) * w[3];
             }
         }
-        acc[..C].copy_from_slice(&L::from_lane_sums::<C>(&sums));
+        acc[..C].copy_from_slice(&L::from_lane_pairs::<C>(&sums));
     }
 
     /// [`PairLoads::add_taps_to`] by one gather per corner, plane and tap (some planes of a
