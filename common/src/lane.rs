@@ -746,15 +746,16 @@ pub unsafe fn load_halves(a: *const f32, b: *const f32) -> f32x8 {
     unsafe { avx2::load_halves(a, b) }
 }
 
-/// [`load_halves`] of two lanes' corner weights `[w0, w1, w2, w3]`.
+/// [`load_halves`] of two lanes' 4 floats held by reference (a tap's corner weights `[w0, w1,
+/// w2, w3]`, or a pixel's planes read with a bounds check).
 #[inline(always)]
-pub fn weight_halves(a: &[f32; 4], b: &[f32; 4]) -> f32x8 {
+pub fn halves(a: &[f32; 4], b: &[f32; 4]) -> f32x8 {
     // SAFETY: each reference holds 4 floats.
     unsafe { avx2::load_halves(a.as_ptr(), b.as_ptr()) }
 }
 
 /// Slot k of each half of `w` spread over its half, for k = 0..4: two lanes' corner weights
-/// ([`weight_halves`]) as factors for their pixels ([`load_halves`]). One in-half permute each.
+/// ([`halves`]) as factors for their pixels ([`load_halves`]). One in-half permute each.
 #[inline(always)]
 pub fn splat_within_halves(w: f32x8) -> [f32x8; 4] {
     avx2::splat_within_halves(w)
@@ -1630,7 +1631,7 @@ mod tests {
             assert_eq!(got.to_array(), want, "reads at {a} and {b}");
         }
         let (wa, wb) = ([0.5f32, 0.25, 0.125, 0.0625], [1.0f32, 2.0, 3.0, 4.0]);
-        let both = weight_halves(&wa, &wb);
+        let both = halves(&wa, &wb);
         assert_eq!(
             both.to_array(),
             [0.5, 0.25, 0.125, 0.0625, 1.0, 2.0, 3.0, 4.0]

@@ -7,9 +7,9 @@
 
 use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
-use convshadow_common::lane::{Lane, MAX_LANES, load_halves, splat_within_halves, weight_halves};
+use convshadow_common::lane::{Lane, MAX_LANES, halves, load_halves, splat_within_halves};
 use convshadow_common::plan::LIT_LEVEL;
-use wide::{f32x8, i32x8};
+use wide::i32x8;
 
 /// Value read outside the buffer: the unoccluded light.
 pub const OUTSIDE: f32 = 1.0;
@@ -999,7 +999,7 @@ impl<L: Lane> PairLoads<'_, L> {
                 let (ra, rb) = (rel(ea, i), rel(eb, i + partner));
                 // SAFETY: both entries lie in the weights column (checked above).
                 let w = unsafe {
-                    weight_halves(
+                    halves(
                         columns.weights.get_unchecked(ea),
                         columns.weights.get_unchecked(eb),
                     )
@@ -1009,10 +1009,8 @@ impl<L: Lane> PairLoads<'_, L> {
                     if checked {
                         let (a, b) = (self.pixel as isize + ra, self.pixel as isize + rb);
                         let (a, b) = (a as usize + by, b as usize + by);
-                        let (lo, hi) = (&data[a..a + 4], &data[b..b + 4]);
-                        f32x8::new(std::array::from_fn(
-                            |s| if s < 4 { lo[s] } else { hi[s - 4] },
-                        ))
+                        let four = |at: usize| <&[f32; 4]>::try_from(&data[at..at + 4]).unwrap();
+                        halves(four(a), four(b))
                     } else {
                         // SAFETY: within the span proved above: rel[i] = i·C + shift + the
                         // offset of a tap of lane i's row (`LaneRows::within`, from
