@@ -703,7 +703,7 @@ impl Lane for f32x8 {
     }
     #[inline(always)]
     fn u_largest(a: u32x8) -> u32 {
-        a.reduce_max()
+        avx2::largest(a)
     }
     #[inline(always)]
     fn u_uniform(a: u32x8) -> Option<u32> {
@@ -1061,24 +1061,30 @@ mod avx2 {
         }
     }
 
-    /// Slot m of the result: slot `from[m]` of the source whose mask has slot m set (one
-    /// permute per source, one blend each).
+    /// Three planes' slots in the order that makes their pixel order three blends apart:
+    /// plane c's pixel `ROTATED[c][s]` at slot s, so that pixel-ordered value j's slot s (plane
+    /// (8j + s) mod 3) holds pixel (8j + s) div 3 of that plane.
+    #[cfg(target_feature = "avx2")]
+    const ROTATED: [[i32; 8]; 3] = [
+        [0, 3, 6, 1, 4, 7, 2, 5],
+        [5, 0, 3, 6, 1, 4, 7, 2],
+        [2, 5, 0, 3, 6, 1, 4, 7],
+    ];
+    /// The inverse permutations of [`ROTATED`]: pixel i of plane c sits at slot
+    /// `UNROTATED[c][i]`.
+    #[cfg(target_feature = "avx2")]
+    const UNROTATED: [[i32; 8]; 3] = [
+        [0, 3, 6, 1, 4, 7, 2, 5],
+        [1, 4, 7, 2, 5, 0, 3, 6],
+        [2, 5, 0, 3, 6, 1, 4, 7],
+    ];
+
+    /// Slots 0, 3, 6 from `a`, 1, 4, 7 from `b`, 2, 5 from `c` (two immediate blends).
     #[cfg(target_feature = "avx2")]
     #[inline(always)]
-    unsafe fn permute_and_pick<const C: usize>(
-        sources: &[__m256; C],
-        from: [i32; 8],
-        masks: &[[i32; 8]; C],
-    ) -> __m256 {
-        // SAFETY: register permutes and blends; this build has AVX2.
-        unsafe {
-            let mut out = _mm256_setzero_ps();
-            for (source, mask) in sources.iter().zip(masks) {
-                let moved = _mm256_permutevar8x32_ps(*source, cast(from));
-                out = _mm256_blendv_ps(out, moved, cast(*mask));
-            }
-            out
-        }
+    unsafe fn blend_thirds(a: __m256, b: __m256, c: __m256) -> __m256 {
+        // SAFETY: register blends; this build has AVX2.
+        unsafe { _mm256_blend_ps::<0b0010_0100>(_mm256_blend_ps::<0b1001_0010>(a, b), c) }
     }
 
     /// Where slot m of pixel-ordered value j comes from: (plane, pixel) = ((8j + m) mod C,
@@ -1116,18 +1122,18 @@ mod avx2 {
                     ];
                     return std::array::from_fn(|j| cast(out[j]));
                 }
-                _ => {
-                    let mut out = [f32x8::splat(0.0); C];
-                    for (j, value) in out.iter_mut().enumerate() {
-                        let (mut from, mut masks) = ([0i32; 8], [[0i32; 8]; C]);
-                        for m in 0..8 {
-                            let (c, i) = pixel_slot(C, j, m);
-                            (from[m], masks[c][m]) = (i as i32, -1);
-                        }
-                        *value = cast(permute_and_pick(&p, from, &masks));
-                    }
-                    return out;
+                3 => {
+                    // Each plane rotated once (ROTATED), then every value three blends.
+                    let [r, g, b] =
+                        [0, 1, 2].map(|c| _mm256_permutevar8x32_ps(p[c], cast(ROTATED[c])));
+                    let out = [
+                        blend_thirds(r, g, b),
+                        blend_thirds(b, r, g),
+                        blend_thirds(g, b, r),
+                    ];
+                    return std::array::from_fn(|j| cast(out[j]));
                 }
+                _ => {}
             }
         }
         #[allow(unreachable_code)]
@@ -1169,19 +1175,20 @@ mod avx2 {
                     ]);
                     return std::array::from_fn(|c| cast(out[c]));
                 }
-                _ => {
-                    let mut out = [f32x8::splat(0.0); C];
-                    for (c, plane) in out.iter_mut().enumerate() {
-                        // Plane c's pixel i is slot (iC + c) mod 8 of value (iC + c) div 8.
-                        let (mut from, mut masks) = ([0i32; 8], [[0i32; 8]; C]);
-                        for i in 0..8 {
-                            let at = i * C + c;
-                            (from[i], masks[at / 8][i]) = ((at % 8) as i32, -1);
-                        }
-                        *plane = cast(permute_and_pick(&v, from, &masks));
-                    }
-                    return out;
+                3 => {
+                    // [`pixel_order`]'s blends undone (each plane's slots, rotated), then each
+                    // plane's rotation (UNROTATED).
+                    let rotated = [
+                        blend_thirds(v[0], v[1], v[2]),
+                        blend_thirds(v[2], v[0], v[1]),
+                        blend_thirds(v[1], v[2], v[0]),
+                    ];
+                    let out: [__m256; 3] = std::array::from_fn(|c| {
+                        _mm256_permutevar8x32_ps(rotated[c], cast(UNROTATED[c]))
+                    });
+                    return std::array::from_fn(|c| cast(out[c]));
                 }
+                _ => {}
             }
         }
         #[allow(unreachable_code)]
@@ -1281,6 +1288,23 @@ mod avx2 {
             let a = w.to_array();
             std::array::from_fn(|k| f32x8::new(std::array::from_fn(|s| a[4 * (s / 4) + k])))
         }
+    }
+
+    /// [`super::Lane::u_largest`]: three maxima of halves (`wide`'s `reduce_max` goes lane by
+    /// lane).
+    #[inline(always)]
+    pub(super) fn largest(a: u32x8) -> u32 {
+        #[cfg(target_feature = "avx2")]
+        // SAFETY: register shuffles and maxima; this build has AVX2.
+        unsafe {
+            let v: __m256i = cast(a);
+            let m = _mm_max_epu32(_mm256_castsi256_si128(v), _mm256_extracti128_si256::<1>(v));
+            let m = _mm_max_epu32(m, _mm_shuffle_epi32::<0b01_00_11_10>(m));
+            let m = _mm_max_epu32(m, _mm_shuffle_epi32::<0b10_11_00_01>(m));
+            return _mm_cvtsi128_si32(m) as u32;
+        }
+        #[allow(unreachable_code)]
+        a.reduce_max()
     }
 
     /// [`super::Lane::shift_lanes`]: one permute and one blend.
@@ -1747,6 +1771,18 @@ mod tests {
                 (f32::u_largest(lanes[3]), f32::u_uniform(lanes[3])),
                 (lanes[3], Some(lanes[3]))
             );
+        }
+        // Full-range values, the largest in each lane in turn (the reduction visits every lane).
+        for at in 0..8 {
+            for seed in 0..50u32 {
+                let mut lanes: [u32; 8] = std::array::from_fn(|i| mix32(seed * 8 + i as u32) >> 1);
+                lanes[at] = u32::MAX - seed;
+                assert_eq!(
+                    f32x8::u_largest(u32x8::new(lanes)),
+                    u32::MAX - seed,
+                    "{lanes:?}"
+                );
+            }
         }
     }
 
