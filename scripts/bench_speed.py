@@ -8,8 +8,10 @@ render the same image: e.g. `--penumbra iterated --guard-band 0` against a relea
 those options); `--pairs-only` stops after the old-vs-new tables.
 
 Every comparison alternates the binaries (or paths, or thread counts) run by run, so a shared
-machine's load falls on both alike, and reports medians and their ratio; only ratios from one
-run mean something on a noisy machine. Each case also checks that both runs wrote the same
+machine's load falls on both alike, and reports medians and their ratio, the median of the
+per-round ratios (A and B run back to back: steadier when the machine's speed drifts) and the
+median per-round ratio of `seconds_sweep` (the sweep alone); only ratios from one run mean
+something on a noisy machine. Each case also checks that both runs wrote the same
 `image_hash`. Prints Markdown tables: the issue's ratios, every kernel, and how the sweep's time
 grows with slabs, pixels and lights (NEW binary only). Times: wall seconds of the whole command
 for 2-thread cases, user CPU seconds for 1-thread cases, `seconds_sweep` for the scaling tables.
@@ -44,9 +46,11 @@ def run(binary, args):
     return wall, user, json.loads(stats.read_text())
 
 
-def alternate(variants, reps, measure):
+def alternate(variants, reps, measure, runs=None):
     """variants: {name: (binary, args)}; runs them in turn `reps` times (order rotating).
-    Returns {name: median of measure(wall, user, stats)} and the set of hashes seen per name."""
+    Returns {name: median of measure(wall, user, stats)} and the set of hashes seen per name;
+    `runs`, when given, receives per name the list of (measure, seconds_sweep) of every run in
+    round order."""
     values = {k: [] for k in variants}
     hashes = {k: set() for k in variants}
     names = list(variants)
@@ -57,6 +61,8 @@ def alternate(variants, reps, measure):
             wall, user, stats = run(b, a)
             values[k].append(measure(wall, user, stats))
             hashes[k].add(stats["image_hash"])
+            if runs is not None:
+                runs.setdefault(k, []).append((values[k][-1], stats["seconds_sweep"]))
     return {k: statistics.median(v) for k, v in values.items()}, hashes
 
 
@@ -126,17 +132,23 @@ def main():
     rows = []
 
     def pair(label, a, b, measure, unit, names=("old", "new")):
-        med, h = alternate({names[0]: a, names[1]: b}, reps, measure)
+        runs = {}
+        med, h = alternate({names[0]: a, names[1]: b}, reps, measure, runs)
         check(label, h)
         x, y = med[names[0]], med[names[1]]
-        ratio = (y / x) if unit == "M/s" else (x / y)
-        rows.append(f"| {label} | {x:.3f} {unit} | {y:.3f} {unit} | **{ratio:.2f}×** |")
+        faster = (lambda p, q: q / p) if unit == "M/s" else (lambda p, q: p / q)
+        ratio = faster(x, y)
+        # Per round (A and B run back to back): robust to the machine's speed drifting between
+        # rounds; and the sweep's own time, without start-up, plan and output.
+        rounds = statistics.median(faster(p[0], q[0]) for p, q in zip(runs[names[0]], runs[names[1]]))
+        sweep = statistics.median(p[1] / q[1] for p, q in zip(runs[names[0]], runs[names[1]]))
+        rows.append(f"| {label} | {x:.3f} {unit} | {y:.3f} {unit} | **{ratio:.2f}×** | {rounds:.2f}× | {sweep:.2f}× |")
         return med
 
     print(f"# bench_speed.py, {time.strftime('%Y-%m-%d %H:%M')} UTC, reps {reps}\n")
     print(f"old: {old}\nnew: {new} {o.new_args}\n")
-    rows.append("| case | A | B | B faster by |")
-    rows.append("|---|---|---|---|")
+    rows.append("| case | A | B | B faster by | per round | sweep, per round |")
+    rows.append("|---|---|---|---|---|---|")
     for sc in ["default", "bunny"]:
         pair(f"{sc}: old (A) vs new (B), SIMD, 2 threads, wall",
              (old, scene(sc) + size + ["--threads", "2"]), (new, scene(sc) + size + ["--threads", "2"] + new_args), wall, "s")
@@ -151,8 +163,8 @@ def main():
         print("\n".join(rows) + "\n")
 
     rows.clear()
-    rows.append("| kernel (default scene, 256², 256 slabs, 2 threads) | old (A) | new (B) | B faster by |")
-    rows.append("|---|---|---|---|")
+    rows.append("| kernel (default scene, 256², 256 slabs, 2 threads) | old (A) | new (B) | B faster by | per round | sweep, per round |")
+    rows.append("|---|---|---|---|---|---|")
     for k in ["ellipse2", "ellipse3", "ellipse2:slab", "poisson8", "poisson16", "gaussian:19", "box", "dirac"]:
         pair(f"`{k}`", (old, small + ["--kernel", k, "--threads", "2"]),
              (new, small + ["--kernel", k, "--threads", "2"] + new_args), rate, "M/s")
