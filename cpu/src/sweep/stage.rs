@@ -265,7 +265,17 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
         (None, None) => {
             for (l, light) in plan.lights.iter().enumerate() {
                 let t = &light.table;
-                let planes = light_planes(plan, prev, l);
+                let planes = match SHAPE {
+                    ANY_SHAPE => light_planes(plan, prev, l),
+                    // The shape's planes at compile time (the plan's, see `shape_of`): the
+                    // gather's dispatch on them and its pixel steps fold away.
+                    shape => LightPlanes {
+                        channels: ch,
+                        light_channels: ch,
+                        pixel_step: ch + usize::from(shape == RGB_DISTANCE),
+                        ..light_planes(plan, prev, l)
+                    },
+                };
                 let shift = t.slab_shift[slab];
                 let acc = &mut iin[l * ch..(l + 1) * ch];
                 let (x0, yi) = (x0 as i32, y as i32);
