@@ -370,7 +370,11 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
     let mut not_one = zero.ne(zero);
     let mut not_zero = not_one;
     let mut light_not_zero = not_one;
-    let planes = plan.planes_per_light();
+    // A shape instance's planes per light at compile time (the store's dispatch folds away).
+    let planes = match SHAPE {
+        ANY_SHAPE => plan.planes_per_light(),
+        shape => ch + usize::from(shape == RGB_DISTANCE),
+    };
     for l in 0..plan.lights.len() {
         let (mut lit_in, mut lit_out) = (zero, zero);
         let mut outs = [zero; 4];
