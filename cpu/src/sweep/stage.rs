@@ -107,17 +107,35 @@ pub(crate) fn light_block(plan: &RenderPlan, l: usize) -> usize {
     plan.light_plane(l, 0) * plan.grid_width as usize
 }
 
-/// Light `l`'s channels in the previous slab's buffer, as the gather reads them.
+/// A `SHAPE` instance's light channels and planes per light: compile-time constants where the
+/// shape fixes them (loops, the gather's dispatch and its pixel steps fold away), else the plan's.
 #[inline(always)]
-fn light_planes<'a>(plan: &RenderPlan, prev: &Previous<'a>, l: usize) -> LightPlanes<'a> {
-    let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
+fn shape_planes<const SHAPE: u8>(plan: &RenderPlan) -> (usize, usize) {
+    match SHAPE {
+        ANY_SHAPE => (plan.channels as usize, plan.planes_per_light()),
+        RGB_DISTANCE => (3, 4),
+        _ => (3, 3),
+    }
+}
+
+/// Light `l`'s channels in the previous slab's buffer, as the gather reads them (`shape`: the
+/// channels and planes per light, [`shape_planes`]).
+#[inline(always)]
+fn light_planes<'a>(
+    plan: &RenderPlan,
+    prev: &Previous<'a>,
+    l: usize,
+    shape: (usize, usize),
+) -> LightPlanes<'a> {
+    let w = plan.grid_width as usize;
+    let (ch, planes) = shape;
     LightPlanes {
         data: prev.light,
         base: light_block(plan, l),
         channels: ch,
         light_channels: ch,
         row_stride: plan.light_row_len(),
-        pixel_step: plan.planes_per_light(),
+        pixel_step: planes,
         plane_step: 1,
         width: w as i32,
         height: plan.grid_height as i32,
@@ -149,7 +167,7 @@ pub(crate) fn gather_pair(
     let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
     for (l, light) in plan.lights.iter().enumerate() {
         let t = &light.table;
-        let planes = light_planes(plan, prev, l);
+        let planes = light_planes(plan, prev, l, shape_planes::<ANY_SHAPE>(plan));
         let p = match t.phase_mode {
             PhaseMode::PerSlab => phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0),
             _ => t.slab_phase[slab],
@@ -203,10 +221,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
         SHAPE == ANY_SHAPE || SHAPE == shape_of(plan),
         "an instance for another plan"
     );
-    let ch = match SHAPE {
-        ANY_SHAPE => plan.channels as usize,
-        _ => 3,
-    };
+    let (ch, planes_per_light) = shape_planes::<SHAPE>(plan);
     let slab = ctx.slab as usize;
     let n = plan.lights.len() * ch;
 
@@ -265,17 +280,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
         (None, None) => {
             for (l, light) in plan.lights.iter().enumerate() {
                 let t = &light.table;
-                let planes = match SHAPE {
-                    ANY_SHAPE => light_planes(plan, prev, l),
-                    // The shape's planes at compile time (the plan's, see `shape_of`): the
-                    // gather's dispatch on them and its pixel steps fold away.
-                    shape => LightPlanes {
-                        channels: ch,
-                        light_channels: ch,
-                        pixel_step: ch + usize::from(shape == RGB_DISTANCE),
-                        ..light_planes(plan, prev, l)
-                    },
-                };
+                let planes = light_planes(plan, prev, l, (ch, planes_per_light));
                 let shift = t.slab_shift[slab];
                 let acc = &mut iin[l * ch..(l + 1) * ch];
                 let (x0, yi) = (x0 as i32, y as i32);
@@ -370,11 +375,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
     let mut not_one = zero.ne(zero);
     let mut not_zero = not_one;
     let mut light_not_zero = not_one;
-    // A shape instance's planes per light at compile time (the store's dispatch folds away).
-    let planes = match SHAPE {
-        ANY_SHAPE => plan.planes_per_light(),
-        shape => ch + usize::from(shape == RGB_DISTANCE),
-    };
+    let planes = planes_per_light;
     for l in 0..plan.lights.len() {
         let (mut lit_in, mut lit_out) = (zero, zero);
         let mut outs = [zero; 4];
@@ -552,7 +553,7 @@ pub(crate) fn dark_depth_chunk(
     let mut light_rows = [<f32x8 as Lane>::u_splat(0); MAX_LIGHTS];
     every_light_rows::<f32x8>(ctx, prev, row_hashes, xi, yi, interior, &mut light_rows);
     for (l, &rows) in light_rows.iter().enumerate().take(plan.lights.len()) {
-        let planes = light_planes(plan, prev, l);
+        let planes = light_planes(plan, prev, l, shape_planes::<ANY_SHAPE>(plan));
         let depth_plane = LightPlanes {
             base: planes.base + ch,
             channels: 1,
