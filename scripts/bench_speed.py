@@ -2,10 +2,12 @@
 """One benchmark run for docs/performance.md: two convshadow release binaries side by side.
 
     scripts/bench_speed.py OLD_BIN NEW_BIN [--reps N] [--quick] [--new-args "..."] [--pairs-only]
+        [--no-scaling]
 
 `--new-args` is appended to the NEW binary's arguments where it runs against OLD (so that both
 render the same image: e.g. `--penumbra iterated --guard-band 0` against a release from before
-those options); `--pairs-only` stops after the old-vs-new tables.
+those options); `--pairs-only` stops after the old-vs-new tables; `--no-scaling` leaves out only the
+time-against-work tables.
 
 Every comparison alternates the binaries (or paths, or thread counts) run by run, so a shared
 machine's load falls on both alike, and reports medians and their ratio, the median of the
@@ -117,6 +119,8 @@ def main():
     ap.add_argument("--quick", action="store_true", help="smaller images for a smoke run")
     ap.add_argument("--new-args", default="", help="extra arguments for NEW where it runs against OLD")
     ap.add_argument("--pairs-only", action="store_true", help="only the old-vs-new tables")
+    ap.add_argument("--no-scaling", action="store_true",
+                    help="every table but the time-against-work ones (the longest part)")
     o = ap.parse_args()
     new_args = shlex.split(o.new_args)
     old, new, reps = os.path.abspath(o.old), os.path.abspath(o.new), o.reps
@@ -170,7 +174,7 @@ def main():
              (new, small + ["--kernel", k, "--threads", "2"] + new_args), rate, "M/s")
     print("## Every kernel (pixel·slab·light updates per second of the sweep)\n")
     print("\n".join(rows) + "\n")
-    if o.pairs_only:
+    if o.pairs_only or o.no_scaling:
         finish(bad)
         return
     scaling_tables(new, reps, small)

@@ -5,6 +5,8 @@ use std::f64::consts::PI;
 use std::hash::Hash;
 use std::sync::{Arc, Mutex, OnceLock};
 
+use wide::f64x4;
+
 use super::*;
 
 /// `(sin t, cos t)` at the midpoints of equal angle steps, computed once per process: the moment
@@ -41,13 +43,57 @@ const ARC_STEPS: usize = 8192;
 pub(crate) fn ellipse_second_moments(r: f64) -> (f64, f64, f64) {
     const STEPS: usize = MOMENT_STEPS;
     let (mut sx, mut sy, mut len) = (0.0, 0.0, 0.0);
+    let rr = f64x4::splat(r * r);
+    // Four steps' terms at once, each in the one-step expression's order (products left to
+    // right, one correctly rounded square root); the sums still add them one step at a time, so
+    // every bit is the one-step loop's (`moments_by_lanes_are_the_bits_of_one_step_at_a_time`).
+    // The plan evaluates this integral thousands of times; the square roots bounded it.
+    for &(s, c) in moment_lanes() {
+        let ds = (s * s + rr * c * c).sqrt();
+        let (tx, ty) = ((c * c * ds).to_array(), (rr * s * s * ds).to_array());
+        for (k, ds) in ds.to_array().into_iter().enumerate() {
+            sx += tx[k];
+            sy += ty[k];
+            len += ds;
+        }
+    }
+    (sx / len, sy / len, len * 2.0 * PI / STEPS as f64)
+}
+
+/// [`moment_sin_cos`] four steps to a lane vector (see [`by_fours`]).
+fn moment_lanes() -> &'static [(f64x4, f64x4)] {
+    static TABLE: OnceLock<Vec<(f64x4, f64x4)>> = OnceLock::new();
+    TABLE.get_or_init(|| by_fours(moment_sin_cos()))
+}
+
+/// [`arc_sin_cos`] four steps to a lane vector (see [`by_fours`]).
+fn arc_lanes() -> &'static [(f64x4, f64x4)] {
+    static TABLE: OnceLock<Vec<(f64x4, f64x4)>> = OnceLock::new();
+    TABLE.get_or_init(|| by_fours(arc_sin_cos()))
+}
+
+/// A `(sin, cos)` table as lane vectors: entry i holds steps 4i..4i + 4.
+fn by_fours(table: &[(f64, f64)]) -> Vec<(f64x4, f64x4)> {
+    assert!(table.len().is_multiple_of(4), "whole lane vectors of steps");
+    let lane =
+        |q: &[(f64, f64)], f: fn(&(f64, f64)) -> f64| f64x4::new(std::array::from_fn(|k| f(&q[k])));
+    table
+        .chunks_exact(4)
+        .map(|q| (lane(q, |p| p.0), lane(q, |p| p.1)))
+        .collect()
+}
+
+/// [`ellipse_second_moments`] one step at a time: the plain loop its lanes must reproduce.
+#[cfg(test)]
+pub(crate) fn ellipse_second_moments_by_steps(r: f64) -> (f64, f64, f64) {
+    let (mut sx, mut sy, mut len) = (0.0, 0.0, 0.0);
     for &(s, c) in moment_sin_cos() {
         let ds = (s * s + r * r * c * c).sqrt();
         sx += c * c * ds;
         sy += r * r * s * s * ds;
         len += ds;
     }
-    (sx / len, sy / len, len * 2.0 * PI / STEPS as f64)
+    (sx / len, sy / len, len * 2.0 * PI / MOMENT_STEPS as f64)
 }
 
 /// A process-wide memo of a pure function of the key, which starts afresh at `capacity` entries.
@@ -163,14 +209,8 @@ pub(crate) fn ellipse_point_sets(
     count: usize,
 ) -> Vec<Vec<[f64; 2]>> {
     const STEPS: usize = ARC_STEPS;
-    // Cumulative arc length at angle samples, for inverting s(t).
-    let mut cum = Vec::with_capacity(STEPS + 1);
-    cum.push(0.0);
     let dt = 2.0 * PI / STEPS as f64;
-    for (i, &(s, c)) in arc_sin_cos().iter().enumerate() {
-        let ds = (a * a * s * s + b * b * c * c).sqrt() * dt;
-        cum.push(cum[i] + ds);
-    }
+    let cum = cumulative_arc(a, b);
     let total = cum[STEPS];
     let points_from = |start: f64| -> Vec<[f64; 2]> {
         (0..count)
@@ -194,6 +234,37 @@ pub(crate) fn ellipse_point_sets(
             .collect()
     };
     starts.iter().map(|&s| points_from(s)).collect()
+}
+
+/// Cumulative arc length of the ellipse with semi-axes (a, b) at the [`ARC_STEPS`] angle samples
+/// (from 0), for inverting s(t). Four steps' lengths at once, each in the one-step expression's
+/// order; the running sum still adds them one at a time (the bits of
+/// [`cumulative_arc_by_steps`], as [`ellipse_second_moments`]' lanes).
+pub(crate) fn cumulative_arc(a: f64, b: f64) -> Vec<f64> {
+    let mut cum = Vec::with_capacity(ARC_STEPS + 1);
+    cum.push(0.0);
+    let dt = f64x4::splat(2.0 * PI / ARC_STEPS as f64);
+    let (aa, bb) = (f64x4::splat(a * a), f64x4::splat(b * b));
+    let mut length = 0.0;
+    for &(s, c) in arc_lanes() {
+        for ds in ((aa * s * s + bb * c * c).sqrt() * dt).to_array() {
+            length += ds;
+            cum.push(length);
+        }
+    }
+    cum
+}
+
+/// [`cumulative_arc`] one step at a time: the plain loop its lanes must reproduce.
+#[cfg(test)]
+pub(crate) fn cumulative_arc_by_steps(a: f64, b: f64) -> Vec<f64> {
+    let mut cum = vec![0.0];
+    let dt = 2.0 * PI / ARC_STEPS as f64;
+    for (i, &(s, c)) in arc_sin_cos().iter().enumerate() {
+        let ds = (a * a * s * s + b * b * c * c).sqrt() * dt;
+        cum.push(cum[i] + ds);
+    }
+    cum
 }
 
 /// The `ellipseN` pattern: PHASES phases of N arc-length-equispaced points, scaled so that the

@@ -89,6 +89,29 @@ fn ellipse_variance_ratio_matches_closed_form_limits() {
 }
 
 #[test]
+fn moments_by_lanes_are_the_bits_of_one_step_at_a_time() {
+    // The moment integral and the arc-length table by lanes give the plain loops' bits for
+    // dyadic ratios, the ends and ratios spread over [0, 1] (a reassociated sum or a fused
+    // product fails here).
+    let mut rs = vec![0.0, 1.0, 0.5, 0.25, 0.75, 1e-9, 1.0 - 1e-12];
+    rs.extend((1..200).map(|i| (f64::from(i) * 0.618_033_988_75).fract()));
+    for r in rs {
+        let (lanes, steps) = (
+            ellipse_second_moments(r),
+            ellipse_second_moments_by_steps(r),
+        );
+        let bits = |m: (f64, f64, f64)| [m.0.to_bits(), m.1.to_bits(), m.2.to_bits()];
+        assert_eq!(bits(lanes), bits(steps), "r = {r}");
+        // The arc-length table of the pattern's points, for the unit ellipse and a scaled one.
+        for (a, b) in [(1.0, r), (2.5, 0.7 * r)] {
+            let (lanes, steps) = (cumulative_arc(a, b), cumulative_arc_by_steps(a, b));
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&lanes), bits(&steps), "a = {a}, b = {b}");
+        }
+    }
+}
+
+#[test]
 fn remembered_moments_give_the_bits_of_the_integral() {
     // The bisection written out with the integral itself: nearby ratios share their first steps,
     // so the later ones read remembered moments, which must be the integral's bits.
