@@ -1,5 +1,7 @@
 //! Compensation: shaping a pattern so that, read bilinearly, its response has the target Σκ.
 
+use wide::f64x4;
+
 use super::*;
 
 /// Whether the light is narrow enough that its mean is carried in whole pixels: when Σκ is
@@ -84,7 +86,8 @@ pub(crate) fn compensated_pattern(
 /// along that axis equals `target` (see [`compensated_pattern`]: non-decreasing in s), by
 /// bisection; 0 or 1 where `target` is out of reach.
 pub(crate) fn axis_scale(pattern: &Pattern, mean: f64, axis: usize, target: f64) -> f64 {
-    let variance = |s: f64| response_variance(pattern, mean, axis, s);
+    let taps = AxisTaps::of(pattern, axis);
+    let variance = |s: f64| taps.response_variance(mean, s);
     if variance(1.0) <= target {
         return 1.0;
     }
@@ -104,8 +107,63 @@ pub(crate) fn axis_scale(pattern: &Pattern, mean: f64, axis: usize, target: f64)
     0.5 * (lo + hi)
 }
 
+/// A pattern's taps along one axis for the bisection of [`axis_scale`], which reads them some 60
+/// times: offsets and weights in the pattern's order (phase by phase), four to a lane vector.
+struct AxisTaps {
+    offsets: Vec<f64x4>,
+    weights: Vec<f64x4>,
+    /// Taps (the last vector's lanes past it are padding).
+    count: usize,
+    /// The weights' sum, one tap at a time in order (the same for every scale).
+    total: f64,
+}
+
+impl AxisTaps {
+    /// The taps of `pattern` along `axis`.
+    fn of(pattern: &Pattern, axis: usize) -> AxisTaps {
+        let taps: Vec<(f64, f64)> = pattern
+            .iter()
+            .flatten()
+            .map(|(o, w)| (o[axis], *w))
+            .collect();
+        let lanes = |f: fn(&(f64, f64)) -> f64| -> Vec<f64x4> {
+            taps.chunks(4)
+                .map(|q| f64x4::new(std::array::from_fn(|k| q.get(k).map_or(0.0, f))))
+                .collect()
+        };
+        AxisTaps {
+            offsets: lanes(|t| t.0),
+            weights: lanes(|t| t.1),
+            count: taps.len(),
+            total: taps.iter().fold(0.0, |total, t| total + t.1),
+        }
+    }
+
+    /// The variance along the axis of the response of these taps (offsets scaled by `s`) read
+    /// bilinearly around `mean` (see `response_variance`): four taps' terms at once, each in its expression's
+    /// order, added one tap at a time in the pattern's order (the same bits;
+    /// `response_variance_by_lanes_is_the_bits_of_one_tap_at_a_time`).
+    fn response_variance(&self, mean: f64, s: f64) -> f64 {
+        let (mean, s4, one) = (f64x4::splat(mean), f64x4::splat(s), f64x4::splat(1.0));
+        let (mut first, mut second) = (0.0, 0.0);
+        for (i, (&o, &w)) in self.offsets.iter().zip(&self.weights).enumerate() {
+            let r = -(mean + s4 * o);
+            let f = r - r.floor();
+            let (by_r, by_second) = ((w * r).to_array(), (w * (r * r + f * (one - f))).to_array());
+            for k in 0..(self.count - 4 * i).min(4) {
+                first += by_r[k];
+                second += by_second[k];
+            }
+        }
+        let m = first / self.total;
+        second / self.total - m * m
+    }
+}
+
 /// Variance along `axis` of the response of a pattern (offsets scaled by `s`) read bilinearly
-/// around `mean`: a read at r = −(mean + s·o) has second moment r² + f(1 − f), f = r − ⌊r⌋.
+/// around `mean`: a read at r = −(mean + s·o) has second moment r² + f(1 − f), f = r − ⌊r⌋. One
+/// tap at a time: the plain loop [`AxisTaps::response_variance`] must reproduce.
+#[cfg(test)]
 pub(crate) fn response_variance(pattern: &Pattern, mean: f64, axis: usize, s: f64) -> f64 {
     let (mut total, mut first, mut second) = (0.0, 0.0, 0.0);
     for phase in pattern {
@@ -119,4 +177,41 @@ pub(crate) fn response_variance(pattern: &Pattern, mean: f64, axis: usize, s: f6
     }
     let m = first / total;
     second / total - m * m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn response_variance_by_lanes_is_the_bits_of_one_tap_at_a_time() {
+        // Patterns of 1 to 9 taps (every padding of the last lane vector), offsets on both sides
+        // of whole pixels, means and scales that put reads on integers and between them.
+        let mut h = 0x9e37_79b9u32;
+        let mut next = || {
+            h = crate::hash::mix32(h.wrapping_add(0x6d2b_79f5));
+            f64::from(h) / f64::from(u32::MAX)
+        };
+        for count in 1..=9 {
+            let pattern: Pattern = (0..3)
+                .map(|_| {
+                    (0..count)
+                        .map(|_| ([next() * 6.0 - 3.0, next() * 4.0 - 2.0], next()))
+                        .collect()
+                })
+                .collect();
+            for axis in 0..2 {
+                let taps = AxisTaps::of(&pattern, axis);
+                for (mean, s) in [(0.0, 0.0), (0.3, 1.0), (-1.25, 0.5), (next(), next())] {
+                    let lanes = taps.response_variance(mean, s);
+                    let plain = response_variance(&pattern, mean, axis, s);
+                    assert_eq!(
+                        lanes.to_bits(),
+                        plain.to_bits(),
+                        "{count} taps, axis {axis}"
+                    );
+                }
+            }
+        }
+    }
 }
