@@ -121,27 +121,19 @@ struct AxisTaps {
 impl AxisTaps {
     /// The taps of `pattern` along `axis`.
     fn of(pattern: &Pattern, axis: usize) -> AxisTaps {
-        let taps: Vec<(f64, f64)> = pattern
-            .iter()
-            .flatten()
-            .map(|(o, w)| (o[axis], *w))
-            .collect();
-        let lanes = |f: fn(&(f64, f64)) -> f64| -> Vec<f64x4> {
-            taps.chunks(4)
-                .map(|q| f64x4::new(std::array::from_fn(|k| q.get(k).map_or(0.0, f))))
-                .collect()
-        };
+        let (offsets, weights): (Vec<f64>, Vec<f64>) =
+            pattern.iter().flatten().map(|(o, w)| (o[axis], *w)).unzip();
         AxisTaps {
-            offsets: lanes(|t| t.0),
-            weights: lanes(|t| t.1),
-            count: taps.len(),
-            total: taps.iter().fold(0.0, |total, t| total + t.1),
+            offsets: lanes_of_four(&offsets),
+            weights: lanes_of_four(&weights),
+            count: weights.len(),
+            total: weights.iter().fold(0.0, |total, w| total + w),
         }
     }
 
     /// The variance along the axis of the response of these taps (offsets scaled by `s`) read
-    /// bilinearly around `mean` (see `response_variance`): four taps' terms at once, each in its expression's
-    /// order, added one tap at a time in the pattern's order (the same bits;
+    /// bilinearly around `mean` (see `response_variance`): four taps' terms at once, each in its
+    /// expression's order, added one tap at a time in the pattern's order (the same bits;
     /// `response_variance_by_lanes_is_the_bits_of_one_tap_at_a_time`).
     fn response_variance(&self, mean: f64, s: f64) -> f64 {
         let (mean, s4, one) = (f64x4::splat(mean), f64x4::splat(s), f64x4::splat(1.0));

@@ -72,14 +72,13 @@ fn arc_lanes() -> &'static [(f64x4, f64x4)] {
     TABLE.get_or_init(|| by_fours(arc_sin_cos()))
 }
 
-/// A `(sin, cos)` table as lane vectors: entry i holds steps 4i..4i + 4.
+/// A `(sin, cos)` table as lane vectors: entry i holds steps 4i..4i + 4 ([`lanes_of_four`]).
 fn by_fours(table: &[(f64, f64)]) -> Vec<(f64x4, f64x4)> {
     assert!(table.len().is_multiple_of(4), "whole lane vectors of steps");
-    let lane =
-        |q: &[(f64, f64)], f: fn(&(f64, f64)) -> f64| f64x4::new(std::array::from_fn(|k| f(&q[k])));
-    table
-        .chunks_exact(4)
-        .map(|q| (lane(q, |p| p.0), lane(q, |p| p.1)))
+    let (sin, cos): (Vec<f64>, Vec<f64>) = table.iter().copied().unzip();
+    lanes_of_four(&sin)
+        .into_iter()
+        .zip(lanes_of_four(&cos))
         .collect()
 }
 

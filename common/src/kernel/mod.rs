@@ -37,3 +37,12 @@ pub use moments::*;
 pub use poisson::*;
 pub use spec::*;
 pub use table::*;
+
+/// `values` four to a lane vector (entry i holds values 4i..4i + 4; the last padded with 0), for
+/// host loops that compute four terms at once and still sum them one at a time.
+pub(crate) fn lanes_of_four(values: &[f64]) -> Vec<wide::f64x4> {
+    values
+        .chunks(4)
+        .map(|q| wide::f64x4::new(std::array::from_fn(|k| q.get(k).copied().unwrap_or(0.0))))
+        .collect()
+}
