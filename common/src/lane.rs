@@ -78,14 +78,6 @@ pub trait Lane:
     /// # Safety
     /// Every lane's index is below `table.len()`, and `table.len() <= i32::MAX as usize`.
     unsafe fn u_gather_unchecked(table: &[u32], i: Self::U) -> Self::U;
-    /// The smallest of the 2×2 block `table[i]`, `table[i + 1]`, `table[i + stride]`,
-    /// `table[i + stride + 1]` per lane, unchecked (`min` is exact and order-free: any order of
-    /// reads gives the same value).
-    ///
-    /// # Safety
-    /// Every lane's `i + stride + 1` is below `table.len()`, and `table.len() <= i32::MAX as
-    /// usize`.
-    unsafe fn u_min_block_unchecked(table: &[u32], i: Self::U, stride: usize) -> Self::U;
     /// `data[at..at + LANES]` as integer lanes (bounds-checked): [`Lane::u_gather`] at
     /// `at + u_iota(0)`, as one contiguous load.
     fn u_load(data: &[u32], at: usize) -> Self::U;
@@ -185,21 +177,6 @@ pub trait Lane:
         y: Self::U,
         outside: f32,
     ) -> Self;
-}
-
-/// The smallest of `table[i]`, `table[i + 1]`, `table[i + stride]`, `table[i + stride + 1]`:
-/// one lane of [`Lane::u_min_block_unchecked`].
-///
-/// # Safety
-/// `i + stride + 1 < table.len()`.
-#[inline(always)]
-unsafe fn min_block_at(table: &[u32], i: usize, stride: usize) -> u32 {
-    // SAFETY: the caller's contract.
-    let at = |k: usize| unsafe { *table.get_unchecked(k) };
-    at(i)
-        .min(at(i + 1))
-        .min(at(i + stride))
-        .min(at(i + stride + 1))
 }
 
 /// Panics unless `lo..=hi` lies inside `0..len` (a gather's or block's index range).
@@ -320,11 +297,6 @@ impl Lane for f32 {
     unsafe fn u_gather_unchecked(table: &[u32], i: u32) -> u32 {
         // SAFETY: the caller guarantees `i < table.len()`.
         unsafe { *table.get_unchecked(i as usize) }
-    }
-    #[inline(always)]
-    unsafe fn u_min_block_unchecked(table: &[u32], i: u32, stride: usize) -> u32 {
-        // SAFETY: the caller guarantees `i + stride + 1 < table.len()`.
-        unsafe { min_block_at(table, i as usize, stride) }
     }
     #[inline(always)]
     fn u_load(data: &[u32], at: usize) -> u32 {
@@ -581,11 +553,6 @@ impl Lane for f32x8 {
         unsafe { avx2::gather_u32_unchecked(table, i) }
     }
     #[inline(always)]
-    unsafe fn u_min_block_unchecked(table: &[u32], i: u32x8, stride: usize) -> u32x8 {
-        // SAFETY: the caller guarantees every block lies in `table`, whose indices fit i32.
-        unsafe { avx2::min_block_u32_unchecked(table, i, stride) }
-    }
-    #[inline(always)]
     fn u_load(data: &[u32], at: usize) -> u32x8 {
         let a: [u32; 8] = data[at..at + 8].try_into().expect("8 integers");
         u32x8::new(a)
@@ -821,54 +788,6 @@ mod avx2 {
             u32x8::new(std::array::from_fn(|k| unsafe {
                 *table.get_unchecked(a[k] as usize)
             }))
-        }
-    }
-
-    /// The smallest of each lane's 2×2 block at `i` (rows `stride` apart), unchecked: per lane
-    /// and row, the pair `table[i], table[i + 1]` as one 8-byte gather (half the gathered
-    /// elements of a gather per corner), then minima.
-    ///
-    /// # Safety
-    /// Every lane's `i + stride + 1` lies in `0..table.len()`, and `table.len() <= i32::MAX as
-    /// usize`.
-    #[inline(always)]
-    pub(super) unsafe fn min_block_u32_unchecked(table: &[u32], i: u32x8, stride: usize) -> u32x8 {
-        #[cfg(target_feature = "avx2")]
-        // SAFETY: the caller's contract: every 8-byte read at `i` and at `i + stride` lies in
-        // `table`.
-        unsafe {
-            let index: __m256i = cast(i);
-            let (first, last) = (
-                _mm256_castsi256_si128(index),
-                _mm256_extracti128_si256::<1>(index),
-            );
-            let top = table.as_ptr().cast::<i64>();
-            let bottom = table.as_ptr().add(stride).cast::<i64>();
-            // Lanes 0..4 and 4..8: per lane one 64-bit slot holding min(top, bottom) of its
-            // left and right column.
-            let pairs = |idx: __m128i| {
-                _mm256_min_epu32(
-                    _mm256_i32gather_epi64::<4>(top, idx),
-                    _mm256_i32gather_epi64::<4>(bottom, idx),
-                )
-            };
-            let (a, b) = (
-                _mm256_castsi256_ps(pairs(first)),
-                _mm256_castsi256_ps(pairs(last)),
-            );
-            // Left columns [a0 a1 b0 b1 | a2 a3 b2 b3], right columns likewise, their minimum,
-            // then the 64-bit quarters put in lane order.
-            let left = _mm256_castps_si256(_mm256_shuffle_ps::<0b10_00_10_00>(a, b));
-            let right = _mm256_castps_si256(_mm256_shuffle_ps::<0b11_01_11_01>(a, b));
-            cast(_mm256_permute4x64_epi64::<0b11_01_10_00>(_mm256_min_epu32(
-                left, right,
-            )))
-        }
-        #[cfg(not(target_feature = "avx2"))]
-        {
-            let a = i.to_array();
-            // SAFETY: the caller's contract, lane by lane.
-            u32x8::new(a.map(|i| unsafe { super::min_block_at(table, i as usize, stride) }))
         }
     }
 
@@ -1782,34 +1701,6 @@ mod tests {
                     u32::MAX - seed,
                     "{lanes:?}"
                 );
-            }
-        }
-    }
-
-    #[test]
-    fn eight_lane_block_minima_are_the_smallest_of_each_lanes_four_values() {
-        // Values over the whole u32 range (an unsigned minimum), rows 13 apart.
-        let ints: Vec<u32> = (0..200u32).map(|k| mix32(k ^ 0x7777)).collect();
-        let stride = 13;
-        let last = (ints.len() - stride - 2) as u32;
-        for seed in 0..500u32 {
-            // Every lane somewhere in 0..=last, the last block included.
-            let h: [u32; MAX_LANES] =
-                std::array::from_fn(|i| mix32(seed * 8 + i as u32) % (last + 1));
-            let i = if seed == 0 { [last; MAX_LANES] } else { h };
-            let mut out = [0u32; MAX_LANES];
-            // SAFETY: every index plus stride + 1 is below ints.len().
-            f32x8::u_store(
-                unsafe { f32x8::u_min_block_unchecked(&ints, u32x8::new(i), stride) },
-                &mut out,
-            );
-            for lane in 0..MAX_LANES {
-                let k = i[lane] as usize;
-                let four = [ints[k], ints[k + 1], ints[k + stride], ints[k + stride + 1]];
-                let smallest = *four.iter().min().unwrap();
-                // SAFETY: as above.
-                let one = unsafe { f32::u_min_block_unchecked(&ints, i[lane], stride) };
-                assert_eq!((out[lane], one), (smallest, smallest), "lane {lane} at {k}");
             }
         }
     }

@@ -9,6 +9,7 @@ use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
 use convshadow_common::lane::{Lane, MAX_LANES, halves, load_halves, splat_within_halves};
 use convshadow_common::plan::LIT_LEVEL;
+use std::ops::Range;
 use wide::i32x8;
 
 /// Value read outside the buffer: the unoccluded light.
@@ -1072,6 +1073,8 @@ impl<L: Lane> PairLoads<'_, L> {
 pub struct LevelPlane<'a> {
     /// The whole plane (all rows, all lights).
     pub data: &'a [u32],
+    /// The plane's 2×2 block minima, laid out as `data` ([`level_block_minima`]).
+    pub blocks: &'a [u32],
     /// Index of this light's pixel (0, 0) in `data`.
     pub base: usize,
     /// Distance between rows in `data`.
@@ -1080,6 +1083,50 @@ pub struct LevelPlane<'a> {
     pub width: i32,
     /// Grid height.
     pub height: i32,
+}
+
+/// Distance penumbra: one row of the level plane's 2×2 block minima, at pixels `xs` of every
+/// light. `levels` is row y of the plane (every light's `width` levels side by side), `below`
+/// row y + 1 (`None` for the last row); `out[i]` becomes the smallest of `levels[i]`,
+/// `levels[i + 1]`, `below[i]` and `below[i + 1]`, where a corner beyond the grid counts as
+/// [`LIT_LEVEL`] (no occluder, the largest level), as the level search's edge path reads it.
+/// Built once per slab so that [`distance_rows`] reads one value per tap and lane, not four.
+pub(crate) fn level_block_minima(
+    levels: &[u32],
+    below: Option<&[u32]>,
+    width: usize,
+    xs: Range<usize>,
+    out: &mut [u32],
+) {
+    assert!(width > 0 && levels.len().is_multiple_of(width) && out.len() == levels.len());
+    assert!(
+        xs.start <= xs.end && xs.end <= width,
+        "pixels {xs:?} of {width}"
+    );
+    // Pixels whose right neighbour lies in the grid, then (if in `xs`) the last pixel.
+    let inner = xs.start.min(width - 1)..xs.end.min(width - 1);
+    for (l, out) in out.chunks_exact_mut(width).enumerate() {
+        let top = &levels[l * width..][..width];
+        let bottom = below.map(|b| &b[l * width..][..width]);
+        let (left, right) = (inner.clone(), inner.start + 1..inner.end + 1);
+        for ((o, a), b) in out[left.clone()]
+            .iter_mut()
+            .zip(&top[left.clone()])
+            .zip(&top[right.clone()])
+        {
+            *o = (*a).min(*b);
+        }
+        if let Some(bottom) = bottom {
+            let pairs = bottom[left.clone()].iter().zip(&bottom[right]);
+            for (o, (a, b)) in out[left].iter_mut().zip(pairs) {
+                *o = (*o).min((*a).min(*b));
+            }
+        }
+        if xs.end == width {
+            let last = width - 1;
+            out[last] = bottom.map_or(top[last], |b| top[last].min(b[last]));
+        }
+    }
 }
 
 /// Distance penumbra: the rows that pixels x0.. of row y gather through. A pixel takes the
@@ -1124,15 +1171,15 @@ pub(crate) fn distance_rows<L: Lane>(
             L::u_iota(at as u32),
             L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),
         );
+        // Each tap's four corners are one block minimum (`level_block_minima`): `min` is exact
+        // and order-free, so one read gives the bits of four.
         if let Some(row) = own_reads.uniform {
-            // Every lane through the same row: each tap's corners are contiguous loads.
+            // Every lane through the same row: each tap's blocks are one contiguous load.
             let origin = at as i64 + shift[1] as i64 * rs as i64 + shift[0] as i64;
             for k in 0..n {
                 let rel = columns.level_offset[k * pc + row as usize] as i32;
                 let top_left = (origin + i64::from(rel)) as usize;
-                for corner in [top_left, top_left + 1, top_left + rs, top_left + rs + 1] {
-                    nearest = L::u_min(nearest, L::u_load(levels.data, corner));
-                }
+                nearest = L::u_min(nearest, L::u_load(levels.blocks, top_left));
             }
             let nearest = L::u_select(L::u_eq(nearest, lit), zero, nearest);
             return level_rows::<L>(table, nearest, phase, slabs, slab);
@@ -1140,7 +1187,11 @@ pub(crate) fn distance_rows<L: Lane>(
         // One proof for every gather below: `LaneRows::within` checked each lane's row against
         // a table of `pc` rows (so `rel` reads inside its column), and the test above (or the
         // sweep's reach) put every corner inside the grid, whose rows lie in `levels.data`.
-        assert!(levels.data.len() <= i32::MAX as usize && columns.summary.len() == pc);
+        assert!(
+            levels.data.len() <= i32::MAX as usize
+                && levels.blocks.len() == levels.data.len()
+                && columns.summary.len() == pc
+        );
         // Crate-internal invariants (this function is crate-private): the sweep builds the level
         // plane and the columns from one plan.
         debug_assert!(
@@ -1154,8 +1205,9 @@ pub(crate) fn distance_rows<L: Lane>(
             // SAFETY: every lane's row is below `pc` (see above).
             let rel = unsafe { L::u_gather_unchecked(column, own_rows) };
             let top_left = L::u_add(lane_shift, rel);
-            // SAFETY: every corner lies inside the grid (see above).
-            let block = unsafe { L::u_min_block_unchecked(levels.data, top_left, rs) };
+            // SAFETY: every corner lies inside the grid (see above), so every top-left corner
+            // lies in `blocks`, laid out as `data`.
+            let block = unsafe { L::u_gather_unchecked(levels.blocks, top_left) };
             nearest = L::u_min(nearest, block);
         }
     } else {

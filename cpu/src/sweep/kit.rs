@@ -48,6 +48,8 @@ pub(crate) fn dark_levels(plan: &RenderPlan, slab: u32) -> Vec<u32> {
 pub(crate) struct Previous<'a> {
     pub light: &'a [f32],
     pub levels: &'a [u32],
+    /// The level plane's 2×2 block minima (`kernels::level_block_minima`), laid out as `levels`.
+    pub level_blocks: &'a [u32],
 }
 
 /// One row's mutable per-pixel state. Colours are planar per row: `[R…][G…][B…]`.

@@ -32,11 +32,11 @@ use convshadow_common::raster::RasterSetup;
 use rayon::prelude::*;
 
 use crate::composite::finish;
-use crate::kernels::TapColumns;
+use crate::kernels::{TapColumns, level_block_minima};
 use crate::ldi::Ldi;
 use convshadow_common::levels::initial_levels;
 use kit::{Previous, Reach, RowState, SlabContext, dark_levels};
-use quiet::{QuietRow, QuietSetup};
+use quiet::{QuietRow, QuietSetup, RowSpans};
 use rows::{sweep_row_scalar, sweep_row_simd};
 
 pub use convshadow_common::sweep_io::{MAX_LIGHT_CHANNELS, SweepError, SweepOptions, SweepOutput};
@@ -95,6 +95,8 @@ struct PixelState {
     /// light; see `kernels::distance_rows`). One unused entry per row otherwise.
     levels_prev: Vec<u32>,
     levels_cur: Vec<u32>,
+    /// `levels_prev`'s 2×2 block minima.
+    level_blocks: LevelBlocks,
     next: Vec<u32>,
     inside: Vec<u32>,
     color: Vec<f32>,
@@ -118,6 +120,7 @@ impl PixelState {
         let prev = to_pixel_rows(plan, initial);
         PixelState {
             levels_cur: vec![0u32; levels_prev.len()],
+            level_blocks: LevelBlocks::new(plan, &levels_prev),
             levels_prev,
             cur: vec![0.0f32; prev.len()],
             prev,
@@ -128,6 +131,86 @@ impl PixelState {
             pre: vec![f32::NAN; pre_stride * h],
             pre_stride,
         }
+    }
+}
+
+/// Distance penumbra: the level plane's 2×2 block minima
+/// ([`crate::kernels::level_block_minima`]), laid out as the plane, and per row the pixels
+/// outside which every block is [`LIT_LEVEL`](convshadow_common::plan::LIT_LEVEL); empty
+/// without depth planes.
+pub(crate) struct LevelBlocks {
+    pub(crate) blocks: Vec<u32>,
+    /// Per row, `[lo, hi)`: every block of the row outside it (any light) is `LIT_LEVEL`.
+    spans: Vec<(i32, i32)>,
+    /// The grid's width and the plane's row stride.
+    width: usize,
+    row_stride: usize,
+}
+
+impl LevelBlocks {
+    /// The block minima of `plan`'s level plane `levels`.
+    pub(crate) fn new(plan: &RenderPlan, levels: &[u32]) -> LevelBlocks {
+        if plan.depth_planes() == 0 {
+            return LevelBlocks::of(&[], 1, 1);
+        }
+        LevelBlocks::of(levels, plan.grid_width as usize, plan.level_row_len())
+    }
+
+    /// The block minima of a level plane `levels` of rows `row_stride` apart, each holding
+    /// every light's `width` levels.
+    fn of(levels: &[u32], width: usize, row_stride: usize) -> LevelBlocks {
+        let mut blocks = LevelBlocks {
+            blocks: vec![0u32; levels.len()],
+            spans: vec![(0, width as i32); levels.len() / row_stride],
+            width,
+            row_stride,
+        };
+        blocks.update(levels, None);
+        blocks
+    }
+
+    /// The block minima of the level plane `levels`, which may differ from the last one only
+    /// where `not_one` allows: where given, per row, the span outside which every pixel's
+    /// outgoing light was exactly 1 in every channel, so its level is `LIT_LEVEL`
+    /// (`pixel_level`: nothing occluded). Rows are rebuilt in parallel, each only over the
+    /// pixels whose block can differ from `LIT_LEVEL` now or did before.
+    fn update(&mut self, levels: &[u32], not_one: Option<&[RowSpans]>) {
+        let (w, rs) = (self.width, self.row_stride);
+        assert_eq!(
+            levels.len(),
+            self.blocks.len(),
+            "a level plane of another size"
+        );
+        let span_of = |y: usize| match not_one {
+            None => (0, w as i32),
+            Some(spans) => spans.get(y).map_or((i32::MAX, i32::MIN), |r| r.not_one),
+        };
+        self.blocks
+            .par_chunks_mut(rs)
+            .zip(self.spans.par_iter_mut())
+            .enumerate()
+            .for_each(|(y, (out, span))| {
+                // Block x reads pixels x and x + 1 of rows y and y + 1.
+                let (a, b) = (span_of(y), span_of(y + 1));
+                let (lo, hi) = (a.0.min(b.0).saturating_sub(1), a.1.max(b.1));
+                let now = if lo < hi {
+                    (lo.max(0), hi.min(w as i32))
+                } else {
+                    (0, 0)
+                };
+                // The blocks outside both the old span and the new are LIT_LEVEL already.
+                let (from, to) = if span.0 < span.1 {
+                    (now.0.min(span.0), now.1.max(span.1))
+                } else {
+                    now
+                };
+                *span = now;
+                if from < to {
+                    let below = levels.get((y + 1) * rs..(y + 2) * rs);
+                    let xs = from as usize..to as usize;
+                    level_block_minima(&levels[y * rs..(y + 1) * rs], below, w, xs, out);
+                }
+            });
     }
 }
 
@@ -234,6 +317,7 @@ fn sweep_slab(
     let prev_ref = &Previous {
         light: &state.prev,
         levels: &state.levels_prev,
+        level_blocks: &state.level_blocks.blocks,
     };
     let rows = state.cur[..state.prev.len() - LIGHT_SLACK]
         .par_chunks_mut(row_len)
@@ -260,7 +344,8 @@ fn sweep_slab(
                 )
             },
         );
-    match (cpu.path, quiet) {
+    let mut quiet = quiet;
+    match (cpu.path, quiet.as_deref_mut()) {
         (SweepPath::Scalar, _) => rows.for_each(|(y, row)| {
             sweep_row_scalar(ctx, reach, y, prev_ref, row);
         }),
@@ -297,6 +382,10 @@ fn sweep_slab(
     }
     std::mem::swap(&mut state.prev, &mut state.cur);
     std::mem::swap(&mut state.levels_prev, &mut state.levels_cur);
+    if ctx.plan.depth_planes() > 0 {
+        let not_one = quiet.map(|q| &q.spans_prev[..]);
+        state.level_blocks.update(&state.levels_prev, not_one);
+    }
 }
 
 /// The image: each pixel inside the guard band composited over the background by [`finish`].
@@ -445,7 +534,86 @@ pub fn sweep_with(
 
 #[cfg(test)]
 mod tests {
-    use super::OpaqueImage;
+    use super::{LevelBlocks, OpaqueImage, RowSpans};
+    use convshadow_common::hash::TestRng;
+    use convshadow_common::plan::LIT_LEVEL;
+
+    /// The smallest level of the 2×2 block at pixel x of row y of light l, corners beyond the
+    /// grid read as `LIT_LEVEL`: straight from the definition.
+    fn block_at(
+        levels: &[u32],
+        (w, lights, h): (usize, usize, usize),
+        l: usize,
+        x: usize,
+        y: usize,
+    ) -> u32 {
+        let mut m = LIT_LEVEL;
+        for (cx, cy) in [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)] {
+            if cx < w && cy < h {
+                m = m.min(levels[cy * w * lights + l * w + cx]);
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn level_blocks_are_the_smallest_level_of_each_two_by_two_block() {
+        let mut rng = TestRng::new(5);
+        for (w, lights, h) in [(1, 1, 1), (2, 2, 3), (11, 2, 6), (9, 1, 2)] {
+            let levels: Vec<u32> = (0..w * lights * h)
+                .map(|_| match rng.below(3) {
+                    0 => LIT_LEVEL,
+                    _ => rng.below(6),
+                })
+                .collect();
+            let blocks = LevelBlocks::of(&levels, w, w * lights).blocks;
+            for (i, &b) in blocks.iter().enumerate() {
+                let (y, l, x) = (i / (w * lights), i % (w * lights) / w, i % w);
+                let want = block_at(&levels, (w, lights, h), l, x, y);
+                assert_eq!(b, want, "{w}×{h}, light {l}, pixel ({x}, {y})");
+            }
+        }
+    }
+
+    #[test]
+    fn level_blocks_rebuilt_within_spans_are_the_blocks_rebuilt_whole() {
+        // Planes that are LIT_LEVEL outside one random span per row (sometimes none), told
+        // with that span or a wider one: the blocks must be those of the whole plane, also where
+        // the last plane had levels and this one has none.
+        let (w, lights, h) = (13, 2, 7);
+        let mut rng = TestRng::new(9);
+        let mut blocks = LevelBlocks::of(&vec![LIT_LEVEL; w * lights * h], w, w * lights);
+        let mut rebuilt = 0;
+        for round in 0..200 {
+            let mut levels = vec![LIT_LEVEL; w * lights * h];
+            let mut spans = vec![RowSpans::EMPTY; h];
+            for y in 0..h {
+                if rng.below(3) == 0 {
+                    continue;
+                }
+                let lo = rng.below(w as u32) as usize;
+                let hi = lo + 1 + rng.below((w - lo) as u32) as usize;
+                for l in 0..lights {
+                    for x in lo..hi {
+                        if rng.below(2) == 0 {
+                            levels[y * w * lights + l * w + x] = rng.below(5);
+                        }
+                    }
+                }
+                // The told span holds every level that is not LIT_LEVEL, maybe with room.
+                let wider = (
+                    lo.saturating_sub(rng.below(2) as usize),
+                    (hi + rng.below(2) as usize).min(w),
+                );
+                spans[y].not_one = (wider.0 as i32, wider.1 as i32);
+            }
+            blocks.update(&levels, Some(&spans));
+            let whole = LevelBlocks::of(&levels, w, w * lights);
+            assert_eq!(blocks.blocks, whole.blocks, "round {round}");
+            rebuilt += usize::from(blocks.spans.iter().any(|s| s.0 < s.1));
+        }
+        assert!(rebuilt > 100, "rounds with levels {rebuilt}");
+    }
 
     /// A 6×4 grid with a 3×2 image at (2, 1), every pixel opaque.
     fn opaque_grid() -> (OpaqueImage, Vec<f32>) {

@@ -449,6 +449,7 @@ fn every_light_rows<L: Lane>(
         };
         let levels = LevelPlane {
             data: prev.levels,
+            blocks: prev.level_blocks,
             base: l * w,
             row_stride: plan.level_row_len(),
             width: w as i32,
@@ -861,9 +862,11 @@ mod tests {
                 _ => rng.below(plan.lights[0].table.levels),
             })
             .collect();
+        let blocks = crate::sweep::LevelBlocks::new(&plan, &levels).blocks;
         let prev = Previous {
             light: &light,
             levels: &levels,
+            level_blocks: &blocks,
         };
         let mut counts = [0u32; 9];
         // Chunks whose summary skipped their cursors, and chunks with a summary that did not.
