@@ -1215,9 +1215,11 @@ pub(crate) fn distance_rows<L: Lane>(
         let mut near = [0u32; MAX_LANES];
         L::u_store(own_rows, &mut rows);
         L::u_store(nearest, &mut near);
+        let inside = |x: i32, y: i32| x >= 0 && y >= 0 && x < levels.width && y < levels.height;
+        let at = |x: i32, y: i32| levels.base + y as usize * rs + x as usize;
         let fetch = |x: i32, y: i32| {
-            if x >= 0 && y >= 0 && x < levels.width && y < levels.height {
-                levels.data[levels.base + y as usize * rs + x as usize]
+            if inside(x, y) {
+                levels.data[at(x, y)]
             } else {
                 LIT_LEVEL
             }
@@ -1226,9 +1228,16 @@ pub(crate) fn distance_rows<L: Lane>(
             let used = columns.level_taps[rows[i] as usize] as usize;
             for t in &table.phase(rows[i])[..used] {
                 let (sx, sy) = (x0 + i as i32 + t.dx + shift[0], y + t.dy + shift[1]);
-                for (cx, cy) in [(sx, sy), (sx + 1, sy), (sx, sy + 1), (sx + 1, sy + 1)] {
-                    near[i] = near[i].min(fetch(cx, cy));
-                }
+                near[i] = near[i].min(if inside(sx, sy) {
+                    // Its corners beyond the grid count as LIT_LEVEL there too.
+                    levels.blocks[at(sx, sy)]
+                } else {
+                    let corners = [(sx, sy), (sx + 1, sy), (sx, sy + 1), (sx + 1, sy + 1)];
+                    corners
+                        .into_iter()
+                        .map(|(cx, cy)| fetch(cx, cy))
+                        .fold(LIT_LEVEL, u32::min)
+                });
             }
         }
         nearest = L::u_gather(&near, L::u_iota(0));
