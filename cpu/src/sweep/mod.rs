@@ -557,6 +557,47 @@ mod tests {
     }
 
     #[test]
+    fn chunk_summaries_stay_current_through_a_sweep() {
+        // The row loop checks each summary against `ChunkState::of` before it uses it (in unit
+        // tests). A thick hazy box turns its chunks opaque a few slabs past its front face,
+        // where no cursor moves (summaries refreshed for their alphas alone); a wall behind it
+        // over the image's left half leaves chunks in the dark, the space beside them unoccluded.
+        use crate::ldi::BuildLdi;
+        use convshadow_common::geometry::SceneGeometry;
+        use convshadow_common::scene::Scene;
+        for penumbra in ["iterated", "distance"] {
+            let text = format!(
+                "[image]\nwidth = 45\nheight = 27\n[camera]\nview_width = 4.0\n[sweep]\n\
+                 guard_band = 0\nslabs = 64\noptimal_distance = 0.5\npenumbra = \"{penumbra}\"\n\
+                 [[light]]\ntilt_deg = [20.0, 10.0]\nvariance = [0.04, 0.02]\n\
+                 [[mesh]]\nshape = \"box\"\nsize = [2.0, 2.0, 2.0]\nmaterial = \"haze\"\n\
+                 [[mesh]]\nshape = \"box\"\nsize = [4.0, 6.0, 0.1]\ntranslate = [-2.0, 0.0, 1.5]\n\
+                 material = \"wall\"\n[material.haze]\nopacity = 0.999\n[material.wall]\nopacity = 1.0\n"
+            );
+            let scene = Scene::parse(&text, "summaries", std::path::Path::new(".")).expect("scene");
+            let g = SceneGeometry::build(&scene).expect("geometry");
+            let ldi = super::Ldi::build(&g.raster, u64::MAX).expect("ldi");
+            let plan = super::RenderPlan::new(&scene, &g).expect("plan");
+            let counts = super::ChunkCounts::default();
+            let cpu = super::CpuOptions {
+                chunk_counts: Some(&counts),
+                ..super::CpuOptions::default()
+            };
+            let options = super::SweepOptions {
+                every_slab: true,
+                ..super::SweepOptions::default()
+            };
+            super::sweep_with(&plan, &g.raster, &ldi, &options, &cpu).expect("sweep");
+            let [full, unoccluded, dark] = counts.snapshot();
+            assert!(
+                full > 0 && unoccluded > 0 && dark > 0,
+                "{penumbra}: chunks {:?}",
+                counts.snapshot()
+            );
+        }
+    }
+
+    #[test]
     fn level_blocks_are_the_smallest_level_of_each_two_by_two_block() {
         let mut rng = TestRng::new(5);
         for (w, lights, h) in [(1, 1, 1), (2, 2, 3), (11, 2, 6), (9, 1, 2)] {

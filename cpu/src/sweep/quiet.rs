@@ -160,7 +160,7 @@ fn meets(span: (i32, i32), a: i64, b: i64) -> bool {
 }
 
 /// A chunk's cursor summary, refreshed whenever its cursors move.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct ChunkState {
     /// Smallest depth of a lane's next fragment (+∞ when no lane has one).
     pub event_depth: f32,
@@ -193,9 +193,15 @@ impl ChunkState {
                 s.event_depth = s.event_depth.min(ldi.depth[next[x] as usize]);
             }
             s.inside_any |= inside[x];
-            s.opaque &= alpha[x] == 1.0;
         }
+        s.opaque = ChunkState::all_opaque(&alpha[x0..x0 + lanes]);
         s
+    }
+
+    /// Whether every alpha of `alpha` (a chunk's) is exactly 1, as [`ChunkState::opaque`] says.
+    #[inline(always)]
+    pub(crate) fn all_opaque(alpha: &[f32]) -> bool {
+        alpha.iter().fold(true, |all, &a| all & (a == 1.0))
     }
 
     /// Whether no lane's cursor crosses a fragment before `back_face`: exactly the negation of

@@ -58,7 +58,7 @@ fn sweep_pixels(
             ctx, y, x, prev, row, row_hashes, jitter_row, interior, None, None, None,
         );
         spans.record(x, 1, out.values());
-        moved |= out.moved;
+        moved |= out.shaded;
     }
     moved
 }
@@ -125,6 +125,27 @@ fn advance_dark(ctx: &SlabContext<'_>, row: &mut RowState<'_>, y: usize, xs: Ran
     moved
 }
 
+/// What a chunk's stages may have changed of its cursor summary ([`ChunkState`]).
+enum Moved {
+    /// Nothing: no lane crossed a fragment or was shaded.
+    Nothing,
+    /// Alphas only: some lane was shaded, none crossed a fragment.
+    Alphas,
+    /// Cursors and inside masks (and alphas): some lane crossed a fragment.
+    Cursors,
+}
+
+impl Moved {
+    /// [`Moved::Cursors`] if `crossed`, else [`Moved::Nothing`] (no shading happened).
+    fn cursors_if(crossed: bool) -> Moved {
+        if crossed {
+            Moved::Cursors
+        } else {
+            Moved::Nothing
+        }
+    }
+}
+
 /// Processes one row of one slab, 8 pixels at a time (quiet chunks skipped when `quiet` is
 /// given); the last `width mod 8` pixels go through the 1-lane stage, or are skipped as one
 /// quiet chunk.
@@ -164,6 +185,16 @@ pub(crate) fn sweep_row_simd(
     for c in 0..w.div_ceil(LANES) {
         let x0 = c * LANES;
         let lanes = LANES.min(w - x0);
+        // Unit tests hold every summary to its definition before it is used.
+        #[cfg(test)]
+        if let Some(q) = &quiet {
+            let fresh = ChunkState::of(ctx.ldi, y, x0, lanes, row.next, row.inside, row.alpha);
+            assert_eq!(
+                q.chunks[c], fresh,
+                "slab {}, row {y}, chunk {c}: a stale summary",
+                ctx.slab
+            );
+        }
         let work = match (&quiet, &hits) {
             (Some(q), Some(hits)) => q.classify(ctx, reach, y, c, lanes, hits),
             _ => ChunkWork::Full(None),
@@ -183,6 +214,7 @@ pub(crate) fn sweep_row_simd(
             }
             None => false,
         };
+        // What of the chunk's cursor summary its stages may have changed.
         let moved = match work {
             ChunkWork::Unoccluded => {
                 tally[1] += 1;
@@ -197,7 +229,7 @@ pub(crate) fn sweep_row_simd(
                 let moved = advance_dark(ctx, &mut row, y, x0..x0 + lanes);
                 fill_quiet(ctx, &mut row, x0, lanes, true);
                 spans.record(x0, lanes, Values::DARK);
-                moved
+                Moved::cursors_if(moved)
             }
             ChunkWork::DarkDepth if lanes == LANES => {
                 tally[2] += 1;
@@ -209,7 +241,7 @@ pub(crate) fn sweep_row_simd(
                     ..Values::DARK
                 };
                 spans.record(x0, LANES, values);
-                moved
+                Moved::cursors_if(moved)
             }
             ChunkWork::Full(known_light) if lanes == LANES => {
                 tally[0] += 1;
@@ -241,17 +273,32 @@ pub(crate) fn sweep_row_simd(
                     ctx, y, x0, prev, &mut row, rh, jr, inner, known, gathered, summary,
                 );
                 spans.record(x0, LANES, out.values());
-                out.moved
+                match (out.crossed, out.shaded) {
+                    (true, _) => Moved::Cursors,
+                    (false, true) => Moved::Alphas,
+                    (false, false) => Moved::Nothing,
+                }
             }
             // The row's tail: the 1-lane stage, pixel by pixel.
             ChunkWork::Full(_) | ChunkWork::DarkDepth => {
                 tally[0] += 1;
-                sweep_pixels(ctx, reach, y, x0..w, prev, &mut row, hashes, &mut spans)
+                let moved = sweep_pixels(ctx, reach, y, x0..w, prev, &mut row, hashes, &mut spans);
+                Moved::cursors_if(moved)
             }
         };
-        // A chunk whose cursors, masks and alphas did not change keeps its summary.
-        if let (Some(q), true) = (&mut quiet, moved) {
-            q.chunks[c] = ChunkState::of(ctx.ldi, y, x0, lanes, row.next, row.inside, row.alpha);
+        // A chunk whose cursors, masks and alphas did not change keeps its summary; one whose
+        // cursors did not move keeps its fragment depth and inside masks.
+        if let Some(q) = &mut quiet {
+            match moved {
+                Moved::Cursors => {
+                    let (next, inside, alpha) = (&*row.next, &*row.inside, &*row.alpha);
+                    q.chunks[c] = ChunkState::of(ctx.ldi, y, x0, lanes, next, inside, alpha);
+                }
+                Moved::Alphas => {
+                    q.chunks[c].opaque = ChunkState::all_opaque(&row.alpha[x0..x0 + lanes])
+                }
+                Moved::Nothing => {}
+            }
         }
     }
 

@@ -49,9 +49,11 @@ pub(crate) struct ChunkOutcome {
     pub not_zero: bool,
     /// Some outgoing value of a light plane (not a depth plane) is not exactly 0.
     pub light_not_zero: bool,
-    /// Some lane crossed a fragment or was shaded: its cursor, inside mask or alpha may have
-    /// changed, so the chunk's quiet summary must be refreshed.
-    pub moved: bool,
+    /// Some lane was shaded (a lane that crossed a fragment is): its alpha may have changed, so
+    /// the chunk's quiet summary must be refreshed.
+    pub shaded: bool,
+    /// Some lane crossed a fragment: its cursor and inside mask changed too.
+    pub crossed: bool,
 }
 
 impl ChunkOutcome {
@@ -329,8 +331,8 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
     // 3–4. Shading and compositing.
     let mut attenuation = [L::splat(1.0); 3];
     let lane_mesh = &mesh[..L::LANES];
-    let moved = lane_mesh.iter().any(Option::is_some)
-        || crossed[..L::LANES].iter().any(|&c| c != NO_CROSSING);
+    let any_crossed = crossed[..L::LANES].iter().any(|&c| c != NO_CROSSING);
+    let shaded = lane_mesh.iter().any(Option::is_some) || any_crossed;
     if let Some(m) = lane_mesh.iter().flatten().next().copied() {
         if lane_mesh.iter().all(|&k| k.is_none() || k == Some(m)) {
             attenuation = shade_chunk(ctx, y, x0, row, &iin[..n], m, &mesh, &crossed, jitter_row);
@@ -408,7 +410,8 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
         not_one: L::m_any(not_one),
         not_zero: L::m_any(not_zero),
         light_not_zero: L::m_any(light_not_zero),
-        moved,
+        shaded,
+        crossed: any_crossed,
     }
 }
 
