@@ -310,7 +310,7 @@ fn sweep_slab(
     reach: &Reach,
     cpu: &CpuOptions<'_>,
     state: &mut PixelState,
-    quiet: Option<&mut QuietState>,
+    mut quiet: Option<&mut QuietState>,
 ) {
     let w = ctx.plan.grid_width as usize;
     let row_len = ctx.plan.light_row_len();
@@ -344,7 +344,6 @@ fn sweep_slab(
                 )
             },
         );
-    let mut quiet = quiet;
     match (cpu.path, quiet.as_deref_mut()) {
         (SweepPath::Scalar, _) => rows.for_each(|(y, row)| {
             sweep_row_scalar(ctx, reach, y, prev_ref, row);

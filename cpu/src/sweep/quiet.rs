@@ -159,7 +159,8 @@ fn meets(span: (i32, i32), a: i64, b: i64) -> bool {
     i64::from(span.0) <= b && i64::from(span.1) > a
 }
 
-/// A chunk's cursor summary, refreshed whenever its cursors move.
+/// A chunk's cursor summary, refreshed whenever its cursors move (only its `opaque` flag when
+/// its lanes were shaded without crossing a fragment).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct ChunkState {
     /// Smallest depth of a lane's next fragment (+∞ when no lane has one).
