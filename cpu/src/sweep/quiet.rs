@@ -159,6 +159,28 @@ fn meets(span: (i32, i32), a: i64, b: i64) -> bool {
     i64::from(span.0) <= b && i64::from(span.1) > a
 }
 
+/// What a chunk's stages may have changed of its [`ChunkState`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Moved {
+    /// Nothing: no lane crossed a fragment or was shaded.
+    Nothing,
+    /// Alphas only: some lane was shaded, none crossed a fragment.
+    Alphas,
+    /// Cursors and inside masks (and alphas): some lane crossed a fragment.
+    Cursors,
+}
+
+impl Moved {
+    /// From whether some lane crossed a fragment and whether some lane was shaded.
+    pub(crate) fn of(crossed: bool, shaded: bool) -> Moved {
+        match (crossed, shaded) {
+            (true, _) => Moved::Cursors,
+            (false, true) => Moved::Alphas,
+            (false, false) => Moved::Nothing,
+        }
+    }
+}
+
 /// A chunk's cursor summary, refreshed whenever its cursors move (only its `opaque` flag when
 /// its lanes were shaded without crossing a fragment).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -201,8 +223,31 @@ impl ChunkState {
 
     /// Whether every alpha of `alpha` (a chunk's) is exactly 1, as [`ChunkState::opaque`] says.
     #[inline(always)]
-    pub(crate) fn all_opaque(alpha: &[f32]) -> bool {
+    fn all_opaque(alpha: &[f32]) -> bool {
         alpha.iter().fold(true, |all, &a| all & (a == 1.0))
+    }
+
+    /// The summary of pixels x0..x0 + lanes of row y after the chunk's stages changed `moved`
+    /// of them: recomputed when a cursor moved, its `opaque` flag alone when only alphas may
+    /// have changed (no cursor moved, so the fragment depth and inside masks stay), else kept.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(crate) fn refresh(
+        &mut self,
+        moved: Moved,
+        ldi: &Ldi,
+        y: usize,
+        x0: usize,
+        lanes: usize,
+        next: &[u32],
+        inside: &[u32],
+        alpha: &[f32],
+    ) {
+        match moved {
+            Moved::Cursors => *self = ChunkState::of(ldi, y, x0, lanes, next, inside, alpha),
+            Moved::Alphas => self.opaque = ChunkState::all_opaque(&alpha[x0..x0 + lanes]),
+            Moved::Nothing => {}
+        }
     }
 
     /// Whether no lane's cursor crosses a fragment before `back_face`: exactly the negation of

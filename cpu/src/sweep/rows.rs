@@ -9,7 +9,7 @@ use wide::f32x8;
 use super::kit::{
     MAX_LIGHT_CHANNELS, Previous, Reach, RowState, SlabContext, jitter_row_hash, light_row_hashes,
 };
-use super::quiet::{ChunkCounts, ChunkState, ChunkWork, LANES, QuietRow, RowSpans, Values};
+use super::quiet::{ChunkCounts, ChunkWork, LANES, Moved, QuietRow, RowSpans, Values};
 use super::stage::{
     ANY_SHAPE, ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, light_block, pairs_gathers,
     shape_of,
@@ -125,27 +125,6 @@ fn advance_dark(ctx: &SlabContext<'_>, row: &mut RowState<'_>, y: usize, xs: Ran
     moved
 }
 
-/// What a chunk's stages may have changed of its cursor summary ([`ChunkState`]).
-enum Moved {
-    /// Nothing: no lane crossed a fragment or was shaded.
-    Nothing,
-    /// Alphas only: some lane was shaded, none crossed a fragment.
-    Alphas,
-    /// Cursors and inside masks (and alphas): some lane crossed a fragment.
-    Cursors,
-}
-
-impl Moved {
-    /// [`Moved::Cursors`] if `crossed`, else [`Moved::Nothing`] (no shading happened).
-    fn cursors_if(crossed: bool) -> Moved {
-        if crossed {
-            Moved::Cursors
-        } else {
-            Moved::Nothing
-        }
-    }
-}
-
 /// Processes one row of one slab, 8 pixels at a time (quiet chunks skipped when `quiet` is
 /// given); the last `width mod 8` pixels go through the 1-lane stage, or are skipped as one
 /// quiet chunk.
@@ -188,7 +167,8 @@ pub(crate) fn sweep_row_simd(
         // Unit tests hold every summary to its definition before it is used.
         #[cfg(test)]
         if let Some(q) = &quiet {
-            let fresh = ChunkState::of(ctx.ldi, y, x0, lanes, row.next, row.inside, row.alpha);
+            let (next, inside, alpha) = (&*row.next, &*row.inside, &*row.alpha);
+            let fresh = super::quiet::ChunkState::of(ctx.ldi, y, x0, lanes, next, inside, alpha);
             assert_eq!(
                 q.chunks[c], fresh,
                 "slab {}, row {y}, chunk {c}: a stale summary",
@@ -229,7 +209,7 @@ pub(crate) fn sweep_row_simd(
                 let moved = advance_dark(ctx, &mut row, y, x0..x0 + lanes);
                 fill_quiet(ctx, &mut row, x0, lanes, true);
                 spans.record(x0, lanes, Values::DARK);
-                Moved::cursors_if(moved)
+                Moved::of(moved, false)
             }
             ChunkWork::DarkDepth if lanes == LANES => {
                 tally[2] += 1;
@@ -241,7 +221,7 @@ pub(crate) fn sweep_row_simd(
                     ..Values::DARK
                 };
                 spans.record(x0, LANES, values);
-                Moved::cursors_if(moved)
+                Moved::of(moved, false)
             }
             ChunkWork::Full(known_light) if lanes == LANES => {
                 tally[0] += 1;
@@ -273,32 +253,19 @@ pub(crate) fn sweep_row_simd(
                     ctx, y, x0, prev, &mut row, rh, jr, inner, known, gathered, summary,
                 );
                 spans.record(x0, LANES, out.values());
-                match (out.crossed, out.shaded) {
-                    (true, _) => Moved::Cursors,
-                    (false, true) => Moved::Alphas,
-                    (false, false) => Moved::Nothing,
-                }
+                Moved::of(out.crossed, out.shaded)
             }
             // The row's tail: the 1-lane stage, pixel by pixel.
             ChunkWork::Full(_) | ChunkWork::DarkDepth => {
                 tally[0] += 1;
+                // Whether some pixel crossed a fragment or was shaded: refreshed whole.
                 let moved = sweep_pixels(ctx, reach, y, x0..w, prev, &mut row, hashes, &mut spans);
-                Moved::cursors_if(moved)
+                Moved::of(moved, moved)
             }
         };
-        // A chunk whose cursors, masks and alphas did not change keeps its summary; one whose
-        // cursors did not move keeps its fragment depth and inside masks.
         if let Some(q) = &mut quiet {
-            match moved {
-                Moved::Cursors => {
-                    let (next, inside, alpha) = (&*row.next, &*row.inside, &*row.alpha);
-                    q.chunks[c] = ChunkState::of(ctx.ldi, y, x0, lanes, next, inside, alpha);
-                }
-                Moved::Alphas => {
-                    q.chunks[c].opaque = ChunkState::all_opaque(&row.alpha[x0..x0 + lanes])
-                }
-                Moved::Nothing => {}
-            }
+            let (next, inside, alpha) = (&*row.next, &*row.inside, &*row.alpha);
+            q.chunks[c].refresh(moved, ctx.ldi, y, x0, lanes, next, inside, alpha);
         }
     }
 
