@@ -531,6 +531,26 @@ pub fn sweep_with(
     })
 }
 
+/// Unit tests' scenes: `text` parsed (as the file `name`) and built into what a sweep takes.
+#[cfg(test)]
+pub(crate) fn built_scene(
+    text: &str,
+    name: &str,
+) -> (
+    convshadow_common::scene::Scene,
+    convshadow_common::geometry::SceneGeometry,
+    Ldi,
+    RenderPlan,
+) {
+    use crate::ldi::BuildLdi;
+    let scene = convshadow_common::scene::Scene::parse(text, name, std::path::Path::new("."))
+        .expect("scene");
+    let g = convshadow_common::geometry::SceneGeometry::build(&scene).expect("geometry");
+    let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
+    let plan = RenderPlan::new(&scene, &g).expect("plan");
+    (scene, g, ldi, plan)
+}
+
 #[cfg(test)]
 mod tests {
     use super::{LevelBlocks, OpaqueImage, RowSpans};
@@ -561,9 +581,6 @@ mod tests {
         // tests). A thick hazy box turns its chunks opaque a few slabs past its front face,
         // where no cursor moves (summaries refreshed for their alphas alone); a wall behind it
         // over the image's left half leaves chunks in the dark, the space beside them unoccluded.
-        use crate::ldi::BuildLdi;
-        use convshadow_common::geometry::SceneGeometry;
-        use convshadow_common::scene::Scene;
         for penumbra in ["iterated", "distance"] {
             let text = format!(
                 "[image]\nwidth = 45\nheight = 27\n[camera]\nview_width = 4.0\n[sweep]\n\
@@ -573,10 +590,7 @@ mod tests {
                  [[mesh]]\nshape = \"box\"\nsize = [4.0, 6.0, 0.1]\ntranslate = [-2.0, 0.0, 1.5]\n\
                  material = \"wall\"\n[material.haze]\nopacity = 0.999\n[material.wall]\nopacity = 1.0\n"
             );
-            let scene = Scene::parse(&text, "summaries", std::path::Path::new(".")).expect("scene");
-            let g = SceneGeometry::build(&scene).expect("geometry");
-            let ldi = super::Ldi::build(&g.raster, u64::MAX).expect("ldi");
-            let plan = super::RenderPlan::new(&scene, &g).expect("plan");
+            let (_scene, g, ldi, plan) = super::built_scene(&text, "summaries");
             let counts = super::ChunkCounts::default();
             let cpu = super::CpuOptions {
                 chunk_counts: Some(&counts),

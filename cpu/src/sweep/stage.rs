@@ -733,8 +733,6 @@ fn forget_front(row: &mut RowState<'_>, x0: usize, lanes: usize, active: &[bool;
 
 #[cfg(test)]
 mod tests {
-    use std::path::Path;
-
     use convshadow_common::geometry::SceneGeometry;
     use convshadow_common::hash::unit_float;
     use convshadow_common::plan::{LIT_LEVEL, RenderPlan};
@@ -743,7 +741,7 @@ mod tests {
 
     use super::*;
     use crate::kernels::TapColumns;
-    use crate::ldi::{BuildLdi, Ldi};
+    use crate::ldi::Ldi;
     use crate::sweep::kit::{Reach, jitter_row_hash, light_row_hashes};
 
     use convshadow_common::hash::TestRng;
@@ -826,11 +824,7 @@ mod tests {
                 &format!("slabs = 24\npenumbra = \"{penumbra}\""),
             )
             .replace("kernel = \"ellipse2\"", &format!("kernel = \"{kernel}\""));
-        let scene = Scene::parse(&text, "lanes", Path::new(".")).expect("scene");
-        let g = SceneGeometry::build(&scene).expect("geometry");
-        let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
-        let plan = RenderPlan::new(&scene, &g).expect("plan");
-        (scene, g, ldi, plan)
+        crate::sweep::built_scene(&text, "lanes")
     }
 
     /// Runs `eight` (an 8-lane stage) and the 1-lane stage eight times on the same random
