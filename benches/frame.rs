@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use convshadow::common::scene::Scene;
+use convshadow::common::model::scene::Scene;
 use convshadow::pipeline::{CpuPath, RenderRequest, render};
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 
@@ -13,7 +13,7 @@ fn frames(c: &mut Criterion) {
     group.sample_size(10);
     let mut scenes = vec![("default", Scene::default_scene())];
     let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.toml");
-    match Scene::load(&bunny) {
+    match convshadow_io::load_scene(&bunny) {
         Ok(s)
             if Path::new(env!("CARGO_MANIFEST_DIR"))
                 .join("../shared/models")

@@ -3,10 +3,9 @@
 
 use std::path::Path;
 
-use convshadow::common::geometry::SceneGeometry;
-use convshadow::common::mesh::load_obj;
-use convshadow::common::scene::Scene;
+use convshadow::common::model::scene::Scene;
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
+use convshadow::io::obj::load_obj;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
 fn scene() -> Scene {
@@ -32,7 +31,7 @@ fn scene() -> Scene {
 
 fn ldi_build(c: &mut Criterion) {
     let scene = scene();
-    let g = SceneGeometry::build(&scene).expect("geometry");
+    let g = convshadow_io::build_geometry(&scene).expect("geometry");
     let fragments = Ldi::build(&g.raster, u64::MAX)
         .expect("ldi")
         .stats()

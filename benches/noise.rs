@@ -1,7 +1,8 @@
 //! Detail-function evaluations per second: fBm (4 octaves) and turbulence (5 octaves) of 3D
 //! improved Perlin noise, scalar against 8 lanes (the two give the same bits).
 
-use convshadow::common::noise::{Detail, DetailKind};
+use convshadow::common::model::scene::DetailKind;
+use convshadow::common::pixel::noise::Detail;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 use wide::f32x8;

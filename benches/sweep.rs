@@ -6,10 +6,10 @@
 
 use std::path::Path;
 
-use convshadow::common::geometry::SceneGeometry;
-use convshadow::common::kernel::KERNEL_NAMES;
+use convshadow::common::model::kernel::KERNEL_NAMES;
+use convshadow::common::model::scene::{Scene, SlabSpec};
 use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::{Scene, SlabSpec};
+use convshadow::common::prepare::geometry::SceneGeometry;
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::cpu::sweep::{CpuOptions, SweepOptions, SweepPath, sweep_with};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -44,9 +44,9 @@ struct Prepared {
 
 impl Prepared {
     fn new(scene: &Scene) -> Prepared {
-        let geometry = SceneGeometry::build(scene).expect("geometry");
+        let geometry = convshadow_io::build_geometry(scene).expect("geometry");
         let ldi = Ldi::build(&geometry.raster, u64::MAX).expect("ldi");
-        let plan = RenderPlan::new(scene, &geometry).expect("plan");
+        let plan = convshadow_io::build_plan(scene, &geometry).expect("plan");
         Prepared {
             geometry,
             ldi,

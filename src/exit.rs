@@ -115,8 +115,8 @@ impl From<crate::pipeline::RenderError> for Failure {
 }
 
 /// The exit code of a geometry error: too many slabs is a limit, the rest bad input.
-fn geometry_code(e: &convshadow_common::geometry::GeometryError) -> i32 {
-    use convshadow_common::geometry::GeometryError as G;
+fn geometry_code(e: &convshadow_common::prepare::error::GeometryError) -> i32 {
+    use convshadow_common::prepare::error::GeometryError as G;
     match e {
         G::TooManySlabs { .. } | G::TooManyAutoSlabs { .. } => RESOURCE_LIMIT,
         _ => BAD_INPUT,
@@ -135,14 +135,14 @@ fn gpu_code(e: &convshadow_gpu::GpuError) -> i32 {
     }
 }
 
-impl From<convshadow_common::scene::SceneError> for Failure {
-    fn from(e: convshadow_common::scene::SceneError) -> Self {
+impl From<convshadow_common::model::scene::SceneError> for Failure {
+    fn from(e: convshadow_common::model::scene::SceneError) -> Self {
         Failure::new(BAD_INPUT, e.to_string())
     }
 }
 
-impl From<convshadow_common::geometry::GeometryError> for Failure {
-    fn from(e: convshadow_common::geometry::GeometryError) -> Self {
+impl From<convshadow_common::prepare::error::GeometryError> for Failure {
+    fn from(e: convshadow_common::prepare::error::GeometryError) -> Self {
         Failure::new(geometry_code(&e), e.to_string())
     }
 }
@@ -153,8 +153,8 @@ impl From<convshadow_cpu::ldi::LdiError> for Failure {
     }
 }
 
-impl From<convshadow_common::image_io::OutputError> for Failure {
-    fn from(e: convshadow_common::image_io::OutputError) -> Self {
+impl From<convshadow_io::image::OutputError> for Failure {
+    fn from(e: convshadow_io::image::OutputError) -> Self {
         Failure::new(OUTPUT_FAILED, e.to_string())
     }
 }

@@ -6,6 +6,8 @@
 
 pub use convshadow_common as common;
 pub use convshadow_cpu as cpu;
+pub use convshadow_io as io;
+pub use convshadow_reference as reference;
 
 pub mod commands;
 pub mod exit;

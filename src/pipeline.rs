@@ -5,18 +5,19 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use convshadow_common::geometry::{GeometryError, SceneGeometry};
-use convshadow_common::guard::GuardBand;
-use convshadow_common::hash::Fingerprint;
-use convshadow_common::image_io::RgbImage;
-use convshadow_common::ldi::BYTES_PER_FRAGMENT;
+use convshadow_common::contract::ldi::BYTES_PER_FRAGMENT;
+use convshadow_common::model::scene::{Penumbra, Scene, SceneError};
+use convshadow_common::pixel::hash::Fingerprint;
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::{Penumbra, Scene, SceneError};
+use convshadow_common::prepare::error::GeometryError;
+use convshadow_common::prepare::geometry::SceneGeometry;
+use convshadow_common::prepare::guard::GuardBand;
 use convshadow_cpu::ldi::{BuildLdi, Ldi, LdiError, LdiStats};
 use convshadow_cpu::sweep::{
     ChunkCounts, CpuOptions, SweepError, SweepOptions, SweepPath, sweep_with,
 };
 use convshadow_gpu::{GpuContext, GpuError};
+use convshadow_io::image::RgbImage;
 
 /// Why a render (or an LDI build) failed. The CLI maps each to an exit code (docs/errors.md);
 /// the message is the error's `Display`.
@@ -283,7 +284,7 @@ pub struct MemoryNeed {
 /// Bytes the scene's input files need in memory (see [`MemoryNeed::inputs`]); a file that cannot
 /// be inspected counts 0 here and is reported when it is loaded.
 fn input_bytes(scene: &Scene, textures: bool) -> u64 {
-    use convshadow_common::scene::{ShapeSpec, TextureFormat};
+    use convshadow_common::model::scene::{ShapeSpec, TextureFormat};
     let size = |p: &std::path::Path| std::fs::metadata(p).map_or(0, |m| m.len());
     let meshes: u64 = scene
         .meshes
@@ -309,7 +310,7 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
             // gzip file or a 4D series counts what it holds); from the file's size (at most 4
             // f32 bytes per stored byte) when the header cannot be read.
             TextureFormat::Nifti { .. } => {
-                convshadow_common::nifti::memory_need(&t.path).unwrap_or_else(|| 5 * size(&t.path))
+                convshadow_io::nifti::memory_need(&t.path).unwrap_or_else(|| 5 * size(&t.path))
             }
         })
         .fold(0u64, u64::saturating_add);
@@ -586,7 +587,7 @@ pub fn build_ldi(
     let (choice, _) = open_within_budget(scene, least, false, backend, memory_budget)?;
     let pool = thread_pool(threads)?;
     let start = Instant::now();
-    let geometry = SceneGeometry::build(scene)?;
+    let geometry = convshadow_io::build_geometry(scene)?;
     let budget = MemoryNeed::for_backend(scene, geometry.raster.guard, false, choice.opened())
         .check(scene, memory_budget)?;
     let t_ldi = Instant::now();
@@ -617,7 +618,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     let least = scene.sweep.guard_band.lower_bound();
     let (choice, _) = open_within_budget(scene, least, true, req.backend, req.memory_budget)?;
     let pool = thread_pool(req.threads)?;
-    let geometry = SceneGeometry::build(scene)?;
+    let geometry = convshadow_io::build_geometry(scene)?;
     let fragment_budget =
         MemoryNeed::for_backend(scene, geometry.raster.guard, true, choice.opened())
             .check(scene, req.memory_budget)?;
@@ -659,9 +660,9 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     // 3D textures (raw and NIfTI) load in chunks and stop once the cancel flag is raised. In the
     // request's pool: the distance penumbra builds its levels' tables in parallel.
     let plan = pool
-        .install(|| RenderPlan::new_cancellable(scene, &geometry, req.cancel))
+        .install(|| convshadow_io::build_plan_cancellable(scene, &geometry, req.cancel))
         .map_err(|e| match e.source {
-            convshadow_common::texture3d::TextureError::Interrupted { .. } => {
+            convshadow_common::pixel::texture3d::TextureError::Interrupted { .. } => {
                 RenderError::Interrupted
             }
             _ => RenderError::BadPlan(e.to_string()),
@@ -756,7 +757,7 @@ mod tests {
         let mut scene = Scene::default_scene();
         scene.image.width = 24;
         scene.image.height = 24;
-        scene.sweep.slabs = convshadow_common::scene::SlabSpec::Count(48);
+        scene.sweep.slabs = convshadow_common::model::scene::SlabSpec::Count(48);
         scene.sweep.penumbra = Penumbra::Distance;
         scene.revalidate().unwrap();
         let req = |memory_budget| RenderRequest {

@@ -17,7 +17,7 @@ fn render_without_arguments_writes_render_png_of_the_default_scene() {
         out.contains("render.png"),
         "the summary names the output: {out}"
     );
-    let img = convshadow::common::image_io::RgbImage::load(&png).unwrap();
+    let img = convshadow::io::image::RgbImage::load(&png).unwrap();
     assert_eq!((img.width, img.height), (96, 96));
     // Not a flat image: the default scene has coloured objects, shadows and a background.
     let (lo, hi) = img
@@ -60,8 +60,8 @@ fn repeated_outputs_png_and_exr_and_stats_json() {
     );
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.is_empty(), "--quiet prints nothing: {out}");
-    let exr = convshadow::common::image_io::RgbImage::load(&dir.join("b.exr")).unwrap();
-    let png = convshadow::common::image_io::RgbImage::load(&dir.join("a.png")).unwrap();
+    let exr = convshadow::io::image::RgbImage::load(&dir.join("b.exr")).unwrap();
+    let png = convshadow::io::image::RgbImage::load(&dir.join("a.png")).unwrap();
     assert_eq!(
         exr.to_srgb8(),
         png.to_srgb8(),
@@ -156,7 +156,7 @@ fn backend_reference_renders_the_sweeps_view_samples_with_reference_light() {
         out.contains("reference: 16 light directions"),
         "the summary names the backend: {out}"
     );
-    let load = |n: &str| convshadow::common::image_io::RgbImage::load(&dir.join(n)).unwrap();
+    let load = |n: &str| convshadow::io::image::RgbImage::load(&dir.join(n)).unwrap();
     let (cpu, reference) = (load("cpu.exr"), load("ref.exr"));
     assert_eq!(cpu.data.len(), reference.data.len());
     for (a, b) in cpu.data.iter().zip(&reference.data) {

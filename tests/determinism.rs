@@ -6,7 +6,7 @@ mod support;
 
 use std::path::{Path, PathBuf};
 
-use convshadow::common::scene::{Scene, SlabSpec};
+use convshadow::common::model::scene::{Scene, SlabSpec};
 use convshadow::pipeline::{CpuPath, RenderRequest, render};
 
 /// The example scenes, small; scenes using ../shared/models are skipped (loudly) without it.
@@ -25,7 +25,7 @@ fn example_scenes() -> Vec<(PathBuf, Scene)> {
         if text.contains("shared/models") && !have_models {
             continue;
         }
-        let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let mut scene = convshadow_io::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
         scene.image.width = 53; // not a multiple of 8: exercises row tails
         scene.image.height = 40;
         scene.sweep.slabs = SlabSpec::Count(24);
@@ -134,7 +134,7 @@ fn simd_and_scalar_paths_give_the_same_bits() {
 fn simd_and_scalar_paths_give_the_same_bits_with_the_iterated_penumbra() {
     // The iterated penumbra's one-phase-per-slab kernels gather two neighbouring chunks at once
     // on the SIMD path (`stage::gather_pair`); width 53 has six chunks, so three such pairs a row.
-    use convshadow::common::scene::Penumbra;
+    use convshadow::common::model::scene::Penumbra;
     let mut compared = 0;
     for (path, base) in example_scenes() {
         if base.sweep.optimal_distance.is_none() {

@@ -3,7 +3,7 @@
 
 mod support;
 
-use convshadow::common::image_io::RgbImage;
+use convshadow::io::image::RgbImage;
 
 /// A smooth test image with some structure.
 fn test_image(w: u32, h: u32) -> RgbImage {

@@ -5,10 +5,11 @@ mod support;
 
 use std::path::{Path, PathBuf};
 
-use convshadow::common::image_io::RgbImage;
-use convshadow::common::nifti::load_nifti;
-use convshadow::common::scene::Scene;
-use convshadow::common::tonemap::{DisplayMap, Tonemap};
+use convshadow::common::model::display::DisplayMap;
+use convshadow::common::model::display::Tonemap;
+use convshadow::common::model::scene::Scene;
+use convshadow::io::image::RgbImage;
+use convshadow::io::nifti::load_nifti;
 use convshadow::pipeline::{RenderRequest, render};
 
 /// `../shared/volumes` beside the repository, or `None` (loudly) when missing; a failure under CI.
@@ -120,7 +121,7 @@ fn nifti_big_endian_and_gzip_4d_match_the_readme() {
     assert_eq!(a.volumes, 1);
     assert_eq!((a.min, a.max), (-610.0, 30393.0));
     // Undo the window to compare voxel values with the README.
-    let value = |t: &convshadow::common::nifti::NiftiTexture, x: usize, y: usize, z: usize| {
+    let value = |t: &convshadow::io::nifti::NiftiTexture, x: usize, y: usize, z: usize| {
         let d = t.texture.dims.map(|d| d as usize);
         let v = f64::from(t.texture.voxels[x + d[0] * (y + d[1] * z)]);
         t.window[0] + v * (t.window[1] - t.window[0])
@@ -202,8 +203,8 @@ fn the_texture_keeps_the_voxel_spacings_aspect() {
     };
     // A cube: the 256 × 192 × 52.8 mm volume fits by its x side, centred in y and z.
     let cube = Scene::parse(&scene_text("[2.0, 2.0, 2.0]"), "t.toml", &dir).unwrap();
-    let geometry = convshadow::common::geometry::SceneGeometry::build(&cube).unwrap();
-    let plan = convshadow::common::plan::RenderPlan::new(&cube, &geometry).unwrap();
+    let geometry = convshadow_io::build_geometry(&cube).unwrap();
+    let plan = convshadow_io::build_plan(&cube, &geometry).unwrap();
     let extent = plan.materials[0].texture_extent.unwrap();
     assert_eq!(extent[0], 256.0);
     assert_eq!(extent[1], 192.0);

@@ -6,18 +6,16 @@
 
 use std::path::Path;
 
-use convshadow::common::geometry::SceneGeometry;
-use convshadow::common::metrics::rmse;
-use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::{Penumbra, Scene, SlabSpec};
+use convshadow::common::model::scene::{Penumbra, Scene, SlabSpec};
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
-use convshadow::cpu::reference::disk::DiskSetup;
-use convshadow::cpu::reference::edge::{
+use convshadow::cpu::sweep::{CpuOptions, SweepOptions, sweep_with};
+use convshadow::io::metrics::rmse;
+use convshadow::pipeline::{CpuPath, RenderRequest, image_fingerprint, render};
+use convshadow::reference::disk::DiskSetup;
+use convshadow::reference::edge::{
     EdgeSetup, half_crossing, light_at, model_profile, run_light, width_10_90,
 };
-use convshadow::cpu::reference::{Reference, ReferenceOptions};
-use convshadow::cpu::sweep::{CpuOptions, SweepOptions, sweep_with};
-use convshadow::pipeline::{CpuPath, RenderRequest, image_fingerprint, render};
+use convshadow::reference::{Reference, ReferenceOptions};
 
 /// The edge at distance d = k·d1 (d1 = 1) with the frame: tilt 30°, pixels of d/64, 256
 /// px across 4d (so the correct penumbra is 64·σ px wide at every distance), `slabs` slabs between
@@ -124,7 +122,7 @@ fn a_disk_shadow_is_right_at_every_distance() {
                 penumbra: Penumbra::Distance,
             };
             let scene = setup.scene().expect("scene");
-            let g = SceneGeometry::build(&scene).expect("geometry");
+            let g = convshadow_io::build_geometry(&scene).expect("geometry");
             let d = setup.distance();
             let correct = setup.reference_light(&g, d * d);
             // The correct shadow moved by the whole pixels the sweep carries: the occluder's
@@ -237,9 +235,9 @@ color = [1.0, 1.0, 1.0]
 
 /// The sweep's image and the shadow-ray reference's (`samples` light directions) for `scene`.
 fn sweep_and_reference(scene: &Scene, samples: u32) -> (Vec<f32>, Vec<f32>) {
-    let g = SceneGeometry::build(scene).expect("geometry");
+    let g = convshadow_io::build_geometry(scene).expect("geometry");
     let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
-    let plan = RenderPlan::new(scene, &g).expect("plan");
+    let plan = convshadow_io::build_plan(scene, &g).expect("plan");
     let out = sweep_with(
         &plan,
         &g.raster,

@@ -7,7 +7,7 @@
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use convshadow::common::scene::{Scene, SlabSpec};
+use convshadow::common::model::scene::{Scene, SlabSpec};
 use convshadow::pipeline::{CpuPath, RenderRequest, Rendered, render};
 
 /// The default scene, small, seen `view_width` wide: its wall (5 × 5) fills a view up to 5 wide.

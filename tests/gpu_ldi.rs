@@ -5,9 +5,8 @@
 mod gpu_common;
 mod support;
 
-use convshadow::common::geometry::SceneGeometry;
-use convshadow::common::guard::GuardBand;
-use convshadow::common::raster::{FIXED_ONE, RasterSetup, TriangleSetup};
+use convshadow::common::prepare::guard::GuardBand;
+use convshadow::common::prepare::raster::{FIXED_ONE, RasterSetup, TriangleSetup};
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow_gpu::GpuContext;
 use convshadow_gpu::ldi::build_ldi;
@@ -98,7 +97,7 @@ fn gpu_ldi_equals_cpu_on_every_example_scene() {
     for path in gpu_common::example_scenes() {
         for size in [64, 173] {
             let scene = gpu_common::small(&path, size, 16);
-            let geometry = SceneGeometry::build(&scene).unwrap();
+            let geometry = convshadow_io::build_geometry(&scene).unwrap();
             let (fragments, _) = assert_same_ldi(
                 &ctx,
                 &geometry.raster,
@@ -123,7 +122,7 @@ fn gpu_ldi_equals_cpu_on_real_models() {
     };
     for name in ["bunny_hr.obj", "armadillo_100k.obj", "teapot.obj"] {
         let path = models.join(name);
-        let mesh = convshadow::common::mesh::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
+        let mesh = convshadow::io::obj::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
         let (lo, hi) = mesh.bounds();
         let c = (lo + hi) * 0.5;
         let text = support::obj_scene(&path, 256, (hi - lo).max_element() * 1.2).replace(
@@ -134,7 +133,7 @@ fn gpu_ldi_equals_cpu_on_real_models() {
             ),
         );
         let scene = support::scene(&text, &models);
-        let geometry = SceneGeometry::build(&scene).unwrap();
+        let geometry = convshadow_io::build_geometry(&scene).unwrap();
         let (fragments, _) = assert_same_ldi(&ctx, &geometry.raster, name);
         assert!(fragments > 1000, "{name}: only {fragments} fragments");
     }

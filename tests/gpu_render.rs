@@ -9,9 +9,9 @@
 mod gpu_common;
 mod support;
 
-use convshadow::common::guard::GuardBandSpec;
-use convshadow::common::metrics::compare;
-use convshadow::common::scene::{Penumbra, Scene};
+use convshadow::common::model::scene::GuardBandSpec;
+use convshadow::common::model::scene::{Penumbra, Scene};
+use convshadow::io::metrics::compare;
 use convshadow::pipeline::{Backend, RenderRequest, Rendered, render};
 use convshadow_gpu::GpuContext;
 
@@ -325,7 +325,7 @@ fn gpu_image_equals_cpu_with_a_patterned_light() {
     let data: Vec<f32> = (0..w * h * 3)
         .map(|i| ((i * 53 + 11) % 97) as f32 / 96.0)
         .collect();
-    convshadow::common::image_io::RgbImage {
+    convshadow::io::image::RgbImage {
         width: w,
         height: h,
         data,
@@ -333,7 +333,7 @@ fn gpu_image_equals_cpu_with_a_patterned_light() {
     .save(&dir.join("gobo.png"))
     .unwrap();
     let mut scene = path_scene(&dir, true, true);
-    scene.lights[0].pattern = Some(convshadow::common::scene::PatternSpec {
+    scene.lights[0].pattern = Some(convshadow::common::model::scene::PatternSpec {
         path: dir.join("gobo.png"),
         size: [3.1, 2.3],
         center: [0.4, -0.3],
@@ -411,7 +411,7 @@ fn auto_counts_the_memory_of_the_backend_it_picks() {
                 slabs = 8\noptimal_distance = 0.5\n[[mesh]]\nshape = \"box\"\n\
                 size = [1.0, 1.0, 1.0]\nmaterial = \"m\"\n[material.m]\nopacity = 0.5\n";
     std::fs::write(dir.join("s.toml"), text).unwrap();
-    let scene = Scene::load(&dir.join("s.toml")).unwrap();
+    let scene = convshadow_io::load_scene(&dir.join("s.toml")).unwrap();
     // The box lies inside the view: the automatic guard band is 0, its lower bound.
     let band = scene.sweep.guard_band.lower_bound();
     let cpu = MemoryNeed::for_backend(&scene, band, true, Backend::Cpu).total();
@@ -549,7 +549,7 @@ fn gpu_image_equals_cpu_with_a_patterned_light_and_the_distance_penumbra() {
     let data: Vec<f32> = (0..w * h * 3)
         .map(|i| ((i * 41 + 7) % 89) as f32 / 88.0)
         .collect();
-    convshadow::common::image_io::RgbImage {
+    convshadow::io::image::RgbImage {
         width: w,
         height: h,
         data,
@@ -557,7 +557,7 @@ fn gpu_image_equals_cpu_with_a_patterned_light_and_the_distance_penumbra() {
     .save(&dir.join("gobo.png"))
     .unwrap();
     let mut scene = path_scene(&dir, true, true);
-    scene.lights[1].pattern = Some(convshadow::common::scene::PatternSpec {
+    scene.lights[1].pattern = Some(convshadow::common::model::scene::PatternSpec {
         path: dir.join("gobo.png"),
         size: [2.7, 3.3],
         center: [-0.2, 0.5],

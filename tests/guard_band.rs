@@ -12,8 +12,9 @@ mod support;
 
 use std::path::Path;
 
-use convshadow::common::guard::{GuardBand, GuardBandSpec};
-use convshadow::common::scene::{Scene, ShapeSpec};
+use convshadow::common::model::scene::GuardBandSpec;
+use convshadow::common::model::scene::{Scene, ShapeSpec};
+use convshadow::common::prepare::guard::GuardBand;
 use convshadow::pipeline::{RenderRequest, Rendered, render};
 
 /// A band wider than any shadow reach in these scenes (the auto bands below are ≤ 140 px).

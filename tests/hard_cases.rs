@@ -8,16 +8,14 @@ mod support;
 
 use std::path::Path;
 
-use convshadow::common::geometry::SceneGeometry;
-use convshadow::common::kernel::{KernelTable, PhaseMode};
-use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::{Penumbra, Scene};
+use convshadow::common::model::scene::{Penumbra, Scene};
+use convshadow::common::plan::kernel::{KernelTable, PhaseMode};
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
-use convshadow::cpu::reference::disk::DiskSetup;
-use convshadow::cpu::reference::edge::{EdgeSetup, half_crossing, model_profile, phi, width_10_90};
-use convshadow::cpu::reference::impulse::{empty_scene, impulse, moments};
-use convshadow::cpu::reference::{Reference, ReferenceOptions};
 use convshadow::cpu::sweep::{SweepOptions, sweep};
+use convshadow::reference::disk::DiskSetup;
+use convshadow::reference::edge::{EdgeSetup, half_crossing, model_profile, phi, width_10_90};
+use convshadow::reference::impulse::{empty_scene, impulse, moments};
+use convshadow::reference::{Reference, ReferenceOptions};
 use convshadow::report::kernels;
 
 /// An edge whose per-slab shift `e·tan ω / px` is non-integer at every tilt tested
@@ -172,9 +170,9 @@ color = [1.0, 1.0, 1.0]
         f64::from(w) * 0.0625
     );
     let scene = Scene::parse(&text, "boundary.toml", Path::new(".")).unwrap();
-    let g = SceneGeometry::build(&scene).unwrap();
+    let g = convshadow_io::build_geometry(&scene).unwrap();
     let ldi = Ldi::build(&g.raster, 1 << 30).unwrap();
-    let plan = RenderPlan::new(&scene, &g).unwrap();
+    let plan = convshadow_io::build_plan(&scene, &g).unwrap();
     assert_eq!(plan.slab_back[3], 1.0);
     assert!(
         ldi.fragments_on(&plan.slab_back) > 0,
@@ -267,9 +265,9 @@ fn compensated_failures((variance, rotation): ([f64; 2], f64), kernel: &str) -> 
         let centre = (grid / 2) as usize;
         {
             let scene = empty_scene(N, grid, tilt, variance, rotation, kernel, true).unwrap();
-            let g = SceneGeometry::build(&scene).unwrap();
+            let g = convshadow_io::build_geometry(&scene).unwrap();
             let ldi = Ldi::build(&g.raster, 1 << 30).unwrap();
-            let mut plan = RenderPlan::new(&scene, &g).unwrap();
+            let mut plan = convshadow_io::build_plan(&scene, &g).unwrap();
             plan.lights[0].table = expected_table(&plan.lights[0].table);
             let init = impulse(&plan, centre);
             let options = SweepOptions {
@@ -367,9 +365,9 @@ fn reference_disk_scene() -> Scene {
 #[test]
 fn the_reference_converges_as_m_grows() {
     let scene = reference_disk_scene();
-    let g = SceneGeometry::build(&scene).unwrap();
+    let g = convshadow_io::build_geometry(&scene).unwrap();
     let ldi = Ldi::build(&g.raster, 1 << 30).unwrap();
-    let plan = RenderPlan::new(&scene, &g).unwrap();
+    let plan = convshadow_io::build_plan(&scene, &g).unwrap();
     let reference = Reference::new(&scene, &g, &plan, 0.0);
     let runs: Vec<Vec<f32>> = [4u32, 16, 64, 256]
         .iter()
@@ -413,8 +411,8 @@ fn the_reference_reproduces_the_correct_edge_shadow() {
         ..EdgeSetup::classic(64, 30.0, 0.05, "ellipse2")
     };
     let scene = s.scene().unwrap();
-    let g = SceneGeometry::build(&scene).unwrap();
-    let plan = RenderPlan::new(&scene, &g).unwrap();
+    let g = convshadow_io::build_geometry(&scene).unwrap();
+    let plan = convshadow_io::build_plan(&scene, &g).unwrap();
     let reference = Reference::new(&scene, &g, &plan, 0.0);
     let d = s.distance();
     let e = s.slab_distance;
@@ -455,9 +453,9 @@ fn the_reference_sees_the_same_scene_as_the_sweep_without_shadows() {
     // lone opaque box renders the same image as the sweep up to f32 rounding of 1·colour.
     let text = support::lone_box_scene(24, 16);
     let scene = Scene::parse(&text, "lone.toml", Path::new(".")).unwrap();
-    let g = SceneGeometry::build(&scene).unwrap();
+    let g = convshadow_io::build_geometry(&scene).unwrap();
     let ldi = Ldi::build(&g.raster, 1 << 30).unwrap();
-    let plan = RenderPlan::new(&scene, &g).unwrap();
+    let plan = convshadow_io::build_plan(&scene, &g).unwrap();
     let sweep_image = sweep(&plan, &g.raster, &ldi, &SweepOptions::default())
         .unwrap()
         .image;

@@ -8,18 +8,18 @@ mod support;
 
 use std::path::Path;
 
-use convshadow::common::geometry::SceneGeometry;
-use convshadow::common::mesh::load_obj;
-use convshadow::common::scene::Scene;
+use convshadow::common::model::scene::Scene;
+use convshadow::common::prepare::geometry::SceneGeometry;
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::cpu::parity::inside;
+use convshadow::io::obj::load_obj;
 use glam::DVec3;
 use proptest::prelude::*;
 
 const BUDGET: u64 = 8 << 30;
 
 fn build(scene: &Scene) -> (SceneGeometry, Ldi) {
-    let g = SceneGeometry::build(scene).unwrap_or_else(|e| panic!("{e}"));
+    let g = convshadow_io::build_geometry(scene).unwrap_or_else(|e| panic!("{e}"));
     let ldi = Ldi::build(&g.raster, BUDGET).unwrap();
     (g, ldi)
 }
@@ -321,7 +321,7 @@ fn inside_classification_matches_analytic_shapes() {
 #[test]
 fn ldi_hash_is_independent_of_thread_count() {
     let scene = Scene::default_scene();
-    let g = SceneGeometry::build(&scene).unwrap();
+    let g = convshadow_io::build_geometry(&scene).unwrap();
     let hashes: Vec<u64> = [1, 2, 3, 8]
         .iter()
         .map(|&n| {
@@ -359,7 +359,7 @@ fn every_closed_model_is_even_and_thread_independent() {
     ] {
         let s = model_scene(&dir.join(name), 256);
         let ldi = assert_even(&s, name);
-        let g = SceneGeometry::build(&s).unwrap();
+        let g = convshadow_io::build_geometry(&s).unwrap();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(3)
             .build()

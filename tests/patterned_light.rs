@@ -9,10 +9,10 @@ mod support;
 
 use std::path::Path;
 
-use convshadow::common::image_io::save_gray_png;
+use convshadow::common::model::scene::Scene;
 use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::Scene;
-use convshadow::cpu::reference::edge::{self, EdgeSetup, phi, run_light};
+use convshadow::io::image::save_gray_png;
+use convshadow::reference::edge::{self, EdgeSetup, phi, run_light};
 
 /// The edge set-up with its occluder made transparent (it only keeps the depth range) and a
 /// pattern, black left of the image centre and white right of it, one texel per pixel aligned
@@ -92,8 +92,8 @@ fn a_half_black_pattern_casts_the_edge_shadow_moved_by_d_tan_omega() {
 fn the_pattern_is_the_initial_light_buffer() {
     let dir = support::temp_dir("pattern-initial");
     let (s, scene) = patterned_edge(4, 0.0, 0.0, &dir);
-    let g = convshadow::common::geometry::SceneGeometry::build(&scene).unwrap();
-    let plan = RenderPlan::new(&scene, &g).unwrap();
+    let g = convshadow_io::build_geometry(&scene).unwrap();
+    let plan = convshadow_io::build_plan(&scene, &g).unwrap();
     let init = plan.initial_light.as_ref().unwrap();
     let row_len = plan.light_row_len();
     let w = s.width as usize;
@@ -227,15 +227,15 @@ fn sweep_paths_and_the_reference_project_the_pattern_alike() {
     let scalar = run(CpuPath::Scalar);
     assert_eq!(simd.image_hash, scalar.image_hash, "scalar and SIMD bits");
     let sweep_iso = image_isoline(&simd.image.data, 64);
-    let g = convshadow::common::geometry::SceneGeometry::build(&scene).unwrap();
-    let ldi =
-        <convshadow::common::ldi::Ldi as convshadow::cpu::ldi::BuildLdi>::build(&g.raster, 1 << 30)
-            .unwrap();
-    let plan = RenderPlan::new(&scene, &g).unwrap();
-    let reference = convshadow::cpu::reference::Reference::new(&scene, &g, &plan, 0.0).render(
-        &ldi,
-        &convshadow::cpu::reference::ReferenceOptions::default(),
-    );
+    let g = convshadow_io::build_geometry(&scene).unwrap();
+    let ldi = <convshadow::common::contract::ldi::Ldi as convshadow::cpu::ldi::BuildLdi>::build(
+        &g.raster,
+        1 << 30,
+    )
+    .unwrap();
+    let plan = convshadow_io::build_plan(&scene, &g).unwrap();
+    let reference = convshadow::reference::Reference::new(&scene, &g, &plan, 0.0)
+        .render(&ldi, &convshadow::reference::ReferenceOptions::default());
     let ref_iso = image_isoline(&reference, 64);
     eprintln!(
         "isoline: sweep {sweep_iso:.3} px, reference {ref_iso:.3} px, expected {expected:.3}"

@@ -8,13 +8,11 @@ mod support;
 
 use std::path::Path;
 
-use convshadow::common::geometry::SceneGeometry;
-use convshadow::common::ldi::Ldi;
-use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::Scene;
+use convshadow::common::contract::ldi::Ldi;
+use convshadow::common::model::scene::Scene;
 use convshadow::cpu::ldi::BuildLdi;
-use convshadow::cpu::reference::{Reference, ReferenceOptions};
 use convshadow::pipeline::{CpuPath, RenderRequest, render};
+use convshadow::reference::{Reference, ReferenceOptions};
 
 /// A fog slab (a 4×4×1 box of constant, partly transparent medium filling the view) lit by one
 /// hard light tilted by `tilt` degrees about the camera's y axis, medium asymmetry `g`.
@@ -116,9 +114,9 @@ fn the_reference_honours_the_same_phase_function() {
     for tilt in [0.0, 30.0, 60.0] {
         let render_ref = |g: f64| {
             let scene = fog(tilt, g);
-            let geometry = SceneGeometry::build(&scene).unwrap();
+            let geometry = convshadow_io::build_geometry(&scene).unwrap();
             let ldi = Ldi::build(&geometry.raster, 1 << 30).unwrap();
-            let plan = RenderPlan::new(&scene, &geometry).unwrap();
+            let plan = convshadow_io::build_plan(&scene, &geometry).unwrap();
             Reference::new(&scene, &geometry, &plan, 0.0).render(
                 &ldi,
                 &ReferenceOptions {

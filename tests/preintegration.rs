@@ -10,8 +10,8 @@ mod support;
 
 use std::path::Path;
 
-use convshadow::common::metrics::rmse;
-use convshadow::common::scene::{Penumbra, Scene, SlabSpec};
+use convshadow::common::model::scene::{Penumbra, Scene, SlabSpec};
+use convshadow::io::metrics::rmse;
 use convshadow::pipeline::{CpuPath, RenderRequest, render};
 
 /// `scenes/narrowband.toml` at `size`² pixels, `slabs` slabs, pre-integration on or off.

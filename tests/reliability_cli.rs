@@ -687,7 +687,7 @@ fn control_characters_in_messages_are_escaped() {
 /// OBJ text of unit cubes translated by `offsets` (outward winding); `flip` reverses the first
 /// triangle of the last cube.
 fn cubes_obj(offsets: &[[f64; 3]], flip: bool) -> String {
-    use convshadow::common::mesh::TriMesh;
+    use convshadow::common::prepare::mesh::TriMesh;
     let mut text = String::new();
     let mut base = 0;
     for (k, o) in offsets.iter().enumerate() {

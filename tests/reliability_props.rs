@@ -6,12 +6,11 @@ mod support;
 
 use std::path::Path;
 
-use convshadow::common::camera::Camera;
-use convshadow::common::geometry::SceneGeometry;
-use convshadow::common::guard::GuardBand;
-use convshadow::common::mesh::TriMesh;
-use convshadow::common::raster::RasterSetup;
-use convshadow::common::scene::{CameraSpec, ImageSpec, Scene};
+use convshadow::common::model::scene::{CameraSpec, ImageSpec, Scene};
+use convshadow::common::prepare::camera::Camera;
+use convshadow::common::prepare::guard::GuardBand;
+use convshadow::common::prepare::mesh::TriMesh;
+use convshadow::common::prepare::raster::RasterSetup;
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::pipeline::{RenderRequest, render};
 use glam::DVec3;
@@ -210,7 +209,7 @@ proptest! {
             );
         }
         let scene = support::scene(&text, Path::new("."));
-        let geometry = SceneGeometry::build(&scene).unwrap();
+        let geometry = convshadow_io::build_geometry(&scene).unwrap();
         prop_assert_eq!(geometry.defect_edges(), 0);
         let ldi = Ldi::build(&geometry.raster, 1 << 30).unwrap();
         prop_assert_eq!(ldi.stats().odd_pixels, 0, "{}", text);
@@ -597,7 +596,7 @@ fn fuzz_obj_with_welded_vertices_and_nul_bytes_loads_and_counts_degenerate_trian
     let dir = support::temp_dir("fuzz-obj-1");
     let path = dir.join("crash.obj");
     std::fs::write(&path, bytes).unwrap();
-    let mesh = convshadow::common::mesh::load_obj(&path).unwrap();
+    let mesh = convshadow::io::obj::load_obj(&path).unwrap();
     assert_eq!(mesh.triangles.len(), 3);
     let (clean, report) = mesh.analyze();
     assert_eq!(report.degenerate_triangles, 2, "{report:?}");
@@ -908,7 +907,7 @@ fn arrays_of_the_wrong_length_and_gradient_indices_are_exact() {
 
 #[test]
 fn kernel_names_are_canonical() {
-    use convshadow::common::kernel::KernelSpec;
+    use convshadow::common::model::kernel::KernelSpec;
     for bad in [
         "gaussian:+3",
         "ellipse02",

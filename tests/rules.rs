@@ -5,8 +5,10 @@
 //!
 //! Each rule is a function over (file, text) returning its violations, so that the tests below
 //! show every rule failing on an injected violating line, in Rust and in WGSL, and passing on the
-//! real tree. The per-pixel scope is by folder (`cpu/src`, `common/src`, `gpu/src`: whatever
-//! files they hold), less an explicit allow-list of host-side code.
+//! real tree. The per-pixel scope is by folder (`common/src/pixel`, `cpu/src`,
+//! `gpu/src/shaders`: whatever files they hold), with no allow-list. Beside them: no file-level
+//! import circle (`scripts/import_cycles.py`), no Rust file over 900 lines outside tests, and
+//! every source path the docs name exists.
 
 use std::path::{Path, PathBuf};
 
@@ -22,34 +24,16 @@ struct Hit {
 /// A rule: the violations of one file's text (none when the rule does not cover the file).
 type Rule = fn(&Path, &str) -> Vec<Hit>;
 
-/// Host-side code inside the per-pixel folders, which may call transcendentals: (path relative
-/// to the repository, prefix-matched; why).
-const HOST_SIDE: [(&str, &str); 7] = [
+/// The per-pixel folders: every Rust and WGSL file in them runs per pixel (or per fragment) and
+/// keeps the per-pixel rules, with no exception. Host code (the model, preparation, the plan's
+/// tables, file formats, the f64 references) lives in other folders.
+const PER_PIXEL_FOLDERS: [(&str, &str); 3] = [
     (
-        "common/src/tonemap.rs",
-        "display mapping of the finished image for PNG output",
+        "common/src/pixel/",
+        "lanes, hashes, noise and texture evaluation, levels",
     ),
-    (
-        "common/src/kernel",
-        "tap tables: built once per light on the host in f64",
-    ),
-    (
-        "common/src/plan.rs",
-        "per-light and per-material tables of the plan",
-    ),
-    ("common/src/mesh", "host geometry: procedural shapes"),
-    (
-        "common/src/image_io.rs",
-        "sRGB encoding of the finished image",
-    ),
-    (
-        "common/src/metrics.rs",
-        "image comparison (`convshadow diff`)",
-    ),
-    (
-        "cpu/src/reference",
-        "the f64 ground-truth references, not a sweep stage",
-    ),
+    ("cpu/src/", "the CPU stages and the sweep"),
+    ("gpu/src/shaders/", "the WGSL stages"),
 ];
 
 /// Rust and WGSL files under `dir`, recursively (build outputs and hidden folders skipped).
@@ -78,7 +62,18 @@ fn root() -> &'static Path {
 /// Every Rust and WGSL file of the repository, as paths relative to its root.
 fn all_files() -> Vec<PathBuf> {
     let mut files = Vec::new();
-    for d in ["common", "cpu", "gpu", "src", "benches", "tests", "fuzz"] {
+    for d in [
+        "common",
+        "io",
+        "cpu",
+        "reference",
+        "gpu",
+        "testkit",
+        "src",
+        "benches",
+        "tests",
+        "fuzz",
+    ] {
         sources(&root().join(d), &mut files);
     }
     files
@@ -164,14 +159,11 @@ const TRANSCENDENTALS: [&str; 24] = [
     "hypot",
 ];
 
-/// Whether a file is per-pixel code: under `cpu/src`, `common/src` or `gpu/src`, not host-side.
+/// Whether a file is per-pixel code: under one of [`PER_PIXEL_FOLDERS`], not a unit-test file.
 fn is_per_pixel(file: &Path) -> bool {
     let path = file.to_string_lossy().replace('\\', "/");
-    let in_scope = ["cpu/src/", "common/src/", "gpu/src/"]
-        .iter()
-        .any(|d| path.starts_with(d));
     let unit_tests = file.file_name().is_some_and(|n| n == "tests.rs");
-    in_scope && !unit_tests && !HOST_SIDE.iter().any(|(p, _)| path.starts_with(p))
+    !unit_tests && PER_PIXEL_FOLDERS.iter().any(|(d, _)| path.starts_with(d))
 }
 
 /// Rule: per-pixel stages call no transcendental (they read tables built on the host).
@@ -209,8 +201,9 @@ fn the_per_pixel_scope_covers_every_stage_file() {
     let files = all_files();
     let per_pixel: Vec<&PathBuf> = files.iter().filter(|f| is_per_pixel(f)).collect();
     for must in [
-        "common/src/hash.rs",
-        "common/src/noise.rs",
+        "common/src/pixel/hash.rs",
+        "common/src/pixel/noise.rs",
+        "common/src/pixel/lane.rs",
         "cpu/src/ldi.rs",
     ] {
         assert!(
@@ -225,11 +218,24 @@ fn the_per_pixel_scope_covers_every_stage_file() {
         wgsl.count() >= 5,
         "the WGSL stages are not scanned: {per_pixel:?}"
     );
-    for (prefix, _) in HOST_SIDE {
+    for (folder, _) in PER_PIXEL_FOLDERS {
         assert!(
-            files.iter().any(|f| f.starts_with(prefix)),
-            "allow-list entry {prefix} matches no file"
+            per_pixel.iter().any(|f| f.starts_with(folder)),
+            "per-pixel folder {folder} holds no file"
         );
+    }
+    // Host code is outside the scope by where it lives, not by a list.
+    for host in [
+        "common/src/plan/kernel/table.rs",
+        "common/src/model/display.rs",
+        "reference/src/shadow_ray.rs",
+        "io/src/image.rs",
+    ] {
+        assert!(
+            files.iter().any(|f| f.as_path() == Path::new(host)),
+            "{host} missing"
+        );
+        assert!(!is_per_pixel(Path::new(host)), "{host} is host code");
     }
 }
 
@@ -303,10 +309,14 @@ fn the_transcendental_rule_fails_on_an_injected_violation() {
         "cpu/src/lane/shading.rs",
         "let y = f32::exp(x);"
     ));
-    assert!(catches(rule, "common/src/hash.rs", "let y = x.powf(2.2);"));
     assert!(catches(
         rule,
-        "common/src/lane.rs",
+        "common/src/pixel/hash.rs",
+        "let y = x.powf(2.2);"
+    ));
+    assert!(catches(
+        rule,
+        "common/src/pixel/lane.rs",
         "let (s, c) = x.sin_cos();"
     ));
     assert!(catches(
@@ -328,10 +338,15 @@ fn the_transcendental_rule_fails_on_an_injected_violation() {
     assert!(!catches(rule, "cpu/src/sweep.rs", "fn log(x: f32) {}"));
     assert!(!catches(
         rule,
-        "common/src/kernel/table.rs",
+        "common/src/plan/kernel/table.rs",
         "let y = x.sin();"
     ));
-    assert!(!catches(rule, "common/src/plan.rs", "let y = x.powf(2.2);"));
+    assert!(!catches(
+        rule,
+        "common/src/plan/mod.rs",
+        "let y = x.powf(2.2);"
+    ));
+    assert!(!catches(rule, "reference/src/edge.rs", "let y = x.exp();"));
     // A unit-test module at the end of a per-pixel file may compute expected values.
     let text = "fn f() {}\n#[cfg(test)]\nmod tests {\n    let y = x.sin();\n}\n";
     assert!(rule(Path::new("cpu/src/kernels.rs"), text).is_empty());
@@ -352,7 +367,7 @@ fn the_randomness_rule_fails_on_an_injected_violation() {
     ));
     assert!(catches(
         rule,
-        "common/src/hash.rs",
+        "common/src/pixel/hash.rs",
         "let s = SystemTime::now();"
     ));
     // WGSL has no library randomness: a clock or rand call there is caught the same way.
@@ -366,4 +381,179 @@ fn the_randomness_rule_fails_on_an_injected_violation() {
         "cpu/src/kernels.rs",
         "let r = mix32(seed ^ x);"
     ));
+}
+
+/// Whether a Rust file is test code: under `tests/` (any crate's), or a unit-test file.
+fn is_test_file(file: &Path) -> bool {
+    file.components().any(|c| c.as_os_str() == "tests")
+        || file.file_name().is_some_and(|n| n == "tests.rs")
+}
+
+/// The Rust files over `limit` lines outside tests.
+fn long_files(files: &[PathBuf], limit: usize) -> Vec<(PathBuf, usize)> {
+    files
+        .iter()
+        .filter(|f| f.extension().is_some_and(|e| e == "rs") && !is_test_file(f))
+        .filter_map(|f| {
+            let lines = std::fs::read_to_string(root().join(f))
+                .unwrap()
+                .lines()
+                .count();
+            (lines > limit).then(|| (f.clone(), lines))
+        })
+        .collect()
+}
+
+#[test]
+fn no_rust_file_over_900_lines_outside_tests() {
+    let long = long_files(&all_files(), 900);
+    assert!(long.is_empty(), "split these files: {long:?}");
+    // The check sees real files: the largest production file is well over a tenth of the limit.
+    assert!(!long_files(&all_files(), 90).is_empty());
+    assert!(is_test_file(Path::new("tests/contract/rules.rs")));
+    assert!(is_test_file(Path::new("common/src/plan/kernel/tests.rs")));
+    assert!(!is_test_file(Path::new("cpu/src/sweep/mod.rs")));
+}
+
+/// `scripts/import_cycles.py` over the tree (or over `dir`): its exit status and output.
+fn import_cycles(dir: &Path) -> (bool, String) {
+    let out = std::process::Command::new("python3")
+        .arg(root().join("scripts/import_cycles.py"))
+        .arg(dir)
+        .output()
+        .expect("python3 runs scripts/import_cycles.py");
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.success(), text)
+}
+
+#[test]
+fn no_file_level_import_circle() {
+    let (ok, text) = import_cycles(root());
+    assert!(ok, "{text}");
+    assert!(text.contains("0 import circles"), "{text}");
+}
+
+#[test]
+fn the_import_circle_script_finds_an_injected_circle() {
+    let dir = std::env::temp_dir().join(format!("convshadow-cycles-{}", std::process::id()));
+    let src = dir.join("common/src");
+    std::fs::create_dir_all(src.join("model")).unwrap();
+    std::fs::write(src.join("lib.rs"), "pub mod model;\npub mod plan;\n").unwrap();
+    std::fs::write(src.join("model/mod.rs"), "pub mod scene;\n").unwrap();
+    // scene -> plan (a grouped `use`), plan -> scene (a path in code): a circle of two files.
+    std::fs::write(
+        src.join("model/scene.rs"),
+        "use crate::{plan::Plan, model};\npub struct Scene;\n",
+    )
+    .unwrap();
+    std::fs::write(
+        src.join("plan.rs"),
+        "pub struct Plan(crate::model::scene::Scene);\n",
+    )
+    .unwrap();
+    let (ok, text) = import_cycles(&dir);
+    assert!(!ok, "{text}");
+    assert!(text.contains("common/src/model/scene.rs"), "{text}");
+    // A comment naming the path is no import: without the code path the circle is gone.
+    std::fs::write(
+        src.join("plan.rs"),
+        "// crate::model::scene::Scene\npub struct Plan;\n",
+    )
+    .unwrap();
+    let (ok, text) = import_cycles(&dir);
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(ok, "{text}");
+}
+
+/// The source paths (`…/x.rs`, `…/x.wgsl`, or a bare `x.rs`) a text names, with their lines.
+fn named_paths(text: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let chars: Vec<char> = line.chars().collect();
+        let is_path_char = |c: char| c.is_ascii_alphanumeric() || "_./-".contains(c);
+        let mut k = 0;
+        while k < chars.len() {
+            if !is_path_char(chars[k]) {
+                k += 1;
+                continue;
+            }
+            let start = k;
+            while k < chars.len() && is_path_char(chars[k]) {
+                k += 1;
+            }
+            let token: String = chars[start..k].iter().collect();
+            let token = token.trim_end_matches('.');
+            let url = start >= 3 && chars[..start].iter().rev().take(3).any(|c| *c == ':');
+            if (token.ends_with(".rs") || token.ends_with(".wgsl")) && !url {
+                out.push((i + 1, token.to_string()));
+            }
+        }
+    }
+    out
+}
+
+/// Whether a named path exists: relative to the repository (or, for a name without a folder,
+/// as some source file's name; `*` patterns and `NAME` placeholders are not paths).
+fn path_exists(named: &str, files: &[PathBuf]) -> bool {
+    let stem_missing = named.rsplit('/').next().is_some_and(|n| n.starts_with('.'));
+    if named.contains('*') || named.contains("NAME") || stem_missing {
+        return true;
+    }
+    if named.contains('/') {
+        let p = named.trim_start_matches("./");
+        return root().join(p).exists()
+            || files
+                .iter()
+                .any(|f| f.to_string_lossy().ends_with(&format!("/{p}")));
+    }
+    files
+        .iter()
+        .any(|f| f.file_name().is_some_and(|n| n.to_string_lossy() == named))
+}
+
+#[test]
+fn every_source_path_the_docs_and_comments_name_exists() {
+    let files = all_files();
+    let mut docs = vec![root().join("README.md")];
+    let mut stack = vec![root().join("docs")];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            // The history is a log of past states: its paths were right when written.
+            if p.is_dir() && p.file_name().is_some_and(|n| n != "history") {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "md") {
+                docs.push(p);
+            }
+        }
+    }
+    let mut missing = Vec::new();
+    for doc in &docs {
+        let text = std::fs::read_to_string(doc).unwrap();
+        for (line, named) in named_paths(&text) {
+            if !path_exists(&named, &files) {
+                missing.push(format!("{}:{line}: {named}", doc.display()));
+            }
+        }
+    }
+    // Comments in the sources (tests excepted: they inject made-up paths).
+    for f in files.iter().filter(|f| !is_test_file(f)) {
+        let text = std::fs::read_to_string(root().join(f)).unwrap();
+        let comments: String = text
+            .lines()
+            .map(|l| l.split_once("//").map_or("", |(_, c)| c))
+            .collect::<Vec<_>>()
+            .join("\n");
+        for (line, named) in named_paths(&comments) {
+            if !path_exists(&named, &files) {
+                missing.push(format!("{}:{line}: {named}", f.display()));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "stale paths:\n{}", missing.join("\n"));
+    // The scan finds paths at all, and a made-up one is missing.
+    assert!(named_paths("see `cpu/src/ldi.rs` and sweep.wgsl.").len() == 2);
+    assert!(!path_exists("cpu/src/no_such_stage.rs", &files));
+    assert!(path_exists("cpu/src/ldi.rs", &files));
 }

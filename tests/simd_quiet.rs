@@ -5,9 +5,7 @@
 
 use std::path::Path;
 
-use convshadow::common::geometry::SceneGeometry;
-use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::{Penumbra, Scene};
+use convshadow::common::model::scene::{Penumbra, Scene};
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::cpu::sweep::{ChunkCounts, CpuOptions, SweepOptions, SweepPath, sweep_with};
 use convshadow::pipeline::image_fingerprint;
@@ -38,9 +36,9 @@ fn compare(
     initial_of: &dyn Fn(usize, usize, usize) -> f32,
 ) -> [u64; 3] {
     let scene = scene(kernel, penumbra);
-    let g = SceneGeometry::build(&scene).expect("geometry");
+    let g = convshadow_io::build_geometry(&scene).expect("geometry");
     let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
-    let plan = RenderPlan::new(&scene, &g).expect("plan");
+    let plan = convshadow_io::build_plan(&scene, &g).expect("plan");
     let (w, h, row_len) = (
         plan.grid_width as usize,
         plan.grid_height as usize,

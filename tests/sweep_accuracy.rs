@@ -5,12 +5,12 @@ mod support;
 
 use std::path::Path;
 
-use convshadow::common::kernel::{KERNEL_NAMES as KERNELS, KernelKind, KernelSpec};
+use convshadow::common::model::kernel::{KERNEL_NAMES as KERNELS, KernelKind, KernelSpec};
+use convshadow::common::model::scene::{Penumbra, Scene};
 use convshadow::common::plan::RenderPlan;
-use convshadow::common::scene::{Penumbra, Scene};
-use convshadow::cpu::reference::edge::{self, EdgeSetup, InitialLight, phi, run_light};
-use convshadow::cpu::reference::impulse::{self, moments};
 use convshadow::cpu::sweep::SweepOutput;
+use convshadow::reference::edge::{self, EdgeSetup, InitialLight, phi, run_light};
+use convshadow::reference::impulse::{self, moments};
 
 /// Runs the sweep of a scene, optionally from a given initial light buffer.
 fn run(scene: &Scene, initial: Option<InitialLight<'_>>) -> (RenderPlan, SweepOutput) {
@@ -377,7 +377,7 @@ fn no_nan_or_infinity_at_grazing_tilts_zero_or_huge_variance() {
             );
             assert!(
                 plan.lights[0].table.taps_per_phase as usize
-                    <= convshadow::common::kernel::MAX_TAPS_PER_PHASE
+                    <= convshadow::common::plan::kernel::MAX_TAPS_PER_PHASE
             );
         }
     }

@@ -1,25 +1,20 @@
-//! Shared core of convshadow: the scene model, parameters, tables, hashing, noise, rasterizer
-//! set-up and image I/O. Everything here is used by both the CPU oracle and the GPU port.
+//! The backend-neutral core of convshadow, in the order a frame's data flows through it. Both
+//! the CPU oracle and the GPU port depend on this crate; it opens no file (the `convshadow-io`
+//! crate reads what a scene names and hands it over as [`contract::files`]).
+//!
+//! - [`model`]: the scene as the user wrote it — types, limits, parsing and validation, the spec
+//!   enums (kernels, display mapping). Host code, f64.
+//! - [`prepare`]: from the model to geometry — camera, meshes, slab count, guard band,
+//!   rasterizer set-up. Host code, f64.
+//! - [`plan`]: every table the sweep reads (kernel taps, transfer functions, hashes), built once
+//!   per render on the host.
+//! - [`pixel`]: what runs per pixel under the bit-exactness rules — the lane type, integer
+//!   hashes, noise and 3D-texture evaluation, the distance penumbra's level.
+//! - [`contract`]: the data the backends exchange — the LDI, the sweep's options and output,
+//!   the files read for a scene.
 
-pub mod auto_slabs;
-pub mod camera;
-pub mod geometry;
-pub mod guard;
-pub mod hash;
-pub mod image_io;
-pub mod input;
-pub mod kernel;
-pub mod lane;
-pub mod ldi;
-pub mod levels;
-pub mod mesh;
-pub mod metrics;
-pub mod nifti;
-pub mod noise;
-pub mod pattern;
+pub mod contract;
+pub mod model;
+pub mod pixel;
 pub mod plan;
-pub mod raster;
-pub mod scene;
-pub mod sweep_io;
-pub mod texture3d;
-pub mod tonemap;
+pub mod prepare;

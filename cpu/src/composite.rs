@@ -3,7 +3,7 @@
 //!
 //! Written once over [`Lane`]: the scalar path is the 1-lane instance.
 
-use convshadow_common::lane::Lane;
+use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::FLUSH_BELOW;
 
 /// `C += (1 − A)·α·c`, `A += (1 − A)·α`, in that order, applied only in the lanes of `lanes`

@@ -5,10 +5,10 @@
 //! `acc = acc + w·v` with no fused multiply-add, so every path gives the same bits. Written once
 //! over [`Lane`]: the scalar path is the 1-lane instance.
 
-use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
-use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
-use convshadow_common::lane::{Lane, MAX_LANES, halves, load_halves, splat_within_halves};
+use convshadow_common::pixel::hash::{phase_index, pixel_hash, row_hash};
+use convshadow_common::pixel::lane::{Lane, MAX_LANES, halves, load_halves, splat_within_halves};
 use convshadow_common::plan::LIT_LEVEL;
+use convshadow_common::plan::kernel::{KernelTable, PhaseMode, Tap};
 use std::ops::Range;
 use wide::i32x8;
 
@@ -1295,8 +1295,9 @@ pub fn phases<L: Lane>(table: &KernelTable, row_hash_v: u32, x0: u32) -> L::U {
 
 #[cfg(test)]
 mod tests {
-    use convshadow_common::hash::TestRng;
-    use convshadow_common::kernel::{KernelMoments, KernelSpec, build_distance_table};
+    use convshadow_common::model::kernel::KernelSpec;
+    use convshadow_common::plan::kernel::{KernelMoments, build_distance_table};
+    use convshadow_testkit::TestRng;
     use wide::{f32x8, u32x8};
 
     use super::*;
@@ -1602,6 +1603,8 @@ mod tests {
                         );
                         // And one pixel at a time (the scalar path's gathers).
                         let mut one = [[0.0f32; 8]; 4];
+                        #[allow(clippy::needless_range_loop)]
+                        // `i` is both the lane and the pixel offset.
                         for i in 0..8 {
                             let r = rows.to_array()[i];
                             let lane_reads = LaneRows::of::<f32>(columns, r);

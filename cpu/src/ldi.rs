@@ -8,11 +8,11 @@
 
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
-use convshadow_common::raster::{FIXED_ONE, RasterSetup, TriangleSetup};
+use convshadow_common::prepare::raster::{FIXED_ONE, RasterSetup, TriangleSetup};
 use rayon::prelude::*;
 
 // The LDI type and its contract live in `convshadow-common`, shared with the GPU builder.
-pub use convshadow_common::ldi::{
+pub use convshadow_common::contract::ldi::{
     BYTES_PER_FRAGMENT, Ldi, LdiError, LdiStats, check_fragment_storage, from_sortable_bits,
     sortable_bits,
 };

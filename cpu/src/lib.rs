@@ -7,7 +7,6 @@ pub mod composite;
 pub mod kernels;
 pub mod ldi;
 pub mod parity;
-pub mod reference;
 pub mod shading;
 pub mod sweep;
 

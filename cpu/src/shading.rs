@@ -5,8 +5,8 @@
 //! Written once over [`Lane`]: the scalar path is the 1-lane instance. Table look-ups are per
 //! lane, arithmetic is on lanes in one fixed order.
 
-use convshadow_common::hash::{pixel_hash, unit_float};
-use convshadow_common::lane::{Lane, MAX_LANES};
+use convshadow_common::pixel::hash::{pixel_hash, unit_float};
+use convshadow_common::pixel::lane::{Lane, MAX_LANES};
 use convshadow_common::plan::{MaterialPlan, PI_SIZE, RenderPlan, TF_SIZE, TfEntry};
 
 use crate::ldi::Ldi;

@@ -5,9 +5,9 @@
 #![no_main]
 
 use arbitrary::Arbitrary;
-use convshadow_common::guard::GuardBand;
-use convshadow_common::camera::Camera;
-use convshadow_common::raster::RasterSetup;
+use convshadow_common::prepare::guard::GuardBand;
+use convshadow_common::prepare::camera::Camera;
+use convshadow_common::prepare::raster::RasterSetup;
 use convshadow_cpu::ldi::{BuildLdi, Ldi, LdiError};
 use glam::DVec3;
 use libfuzzer_sys::fuzz_target;

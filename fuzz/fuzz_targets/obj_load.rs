@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
-use convshadow_common::mesh::load_obj;
+use convshadow_io::obj::load_obj;
 use libfuzzer_sys::fuzz_target;
 
 /// One temporary file per fuzzing process (libFuzzer runs inputs one after another).

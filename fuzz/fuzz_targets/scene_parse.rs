@@ -5,10 +5,10 @@
 
 use std::path::Path;
 
-use convshadow_common::guard::GuardBandSpec;
-use convshadow_common::geometry::SceneGeometry;
+use convshadow_common::model::scene::GuardBandSpec;
+use convshadow_common::prepare::geometry::SceneGeometry;
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::{Scene, ShapeSpec, SlabSpec};
+use convshadow_common::model::scene::{Scene, ShapeSpec, SlabSpec};
 use libfuzzer_sys::fuzz_target;
 
 /// Whether a parsed scene is small enough to build its geometry and plan within a fuzz run.
@@ -48,13 +48,13 @@ fuzz_target!(|data: &[u8]| {
     if !small(&scene) {
         return;
     }
-    let Ok(geometry) = SceneGeometry::build(&scene) else {
+    let Ok(geometry) = convshadow_io::build_geometry(&scene) else {
         return;
     };
     if geometry.slabs > 4096 {
         return;
     }
-    if let Ok(plan) = RenderPlan::new(&scene, &geometry) {
+    if let Ok(plan) = convshadow_io::build_plan(&scene, &geometry) {
         assert_eq!(plan.slabs, geometry.slabs);
         assert!(plan.slab_distance.is_finite() && plan.slab_distance >= 0.0);
     }

@@ -5,7 +5,7 @@
 #![no_main]
 
 use arbitrary::Arbitrary;
-use convshadow_common::mesh::TriMesh;
+use convshadow_common::prepare::mesh::TriMesh;
 use libfuzzer_sys::fuzz_target;
 
 /// A length in the validator's range: 1e-9 × 10^(18·u/65535).

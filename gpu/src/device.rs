@@ -1,7 +1,7 @@
 //! Device set-up: the Vulkan backend, a hardware adapter when there is one, else a software one
 //! (Mesa lavapipe), the adapter's own limits, and one error type for everything GPU-side.
 
-use convshadow_common::ldi::LdiError;
+use convshadow_common::contract::ldi::LdiError;
 
 /// Environment variable that picks an adapter by a case-insensitive substring of its name
 /// (e.g. `llvmpipe` to force lavapipe on a machine that also has a GPU).

@@ -15,8 +15,8 @@
 //! The result is read back into the shared [`Ldi`] type, so `ldi_hash`, statistics and the sweep
 //! input are the same code on both backends.
 
-use convshadow_common::ldi::{Ldi, check_fragment_storage, from_sortable_bits};
-use convshadow_common::raster::RasterSetup;
+use convshadow_common::contract::ldi::{Ldi, check_fragment_storage, from_sortable_bits};
+use convshadow_common::prepare::raster::RasterSetup;
 
 use crate::buffers::{bind, check_size, groups_1d, pipeline, read_back, uniform, upload, zeroed};
 use crate::device::{GpuContext, GpuError};

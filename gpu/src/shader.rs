@@ -8,10 +8,10 @@
 
 use std::fmt::Write;
 
+use convshadow_common::contract::sweep_io::MAX_LIGHT_CHANNELS;
+use convshadow_common::model::scene::{MAX_LIGHTS, MAX_MESHES};
 use convshadow_common::plan::{LIT_LEVEL, PI_SIZE, TF_SIZE};
-use convshadow_common::raster::FIXED_ONE;
-use convshadow_common::scene::{MAX_LIGHTS, MAX_MESHES};
-use convshadow_common::sweep_io::MAX_LIGHT_CHANNELS;
+use convshadow_common::prepare::raster::FIXED_ONE;
 
 use crate::layout::{
     DETAIL_FBM, DETAIL_NONE, DETAIL_PERLIN, DETAIL_RIDGED, DETAIL_TURBULENCE, MESH_BITS, NO_PRE,

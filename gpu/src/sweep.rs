@@ -9,16 +9,17 @@
 //! grid pixel; the two light buffers ping-pong; the slab index reaches the shader through a small
 //! uniform filled by a buffer copy before each dispatch, so many slabs go in one submission.
 
-use convshadow_common::kernel::PhaseMode;
-use convshadow_common::ldi::Ldi;
-use convshadow_common::levels::initial_levels;
-use convshadow_common::noise::{DetailKind, PERLIN4_SCALE};
+use convshadow_common::contract::ldi::Ldi;
+use convshadow_common::contract::sweep_io::{MAX_LIGHT_CHANNELS, SweepOptions, SweepOutput};
+use convshadow_common::model::scene::DetailKind;
+use convshadow_common::model::scene::MAX_MESHES;
+use convshadow_common::pixel::noise::PERLIN4_SCALE;
+use convshadow_common::plan::kernel::PhaseMode;
+use convshadow_common::plan::levels::initial_levels;
 use convshadow_common::plan::{
     FLUSH_BELOW, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE, TfEntry,
 };
-use convshadow_common::raster::RasterSetup;
-use convshadow_common::scene::MAX_MESHES;
-use convshadow_common::sweep_io::{MAX_LIGHT_CHANNELS, SweepOptions, SweepOutput};
+use convshadow_common::prepare::raster::RasterSetup;
 
 use crate::buffers::{bind, check_size, pipeline, read_back, uniform, upload, wait, zeroed};
 use crate::device::{GpuContext, GpuError};
@@ -661,8 +662,9 @@ pub fn sweep(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use convshadow_common::geometry::SceneGeometry;
-    use convshadow_common::scene::{Penumbra, Scene, SlabSpec};
+    use convshadow_common::contract::files::{GeometryFiles, PlanFiles};
+    use convshadow_common::model::scene::{Penumbra, Scene, SlabSpec};
+    use convshadow_common::prepare::geometry::SceneGeometry;
 
     /// The default scene, small, with the distance penumbra and `kernel`: its geometry and plan.
     fn distance_plan(kernel: &str) -> (SceneGeometry, RenderPlan) {
@@ -673,8 +675,8 @@ mod tests {
         scene.sweep.kernel = kernel.parse().expect("kernel");
         scene.sweep.penumbra = Penumbra::Distance;
         scene.revalidate().expect("scene");
-        let g = SceneGeometry::build(&scene).expect("geometry");
-        let plan = RenderPlan::new(&scene, &g).expect("plan");
+        let g = SceneGeometry::build(&scene, &GeometryFiles::default()).expect("geometry");
+        let plan = RenderPlan::new(&scene, &g, &PlanFiles::default()).expect("plan");
         (g, plan)
     }
 

@@ -4,8 +4,8 @@
 
 use std::path::PathBuf;
 
-use convshadow_common::image_io::RgbImage;
-use convshadow_common::metrics::{DiffMetrics, ULP_BUCKETS, compare, heatmap};
+use convshadow_io::image::RgbImage;
+use convshadow_io::metrics::{DiffMetrics, ULP_BUCKETS, compare, heatmap};
 use serde_json::json;
 
 use crate::exit::{self, Failure};
@@ -118,7 +118,7 @@ pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
     super::require_png("--heatmap", args.heatmap.as_ref())?;
     super::refuse_collisions(args.json.iter().chain(&args.heatmap))?;
     for p in args.json.iter().chain(&args.heatmap) {
-        convshadow_common::image_io::check_writable(p)?;
+        convshadow_io::image::check_writable(p)?;
     }
     let load =
         |p: &PathBuf| RgbImage::load(p).map_err(|e| Failure::new(exit::BAD_INPUT, e.to_string()));

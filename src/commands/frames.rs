@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use convshadow_common::scene::Scene;
+use convshadow_common::model::scene::Scene;
 
 use crate::exit::{self, Failure};
 

@@ -46,7 +46,7 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
     super::require_png("--layers-png", args.layers_png.as_ref())?;
     super::refuse_collisions(args.stats_json.iter().chain(&args.layers_png))?;
     for p in args.stats_json.iter().chain(&args.layers_png) {
-        convshadow_common::image_io::check_writable(p)?;
+        convshadow_io::image::check_writable(p)?;
     }
     let budget = args
         .max_memory
@@ -169,7 +169,7 @@ fn write_layers_png(path: &std::path::Path, built: &BuiltLdi) -> Result<(), Fail
     let data = (0..n)
         .map(|p| ((ldi.offsets[p + 1] - ldi.offsets[p]) * 255 / max) as u8)
         .collect();
-    convshadow_common::image_io::save_gray_png(path, ldi.width, ldi.height, data)?;
+    convshadow_io::image::save_gray_png(path, ldi.width, ldi.height, data)?;
     Ok(())
 }
 

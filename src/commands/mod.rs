@@ -8,14 +8,14 @@ pub mod report;
 
 use std::path::Path;
 
-use convshadow_common::scene::Scene;
+use convshadow_common::model::scene::Scene;
 
 use crate::exit::Failure;
 
 /// Loads the scene file, or the embedded default scene when none is given.
 pub fn load_scene(path: Option<&Path>) -> Result<Scene, Failure> {
     Ok(match path {
-        Some(p) => Scene::load(p)?,
+        Some(p) => convshadow_io::load_scene(p)?,
         None => Scene::default_scene(),
     })
 }
@@ -96,7 +96,7 @@ pub fn parse_threads(s: &str) -> Result<usize, String> {
 
 /// Parses `--width` / `--height`: 1 to the scene format's largest image side.
 pub fn parse_side(s: &str) -> Result<u32, String> {
-    let max = convshadow_common::scene::MAX_IMAGE_SIDE;
+    let max = convshadow_common::model::scene::MAX_IMAGE_SIDE;
     match s.parse::<u32>() {
         Ok(n) if (1..=max).contains(&n) => Ok(n),
         _ => Err(format!("expected an integer from 1 to {max}, got {s:?}")),
@@ -104,8 +104,8 @@ pub fn parse_side(s: &str) -> Result<u32, String> {
 }
 
 /// `--slabs`: a slab count (its range is checked with the scene) or `auto`.
-pub fn parse_slabs(s: &str) -> Result<convshadow_common::scene::SlabSpec, String> {
-    use convshadow_common::scene::{MAX_SLABS, SlabSpec};
+pub fn parse_slabs(s: &str) -> Result<convshadow_common::model::scene::SlabSpec, String> {
+    use convshadow_common::model::scene::{MAX_SLABS, SlabSpec};
     if s == "auto" {
         return Ok(SlabSpec::Auto);
     }
@@ -123,7 +123,7 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, Failure> {
 pub fn write_json(path: &Path, value: &serde_json::Value) -> Result<(), Failure> {
     let text = serde_json::to_string_pretty(value)
         .map_err(|e| Failure::new(crate::exit::INTERNAL, e.to_string()))?;
-    convshadow_common::image_io::write_atomically(path, |w| {
+    convshadow_io::image::write_atomically(path, |w| {
         w.write_all(text.as_bytes())?;
         w.write_all(b"\n")
     })?;

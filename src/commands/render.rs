@@ -4,15 +4,13 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use convshadow_common::geometry::SceneGeometry;
-use convshadow_common::guard::GuardBandSpec;
-use convshadow_common::image_io::RgbImage;
-use convshadow_common::kernel::{KERNEL_SYNTAX, KernelSpec};
-use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::{Penumbra, Scene, SlabSpec};
-use convshadow_common::tonemap::Tonemap;
+use convshadow_common::model::display::Tonemap;
+use convshadow_common::model::kernel::{KERNEL_SYNTAX, KernelSpec};
+use convshadow_common::model::scene::GuardBandSpec;
+use convshadow_common::model::scene::{Penumbra, Scene, SlabSpec};
 use convshadow_cpu::ldi::{BuildLdi, Ldi};
-use convshadow_cpu::reference::{Reference, ReferenceOptions, samples_side};
+use convshadow_io::image::RgbImage;
+use convshadow_reference::{Reference, ReferenceOptions, samples_side};
 use serde_json::json;
 
 use super::frames;
@@ -399,7 +397,7 @@ fn output_paths(args: &RenderArgs, frame_list: Option<&[u32]>) -> Result<Vec<Pat
     };
     super::refuse_collisions(first_outputs.iter().chain(&args.stats_json))?;
     for p in first_outputs.iter().chain(&args.stats_json) {
-        convshadow_common::image_io::check_writable(p)?;
+        convshadow_io::image::check_writable(p)?;
         let ext = p
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase());
@@ -769,7 +767,7 @@ fn render_reference(
     let start = Instant::now();
     MemoryNeed::of(scene, scene.sweep.guard_band.lower_bound(), true).check(scene, budget)?;
     let pool = super::thread_pool(threads)?;
-    let geometry = SceneGeometry::build(scene)?;
+    let geometry = convshadow_io::build_geometry(scene)?;
     let fragment_budget =
         MemoryNeed::of(scene, geometry.raster.guard, true).check(scene, budget)?;
     exit::check_interrupt()?;
@@ -790,7 +788,7 @@ fn render_reference(
     }
     let seconds_ldi = start.elapsed().as_secs_f64();
     let t_plan = Instant::now();
-    let plan = RenderPlan::new(scene, &geometry)
+    let plan = convshadow_io::build_plan(scene, &geometry)
         .map_err(|e| Failure::new(exit::BAD_INPUT, e.to_string()))?;
     let seconds_plan = t_plan.elapsed().as_secs_f64();
     exit::check_interrupt()?;

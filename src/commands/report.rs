@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use convshadow_common::scene::Penumbra;
+use convshadow_common::model::scene::Penumbra;
 
 use crate::exit::{self, Failure};
 use crate::report::{ReportOptions, run as run_report};

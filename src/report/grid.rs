@@ -3,10 +3,10 @@
 
 use std::path::PathBuf;
 
-use convshadow_common::kernel::KERNEL_NAMES;
-use convshadow_common::scene::Penumbra;
-use convshadow_cpu::reference::disk::DiskSetup;
-use convshadow_cpu::reference::edge::EdgeSetup;
+use convshadow_common::model::kernel::KERNEL_NAMES;
+use convshadow_common::model::scene::Penumbra;
+use convshadow_reference::disk::DiskSetup;
+use convshadow_reference::edge::EdgeSetup;
 
 /// The kernels of the report: the one kernel list, without the per-slab phase variant (the
 /// same pattern as its per-pixel twin, it adds no point to the figure).

@@ -3,12 +3,12 @@
 //! `speed_vs_error.png`.
 //!
 //! Families of cases, each with its own reference:
-//! - `edge`: the opaque edge at d = d1/4, d1, 4·d1 ([`edge`], in `convshadow_cpu::reference`); references: the correct shadow
+//! - `edge`: the opaque edge at d = d1/4, d1, 4·d1 ([`edge`], in `convshadow_reference`); references: the correct shadow
 //!   (Gaussian CDF of std d·σ) and the iterated model (std √(d·d1)·σ, paper eq. 8);
 //! - `disk`: the disk over a plane ([`disk`], the same); references: the disk's indicator convolved with
 //!   the correct and the iterated Gaussian, numerically in f64;
 //! - `scene`: the embedded default scene at a small size; reference: the ground-truth shadow-ray
-//!   renderer (`convshadow_cpu::reference::shadow_ray`), whose own error (M against 4·M samples) is reported;
+//!   renderer (`convshadow_reference::shadow_ray`), whose own error (M against 4·M samples) is reported;
 //! - `narrowband`: `scenes/narrowband.toml` (a 0.05-wide opacity band over fBm) at a small size,
 //!   `ellipse2`, with and without pre-integrated compositing; reference: the same scene swept
 //!   with 2048 slabs without pre-integration, whose own error (against 4096 slabs) is reported.
@@ -27,7 +27,7 @@ pub mod runner;
 
 use std::path::{Path, PathBuf};
 
-pub use convshadow_cpu::reference::{disk, edge, impulse};
+pub use convshadow_reference::{disk, edge, impulse};
 pub use grid::*;
 pub use runner::*;
 

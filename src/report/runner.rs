@@ -2,15 +2,15 @@
 
 use std::time::Instant;
 
-use convshadow_common::geometry::SceneGeometry;
-use convshadow_common::metrics::rmse;
+use convshadow_common::model::scene::{Penumbra, Scene, SlabSpec};
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::scene::{Penumbra, Scene, SlabSpec};
+use convshadow_common::prepare::geometry::SceneGeometry;
 use convshadow_cpu::ldi::{BuildLdi, Ldi};
-use convshadow_cpu::reference::disk::DiskSetup;
-use convshadow_cpu::reference::edge::{self, EdgeSetup, model_profile, run_light};
-use convshadow_cpu::reference::{Reference, ReferenceOptions};
 use convshadow_cpu::sweep::{SweepOptions, sweep};
+use convshadow_io::metrics::rmse;
+use convshadow_reference::disk::DiskSetup;
+use convshadow_reference::edge::{self, EdgeSetup, model_profile, run_light};
+use convshadow_reference::{Reference, ReferenceOptions};
 
 use super::grid::{SLAB_COUNTS, TILTS, VARIANCES, disk_setup, edge_setup, kernels};
 use super::{Report, ReportOptions, Row, csv, markdown, plot};
@@ -94,7 +94,7 @@ struct DiskReference {
 
 fn disk_reference(setup: &DiskSetup) -> DiskReference {
     let scene = setup.scene().unwrap_or_else(|e| panic!("{e}"));
-    let g = SceneGeometry::build(&scene).unwrap_or_else(|e| panic!("{e}"));
+    let g = convshadow_io::build_geometry(&scene).unwrap_or_else(|e| panic!("{e}"));
     let d = setup.distance();
     let correct = setup.reference_light(&g, d * d);
     let iterated = setup.reference_light(&g, d * setup.optimal_distance);
@@ -182,9 +182,9 @@ fn disk_row(setup: &DiskSetup, level: &str, r: &DiskReference) -> Row {
 
 /// A sweep of a full scene: (plan, geometry, ldi, image, seconds).
 fn render_scene(scene: &Scene) -> (RenderPlan, SceneGeometry, Ldi, Vec<f32>, f64) {
-    let g = SceneGeometry::build(scene).unwrap_or_else(|e| panic!("{e}"));
+    let g = convshadow_io::build_geometry(scene).unwrap_or_else(|e| panic!("{e}"));
     let ldi = Ldi::build(&g.raster, 8 << 30).unwrap_or_else(|e| panic!("{e}"));
-    let plan = RenderPlan::new(scene, &g).unwrap_or_else(|e| panic!("{e}"));
+    let plan = convshadow_io::build_plan(scene, &g).unwrap_or_else(|e| panic!("{e}"));
     let t = Instant::now();
     let out =
         sweep(&plan, &g.raster, &ldi, &SweepOptions::default()).unwrap_or_else(|e| panic!("{e}"));

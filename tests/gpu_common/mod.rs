@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use convshadow::common::scene::{Scene, SlabSpec};
+use convshadow::common::model::scene::{Scene, SlabSpec};
 use convshadow_gpu::GpuContext;
 
 /// A GPU context, or `None` with a loud `SKIP` message. Under CI (env `CI` set) a missing
@@ -40,7 +40,7 @@ pub fn example_scenes() -> Vec<std::path::PathBuf> {
 
 /// Loads a scene and makes it small: `size`×`size` pixels and `slabs` slabs.
 pub fn small(path: &Path, size: u32, slabs: u32) -> Scene {
-    let mut scene = Scene::load(path).unwrap_or_else(|e| panic!("{e}"));
+    let mut scene = convshadow_io::load_scene(path).unwrap_or_else(|e| panic!("{e}"));
     shrink(&mut scene, size, slabs);
     scene
 }

@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use convshadow::common::kernel::KERNEL_NAMES;
-use convshadow::common::scene::Scene;
+use convshadow::common::model::kernel::KERNEL_NAMES;
+use convshadow::common::model::scene::Scene;
 
 /// The one kernel list of `common`, with `gaussian:K` at K = 7 (the same code as 19, a fraction
 /// of the taps) and `ellipse5` (an N other than 2 and 3): the grid the golden hashes record.
@@ -25,7 +25,7 @@ pub fn kernels() -> Vec<&'static str> {
 
 /// The one test RNG: a counter through the project's `mix32`.
 #[allow(unused_imports)] // not every test binary draws random numbers
-pub use convshadow::common::hash::TestRng;
+pub use convshadow_testkit::TestRng;
 
 /// `../shared/models` beside the repository, or `None` (with a loud message) when it is missing.
 /// Under CI (env `CI` set) a missing folder is a failure, not a skip.
@@ -149,7 +149,7 @@ material = "m"
 /// The text of a scene framing an OBJ file (centred on its bounds, `margin` × its largest
 /// extent across); a fixed 4-unit view when the file does not load.
 pub fn framed_obj_scene(obj: &Path, width: u32, margin: f64) -> String {
-    match convshadow::common::mesh::load_obj(obj) {
+    match convshadow::io::obj::load_obj(obj) {
         Ok(m) => {
             let (lo, hi) = m.bounds();
             let c = (lo + hi) * 0.5;

@@ -1,16 +1,16 @@
 //! The per-pixel kit every lane path of the sweep uses: what a slab shares ([`SlabContext`]),
 //! one row's mutable state ([`RowState`]), the row hashes and the gather's reach.
 
-use convshadow_common::hash::row_hash;
-use convshadow_common::levels::pixel_level;
+use convshadow_common::pixel::hash::row_hash;
+use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::raster::RasterSetup;
+use convshadow_common::prepare::raster::RasterSetup;
 
 use crate::kernels::{TapColumns, light_row_hash};
 use crate::ldi::Ldi;
 
-pub use convshadow_common::scene::MAX_LIGHTS;
-pub use convshadow_common::sweep_io::MAX_LIGHT_CHANNELS;
+pub use convshadow_common::contract::sweep_io::MAX_LIGHT_CHANNELS;
+pub use convshadow_common::model::scene::MAX_LIGHTS;
 
 /// What every pixel of one slab shares.
 pub(crate) struct SlabContext<'a> {

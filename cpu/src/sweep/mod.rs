@@ -28,18 +28,20 @@ mod stage;
 use std::sync::atomic::Ordering;
 
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::raster::RasterSetup;
+use convshadow_common::prepare::raster::RasterSetup;
 use rayon::prelude::*;
 
 use crate::composite::finish;
 use crate::kernels::{TapColumns, level_block_minima};
 use crate::ldi::Ldi;
-use convshadow_common::levels::initial_levels;
+use convshadow_common::plan::levels::initial_levels;
 use kit::{Previous, Reach, RowState, SlabContext, dark_levels};
 use quiet::{QuietRow, QuietSetup, RowSpans};
 use rows::{sweep_row_scalar, sweep_row_simd};
 
-pub use convshadow_common::sweep_io::{MAX_LIGHT_CHANNELS, SweepError, SweepOptions, SweepOutput};
+pub use convshadow_common::contract::sweep_io::{
+    MAX_LIGHT_CHANNELS, SweepError, SweepOptions, SweepOutput,
+};
 pub use quiet::ChunkCounts;
 
 /// Which CPU code path runs the sweep. Both give the same bits.
@@ -537,25 +539,26 @@ pub(crate) fn built_scene(
     text: &str,
     name: &str,
 ) -> (
-    convshadow_common::scene::Scene,
-    convshadow_common::geometry::SceneGeometry,
+    convshadow_common::model::scene::Scene,
+    convshadow_common::prepare::geometry::SceneGeometry,
     Ldi,
     RenderPlan,
 ) {
     use crate::ldi::BuildLdi;
-    let scene = convshadow_common::scene::Scene::parse(text, name, std::path::Path::new("."))
-        .expect("scene");
-    let g = convshadow_common::geometry::SceneGeometry::build(&scene).expect("geometry");
+    let scene =
+        convshadow_common::model::scene::Scene::parse(text, name, std::path::Path::new("."))
+            .expect("scene");
+    let g = convshadow_io::build_geometry(&scene).expect("geometry");
     let ldi = Ldi::build(&g.raster, u64::MAX).expect("ldi");
-    let plan = RenderPlan::new(&scene, &g).expect("plan");
+    let plan = convshadow_io::build_plan(&scene, &g).expect("plan");
     (scene, g, ldi, plan)
 }
 
 #[cfg(test)]
 mod tests {
     use super::{LevelBlocks, OpaqueImage, RowSpans};
-    use convshadow_common::hash::TestRng;
     use convshadow_common::plan::LIT_LEVEL;
+    use convshadow_testkit::TestRng;
 
     /// The smallest level of the 2×2 block at pixel x of row y of light l, corners beyond the
     /// grid read as `LIT_LEVEL`: straight from the definition.

@@ -21,7 +21,7 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use convshadow_common::lane::Lane;
+use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::RenderPlan;
 use wide::f32x8;
 
@@ -523,7 +523,7 @@ impl ChunkCounts {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use convshadow_common::hash::TestRng;
+    use convshadow_testkit::TestRng;
 
     /// A random span of one kind: empty one time in five.
     fn random_span(rng: &mut TestRng) -> (i32, i32) {

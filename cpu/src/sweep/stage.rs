@@ -7,8 +7,8 @@
 //! compositing and attenuation. Per lane: the layer cursor (a short data-dependent loop) and
 //! table look-ups. Lanes on different meshes are shaded one lane at a time.
 
-use convshadow_common::kernel::PhaseMode;
-use convshadow_common::lane::{Lane, MAX_LANES};
+use convshadow_common::pixel::lane::{Lane, MAX_LANES};
+use convshadow_common::plan::kernel::PhaseMode;
 
 use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowState, SlabContext};
 use super::quiet::{ChunkState, Values};
@@ -21,7 +21,7 @@ use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
     Specular, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
-use convshadow_common::levels::pixel_level;
+use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::{RenderPlan, TfEntry};
 use wide::f32x8;
 
@@ -733,10 +733,10 @@ fn forget_front(row: &mut RowState<'_>, x0: usize, lanes: usize, active: &[bool;
 
 #[cfg(test)]
 mod tests {
-    use convshadow_common::geometry::SceneGeometry;
-    use convshadow_common::hash::unit_float;
+    use convshadow_common::model::scene::Scene;
+    use convshadow_common::pixel::hash::unit_float;
     use convshadow_common::plan::{LIT_LEVEL, RenderPlan};
-    use convshadow_common::scene::Scene;
+    use convshadow_common::prepare::geometry::SceneGeometry;
     use wide::f32x8;
 
     use super::*;
@@ -744,7 +744,7 @@ mod tests {
     use crate::ldi::Ldi;
     use crate::sweep::kit::{Reach, jitter_row_hash, light_row_hashes};
 
-    use convshadow_common::hash::TestRng;
+    use convshadow_testkit::TestRng;
 
     /// A value in [0, 1], exactly 0 or exactly 1 one time in eight each.
     fn value(rng: &mut TestRng) -> f32 {

@@ -1,4 +1,4 @@
-// Integer hashing: mirrors common/src/hash.rs (lowbias32 and the seed/stream/slab/row/pixel chain).
+// Integer hashing: mirrors common/src/pixel/hash.rs (lowbias32 and the seed/stream/slab/row/pixel chain).
 
 // `mix32`: Chris Wellons' lowbias32.
 fn mix32(x0: u32) -> u32 {

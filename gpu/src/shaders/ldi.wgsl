@@ -1,4 +1,4 @@
-// The layered depth image on the GPU: mirrors cpu/src/ldi.rs and common/src/raster.rs.
+// The layered depth image on the GPU: mirrors cpu/src/ldi.rs and common/src/prepare/raster.rs.
 //
 // Coverage uses the same fixed-point vertices, the same integer edge functions and the same
 // top-left rule as `TriangleSetup::covers`. WGSL has no i64, so the edge function

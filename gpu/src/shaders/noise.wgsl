@@ -1,4 +1,4 @@
-// Volumetric detail functions: mirrors common/src/noise.rs operation by operation (read its header
+// Volumetric detail functions: mirrors common/src/pixel/noise.rs operation by operation (read its header
 // comment). Only f32 add, sub, mul, floor, sign-bit clear/xor, compare + select, saturating
 // f32 → i32 of an integral value, and u32 wrapping arithmetic. No fma, mix, min, max or
 // transcendentals. Every expression keeps the Rust evaluation order (left to right).

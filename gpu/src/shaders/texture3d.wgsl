@@ -1,4 +1,4 @@
-// The trilinear 3D-texture sampler: mirrors common/src/texture3d.rs (`axis` and `sample_lanes`).
+// The trilinear 3D-texture sampler: mirrors common/src/pixel/texture3d.rs (`axis` and `sample_lanes`).
 
 #import shared/bindings
 #import noise

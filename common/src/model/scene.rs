@@ -1,0 +1,506 @@
+//! Scene files (TOML) parsed into a typed, validated model.
+//!
+//! The schema is documented in `docs/scene-format.md`. Parsing is strict: unknown keys, wrong
+//! types, missing required keys and invalid values are errors naming the file, the key and what
+//! was expected.
+//! The scene model: what a scene file says, typed and validated (`model::parse` reads the TOML
+//! and checks every value), with its limits and the spec enums the stages read.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use crate::model::display::DisplayMap;
+use crate::model::display::Tonemap;
+use crate::model::kernel::KernelSpec;
+
+/// Largest accepted image width or height in pixels.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+/// Largest accepted |exposure| in stops (2^64 is far past any useful brightening).
+pub const MAX_EXPOSURE_STOPS: f64 = 64.0;
+/// Largest accepted slab count.
+pub const MAX_SLABS: u32 = 65536;
+/// Smallest and largest accepted `sweep.slab_factor` (the modulation of `slabs = "auto"`).
+pub const SLAB_FACTOR_RANGE: (f64, f64) = (1.0 / 1024.0, 1024.0);
+/// Largest accepted |g| of a Henyey–Greenstein phase function (the function needs |g| < 1; this
+/// bound keeps its largest value, (1 + 0.999)/(1 − 0.999)² ≈ 2·10⁶, finite with every colour in f32).
+pub const MAX_PHASE_G: f64 = 0.999;
+/// Largest accepted number of lights.
+pub const MAX_LIGHTS: usize = 16;
+/// Largest accepted number of meshes (the parity cursor keeps one inside bit per mesh in a u32).
+pub const MAX_MESHES: usize = 32;
+/// Largest icosphere subdivision level and torus segment count accepted.
+pub const MAX_SPHERE_SUBDIVISIONS: u32 = 7;
+/// Largest torus segment count accepted.
+pub const MAX_TORUS_SEGMENTS: u32 = 1024;
+/// Largest guard band in pixels.
+pub const MAX_GUARD_BAND: u32 = 4096;
+/// Largest magnitude of a world-space length, position or scale (the f32 stages keep 7 digits,
+/// so a scene spanning more than this collapses; it also keeps squares and products finite).
+pub const MAX_WORLD: f64 = 1e9;
+/// Smallest positive world-space length (lengths, distances, sizes, scales, view width).
+pub const MIN_WORLD: f64 = 1e-9;
+/// Largest colour component (light, material, background, gradient) and specular strength: with
+/// 16 lights, a specular highlight and 64 stops of exposure the f32 image stays finite.
+pub const MAX_COLOR: f64 = 1e4;
+/// Largest light variance σ² per unit distance (σ = 10⁴: far wider than a hemisphere; the sweep
+/// and its tables stay finite up to it, tested at 2e6 in `sweep_accuracy` and at the bound here).
+pub const MAX_VARIANCE: f64 = 1e8;
+/// Largest magnitude of an angle in degrees (a rotation of more turns than this has no meaning
+/// left in f64).
+pub const MAX_ANGLE_DEG: f64 = 1e6;
+/// Largest detail frequency ratio per octave (`lacunarity`) and amplitude ratio (`gain`): 16
+/// octaves of ratio 16 stay within f32.
+pub const MAX_OCTAVE_RATIO: f64 = 16.0;
+
+/// The embedded default scene (procedural meshes only, so it needs no file).
+pub const DEFAULT_SCENE_TOML: &str = include_str!("../../../scenes/default.toml");
+/// The name used for the embedded default scene in messages.
+pub const DEFAULT_SCENE_NAME: &str = "<embedded default scene>";
+
+/// A scene error: names the file, the key and what was expected.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SceneError {
+    /// The scene file (or `<embedded default scene>`).
+    pub file: String,
+    /// The key path, e.g. `light[1].tilt_deg`, or empty for a syntax error.
+    pub key: String,
+    /// What was wrong and what was expected.
+    pub message: String,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.key.is_empty() {
+            write!(f, "{}: {}", self.file, self.message)
+        } else {
+            write!(f, "{}: key `{}`: {}", self.file, self.key, self.message)
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+// ---------------------------------------------------------------------------------------------
+// Validated model.
+
+/// A validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Where the scene came from (file path or the embedded name), for messages.
+    pub source: String,
+    /// Folder that relative paths (OBJ, textures) are resolved against.
+    pub base_dir: PathBuf,
+    /// Output image.
+    pub image: ImageSpec,
+    /// Orthographic camera.
+    pub camera: CameraSpec,
+    /// Slab sweep parameters.
+    pub sweep: SweepSpec,
+    /// Distant Gaussian lights (at least one; a scene without `[[light]]` gets one white light).
+    pub lights: Vec<LightSpec>,
+    /// Meshes in scene order (which also resolves overlapping materials: first wins).
+    pub meshes: Vec<MeshSpec>,
+    /// Materials, indexed by `MeshSpec::material`.
+    pub materials: Vec<MaterialSpec>,
+}
+
+/// Output image size and background.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageSpec {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Linear RGB composited behind everything.
+    pub background: [f32; 3],
+    /// PNG output only: exposure in stops (0 = as rendered).
+    pub exposure: f64,
+    /// PNG output only: the tone curve (default `aces`, which does not clip the default scene).
+    pub tonemap: Tonemap,
+}
+
+impl ImageSpec {
+    /// How PNG output maps the linear image to 8-bit sRGB.
+    pub fn display_map(&self) -> DisplayMap {
+        DisplayMap {
+            exposure: self.exposure,
+            tonemap: self.tonemap,
+        }
+    }
+}
+
+/// Orthographic camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraSpec {
+    /// View direction (normalized).
+    pub direction: [f64; 3],
+    /// World direction shown at the top of the image.
+    pub up: [f64; 3],
+    /// Centre of the view.
+    pub center: [f64; 3],
+    /// World units across the image.
+    pub view_width: f64,
+}
+
+/// How the slab thickness is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SlabSpec {
+    /// A slab count over the scene's depth range.
+    Count(u32),
+    /// A slab thickness in world units.
+    Distance(f64),
+    /// Chosen from the detail: 2 slabs per finest period of the procedural detail or per voxel of
+    /// a 3D texture along the view direction, times `SweepSpec::slab_factor`
+    /// (see `crate::prepare::auto_slabs`).
+    Auto,
+}
+
+/// How a light's kernel grows from slab to slab (`sweep.penumbra`; docs/accuracy.md).
+///
+/// The default is `Distance`: against closed forms and the shadow-ray reference it has the lower
+/// error on every case measured (docs/accuracy.md) at about 1.5× the iterated mode's sweep time
+/// on the default scene, within the 2× that the distance mode was allowed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Penumbra {
+    /// The paper's model: the same kernel every slab, covariance d1·e·Σl, so after distance d the
+    /// penumbra has covariance d·d1·Σl: right at d = d1 only.
+    Iterated,
+    /// The kernel follows each pixel's mean occluder depth z̄: covariance ((h+1)² − h²)·e²·Σl at
+    /// h = (z − z̄)/e slabs, so a single occluder's penumbra has (z − z̄)²·Σl at every distance.
+    #[default]
+    Distance,
+}
+
+impl fmt::Display for Penumbra {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Penumbra::Iterated => "iterated",
+            Penumbra::Distance => "distance",
+        })
+    }
+}
+
+impl std::str::FromStr for Penumbra {
+    type Err = String;
+
+    /// `iterated` or `distance`.
+    fn from_str(s: &str) -> Result<Penumbra, String> {
+        match s {
+            "iterated" => Ok(Penumbra::Iterated),
+            "distance" => Ok(Penumbra::Distance),
+            _ => Err(format!("expected \"iterated\" or \"distance\", got {s:?}")),
+        }
+    }
+}
+
+/// Slab sweep parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepSpec {
+    /// Slab count or thickness.
+    pub slabs: SlabSpec,
+    /// Multiplies the count `slabs = "auto"` chooses (1 = 2 slabs per finest period).
+    pub slab_factor: f64,
+    /// The optimal shadow distance d1 (world units): where the iterated mode's shadows are right.
+    /// Required with `penumbra = "iterated"`; optional (and unused) with `"distance"`.
+    pub optimal_distance: Option<f64>,
+    /// How the kernel grows with depth: the paper's fixed per-slab kernel, or one that follows
+    /// each pixel's distance to its occluders.
+    pub penumbra: Penumbra,
+    /// Convolution kernel.
+    pub kernel: KernelSpec,
+    /// Jitter the shading point inside each slab.
+    pub jitter: bool,
+    /// Seed of every hash-derived random number.
+    pub seed: u32,
+    /// Compensate the variance that bilinear reads add (see docs/accuracy.md).
+    pub variance_compensation: bool,
+    /// Light buffer and LDI beyond the image edges, so objects just outside cast shadows into
+    /// it: sized from the scene (`auto`, the default) or a fixed pixel count on every side.
+    pub guard_band: GuardBandSpec,
+    /// Pre-integrated compositing (Patel et al. 2013 §7, Engel, Kraus & Ertl 2001): materials
+    /// with detail are shaded from a 2D table over the detail values at a slab's front and back
+    /// faces instead of one sample (off by default: the images of before, bit for bit).
+    pub preintegration: bool,
+}
+
+/// A distant Gaussian light behind the viewer.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightSpec {
+    /// Linear RGB colour.
+    pub color: [f32; 3],
+    /// Tilt angles (ωx, ωy) in degrees, each |ω| < 90.
+    pub tilt_deg: [f64; 2],
+    /// Variances (σx², σy²) on the virtual light plane at unit distance.
+    pub variance: [f64; 2],
+    /// Rotation α of the principal axes, degrees.
+    pub rotation_deg: f64,
+    /// A gobo: an image that is the light's initial light buffer (see `convshadow_io::pattern`).
+    pub pattern: Option<PatternSpec>,
+}
+
+/// A light's pattern (`[[light]] pattern = { path, size, center }`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PatternSpec {
+    /// Resolved image path.
+    pub path: PathBuf,
+    /// World-unit size [w, h] of the image on the first slab plane.
+    pub size: [f64; 2],
+    /// Centre of the image, camera-space [x right, y down] world units from the view's centre.
+    pub center: [f64; 2],
+}
+
+/// The shape of a mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ShapeSpec {
+    /// Axis-aligned box with full extents.
+    Box {
+        /// Full extents.
+        size: [f64; 3],
+    },
+    /// Icosphere.
+    Sphere {
+        /// Radius.
+        radius: f64,
+        /// Subdivision level (0 = icosahedron).
+        subdivisions: u32,
+    },
+    /// Torus around the z axis.
+    Torus {
+        /// Radius of the centre circle.
+        major: f64,
+        /// Radius of the tube.
+        minor: f64,
+        /// Segments around the major circle.
+        segments: u32,
+    },
+    /// Closed cylinder around the z axis.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Full height.
+        height: f64,
+        /// Segments around.
+        segments: u32,
+    },
+    /// A Wavefront OBJ file.
+    Obj {
+        /// Resolved path.
+        path: PathBuf,
+    },
+}
+
+/// A mesh instance.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshSpec {
+    /// Shape.
+    pub shape: ShapeSpec,
+    /// Translation (applied last).
+    pub translate: [f64; 3],
+    /// Rotation in degrees about x, then y, then z.
+    pub rotate_deg: [f64; 3],
+    /// Uniform scale (applied first).
+    pub scale: f64,
+    /// Index into `Scene::materials`.
+    pub material: usize,
+}
+
+/// A volumetric detail function.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DetailSpec {
+    /// Which function.
+    pub kind: DetailKind,
+    /// Base frequency (per object-space unit).
+    pub frequency: f64,
+    /// Octave count.
+    pub octaves: u32,
+    /// Frequency ratio between octaves.
+    pub lacunarity: f64,
+    /// Amplitude ratio between octaves.
+    pub gain: f64,
+    /// Time for 4D animation; `None` means 3D noise.
+    pub time: Option<f64>,
+}
+
+/// A 3D texture, mapped onto the mesh's object-space bounding box.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureSpec {
+    /// Resolved path.
+    pub path: PathBuf,
+    /// How the file is read.
+    pub format: TextureFormat,
+}
+
+/// The file format of a 3D texture.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TextureFormat {
+    /// A headerless raw file: dims and voxel type given in the scene; stretched to the bounds.
+    Raw {
+        /// Voxel counts in x, y, z.
+        dims: [u32; 3],
+        /// Voxel type.
+        voxel: VoxelType,
+    },
+    /// NIfTI-1 (`.nii`, `.nii.gz`): dims, spacing and type from the header; the physical extent
+    /// keeps its aspect inside the bounds.
+    Nifti {
+        /// Values mapped to [0, 1]; `None`: the data's min–max.
+        window: Option<[f64; 2]>,
+    },
+}
+
+/// A specular highlight at crossed surfaces.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpecularSpec {
+    /// Multiplier of the highlight.
+    pub strength: f32,
+    /// Blinn–Phong exponent (evaluated by repeated squaring).
+    pub exponent: u32,
+}
+
+/// One gradient stop: detail value and (r, g, b, opacity).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GradientStop {
+    /// Detail value in [0, 1].
+    pub value: f64,
+    /// Linear RGB.
+    pub color: [f64; 3],
+    /// Opacity per reference length, in [0, 1].
+    pub opacity: f64,
+}
+
+/// A material: constant, or volumetric detail through a colour/opacity gradient.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialSpec {
+    /// Name in the scene file.
+    pub name: String,
+    /// Colour of a constant material.
+    pub color: [f64; 3],
+    /// Opacity per reference length of a constant material.
+    pub opacity: f64,
+    /// Transport colour τ (chromatic attenuation: 1 lets that channel through).
+    pub transport: [f64; 3],
+    /// Length the opacities are given for; `None` = the slab distance.
+    pub reference_length: Option<f64>,
+    /// Procedural detail.
+    pub detail: Option<DetailSpec>,
+    /// 3D texture detail.
+    pub texture: Option<TextureSpec>,
+    /// Transfer function for detail values (sorted by value).
+    pub gradient: Vec<GradientStop>,
+    /// Optional specular highlight.
+    pub specular: Option<SpecularSpec>,
+    /// Henyey–Greenstein asymmetry g of the medium's scattering (0 = isotropic, > 0 forward,
+    /// < 0 backward); with distant lights and an orthographic camera the phase function is one
+    /// constant per light, applied to the light's colour in shading (not to the specular term).
+    pub phase_g: f64,
+}
+
+/// Whether `path` names a NIfTI file (`.nii` or `.nii.gz`, any case).
+pub fn is_nifti_path(path: &Path) -> bool {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    name.ends_with(".nii") || name.ends_with(".nii.gz")
+}
+
+// ---------------------------------------------------------------------------------------------
+// Spec enums the stages read.
+
+/// Which detail function.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DetailKind {
+    /// One octave of improved Perlin noise, `0.5 + 0.5·n`.
+    Perlin,
+    /// Fractional Brownian motion, `0.5 + 0.5·(Σ a_i n_i)·inv_amplitude_sum`.
+    Fbm,
+    /// Musgrave ridged multifractal (offset 1, weight = previous signal clamped to [0, 1]).
+    Ridged,
+    /// Perlin turbulence, `(Σ a_i |n_i|)·inv_amplitude_sum`.
+    Turbulence,
+}
+
+/// Voxel format of a raw 3D texture file (little-endian, x fastest, then y, then z).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum VoxelType {
+    /// Unsigned 8-bit, normalised by 1/255.
+    U8,
+    /// Unsigned 16-bit little-endian, normalised by 1/65535.
+    U16,
+    /// IEEE f32 little-endian, used as stored (must be finite).
+    F32,
+}
+
+impl VoxelType {
+    /// Bytes per voxel.
+    pub fn bytes(self) -> u64 {
+        match self {
+            VoxelType::U8 => 1,
+            VoxelType::U16 => 2,
+            VoxelType::F32 => 4,
+        }
+    }
+}
+
+impl fmt::Display for VoxelType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            VoxelType::U8 => "u8",
+            VoxelType::U16 => "u16",
+            VoxelType::F32 => "f32",
+        })
+    }
+}
+
+/// How the scene asks for its guard band (`sweep.guard_band`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum GuardBandSpec {
+    /// Sized per side from the lights, the scene's depth and the meshes' projected bounds.
+    #[default]
+    Auto,
+    /// The same number of pixels on every side (0: no band).
+    Pixels(u32),
+}
+
+impl fmt::Display for GuardBandSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            GuardBandSpec::Auto => f.write_str("auto"),
+            GuardBandSpec::Pixels(g) => write!(f, "{g}"),
+        }
+    }
+}
+
+impl std::str::FromStr for GuardBandSpec {
+    type Err = String;
+
+    /// `auto` or a pixel count 0–[`MAX_GUARD_BAND`].
+    fn from_str(s: &str) -> Result<GuardBandSpec, String> {
+        if s == "auto" {
+            return Ok(GuardBandSpec::Auto);
+        }
+        match s.parse::<u32>() {
+            Ok(g) if g <= MAX_GUARD_BAND => Ok(GuardBandSpec::Pixels(g)),
+            _ => Err(format!(
+                "expected \"auto\" or a pixel count 0 to {MAX_GUARD_BAND}, got {s:?}"
+            )),
+        }
+    }
+}
+
+impl Scene {
+    /// Whether every material's transport is grey and no light has a pattern (which may be
+    /// coloured), so one light-buffer channel suffices.
+    pub fn is_monochrome(&self) -> bool {
+        self.lights.iter().all(|l| l.pattern.is_none())
+            && self
+                .materials
+                .iter()
+                .all(|m| m.transport[0] == m.transport[1] && m.transport[1] == m.transport[2])
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,149 @@
+//! Scene parsing and validation tests.
+
+use super::*;
+
+const MINIMAL: &str = r#"
+[image]
+width = 64
+height = 32
+[camera]
+view_width = 2.0
+[sweep]
+slabs = 16
+optimal_distance = 0.5
+[[mesh]]
+shape = "box"
+size = [1.0, 1.0, 1.0]
+material = "m"
+[material.m]
+"#;
+
+fn parse(text: &str) -> Result<Scene, SceneError> {
+    Scene::parse(text, "test.toml", Path::new("."))
+}
+
+#[test]
+fn defaults_are_the_documented_ones() {
+    let s = parse(MINIMAL).unwrap();
+    assert_eq!(s.camera.direction, [0.0, 0.0, 1.0]);
+    assert_eq!(s.camera.up, [0.0, 1.0, 0.0]);
+    assert_eq!(s.camera.center, [0.0; 3]);
+    assert_eq!(s.image.background, [0.0; 3]);
+    assert_eq!(s.sweep.kernel, KernelSpec::default());
+    assert!(s.sweep.jitter);
+    assert_eq!(s.sweep.seed, 0);
+    assert_eq!(s.lights.len(), 1);
+    assert_eq!(s.lights[0].color, [1.0; 3]);
+    assert_eq!(s.meshes[0].scale, 1.0);
+    assert_eq!(s.materials[0].transport, [0.0; 3]);
+    assert_eq!(s.materials[0].reference_length, None);
+    assert!(s.is_monochrome());
+}
+
+#[test]
+fn the_embedded_default_scene_parses() {
+    let s = Scene::default_scene();
+    assert!(s.lights.len() >= 2);
+    assert!(
+        s.meshes
+            .iter()
+            .all(|m| !matches!(m.shape, ShapeSpec::Obj { .. }))
+    );
+}
+
+fn expect_err(text: &str, key: &str, words: &str) {
+    let e = parse(text).expect_err("must be rejected");
+    let msg = e.to_string();
+    assert!(msg.contains("test.toml"), "{msg}");
+    assert!(msg.contains(key), "message should name key {key}: {msg}");
+    assert!(msg.contains(words), "message should say {words}: {msg}");
+}
+
+#[test]
+fn invalid_values_name_file_key_and_expectation() {
+    expect_err(
+        &MINIMAL.replace("width = 64", "width = 0"),
+        "image.width",
+        "1 to 16384",
+    );
+    expect_err(
+        &MINIMAL.replace("width = 64", "width = 100000"),
+        "image.width",
+        "16384",
+    );
+    expect_err(
+        &MINIMAL.replace("slabs = 16", "slabs = 0"),
+        "sweep.slabs",
+        "1 to",
+    );
+    expect_err(
+        &MINIMAL.replace("slabs = 16", "slab_distance = 0.0"),
+        "sweep.slab_distance",
+        "> 0",
+    );
+    expect_err(
+        &MINIMAL.replace("slabs = 16", ""),
+        "sweep.slabs",
+        "expected one of",
+    );
+    expect_err(
+        &format!("{MINIMAL}\n[[light]]\ntilt_deg = [90.0, 0.0]\n"),
+        "light[0].tilt_deg[0]",
+        "< 90",
+    );
+    expect_err(
+        &format!("{MINIMAL}\n[[light]]\nvariance = [-1.0, 0.0]\n"),
+        "light[0].variance[0]",
+        ">= 0",
+    );
+    expect_err(
+        &MINIMAL.replace("size = [1.0, 1.0, 1.0]", "size = [1.0, 0.0, 1.0]"),
+        "mesh[0].size[1]",
+        "> 0",
+    );
+    expect_err(
+        &MINIMAL.replace("material = \"m\"", "material = \"x\""),
+        "mesh[0].material",
+        "no material named",
+    );
+    expect_err(
+        &MINIMAL.replace("view_width = 2.0", "view_width = nan"),
+        "camera.view_width",
+        "finite",
+    );
+    expect_err(
+        &MINIMAL.replace("view_width = 2.0", "view_width = inf"),
+        "camera.view_width",
+        "finite",
+    );
+    expect_err(
+        &MINIMAL.replace("shape = \"box\"", "shape = \"cone\""),
+        "mesh[0].shape",
+        "expected one of",
+    );
+    expect_err(
+        &MINIMAL.replace("slabs = 16", "slabs = 16\nkernel = \"blur\""),
+        "sweep.kernel",
+        "ellipse",
+    );
+}
+
+#[test]
+fn syntax_unknown_keys_and_wrong_types_are_errors() {
+    expect_err(
+        &MINIMAL.replace("height = 32", "height = 32\ncolour = 3"),
+        "",
+        "unknown field `colour`",
+    );
+    expect_err(
+        &MINIMAL.replace("height = 32", "height = \"tall\""),
+        "height",
+        "line 4",
+    );
+    // Without the [camera] header its key lands in [image]: an unknown field there.
+    let e = parse(&MINIMAL.replace("[camera]\n", "")).unwrap_err();
+    assert!(e.to_string().contains("unknown field `view_width`"), "{e}");
+    // Without the whole table: a missing required table.
+    let e = parse(&MINIMAL.replace("[camera]\nview_width = 2.0\n", "")).unwrap_err();
+    assert!(e.to_string().contains("missing field `camera`"), "{e}");
+}

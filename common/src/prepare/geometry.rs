@@ -1,0 +1,191 @@
+//! From a scene to world-space meshes, the slab range and the rasterizer set-up.
+
+use glam::DVec3;
+
+use crate::contract::files::GeometryFiles;
+use crate::model::scene::{MAX_SLABS, MeshSpec, Scene, ShapeSpec, SlabSpec};
+use crate::prepare::auto_slabs::{AutoSlabs, auto_slabs};
+use crate::prepare::camera::Camera;
+use crate::prepare::error::GeometryError;
+use crate::prepare::guard::{AutoGuardInput, GuardBand};
+use crate::prepare::mesh::{MeshError, TriMesh};
+use crate::prepare::placement::{WorldMesh, object_to_world};
+use crate::prepare::raster::RasterSetup;
+
+/// Everything geometric the LDI and the sweep need.
+#[derive(Clone, Debug)]
+pub struct SceneGeometry {
+    /// The camera.
+    pub camera: Camera,
+    /// World meshes in scene order.
+    pub meshes: Vec<WorldMesh>,
+    /// Camera depth of the front of the first slab (the scene's nearest vertex).
+    pub z_origin: f64,
+    /// Slab thickness (world units).
+    pub slab_distance: f64,
+    /// Number of slabs.
+    pub slabs: u32,
+    /// How `slabs = "auto"` chose the count (`None` for a count or distance given).
+    pub auto_slabs: Option<AutoSlabs>,
+    /// Rasterizer set-up of every triangle (depths relative to `z_origin`), on the grid of the
+    /// image plus the guard band resolved for this scene (`raster.guard`).
+    pub raster: RasterSetup,
+}
+
+/// A mesh spec's object-space mesh: a built-in shape, or the mesh read from its file (`read`,
+/// from [`GeometryFiles::meshes`]; `None` when the host did not read it).
+pub fn object_mesh(spec: &MeshSpec, read: Option<&TriMesh>) -> Result<TriMesh, MeshError> {
+    Ok(match &spec.shape {
+        ShapeSpec::Box { size } => TriMesh::unit_box(DVec3::from(*size)),
+        ShapeSpec::Sphere {
+            radius,
+            subdivisions,
+        } => TriMesh::icosphere(*radius, *subdivisions),
+        ShapeSpec::Torus {
+            major,
+            minor,
+            segments,
+        } => TriMesh::torus(*major, *minor, *segments),
+        ShapeSpec::Cylinder {
+            radius,
+            height,
+            segments,
+        } => TriMesh::cylinder(*radius, *height, *segments),
+        ShapeSpec::Obj { path } => read
+            .cloned()
+            .ok_or_else(|| MeshError::NotRead { path: path.clone() })?,
+    })
+}
+
+impl SceneGeometry {
+    /// Places every mesh (built-in shapes built here, mesh files as the host read them:
+    /// `convshadow_io::read_geometry_files`), finds the slab range and sets up rasterization.
+    pub fn build(scene: &Scene, files: &GeometryFiles) -> Result<SceneGeometry, GeometryError> {
+        let camera = Camera::new(&scene.camera, &scene.image);
+        let mut meshes = Vec::with_capacity(scene.meshes.len());
+        for (index, spec) in scene.meshes.iter().enumerate() {
+            let read = files.meshes.get(index).and_then(Option::as_ref);
+            let object = object_mesh(spec, read).map_err(|source| GeometryError::Mesh {
+                scene: scene.source.clone(),
+                index,
+                source,
+            })?;
+            let world = object.transformed(
+                spec.scale,
+                DVec3::from(spec.rotate_deg),
+                DVec3::from(spec.translate),
+            );
+            let (mesh, report) = world.analyze();
+            if mesh.triangles.is_empty() {
+                return Err(GeometryError::EmptyMesh {
+                    scene: scene.source.clone(),
+                    index,
+                });
+            }
+            meshes.push(WorldMesh {
+                mesh,
+                report,
+                world_to_object: object_to_world(spec).inverse(),
+                object_bounds: object.bounds(),
+            });
+        }
+        let (mut z_min, mut z_max) = (f64::INFINITY, f64::NEG_INFINITY);
+        for m in &meshes {
+            for p in &m.mesh.positions {
+                let z = camera.to_camera(*p).z;
+                z_min = z_min.min(z);
+                z_max = z_max.max(z);
+            }
+        }
+        // Widen the far end slightly so the farthest surface lies strictly before the last back face.
+        let depth = (z_max - z_min).max(1e-12 * z_min.abs().max(1.0));
+        let depth = depth + depth * 1e-6;
+        let mut auto = None;
+        let (slab_distance, slabs) = match scene.sweep.slabs {
+            SlabSpec::Count(n) => (depth / f64::from(n), n),
+            SlabSpec::Auto => {
+                let a = auto_slabs(scene, files, camera.forward, &meshes, depth)?;
+                let n = a.count;
+                auto = Some(a);
+                (depth / f64::from(n), n)
+            }
+            SlabSpec::Distance(e) => {
+                let count = (depth / e).ceil();
+                if count > f64::from(MAX_SLABS) {
+                    return Err(GeometryError::TooManySlabs {
+                        scene: scene.source.clone(),
+                        distance: e,
+                        count,
+                        depth,
+                    });
+                }
+                (e, (count as u32).max(1))
+            }
+        };
+        let refs: Vec<(&[DVec3], &[[u32; 3]])> = meshes
+            .iter()
+            .map(|m| (m.mesh.positions.as_slice(), m.mesh.triangles.as_slice()))
+            .collect();
+        let guard = GuardBand::resolve(
+            scene.sweep.guard_band,
+            &AutoGuardInput {
+                camera: &camera,
+                meshes: refs.clone(),
+                lights: &scene.lights,
+                slabs,
+                slab_distance,
+                optimal_distance: scene.sweep.optimal_distance,
+                penumbra: scene.sweep.penumbra,
+                variance_compensation: scene.sweep.variance_compensation,
+            },
+        );
+        let raster = RasterSetup::new(&camera, guard, &refs, z_min).map_err(|source| {
+            GeometryError::Raster {
+                scene: scene.source.clone(),
+                source,
+            }
+        })?;
+        Ok(SceneGeometry {
+            camera,
+            meshes,
+            z_origin: z_min,
+            slab_distance,
+            slabs,
+            auto_slabs: auto,
+            raster,
+        })
+    }
+
+    /// Back face of every slab relative to `z_origin`, in f32: a fragment is crossed in slab k
+    /// when its depth is `< back[k]` and it was not crossed before.
+    pub fn slab_back_faces(&self) -> Vec<f32> {
+        (0..self.slabs)
+            .map(|k| (f64::from(k + 1) * self.slab_distance) as f32)
+            .collect()
+    }
+
+    /// One warning per mesh with closed non-manifold edges (used as often in each direction:
+    /// accepted, since the parity test holds, but worth knowing).
+    pub fn mesh_warnings(&self) -> Vec<String> {
+        self.meshes
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.report.paired_nonmanifold_edges > 0)
+            .map(|(i, m)| {
+                format!(
+                    "mesh[{i}] has {} non-manifold edges, each used as often in each direction \
+                     (closed for the parity test; accepted)",
+                    m.report.paired_nonmanifold_edges
+                )
+            })
+            .collect()
+    }
+
+    /// Boundary + non-manifold + flipped edges summed over meshes.
+    pub fn defect_edges(&self) -> usize {
+        self.meshes
+            .iter()
+            .map(|m| m.report.boundary_edges + m.report.nonmanifold_edges + m.report.flipped_edges)
+            .sum()
+    }
+}

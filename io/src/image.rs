@@ -1,0 +1,269 @@
+//! Image and file output. Every file is written to a temporary file in the target folder and
+//! renamed into place, so a failed or interrupted write never leaves a partial file.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use convshadow_common::model::display::{DisplayMap, linear_to_srgb8, srgb8_to_linear};
+
+/// An output error: names the file and what went wrong.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct OutputError {
+    /// The target file.
+    pub path: String,
+    /// What went wrong.
+    pub message: String,
+}
+
+fn out_err(path: &Path, message: impl Into<String>) -> OutputError {
+    OutputError {
+        path: path.display().to_string(),
+        message: message.into(),
+    }
+}
+
+/// The temporary file used while writing `path` (same folder, so the rename is atomic).
+pub fn temp_path_for(path: &Path) -> PathBuf {
+    let name = path.file_name().map_or_else(
+        || "output".to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    let pid = std::process::id();
+    let long = format!(".{name}.{pid}.partial");
+    // File names are at most 255 bytes: a long name gets a short one (a hash of the name).
+    if long.len() <= 255 {
+        return path.with_file_name(long);
+    }
+    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    path.with_file_name(format!(".cs-{hash:016x}.{pid}.partial"))
+}
+
+/// Checks that `path` can be written: not a folder, its folder exists and is a folder, and a
+/// file can be created there (probed by creating and removing the temporary file, so a render is
+/// refused before it starts, not after).
+pub fn check_writable(path: &Path) -> Result<(), OutputError> {
+    if path.is_dir() {
+        return Err(out_err(path, "is a folder; expected a file path"));
+    }
+    // A device, FIFO or socket is never replaced by a regular file.
+    if let Ok(meta) = std::fs::metadata(path)
+        && !meta.is_file()
+    {
+        return Err(out_err(
+            path,
+            "exists and is not a regular file (a device, FIFO or socket); refusing to replace it",
+        ));
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        let why = if dir.exists() {
+            "is not a folder"
+        } else {
+            "does not exist"
+        };
+        return Err(out_err(path, format!("folder {} {why}", dir.display())));
+    }
+    let tmp = temp_path_for(path);
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        // Left by an earlier write of this process: creatable, then.
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+        Err(e) => {
+            return Err(out_err(
+                path,
+                format!("cannot create a file in folder {}: {e}", dir.display()),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Writes bytes produced by `fill` atomically to `path`.
+pub fn write_atomically(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), OutputError> {
+    check_writable(path)?;
+    let tmp = temp_path_for(path);
+    let result = (|| -> std::io::Result<()> {
+        let file = std::fs::File::create(&tmp)?;
+        let mut w = std::io::BufWriter::new(file);
+        fill(&mut w)?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(out_err(path, format!("cannot write: {e}")));
+    }
+    Ok(())
+}
+
+/// A linear RGB float image, row-major.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width·height·3` linear values.
+    pub data: Vec<f32>,
+}
+
+impl RgbImage {
+    /// The 8-bit sRGB encoding of the image.
+    pub fn to_srgb8(&self) -> Vec<u8> {
+        self.data.iter().map(|&v| linear_to_srgb8(v)).collect()
+    }
+
+    /// Writes the image by extension: `.png` (sRGB 8-bit, clamped) or `.exr` (linear float).
+    pub fn save(&self, path: &Path) -> Result<(), OutputError> {
+        self.save_mapped(path, &DisplayMap::CLAMP)
+    }
+
+    /// Writes the image by extension: `.png` through `map` (exposure, tone curve, sRGB 8-bit) or
+    /// `.exr` (linear float, `map` ignored).
+    pub fn save_mapped(&self, path: &Path, map: &DisplayMap) -> Result<(), OutputError> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        match ext.as_str() {
+            "png" => {
+                let buf =
+                    image::RgbImage::from_raw(self.width, self.height, map.to_srgb8(&self.data))
+                        .ok_or_else(|| out_err(path, "image buffer has the wrong size"))?;
+                encode(
+                    path,
+                    image::DynamicImage::ImageRgb8(buf),
+                    image::ImageFormat::Png,
+                )
+            }
+            "exr" => {
+                let buf = image::Rgb32FImage::from_raw(self.width, self.height, self.data.clone())
+                    .ok_or_else(|| out_err(path, "image buffer has the wrong size"))?;
+                encode(
+                    path,
+                    image::DynamicImage::ImageRgb32F(buf),
+                    image::ImageFormat::OpenExr,
+                )
+            }
+            _ => Err(out_err(
+                path,
+                "unknown image extension; expected .png or .exr",
+            )),
+        }
+    }
+
+    /// Reads a PNG (decoded from sRGB to linear) or an EXR (linear).
+    pub fn load(path: &Path) -> Result<RgbImage, OutputError> {
+        let img =
+            image::open(path).map_err(|e| out_err(path, format!("cannot read image: {e}")))?;
+        let is_float = matches!(
+            img.color(),
+            image::ColorType::Rgb32F | image::ColorType::Rgba32F
+        );
+        let (width, height) = (img.width(), img.height());
+        let data = if is_float {
+            img.to_rgb32f().into_raw()
+        } else {
+            img.to_rgb8()
+                .into_raw()
+                .into_iter()
+                .map(srgb8_to_linear)
+                .collect()
+        };
+        Ok(RgbImage {
+            width,
+            height,
+            data,
+        })
+    }
+}
+
+/// Writes an 8-bit grey image as PNG.
+pub fn save_gray_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    data: Vec<u8>,
+) -> Result<(), OutputError> {
+    let buf = image::GrayImage::from_raw(width, height, data)
+        .ok_or_else(|| out_err(path, "image buffer has the wrong size"))?;
+    encode(
+        path,
+        image::DynamicImage::ImageLuma8(buf),
+        image::ImageFormat::Png,
+    )
+}
+
+fn encode(
+    path: &Path,
+    img: image::DynamicImage,
+    format: image::ImageFormat,
+) -> Result<(), OutputError> {
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), format)
+        .map_err(|e| out_err(path, format!("cannot encode: {e}")))?;
+    write_atomically(path, |w| w.write_all(&bytes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_round_trips_every_8bit_value() {
+        for v in 0..=255u8 {
+            assert_eq!(linear_to_srgb8(srgb8_to_linear(v)), v);
+        }
+        assert_eq!(linear_to_srgb8(-1.0), 0);
+        assert_eq!(linear_to_srgb8(2.0), 255);
+    }
+
+    #[test]
+    fn images_round_trip_and_failed_writes_leave_nothing() {
+        let dir = std::env::temp_dir().join(format!("convshadow-io-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let img = RgbImage {
+            width: 3,
+            height: 2,
+            data: (0..18).map(|i| i as f32 / 17.0).collect(),
+        };
+        let exr = dir.join("a.exr");
+        img.save(&exr).unwrap();
+        assert_eq!(RgbImage::load(&exr).unwrap(), img);
+        let png = dir.join("a.png");
+        img.save(&png).unwrap();
+        let back = RgbImage::load(&png).unwrap();
+        assert_eq!(back.to_srgb8(), img.to_srgb8());
+        // A folder as the target, and a missing folder: errors, and no file or temp file left.
+        assert!(img.save(&dir).is_err());
+        let missing = dir.join("nope/x.png");
+        assert!(
+            img.save(&missing)
+                .unwrap_err()
+                .to_string()
+                .contains("does not exist")
+        );
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(left.len(), 2, "{left:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

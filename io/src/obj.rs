@@ -1,0 +1,447 @@
+//! OBJ reading: a validating scan that names the line, then tobj, then welding.
+
+use std::collections::HashMap;
+use std::collections::hash_map::Entry;
+use std::ops::Div;
+use std::path::Path;
+use std::str::FromStr;
+
+use glam::DVec3;
+
+use convshadow_common::prepare::mesh::{MeshError, TriMesh};
+
+/// Longest line excerpt quoted in an error message.
+pub(crate) const MAX_QUOTE: usize = 120;
+
+/// The line trimmed and shortened for quoting in a message.
+pub(crate) fn quote(line: &str) -> String {
+    let t = line.trim();
+    if t.chars().count() <= MAX_QUOTE {
+        t.to_string()
+    } else {
+        let mut s: String = t.chars().take(MAX_QUOTE).collect();
+        s.push('…');
+        s
+    }
+}
+
+/// What the validating scan learned about a file that tobj needs to be told.
+pub(crate) struct ScanSummary {
+    /// Number of face lines.
+    faces: usize,
+    /// Whether the file has `l` (polyline) elements, which tobj would turn into triangles.
+    has_polylines: bool,
+}
+
+/// The float type tobj parses into (f32, or f64 with tobj's `use_f64` feature), as used by the scan.
+pub(crate) trait ObjFloat: FromStr + Copy + Into<f64> + Div<Output = Self> {}
+impl<T: FromStr + Copy + Into<f64> + Div<Output = T>> ObjFloat for T {}
+
+/// One line under the scan: where it is, for the errors it words.
+struct ObjLine<'a> {
+    /// The file.
+    path: &'a Path,
+    /// 1-based line number.
+    line_no: usize,
+    /// The line's text (without `\r`).
+    text: &'a str,
+}
+
+impl ObjLine<'_> {
+    /// A syntax error on this line.
+    fn syntax(&self, expected: String) -> MeshError {
+        MeshError::Syntax {
+            path: self.path.to_path_buf(),
+            line: self.line_no,
+            expected,
+            text: quote(self.text),
+        }
+    }
+}
+
+/// Line-by-line validation with tobj's acceptance rules plus ours; errors carry the line number.
+///
+/// `_like` only fixes `T` to tobj's float type, so finiteness is judged on the values tobj keeps.
+pub(crate) fn scan_obj<T: ObjFloat>(
+    path: &Path,
+    bytes: &[u8],
+    _like: &[T],
+) -> Result<ScanSummary, MeshError> {
+    // Elements defined so far: vertices, texture coordinates, normals.
+    let mut defined = [0usize; 3];
+    let mut summary = ScanSummary {
+        faces: 0,
+        has_polylines: false,
+    };
+    let mut lines = bytes.split(|&b| b == b'\n').enumerate().peekable();
+    while let Some((i, raw)) = lines.next() {
+        let line_no = i + 1;
+        if raw.is_empty() && lines.peek().is_none() {
+            break; // trailing newline
+        }
+        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+        let Ok(text) = std::str::from_utf8(raw) else {
+            return Err(MeshError::Syntax {
+                path: path.to_path_buf(),
+                line: line_no,
+                expected: "UTF-8 text".to_string(),
+                text: quote(&String::from_utf8_lossy(raw)),
+            });
+        };
+        let line = ObjLine {
+            path,
+            line_no,
+            text,
+        };
+        let mut words = text.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                let coords = scan_vertex::<T>(&line, words)?;
+                defined[0] += 1;
+                if coords.iter().any(|c| !c.is_finite()) {
+                    return Err(MeshError::NonFinite {
+                        path: path.to_path_buf(),
+                        line: line_no,
+                        vertex: defined[0],
+                        text: quote(text),
+                    });
+                }
+            }
+            Some(kw @ ("vt" | "vn")) => {
+                scan_attribute::<T>(&line, kw == "vt", words)?;
+                defined[if kw == "vt" { 1 } else { 2 }] += 1;
+            }
+            Some("f") => {
+                scan_face(&line, defined, words)?;
+                summary.faces += 1;
+            }
+            Some("l") => summary.has_polylines = true,
+            Some("usemtl") => {
+                // tobj takes the name after the first space and rejects an empty one.
+                let name = text.split_once(' ').map(|(_, n)| n.trim()).unwrap_or("");
+                if name.is_empty() {
+                    return Err(line.syntax("a material name after \"usemtl\"".to_string()));
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(summary)
+}
+
+/// The words of a `v` line after the keyword: the vertex as tobj keeps it (x, y, z divided by w
+/// when a w is given; colours ignored).
+fn scan_vertex<'a, T: ObjFloat>(
+    line: &ObjLine<'_>,
+    mut words: impl Iterator<Item = &'a str>,
+) -> Result<Vec<f64>, MeshError> {
+    let mut xyz = [None::<T>; 3];
+    for (k, slot) in xyz.iter_mut().enumerate() {
+        let axis = ["x", "y", "z"][k];
+        let Some(w) = words.next() else {
+            return Err(line.syntax(format!(
+                "3 coordinates \"v x y z\" in a vertex line, found {k}"
+            )));
+        };
+        match w.parse::<T>() {
+            Ok(x) => *slot = Some(x),
+            Err(_) => {
+                return Err(line.syntax(format!(
+                    "a number for the {axis} coordinate of a vertex, found \"{w}\","
+                )));
+            }
+        }
+    }
+    let rest: Vec<&str> = words.collect();
+    let mut coords: Vec<f64> = Vec::with_capacity(3);
+    match rest.len() {
+        0 | 3 => coords.extend(xyz.iter().flatten().map(|&x| x.into())),
+        1 => {
+            let w = rest[0].parse::<T>().map_err(|_| {
+                line.syntax(format!(
+                    "a number for the w coordinate of a vertex, found \"{}\",",
+                    rest[0]
+                ))
+            })?;
+            if w.into() == 0.0 {
+                return Err(line.syntax("a nonzero w coordinate".to_string()));
+            }
+            coords.extend(xyz.iter().flatten().map(|&x| (x / w).into()));
+        }
+        k => {
+            return Err(line.syntax(format!(
+                "\"v x y z\", \"v x y z w\" or \"v x y z r g b\", found {} numbers",
+                3 + k
+            )));
+        }
+    }
+    Ok(coords)
+}
+
+/// The words of a `vt` (`texture`) or `vn` line after the keyword: enough numbers.
+fn scan_attribute<'a, T: ObjFloat>(
+    line: &ObjLine<'_>,
+    texture: bool,
+    mut words: impl Iterator<Item = &'a str>,
+) -> Result<(), MeshError> {
+    let (need, what) = if texture {
+        (2, "texture coordinate \"vt u v\"")
+    } else {
+        (3, "normal \"vn x y z\"")
+    };
+    for k in 0..need {
+        match words.next() {
+            None => {
+                return Err(line.syntax(format!("{need} numbers in a {what}, found {k}")));
+            }
+            Some(w) if w.parse::<T>().is_err() => {
+                return Err(line.syntax(format!("a number in a {what}, found \"{w}\",")));
+            }
+            Some(_) => {}
+        }
+    }
+    Ok(())
+}
+
+/// The words of an `f` line after the keyword: at least 3 vertices, each index defined before
+/// the line (`defined`: vertices, texture coordinates, normals so far).
+fn scan_face<'a>(
+    line: &ObjLine<'_>,
+    defined: [usize; 3],
+    words: impl Iterator<Item = &'a str>,
+) -> Result<(), MeshError> {
+    let mut count = 0usize;
+    for token in words {
+        count += 1;
+        let parts: Vec<&str> = token.split('/').collect();
+        if parts.len() > 3 {
+            return Err(line.syntax(format!(
+                "a face vertex \"v\", \"v/vt\", \"v//vn\" or \"v/vt/vn\", found \"{token}\","
+            )));
+        }
+        if parts[0].is_empty() {
+            return Err(line.syntax(format!("a vertex index, found \"{token}\",")));
+        }
+        let names = ["vertex", "texture coordinate", "normal"];
+        for (k, part) in parts.iter().enumerate() {
+            if part.is_empty() {
+                continue;
+            }
+            let Ok(index) = part.parse::<i64>() else {
+                return Err(
+                    line.syntax(format!("an integer {} index, found \"{part}\",", names[k]))
+                );
+            };
+            let n = defined[k] as i64;
+            let ok = (index > 0 && index <= n) || (index < 0 && index >= -n);
+            if !ok {
+                return Err(MeshError::BadIndex {
+                    path: line.path.to_path_buf(),
+                    line: line.line_no,
+                    element: names[k],
+                    index,
+                    defined: defined[k],
+                    text: quote(line.text),
+                });
+            }
+        }
+    }
+    if count < 3 {
+        return Err(MeshError::FaceTooShort {
+            path: line.path.to_path_buf(),
+            line: line.line_no,
+            count,
+            text: quote(line.text),
+        });
+    }
+    Ok(())
+}
+
+/// `bytes` with every `l` (polyline) line blanked, keeping line numbers.
+pub(crate) fn without_polylines(bytes: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(bytes.len());
+    for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        if i > 0 {
+            out.push(b'\n');
+        }
+        let is_polyline = std::str::from_utf8(raw)
+            .map(|s| s.split_whitespace().next() == Some("l"))
+            .unwrap_or(false);
+        if !is_polyline {
+            out.extend_from_slice(raw);
+        }
+    }
+    out
+}
+
+/// Load an OBJ with tobj (single_index = false, triangulate = true; all models/objects in the file merged into one TriMesh).
+///
+/// Vertices are welded by exact position (−0.0 = 0.0) so closure is judged by position.
+/// Each line is validated first so that errors name the line: syntax tobj would reject,
+/// non-finite vertices, faces with fewer than 3 vertices, and indices that are 0 or refer to an
+/// element not defined before the line (negative indices are relative, as in the OBJ format).
+/// Polylines (`l`) are ignored; materials are not read. Degenerate triangles are kept here and
+/// dropped by [`TriMesh::analyze`]. Polygons are triangulated by tobj as fans.
+pub fn load_obj(path: &Path) -> Result<TriMesh, MeshError> {
+    let bytes =
+        crate::input::read_limited(path, crate::input::MAX_OBJ_BYTES).map_err(|source| {
+            MeshError::Io {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+    // The empty Vec only tells the scan which float type tobj parses into.
+    let summary = scan_obj(path, &bytes, &tobj::Mesh::default().positions)?;
+    if summary.faces == 0 {
+        return Err(MeshError::NoTriangles {
+            path: path.to_path_buf(),
+        });
+    }
+    let filtered;
+    let input: &[u8] = if summary.has_polylines {
+        filtered = without_polylines(&bytes);
+        &filtered
+    } else {
+        &bytes
+    };
+    // `..Default::default()` keeps this compiling when tobj's `merging`/`reordering` features add fields.
+    #[allow(clippy::needless_update)]
+    let options = tobj::LoadOptions {
+        single_index: false,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut std::io::Cursor::new(input), &options, |_| {
+            Err(tobj::LoadError::GenericFailure)
+        })
+        .map_err(|source| MeshError::Obj {
+            path: path.to_path_buf(),
+            reason: source.to_string(),
+        })?;
+
+    let invalid = |message: String| MeshError::Invalid {
+        path: path.to_path_buf(),
+        message,
+    };
+    let mut mesh = TriMesh::default();
+    let mut weld: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut local: Vec<u32> = Vec::new();
+    for model in &models {
+        let m = &model.mesh;
+        local.clear();
+        for p in m.positions.chunks_exact(3) {
+            let q: [f64; 3] = [p[0].into(), p[1].into(), p[2].into()];
+            if q.iter().any(|c| !c.is_finite()) {
+                return Err(invalid(format!(
+                    "a vertex of object \"{}\" has a non-finite coordinate {q:?} (expected finite numbers)",
+                    model.name
+                )));
+            }
+            // +0.0 normalises -0.0 to 0.0.
+            let key = q.map(|c| (c + 0.0).to_bits());
+            let id = match weld.entry(key) {
+                Entry::Occupied(e) => *e.get(),
+                Entry::Vacant(e) => {
+                    let Ok(next) = u32::try_from(mesh.positions.len()) else {
+                        return Err(invalid(format!(
+                            "more than {} distinct vertex positions (expected a mesh addressable with u32 indices)",
+                            u32::MAX
+                        )));
+                    };
+                    mesh.positions.push(DVec3::from_array(q));
+                    *e.insert(next)
+                }
+            };
+            local.push(id);
+        }
+        for t in m.indices.chunks_exact(3) {
+            let map = |i: u32| local.get(i as usize).copied();
+            match (map(t[0]), map(t[1]), map(t[2])) {
+                (Some(a), Some(b), Some(c)) => mesh.triangles.push([a, b, c]),
+                _ => {
+                    return Err(invalid(format!(
+                        "tobj produced a vertex index out of range in object \"{}\" (expected valid face indices)",
+                        model.name
+                    )));
+                }
+            }
+        }
+    }
+    if mesh.triangles.is_empty() {
+        return Err(MeshError::NoTriangles {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn load_obj_welds_seams_and_resolves_relative_indices() {
+        let dir = std::env::temp_dir().join(format!("convshadow-mesh-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let path = dir.join("seam.obj");
+        // A tetrahedron whose vertex 1 is duplicated (as -0.0) and whose faces use v/vt/vn,
+        // v//vn, negative indices, and a polyline that must be ignored (tobj would make it a triangle).
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv -0.0 0 -0\nvt 0 0\nvn 0 0 1\n\
+                    f 1/1/1 3/1/1 2/1/1\nf 5//1 2//1 4//1\nf -5 -2 -3\nf 2 3 4\nl 1 2 3\n";
+        std::fs::write(&path, text).expect("write");
+        let m = load_obj(&path).expect("loads");
+        let (_, r) = m.analyze();
+        assert_eq!(m.positions.len(), 4);
+        assert_eq!(r.triangles, 4);
+        assert!(r.is_closed(), "{r}");
+        assert!((m.signed_volume() - 1.0 / 6.0).abs() < 1e-15);
+
+        let cases: [(&str, &str, &str); 9] = [
+            (
+                "v 0 0 0\nv 1 0 0\nf 1 2 0\n",
+                "seam.obj:3:",
+                "vertex index 0",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nf 1 2 -3\n",
+                "seam.obj:3:",
+                "vertex index -3",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3 4\n",
+                "seam.obj:4:",
+                "vertex index 4",
+            ),
+            ("v 0 0 0\nv 1 0\n", "seam.obj:2:", "3 coordinates"),
+            ("v 0 0 0\nv 1 inf 0\n", "seam.obj:2:", "vertex 2"),
+            ("v 0 0 0\n\nv 1 0 0\nf 1 2\n", "seam.obj:4:", "at least 3"),
+            (
+                "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1/2 2 3\n",
+                "seam.obj:4:",
+                "texture coordinate index 2",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3/x\n",
+                "seam.obj:4:",
+                "\"x\"",
+            ),
+            ("v 0 0 0\nv 1 0 0\n", "seam.obj", "no triangles"),
+        ];
+        for (text, location, what) in cases {
+            std::fs::write(&path, text).expect("write");
+            let msg = load_obj(&path).expect_err(text).to_string();
+            assert!(
+                msg.contains(location) && msg.contains(what),
+                "{text:?} -> {msg}"
+            );
+        }
+        let missing = load_obj(&dir.join("missing.obj"))
+            .expect_err("missing")
+            .to_string();
+        assert!(missing.contains("missing.obj"), "{missing}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,702 @@
+//! The ground-truth shadow-ray reference: the light arriving at
+//! every shading point, integrated by Monte Carlo over the Gaussian light's directions with
+//! transmittance marched along each shadow ray through the continuous scene.
+//!
+//! What it shares with the sweep, and what it does not:
+//! - **View samples** are the sweep's: per pixel and slab the same shading point (the crossing
+//!   point, else the slab centre plus the same hashed jitter), the same material, detail value,
+//!   transfer function, specular term and front-to-back compositing. Only the light term `Iin`
+//!   differs, so the image difference is the shadow error and nothing else.
+//! - **Light directions**: per shading point and light, `M = k²` directions, one per cell of a
+//!   k×k stratification of the unit square, jittered by the integer hash (no `rand`), mapped
+//!   through the inverse normal CDF to the light's Gaussian `N(μl, R diag(σ²) Rᵀ)` per unit depth.
+//! - **Inside test**: exact. Each shadow ray is intersected (Möller–Trumbore, f64) with the
+//!   world triangles whose screen bounding box it passes (a 2D bin grid), and the crossings are
+//!   counted even-odd from the light side, where every point is outside. The LDI's fragments are
+//!   only exact at pixel centres and a shadow ray crosses pixels between them, so they are not
+//!   used for shadow rays (a nearest-pixel inside test would quantize every shadow edge to the
+//!   pixel grid, an error of the size being measured).
+//! - **Materials** at continuous positions: the gradient's opacity α(v) per reference length
+//!   becomes an extinction `κ = −ln(1 − α)/e_ref` per unit depth and the light is attenuated by
+//!   `exp(−(1 − τ)·∫κ)` (the limit of the sweep's `1 − α_slab(1 − τ)` per slab as the slab
+//!   thickness goes to 0). Like the sweep it attenuates per unit *depth*, not per unit path
+//!   length: it integrates the method's model, so it measures numerical error, not the gap
+//!   between the model and physically based transport. Detail media are marched with a step
+//!   given to [`Reference::new`] (by default an eighth of the slab thickness),
+//!   constant media are integrated in closed form. Opacity 1 is an infinite extinction: any
+//!   positive length blocks the light. Crossings closer than 2^-16 (relative) to the
+//!   shading point are ignored, so a ray does not hit the surface it starts on (a crossing's
+//!   shading point has the LDI's f32 depth, a few ulps off the surface).
+//!
+//! - **Patterned lights**: a ray's transmittance is multiplied by the light's initial light
+//!   (its pattern, as the plan sampled it at pixel centres; bilinear between them, 1 outside the
+//!   grid like the sweep's reads) where the ray leaves the scene through the first slab plane.
+//!
+//! It is slow — every shading point marches `lights × M` rays — and meant for small images.
+
+use convshadow_common::model::scene::{MaterialSpec, Scene};
+use convshadow_common::pixel::hash::{mix32, row_hash};
+use convshadow_common::plan::RenderPlan;
+use convshadow_common::prepare::geometry::SceneGeometry;
+use rayon::prelude::*;
+
+use convshadow_cpu::composite::{composite, finish};
+use convshadow_cpu::ldi::Ldi;
+use convshadow_cpu::parity::{NO_CROSSING, advance, first_mesh};
+use convshadow_cpu::shading::{Specular, detail_value, material_at, shade, shading_depth};
+
+/// Optical depth beyond which a shadow ray is treated as fully blocked (e^-40 ≈ 4e-18).
+const OPAQUE_DEPTH: f64 = 40.0;
+/// Side of a bin of the triangle grid, in grid pixels.
+const BIN: f64 = 4.0;
+/// Stop compositing a pixel once `1 − A` falls below this (changes the image by less).
+const TRANSPARENCY_CUTOFF: f32 = 1e-7;
+
+/// How the reference integrates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReferenceOptions {
+    /// Light directions per shading point and light; rounded up to a square `k²`.
+    pub samples: u32,
+    /// Seed of the direction jitter (independent of the sweep's seed).
+    pub seed: u32,
+}
+
+impl Default for ReferenceOptions {
+    fn default() -> Self {
+        ReferenceOptions {
+            samples: 64,
+            seed: 0x5eed,
+        }
+    }
+}
+
+/// One triangle in grid space: x, y in grid pixels, z in world depth relative to the first slab.
+#[derive(Clone, Copy, Debug)]
+struct Tri {
+    v0: [f64; 3],
+    e1: [f64; 3],
+    e2: [f64; 3],
+    mesh: u32,
+}
+
+/// A material as the reference sees it: extinction per unit depth as a function of the detail
+/// value, and transport.
+#[derive(Clone, Debug)]
+struct Medium {
+    /// Opacity of a constant material (per reference length).
+    opacity: f64,
+    /// Gradient stops (value, opacity) of a detail material; empty for constant ones.
+    stops: Vec<(f64, f64)>,
+    /// The length the opacities are given for.
+    reference_length: f64,
+    /// Transport colour τ.
+    transport: [f64; 3],
+}
+
+/// Extinction per unit depth of opacity `alpha` per `reference_length` (infinite for opacity 1:
+/// any positive length of an opaque medium blocks the light, as the sweep's `α_slab = 1` does).
+fn extinction(alpha: f64, reference_length: f64) -> f64 {
+    if alpha >= 1.0 {
+        f64::INFINITY
+    } else {
+        -(1.0 - alpha.max(0.0)).ln() / reference_length
+    }
+}
+
+impl Medium {
+    fn new(m: &MaterialSpec, slab_distance: f64) -> Medium {
+        Medium {
+            opacity: m.opacity,
+            stops: m.gradient.iter().map(|s| (s.value, s.opacity)).collect(),
+            reference_length: m.reference_length.unwrap_or(slab_distance),
+            transport: m.transport,
+        }
+    }
+
+    /// Extinction at detail value `v`: the gradient's opacity interpolated linearly (piecewise
+    /// linear, constant beyond the ends, as the scene format defines it), then converted.
+    fn kappa(&self, v: f64) -> f64 {
+        let g = &self.stops;
+        if g.is_empty() {
+            return extinction(self.opacity, self.reference_length);
+        }
+        let mut a = g[g.len() - 1].1;
+        if v <= g[0].0 {
+            a = g[0].1;
+        } else {
+            for w in g.windows(2) {
+                if v <= w[1].0 {
+                    let span = w[1].0 - w[0].0;
+                    let t = if span > 0.0 { (v - w[0].0) / span } else { 1.0 };
+                    a = w[0].1 + t * (w[1].1 - w[0].1);
+                    break;
+                }
+            }
+        }
+        extinction(a, self.reference_length)
+    }
+}
+
+/// The reference renderer for one scene (triangles binned once, materials converted once).
+pub struct Reference<'a> {
+    plan: &'a RenderPlan,
+    geometry: &'a SceneGeometry,
+    tris: Vec<Tri>,
+    bins: Vec<Vec<u32>>,
+    bin_origin: [f64; 2],
+    bin_dims: [usize; 2],
+    media: Vec<Medium>,
+    mesh_material: Vec<usize>,
+    /// Per light: mean direction offset per unit depth (grid px per world depth) and the
+    /// Cholesky-like factor (R·diag(σ)) in grid px per world depth.
+    lights: Vec<([f64; 2], [[f64; 2]; 2])>,
+    step: f64,
+}
+
+impl<'a> Reference<'a> {
+    /// Prepares the reference for a scene whose geometry and plan are built. `step` is the
+    /// marching step through detail media in world depth units (`0` = an eighth of a slab).
+    pub fn new(
+        scene: &Scene,
+        geometry: &'a SceneGeometry,
+        plan: &'a RenderPlan,
+        step: f64,
+    ) -> Reference<'a> {
+        let cam = &geometry.camera;
+        let mut tris = Vec::new();
+        for (m, wm) in geometry.meshes.iter().enumerate() {
+            let pts: Vec<[f64; 3]> = wm
+                .mesh
+                .positions
+                .iter()
+                .map(|p| {
+                    let q = cam.to_pixel(*p);
+                    // Image pixel coordinates (as the plan's detail affine takes them).
+                    [q.x, q.y, q.z - geometry.z_origin]
+                })
+                .collect();
+            for t in &wm.mesh.triangles {
+                let (a, b, c) = (pts[t[0] as usize], pts[t[1] as usize], pts[t[2] as usize]);
+                tris.push(Tri {
+                    v0: a,
+                    e1: sub(b, a),
+                    e2: sub(c, a),
+                    mesh: m as u32,
+                });
+            }
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for t in &tris {
+            for v in [t.v0, add(t.v0, t.e1), add(t.v0, t.e2)] {
+                for a in 0..2 {
+                    lo[a] = lo[a].min(v[a]);
+                    hi[a] = hi[a].max(v[a]);
+                }
+            }
+        }
+        let dims = [
+            (((hi[0] - lo[0]) / BIN).floor() as usize + 1).min(4096),
+            (((hi[1] - lo[1]) / BIN).floor() as usize + 1).min(4096),
+        ];
+        let cell =
+            |v: f64, a: usize| (((v - lo[a]) / BIN).floor().max(0.0) as usize).min(dims[a] - 1);
+        let mut bins = vec![Vec::new(); dims[0] * dims[1]];
+        for (i, t) in tris.iter().enumerate() {
+            let vs = [t.v0, add(t.v0, t.e1), add(t.v0, t.e2)];
+            let bx = vs
+                .iter()
+                .map(|v| v[0])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |m, x| {
+                    (m.0.min(x), m.1.max(x))
+                });
+            let by = vs
+                .iter()
+                .map(|v| v[1])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |m, x| {
+                    (m.0.min(x), m.1.max(x))
+                });
+            for cy in cell(by.0, 1)..=cell(by.1, 1) {
+                for cx in cell(bx.0, 0)..=cell(bx.1, 0) {
+                    bins[cy * dims[0] + cx].push(i as u32);
+                }
+            }
+        }
+        let e = geometry.slab_distance;
+        let media = scene.materials.iter().map(|m| Medium::new(m, e)).collect();
+        let px = cam.pixel_size;
+        let lights = scene
+            .lights
+            .iter()
+            .map(|l| {
+                let mu = l.tilt_deg.map(|t| t.to_radians().tan() / px);
+                let (s, c) = l.rotation_deg.to_radians().sin_cos();
+                let (sx, sy) = (l.variance[0].sqrt() / px, l.variance[1].sqrt() / px);
+                // δ = R·(sx z1, sy z2), R = [[c, −s], [s, c]].
+                (mu, [[c * sx, -s * sy], [s * sx, c * sy]])
+            })
+            .collect();
+        Reference {
+            plan,
+            geometry,
+            tris,
+            bins,
+            bin_origin: lo,
+            bin_dims: dims,
+            media,
+            mesh_material: scene.meshes.iter().map(|m| m.material).collect(),
+            lights,
+            step: if step > 0.0 { step } else { e / 8.0 },
+        }
+    }
+
+    /// Candidate triangles whose bins the screen segment from `a` to `b` passes.
+    fn candidates(&self, a: [f64; 2], b: [f64; 2], out: &mut Vec<u32>) {
+        out.clear();
+        let len = ((b[0] - a[0]).abs().max((b[1] - a[1]).abs()) / BIN)
+            .ceil()
+            .max(1.0) as usize;
+        let cell = |v: f64, k: usize| -> i64 { ((v - self.bin_origin[k]) / BIN).floor() as i64 };
+        let (mut last_x, mut last_y) = (i64::MIN, i64::MIN);
+        for i in 0..len {
+            // Piece i of the segment, at most one bin long per axis: its bounding box of bins.
+            let t0 = i as f64 / len as f64;
+            let t1 = (i + 1) as f64 / len as f64;
+            let p0 = [a[0] + t0 * (b[0] - a[0]), a[1] + t0 * (b[1] - a[1])];
+            let p1 = [a[0] + t1 * (b[0] - a[0]), a[1] + t1 * (b[1] - a[1])];
+            let (x0, x1) = (cell(p0[0].min(p1[0]), 0), cell(p0[0].max(p1[0]), 0));
+            let (y0, y1) = (cell(p0[1].min(p1[1]), 1), cell(p0[1].max(p1[1]), 1));
+            for cy in y0.max(0)..=y1.min(self.bin_dims[1] as i64 - 1) {
+                for cx in x0.max(0)..=x1.min(self.bin_dims[0] as i64 - 1) {
+                    if (cx, cy) == (last_x, last_y) {
+                        continue;
+                    }
+                    last_x = cx;
+                    last_y = cy;
+                    out.extend_from_slice(&self.bins[cy as usize * self.bin_dims[0] + cx as usize]);
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+    }
+
+    /// Transmittance per channel from point `p` (grid px x, y; relative depth z) towards the
+    /// light along direction offset `dir` (grid px per unit depth): the product over the media
+    /// the ray crosses before reaching `p`.
+    fn transmittance(&self, p: [f64; 3], dir: [f64; 2], scratch: &mut Scratch) -> [f64; 3] {
+        // The ray towards the light: q(u) = p + u·(dir, −1), u ∈ (0, p.z]; q(p.z) is at depth 0,
+        // in front of every vertex, so it is outside every mesh.
+        let end = [p[0] + p[2] * dir[0], p[1] + p[2] * dir[1]];
+        self.candidates([p[0], p[1]], end, &mut scratch.tris);
+        let d = [dir[0], dir[1], -1.0];
+        scratch.hits.clear();
+        // A crossing's shading point has the LDI's f32 depth (a plane equation evaluated in f32:
+        // a few ulps off its surface, more along a ray that leaves a sloped surface at a shallow
+        // angle): a surface that close is the one the point lies on, else an opaque receiver
+        // whose depth rounded inwards would shadow itself completely.
+        let tol = (1.0 + p[2].abs()) / 65_536.0;
+        for &i in &scratch.tris {
+            let t = &self.tris[i as usize];
+            if let Some(u) = intersect(p, d, t)
+                && u > tol
+                && u < p[2] + tol
+            {
+                scratch.hits.push((u, t.mesh));
+            }
+        }
+        // From the light side (largest u) towards p, toggling inside bits.
+        scratch
+            .hits
+            .sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let mut inside = 0u32;
+        let mut optical = [0.0f64; 3];
+        for k in 0..scratch.hits.len() {
+            if optical.iter().all(|&o| o > OPAQUE_DEPTH) {
+                // Transmittance below e^-40 (4e-18) on every channel: nothing measurable is left.
+                return [0.0; 3];
+            }
+            let (u_far, mesh) = scratch.hits[k];
+            inside ^= 1 << mesh;
+            let u_near = if k + 1 < scratch.hits.len() {
+                scratch.hits[k + 1].0
+            } else {
+                0.0
+            };
+            if inside == 0 || u_far <= u_near {
+                continue;
+            }
+            let mesh = inside.trailing_zeros() as usize;
+            let m = self.mesh_material[mesh];
+            let od = self.optical_depth(p, dir, mesh, m, u_near, u_far);
+            let tau = self.media[m].transport;
+            for (o, t) in optical.iter_mut().zip(tau) {
+                // Transport 1 lets the channel through whatever the optical depth (also ∞).
+                if t < 1.0 {
+                    *o += od * (1.0 - t);
+                }
+            }
+        }
+        optical.map(|o| (-o).exp())
+    }
+
+    /// ∫κ over u ∈ [u0, u1] of the ray from `p` in mesh `mesh` of material `m`.
+    fn optical_depth(
+        &self,
+        p: [f64; 3],
+        dir: [f64; 2],
+        mesh: usize,
+        m: usize,
+        u0: f64,
+        u1: f64,
+    ) -> f64 {
+        let len = u1 - u0;
+        let material = &self.plan.materials[self.plan.mesh_material[mesh] as usize];
+        let medium = &self.media[m];
+        if medium.stops.is_empty() || (material.detail.is_none() && material.texture.is_none()) {
+            let k = medium.kappa(0.0);
+            return if k.is_infinite() { k } else { k * len };
+        }
+        let n = (len / self.step).ceil().max(1.0) as usize;
+        let h = len / n as f64;
+        let xf = &self.plan.mesh_to_detail[mesh];
+        let mut sum = 0.0;
+        for i in 0..n {
+            let u = u0 + (i as f64 + 0.5) * h;
+            let q = [p[0] + u * dir[0], p[1] + u * dir[1], p[2] - u];
+            let v = detail_value(material, to_detail_f64(xf, q));
+            sum += medium.kappa(f64::from(v));
+            if sum.is_infinite() {
+                return sum;
+            }
+        }
+        sum * h
+    }
+
+    /// The light arriving at `p` (grid px, relative depth) from light `l`, per channel: the mean
+    /// transmittance over `k²` stratified directions; `stream` decorrelates the jitter.
+    pub fn light_at(&self, l: usize, p: [f64; 3], k: u32, seed: u32, stream: u32) -> [f64; 3] {
+        let mut scratch = Scratch::default();
+        self.light_at_with(l, p, k, seed, stream, &mut scratch)
+    }
+
+    fn light_at_with(
+        &self,
+        l: usize,
+        p: [f64; 3],
+        k: u32,
+        seed: u32,
+        stream: u32,
+        scratch: &mut Scratch,
+    ) -> [f64; 3] {
+        let (mu, f) = self.lights[l];
+        let base = mix32(mix32(mix32(seed ^ k.wrapping_mul(0x2c1b_3c6d)) ^ stream) ^ l as u32);
+        let mut acc = [0.0f64; 3];
+        for a in 0..k {
+            for b in 0..k {
+                let h = mix32(base ^ (a * k + b).wrapping_mul(0x9e37_79b9));
+                let j1 = (f64::from(h >> 8) + 0.5) / 16_777_216.0;
+                let j2 = (f64::from(mix32(h) >> 8) + 0.5) / 16_777_216.0;
+                let z1 = inverse_normal_cdf((f64::from(a) + j1) / f64::from(k));
+                let z2 = inverse_normal_cdf((f64::from(b) + j2) / f64::from(k));
+                let dir = [
+                    mu[0] + f[0][0] * z1 + f[0][1] * z2,
+                    mu[1] + f[1][0] * z1 + f[1][1] * z2,
+                ];
+                let mut t = self.transmittance(p, dir, scratch);
+                if self.plan.initial_light.is_some() {
+                    // A patterned light: the ray leaves the scene through the first slab plane
+                    // (depth 0) at p + p.z·dir, where the pattern gives the light's value.
+                    let i = self.initial_at(l, p[0] + p[2] * dir[0], p[1] + p[2] * dir[1]);
+                    for (v, s) in t.iter_mut().zip(i) {
+                        *v *= s;
+                    }
+                }
+                for (a, v) in acc.iter_mut().zip(t) {
+                    *a += v;
+                }
+            }
+        }
+        let m = f64::from(k * k);
+        acc.map(|v| v / m)
+    }
+
+    /// Light `l`'s initial light (its pattern) at image position (x, y) in pixels (the ray
+    /// positions' frame; the grid starts `guard.left`, `guard.top` pixels before it), per
+    /// channel: bilinear between pixel centres, 1 outside the grid (as the sweep reads it).
+    fn initial_at(&self, l: usize, x: f64, y: f64) -> [f64; 3] {
+        let plan = self.plan;
+        let Some(buf) = &plan.initial_light else {
+            return [1.0; 3];
+        };
+        let (x, y) = (
+            x + f64::from(plan.guard.left),
+            y + f64::from(plan.guard.top),
+        );
+        let (w, h) = (plan.grid_width as i64, plan.grid_height as i64);
+        let ch = plan.channels as usize;
+        let row_len = plan.light_row_len();
+        let (fx, fy) = (x - 0.5, y - 0.5);
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (ax, ay) = (fx - x0, fy - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let mut out = [1.0f64; 3];
+        for (c, o) in out.iter_mut().enumerate().take(ch) {
+            let at = |xi: i64, yi: i64| {
+                if xi < 0 || yi < 0 || xi >= w || yi >= h {
+                    1.0
+                } else {
+                    let plane = plan.light_plane(l, c);
+                    f64::from(buf[yi as usize * row_len + plane * w as usize + xi as usize])
+                }
+            };
+            let top = at(x0, y0) * (1.0 - ax) + at(x0 + 1, y0) * ax;
+            let bottom = at(x0, y0 + 1) * (1.0 - ax) + at(x0 + 1, y0 + 1) * ax;
+            *o = top * (1.0 - ay) + bottom * ay;
+        }
+        if ch == 1 {
+            out = [out[0]; 3];
+        }
+        out
+    }
+
+    /// Renders the image (linear RGB, `width·height·3`) with the sweep's view samples and
+    /// reference light (see the module documentation).
+    pub fn render(&self, ldi: &Ldi, options: &ReferenceOptions) -> Vec<f32> {
+        let plan = self.plan;
+        let k = samples_side(options.samples);
+        let (iw, ih) = (plan.width as usize, plan.height as usize);
+        let (left, top) = (plan.guard.left as usize, plan.guard.top as usize);
+        let w = plan.grid_width as usize;
+        let ch = plan.channels as usize;
+        let lights = plan.lights.len();
+        let mut image = vec![0.0f32; iw * ih * 3];
+        image
+            .par_chunks_mut(iw * 3)
+            .enumerate()
+            .for_each(|(iy, row)| {
+                let mut scratch = Scratch::default();
+                let y = iy + top;
+                for ix in 0..iw {
+                    let x = ix + left;
+                    let p = y * w + x;
+                    let mut next = ldi.offsets[p];
+                    let end = ldi.offsets[p + 1];
+                    let mut inside = 0u32;
+                    let mut color = [0.0f32; 3];
+                    let mut alpha = 0.0f32;
+                    let mut iin = [0.0f32; 48];
+                    for slab in 0..plan.slabs {
+                        let back = plan.slab_back[slab as usize];
+                        let front = plan.slab_front[slab as usize];
+                        let crossed = advance(ldi, &mut next, end, &mut inside, back);
+                        let mesh = if crossed != NO_CROSSING {
+                            Some(u32::from(ldi.mesh[crossed as usize]))
+                        } else {
+                            first_mesh(inside)
+                        };
+                        let Some(mesh) = mesh else { continue };
+                        if 1.0 - alpha < TRANSPARENCY_CUTOFF {
+                            break;
+                        }
+                        let jitter_row =
+                            row_hash(plan.jitter_slab_hash[slab as usize], plan.hash_y(y as u32));
+                        let z = shading_depth(plan, ldi, crossed, front, jitter_row, x);
+                        let tf = material_at(plan, mesh, ix as f32, iy as f32, z);
+                        let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
+                        let pos = [ix as f64 + 0.5, iy as f64 + 0.5, f64::from(z)];
+                        let stream = mix32(mix32(p as u32) ^ slab);
+                        for l in 0..lights {
+                            let t =
+                                self.light_at_with(l, pos, k, options.seed, stream, &mut scratch);
+                            for (dst, v) in iin[l * ch..(l + 1) * ch].iter_mut().zip(t) {
+                                *dst = v as f32;
+                            }
+                        }
+                        let spec = match material.specular {
+                            Some((strength, exponent)) if crossed != NO_CROSSING => {
+                                let n = self.geometry.raster.triangles
+                                    [ldi.triangle[crossed as usize] as usize]
+                                    .normal;
+                                Some(Specular {
+                                    strength,
+                                    exponent,
+                                    normal: n,
+                                    lanes: true,
+                                })
+                            }
+                            _ => None,
+                        };
+                        let iin = &iin[..lights * ch];
+                        let shaded = shade(plan, material, tf.color, iin, spec.as_ref());
+                        composite(&mut color, &mut alpha, shaded, tf.alpha, true);
+                    }
+                    finish(&mut color, alpha, plan.background);
+                    row[3 * ix..3 * ix + 3].copy_from_slice(&color);
+                }
+            });
+        image
+    }
+}
+
+/// Per-thread scratch buffers.
+#[derive(Default)]
+struct Scratch {
+    tris: Vec<u32>,
+    hits: Vec<(f64, u32)>,
+}
+
+/// `ceil(√samples)`, at least 1: the side of the stratification.
+pub fn samples_side(samples: u32) -> u32 {
+    let mut k = 1u32;
+    while k * k < samples {
+        k += 1;
+    }
+    k
+}
+
+fn to_detail_f64(m: &[f32; 12], q: [f64; 3]) -> [f32; 3] {
+    let row = |r: usize| {
+        f64::from(m[4 * r]) * q[0]
+            + f64::from(m[4 * r + 1]) * q[1]
+            + f64::from(m[4 * r + 2]) * q[2]
+            + f64::from(m[4 * r + 3])
+    };
+    [row(0) as f32, row(1) as f32, row(2) as f32]
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Möller–Trumbore: the ray parameter where `o + u·d` meets triangle `t`, if it does.
+fn intersect(o: [f64; 3], d: [f64; 3], t: &Tri) -> Option<f64> {
+    let pv = cross(d, t.e2);
+    let det = dot(t.e1, pv);
+    if det == 0.0 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = sub(o, t.v0);
+    let a = dot(tv, pv) * inv;
+    if !(0.0..=1.0).contains(&a) {
+        return None;
+    }
+    let qv = cross(tv, t.e1);
+    let b = dot(d, qv) * inv;
+    if b < 0.0 || a + b > 1.0 {
+        return None;
+    }
+    Some(dot(t.e2, qv) * inv)
+}
+
+/// The standard normal quantile (Acklam's rational approximation refined by one Halley step
+/// on the complementary error function: relative error below 1e-12 on (0, 1)).
+pub fn inverse_normal_cdf(p: f64) -> f64 {
+    const A: [f64; 6] = [
+        -3.969_683_028_665_376e1,
+        2.209_460_984_245_205e2,
+        -2.759_285_104_469_687e2,
+        1.383_577_518_672_69e2,
+        -3.066_479_806_614_716e1,
+        2.506_628_277_459_239,
+    ];
+    const B: [f64; 5] = [
+        -5.447_609_879_822_406e1,
+        1.615_858_368_580_409e2,
+        -1.556_989_798_598_866e2,
+        6.680_131_188_771_972e1,
+        -1.328_068_155_288_572e1,
+    ];
+    const C: [f64; 6] = [
+        -7.784_894_002_430_293e-3,
+        -3.223_964_580_411_365e-1,
+        -2.400_758_277_161_838,
+        -2.549_732_539_343_734,
+        4.374_664_141_464_968,
+        2.938_163_982_698_783,
+    ];
+    const D: [f64; 4] = [
+        7.784_695_709_041_462e-3,
+        3.224_671_290_700_398e-1,
+        2.445_134_137_142_996,
+        3.754_408_661_907_416,
+    ];
+    let p = p.clamp(1e-300, 1.0 - 1e-16);
+    let x = if p < 0.024_25 {
+        let q = (-2.0 * p.ln()).sqrt();
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    } else if p <= 1.0 - 0.024_25 {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    } else {
+        let q = (-2.0 * (1.0 - p).ln()).sqrt();
+        -(((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    };
+    // One Halley step: e = Φ(x) − p.
+    let e = normal_cdf(x) - p;
+    let u = e * (2.0 * std::f64::consts::PI).sqrt() * (0.5 * x * x).exp();
+    x - u / (1.0 + 0.5 * x * u)
+}
+
+/// The standard normal CDF Φ(x) = erfc(−x/√2)/2, by `libm`'s `erfc` (musl's, within about an
+/// ulp): the complementary function keeps the lower tail's relative precision.
+pub fn normal_cdf(x: f64) -> f64 {
+    0.5 * libm::erfc(-x / std::f64::consts::SQRT_2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normal_cdf_and_quantile_agree_with_known_values() {
+        // Φ(0) = 1/2, Φ(1) = 0.841344746068543, Φ(−3) = 0.00134989803163009,
+        // Φ(−5) = 1 − Φ(5) = 2.866515718791939e-7 (tabulated values).
+        assert!((normal_cdf(0.0) - 0.5).abs() < 1e-16);
+        assert!((normal_cdf(1.0) - 0.841_344_746_068_543).abs() < 1e-14);
+        assert!((normal_cdf(-3.0) - 0.001_349_898_031_630_09).abs() < 1e-16);
+        // The upper tail: Φ(5) is within f64's rounding of 1 − 2.87e-7 (ulp(1) = 2.2e-16, so
+        // 1 − Φ(5) cannot be checked closer than that); the lower tail Φ(−5) is computed directly
+        // by the continued fraction and must be good to 1e-14 relative.
+        assert!((normal_cdf(5.0) - (1.0 - 2.866_515_718_791_939e-7)).abs() <= 2.0 * f64::EPSILON);
+        assert!((normal_cdf(-5.0) / 2.866_515_718_791_939e-7 - 1.0).abs() < 1e-14);
+        for p in [1e-9, 0.001, 0.02, 0.3, 0.5, 0.77, 0.999] {
+            let x = inverse_normal_cdf(p);
+            assert!((normal_cdf(x) - p).abs() < 1e-13 * p.max(1e-3), "{p}");
+        }
+    }
+
+    #[test]
+    fn ray_meets_a_triangle_where_expected() {
+        let t = Tri {
+            v0: [0.0, 0.0, 2.0],
+            e1: [4.0, 0.0, 0.0],
+            e2: [0.0, 4.0, 0.0],
+            mesh: 0,
+        };
+        // From (1, 1, 5) towards depth 0 with slope (0.1, 0): meets depth 2 at u = 3.
+        let u = intersect([1.0, 1.0, 5.0], [0.1, 0.0, -1.0], &t).unwrap();
+        assert!((u - 3.0).abs() < 1e-12);
+        assert!(intersect([5.0, 5.0, 5.0], [0.0, 0.0, -1.0], &t).is_none());
+    }
+}
