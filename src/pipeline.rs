@@ -1,6 +1,6 @@
 //! The render pipeline as a library call: scene → geometry → LDI → plan → sweep → image.
 //! The `render` command and the tests both go through [`render`]. Library code: failures are a
-//! typed [`RenderError`]; the exit codes they map to live in the CLI (`crate::exit`).
+//! typed [`RenderError`]; the exit codes they map to live in the binary's CLI (`src/cli/exit.rs`).
 
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;

@@ -1,12 +1,12 @@
 //! `convshadow report`: speed against error over kernels and slab counts, written as
-//! `report.csv`, `report.md` and `speed_vs_error.png` (see `crate::report`).
+//! `report.csv`, `report.md` and `speed_vs_error.png` (see `convshadow::report`).
 
 use std::path::PathBuf;
 
 use convshadow_common::scene::Penumbra;
 
-use crate::exit::{self, Failure};
-use crate::report::{ReportOptions, run as run_report};
+use crate::cli::exit::{self, Failure};
+use convshadow::report::{ReportOptions, run as run_report};
 
 /// Arguments of `convshadow report`.
 #[derive(clap::Args, Debug)]

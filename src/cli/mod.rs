@@ -1,6 +1,11 @@
-//! The `convshadow` subcommands.
+//! The command line, private to the `convshadow` binary: the subcommands, the exit codes
+//! ([`exit`], the only place they exist) and the processor check that runs before `main`. The
+//! library (`convshadow::pipeline`, `convshadow::report`) returns typed errors; this module maps
+//! them to exit codes and messages (docs/errors.md).
 
+mod cpu_check;
 pub mod diff;
+pub mod exit;
 pub mod frames;
 pub mod ldi;
 pub mod render;
@@ -10,7 +15,7 @@ use std::path::Path;
 
 use convshadow_common::scene::Scene;
 
-use crate::exit::Failure;
+use crate::cli::exit::Failure;
 
 /// Loads the scene file, or the embedded default scene when none is given.
 pub fn load_scene(path: Option<&Path>) -> Result<Scene, Failure> {
@@ -53,7 +58,7 @@ pub fn refuse_collisions<'a>(
         let k = key(p);
         if let Some((_, first)) = seen.iter().find(|(s, _)| *s == k) {
             return Err(Failure::new(
-                crate::exit::BAD_ARGUMENTS,
+                crate::cli::exit::BAD_ARGUMENTS,
                 format!(
                     "{} and {} are the same file: give each output its own path",
                     first.display(),
@@ -75,7 +80,7 @@ pub fn require_png(flag: &str, path: Option<&std::path::PathBuf>) -> Result<(), 
             .map(|e| e.to_string_lossy().to_ascii_lowercase());
         if ext.as_deref() != Some("png") {
             return Err(Failure::new(
-                crate::exit::BAD_ARGUMENTS,
+                crate::cli::exit::BAD_ARGUMENTS,
                 format!("{flag} {}: writes PNG; expected a .png name", p.display()),
             ));
         }
@@ -83,9 +88,9 @@ pub fn require_png(flag: &str, path: Option<&std::path::PathBuf>) -> Result<(), 
     Ok(())
 }
 
-/// Parses `--threads`: 0 (one per core) to [`crate::pipeline::MAX_THREADS`].
+/// Parses `--threads`: 0 (one per core) to [`convshadow::pipeline::MAX_THREADS`].
 pub fn parse_threads(s: &str) -> Result<usize, String> {
-    let max = crate::pipeline::MAX_THREADS;
+    let max = convshadow::pipeline::MAX_THREADS;
     match s.parse::<usize>() {
         Ok(n) if n <= max => Ok(n),
         _ => Err(format!(
@@ -116,13 +121,13 @@ pub fn parse_slabs(s: &str) -> Result<convshadow_common::scene::SlabSpec, String
 
 /// The pipeline's thread pool with `threads` workers (0 = one per core), its error as a failure.
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, Failure> {
-    Ok(crate::pipeline::thread_pool(threads)?)
+    Ok(convshadow::pipeline::thread_pool(threads)?)
 }
 
 /// Writes a JSON value atomically.
 pub fn write_json(path: &Path, value: &serde_json::Value) -> Result<(), Failure> {
     let text = serde_json::to_string_pretty(value)
-        .map_err(|e| Failure::new(crate::exit::INTERNAL, e.to_string()))?;
+        .map_err(|e| Failure::new(crate::cli::exit::INTERNAL, e.to_string()))?;
     convshadow_common::image_io::write_atomically(path, |w| {
         w.write_all(text.as_bytes())?;
         w.write_all(b"\n")

@@ -16,8 +16,8 @@ use convshadow_cpu::reference::{Reference, ReferenceOptions, samples_side};
 use serde_json::json;
 
 use super::frames;
-use crate::exit::{self, Failure};
-use crate::pipeline::{
+use crate::cli::exit::{self, Failure};
+use convshadow::pipeline::{
     Backend, CpuPath, MemoryNeed, RenderRequest, Rendered, image_fingerprint, render,
 };
 
@@ -233,7 +233,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     let Some(list) = frame_list else {
         let r = render(&scene, &request)?;
         if let Some(note) = &r.backend_note {
-            eprintln!("note: {}", crate::exit::escape_line(note));
+            eprintln!("note: {}", crate::cli::exit::escape_line(note));
         }
         return finish(&scene, args, &outputs, &r, bar.as_ref(), 0);
     };
@@ -263,7 +263,7 @@ fn apply_view_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Fail
         if let Some(note) = frames::apply_size(scene, w, h)?
             && !args.quiet
         {
-            eprintln!("note: {}", crate::exit::escape_line(&note));
+            eprintln!("note: {}", crate::cli::exit::escape_line(&note));
         }
     }
     let direction = args
@@ -491,7 +491,7 @@ impl Sequence<'_> {
             let r = render(&frame_scene, request)?;
             if i == 0 {
                 if let Some(note) = &r.backend_note {
-                    eprintln!("note: {}", crate::exit::escape_line(note));
+                    eprintln!("note: {}", crate::cli::exit::escape_line(note));
                 }
                 slab_count.store(u64::from(r.plan.slabs), Relaxed);
                 if let Some(b) = &bar {
@@ -616,7 +616,7 @@ fn finish(
         super::write_json(p, &stats_value(scene, args, r, samples, outputs))?;
     }
     for w in &r.mesh_warnings {
-        eprintln!("warning: {}", crate::exit::escape_line(w));
+        eprintln!("warning: {}", crate::cli::exit::escape_line(w));
     }
     if r.ldi.odd_pixels > 0 {
         eprintln!(

@@ -19,7 +19,7 @@ pub const MESH_DEFECT: i32 = 6;
 /// The output could not be written.
 pub const OUTPUT_FAILED: i32 = 7;
 /// This build uses instructions (x86-64-v3: AVX2, FMA, BMI) the processor lacks; checked
-/// before `main` (`src/cpu_check.rs`).
+/// before `main` (`src/cli/cpu_check.rs`).
 pub const UNSUPPORTED_CPU: i32 = 8;
 /// Interrupted by SIGINT or SIGTERM (no output was written).
 pub const INTERRUPTED: i32 = 130;
@@ -98,9 +98,9 @@ impl std::fmt::Display for Failure {
 
 /// Every library error reaches the CLI through here: the exit code of each kind (docs/errors.md);
 /// the message is the error's own.
-impl From<crate::pipeline::RenderError> for Failure {
-    fn from(e: crate::pipeline::RenderError) -> Self {
-        use crate::pipeline::RenderError as R;
+impl From<convshadow::pipeline::RenderError> for Failure {
+    fn from(e: convshadow::pipeline::RenderError) -> Self {
+        use convshadow::pipeline::RenderError as R;
         let code = match &e {
             R::Scene(_) | R::BadPlan(_) => BAD_INPUT,
             R::Geometry(g) => geometry_code(g),

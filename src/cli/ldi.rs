@@ -4,8 +4,8 @@ use std::path::PathBuf;
 
 use serde_json::json;
 
-use crate::exit::{self, Failure};
-use crate::pipeline::{BuiltLdi, build_ldi};
+use crate::cli::exit::{self, Failure};
+use convshadow::pipeline::{BuiltLdi, build_ldi};
 
 /// Arguments of `convshadow ldi`.
 #[derive(clap::Args, Debug)]
@@ -26,8 +26,8 @@ pub struct LdiArgs {
     pub stats_json: Option<PathBuf>,
     /// Backend: the CPU oracle, the GPU (wgpu/Vulkan; exit code 5 without an adapter), or auto
     /// (the GPU when an adapter exists, else the CPU with a message).
-    #[arg(long, value_enum, default_value_t = crate::pipeline::Backend::Cpu)]
-    pub backend: crate::pipeline::Backend,
+    #[arg(long, value_enum, default_value_t = convshadow::pipeline::Backend::Cpu)]
+    pub backend: convshadow::pipeline::Backend,
     /// Write the layer count per pixel as a grey PNG (white = the most layers), over the whole
     /// grid: the image and its guard band.
     #[arg(long)]
@@ -40,7 +40,7 @@ pub struct LdiArgs {
 /// Runs `convshadow ldi`; exit code 6 when a mesh is not closed or a pixel has an odd count.
 pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
     // The LDI build has no cancel point: a signal ends the run at once, before any output.
-    crate::exit::install_exit_on_signal(None);
+    crate::cli::exit::install_exit_on_signal(None);
     let mut scene = super::load_scene(args.scene.as_deref())?;
     super::override_size(&mut scene, args.width, args.height)?;
     super::require_png("--layers-png", args.layers_png.as_ref())?;
@@ -55,7 +55,7 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         });
     let built = build_ldi(&scene, args.backend, args.threads, budget)?;
     if let Some(note) = &built.backend_note {
-        eprintln!("note: {}", crate::exit::escape_line(note));
+        eprintln!("note: {}", crate::cli::exit::escape_line(note));
     }
     let hash = built.ldi.fingerprint();
     print_summary(&built, hash);
@@ -67,7 +67,7 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
     }
     let (geometry, stats) = (&built.geometry, &built.stats);
     for w in geometry.mesh_warnings() {
-        eprintln!("warning: {}", crate::exit::escape_line(&w));
+        eprintln!("warning: {}", crate::cli::exit::escape_line(&w));
     }
     if geometry.defect_edges() > 0 || stats.odd_pixels > 0 {
         eprintln!(

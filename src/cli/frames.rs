@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use convshadow_common::scene::Scene;
 
-use crate::exit::{self, Failure};
+use crate::cli::exit::{self, Failure};
 
 /// Default `--time-step`: detail time advanced per frame.
 pub const DEFAULT_TIME_STEP: f64 = 0.05;
@@ -45,16 +45,6 @@ impl FrameRange {
             return Err(bad());
         }
         Ok(FrameRange { start, end })
-    }
-
-    /// Frame count.
-    pub fn len(&self) -> u32 {
-        self.end - self.start
-    }
-
-    /// Whether the range is empty (never, once parsed).
-    pub fn is_empty(&self) -> bool {
-        self.end <= self.start
     }
 }
 

@@ -8,7 +8,7 @@ use convshadow_common::image_io::RgbImage;
 use convshadow_common::metrics::{DiffMetrics, ULP_BUCKETS, compare, heatmap};
 use serde_json::json;
 
-use crate::exit::{self, Failure};
+use crate::cli::exit::{self, Failure};
 
 /// Arguments of `convshadow diff`.
 #[derive(clap::Args, Debug)]

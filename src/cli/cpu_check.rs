@@ -67,7 +67,7 @@ extern "C" fn require_compiled_features() {
           (same image bits; docs/performance.md)\n",
     );
     drop(err);
-    std::process::exit(convshadow::exit::UNSUPPORTED_CPU);
+    std::process::exit(super::exit::UNSUPPORTED_CPU);
 }
 
 /// Registers [`require_compiled_features`] as a constructor: it runs before `main`.
