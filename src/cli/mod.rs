@@ -108,6 +108,11 @@ pub fn parse_side(s: &str) -> Result<u32, String> {
     }
 }
 
+/// `--penumbra iterated|distance` (clap reports a bad value with the option's name).
+pub fn parse_penumbra(s: &str) -> Result<convshadow_common::scene::Penumbra, String> {
+    s.parse()
+}
+
 /// `--slabs`: a slab count (its range is checked with the scene) or `auto`.
 pub fn parse_slabs(s: &str) -> Result<convshadow_common::scene::SlabSpec, String> {
     use convshadow_common::scene::{MAX_SLABS, SlabSpec};

@@ -29,7 +29,7 @@ pub struct ReportArgs {
     pub case: Option<usize>,
     /// Run one penumbra model only (`iterated` or `distance`); by default every case runs with
     /// both.
-    #[arg(long, value_name = "iterated|distance", value_parser = super::render::parse_penumbra)]
+    #[arg(long, value_name = "iterated|distance", value_parser = super::parse_penumbra)]
     pub penumbra: Option<Penumbra>,
 }
 
