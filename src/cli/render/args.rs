@@ -150,3 +150,130 @@ pub struct RenderArgs {
 fn parse_guard_band(s: &str) -> Result<GuardBandSpec, String> {
     s.parse()
 }
+
+/// `convshadow render ARGS` as the command line parses it (for the tests of this folder).
+#[cfg(test)]
+pub(super) fn parse(argv: &[&str]) -> Result<RenderArgs, clap::Error> {
+    use clap::Parser;
+    #[derive(clap::Parser)]
+    struct Render {
+        #[command(flatten)]
+        args: RenderArgs,
+    }
+    Render::try_parse_from(std::iter::once("render").chain(argv.iter().copied())).map(|r| r.args)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ok(argv: &[&str]) -> RenderArgs {
+        parse(argv).unwrap_or_else(|e| panic!("{argv:?}: {e}"))
+    }
+
+    #[test]
+    fn without_flags_nothing_is_overridden_and_the_defaults_are_the_documented_ones() {
+        let a = ok(&[]);
+        assert_eq!(a.scene, None);
+        assert!(a.outputs.is_empty());
+        assert_eq!((a.width, a.height, a.size.as_deref()), (None, None, None));
+        assert_eq!(
+            (a.slabs, a.seed, a.penumbra, a.guard_band),
+            (None, None, None, None)
+        );
+        assert_eq!((a.preintegration, a.variance_compensation), (None, None));
+        // --threads 0 (one per core), the SIMD path, the CPU, quiet-chunk skipping on.
+        assert_eq!(a.threads, 0);
+        assert_eq!(a.path, CpuPath::Simd);
+        assert_eq!(a.backend, RenderBackend::Cpu);
+        assert!(!a.no_skip_quiet && !a.quiet && !a.allow_open);
+    }
+
+    #[test]
+    fn each_flag_lands_in_its_own_field() {
+        let a = ok(&[
+            "scene.toml",
+            "-o",
+            "a.png",
+            "--output",
+            "b.exr",
+            "--slabs",
+            "auto",
+            "--seed",
+            "7",
+            "--penumbra",
+            "distance",
+            "--guard-band",
+            "0",
+            "--variance-compensation",
+            "false",
+            "--preintegration",
+            "--threads",
+            "3",
+            "--path",
+            "scalar",
+            "--backend",
+            "reference",
+            "--reference-samples",
+            "9",
+            "--camera-direction",
+            "-1,0,0",
+            "--view-width",
+            "-2",
+        ]);
+        assert_eq!(a.scene, Some(PathBuf::from("scene.toml")));
+        assert_eq!(a.outputs, [PathBuf::from("a.png"), PathBuf::from("b.exr")]);
+        assert_eq!(a.slabs, Some(SlabSpec::Auto));
+        assert_eq!(a.seed, Some(7));
+        assert_eq!(a.penumbra, Some(Penumbra::Distance));
+        assert_eq!(a.guard_band, Some(GuardBandSpec::Pixels(0)));
+        assert_eq!(a.variance_compensation, Some(false));
+        // A bare --preintegration turns it on.
+        assert_eq!(a.preintegration, Some(true));
+        assert_eq!(a.threads, 3);
+        assert_eq!(a.path, CpuPath::Scalar);
+        assert_eq!(a.backend.device(), None);
+        assert_eq!(a.reference_samples, Some(9));
+        // Values that start with a minus sign are values, not flags.
+        assert_eq!(a.camera_direction.as_deref(), Some("-1,0,0"));
+        assert_eq!(a.view_width, Some(-2.0));
+        assert_eq!(
+            ok(&["--preintegration", "false"]).preintegration,
+            Some(false)
+        );
+        assert_eq!(ok(&["--slabs", "96"]).slabs, Some(SlabSpec::Count(96)));
+        assert_eq!(
+            ok(&["--guard-band", "auto"]).guard_band,
+            Some(GuardBandSpec::Auto)
+        );
+        // Each backend names the pipeline's device of the same name.
+        for (name, device) in [
+            ("cpu", Backend::Cpu),
+            ("gpu", Backend::Gpu),
+            ("auto", Backend::Auto),
+        ] {
+            assert_eq!(ok(&["--backend", name]).backend.device(), Some(device));
+        }
+    }
+
+    #[test]
+    fn conflicting_or_out_of_range_flags_are_refused_by_the_parser() {
+        for argv in [
+            &["--size", "8x8", "--width", "8"][..],
+            &["--size", "8x8", "--height", "8"],
+            &["--frames", "0..2", "--frame", "1"],
+            &["--threads", "1025"],
+            &["--width", "0"],
+            &["--slabs", "many"],
+            &["--penumbra", "soft"],
+            &["--guard-band", "-1"],
+            &["--path", "gpu"],
+        ] {
+            let e = parse(argv)
+                .err()
+                .unwrap_or_else(|| panic!("{argv:?} accepted"));
+            // clap's usage errors go to stderr (the binary exits 2 for them).
+            assert!(e.use_stderr(), "{argv:?}: {e}");
+        }
+    }
+}

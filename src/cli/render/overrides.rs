@@ -139,3 +139,209 @@ pub(super) fn reference_samples(args: &RenderArgs) -> Result<u32, Failure> {
         (_, None) => 0,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use convshadow_common::guard::GuardBandSpec;
+    use convshadow_common::scene::{Penumbra, SlabSpec};
+
+    use super::super::args::parse;
+    use super::*;
+
+    fn args(argv: &[&str]) -> RenderArgs {
+        parse(argv).unwrap_or_else(|e| panic!("{argv:?}: {e}"))
+    }
+
+    /// The default scene at 200×100 pixels, 4 world units wide (so 2 high), quiet.
+    fn wide_scene() -> Scene {
+        let mut s = Scene::default_scene();
+        s.image.width = 200;
+        s.image.height = 100;
+        s.camera.view_width = 4.0;
+        s.revalidate().unwrap();
+        s
+    }
+
+    /// The scene after the view and sweep overrides of `argv` (as `run` applies them).
+    fn overridden(argv: &[&str]) -> Result<Scene, Failure> {
+        let a = args(argv);
+        let mut s = wide_scene();
+        apply_view_overrides(&mut s, &a)?;
+        apply_sweep_overrides(&mut s, &a)?;
+        Ok(s)
+    }
+
+    fn refused(argv: &[&str]) -> Failure {
+        overridden(argv)
+            .err()
+            .unwrap_or_else(|| panic!("{argv:?} accepted"))
+    }
+
+    #[test]
+    fn no_flags_leave_the_scene_as_it_is() {
+        assert_eq!(overridden(&["-q"]).unwrap(), wide_scene());
+    }
+
+    #[test]
+    fn sweep_flags_set_their_scene_keys_and_nothing_else() {
+        let s = overridden(&[
+            "--slabs",
+            "33",
+            "--kernel",
+            "ellipse5",
+            "--seed",
+            "7",
+            "--penumbra",
+            "distance",
+            "--guard-band",
+            "3",
+            "--variance-compensation",
+            "false",
+            "--preintegration",
+        ])
+        .unwrap();
+        assert_eq!(s.sweep.slabs, SlabSpec::Count(33));
+        assert_eq!(s.sweep.kernel.to_string(), "ellipse5");
+        assert_eq!(s.sweep.seed, 7);
+        assert_eq!(s.sweep.penumbra, Penumbra::Distance);
+        assert_eq!(s.sweep.guard_band, GuardBandSpec::Pixels(3));
+        assert!(!s.sweep.variance_compensation);
+        assert!(s.sweep.preintegration);
+        // Everything else is the scene's: put the overridden keys back and compare.
+        let mut back = s.clone();
+        back.sweep = wide_scene().sweep;
+        assert_eq!(back, wide_scene());
+        let off = overridden(&["--preintegration", "false"]).unwrap();
+        assert!(!off.sweep.preintegration);
+    }
+
+    #[test]
+    fn view_flags_set_the_camera_and_the_display_map() {
+        let s = overridden(&[
+            "--camera-direction",
+            "0,0,-2",
+            "--camera-center",
+            "1,2,3",
+            "--exposure",
+            "-2.5",
+            "--tonemap",
+            "reinhard",
+        ])
+        .unwrap();
+        // The direction is normalised.
+        assert_eq!(s.camera.direction, [0.0, 0.0, -1.0]);
+        assert_eq!(s.camera.center, [1.0, 2.0, 3.0]);
+        assert_eq!(s.image.exposure, -2.5);
+        assert_eq!(s.image.tonemap, Tonemap::Reinhard);
+        assert_eq!(s.camera.view_width, 4.0);
+    }
+
+    #[test]
+    fn bad_values_are_refused_with_code_2_naming_their_flag() {
+        for (argv, flag) in [
+            (&["--kernel", "nope"][..], "--kernel"),
+            (&["--tonemap", "sepia"], "--tonemap"),
+            (&["--camera-direction", "1,2"], "--camera-direction"),
+            (&["--camera-center", "x,0,0"], "--camera-center"),
+            (&["--size", "800"], "--size"),
+            (&["--size", "0x10"], "--size"),
+            // Parallel to the default scene's camera.up (0, 1, 0).
+            (&["--camera-direction", "0,3,0"], "--camera-direction"),
+            (&["--view-width", "-1"], "--view-width"),
+        ] {
+            let f = refused(argv);
+            assert_eq!(f.code, exit::BAD_ARGUMENTS, "{argv:?}: {}", f.message);
+            assert!(f.message.contains(flag), "{argv:?}: {}", f.message);
+        }
+        // A value the flag's parser accepts but the scene's validation does not (0 slabs).
+        let f = refused(&["--slabs", "0"]);
+        assert_eq!(f.code, exit::BAD_ARGUMENTS);
+        assert!(
+            f.message.starts_with("command-line override:") && f.message.contains("sweep.slabs"),
+            "{}",
+            f.message
+        );
+    }
+
+    #[test]
+    fn size_widens_the_view_to_keep_the_whole_scene_in_frame_and_width_does_not() {
+        // The scene shows 4 × 2 world units. At W×H pixels, square pixels show view_width ×
+        // view_width·H/W, which must hold 4 × 2: view_width = max(4, 2·W/H).
+        for (size, view_width) in [
+            ("400x100", 8.0), // 2·4 = 8
+            ("300x50", 12.0), // 2·6 = 12
+            ("300x150", 4.0), // the same aspect
+            ("100x100", 4.0), // taller: the width already holds it
+            ("100x400", 4.0),
+        ] {
+            let s = overridden(&["--size", size]).unwrap();
+            let (w, h) = size.split_once('x').unwrap();
+            assert_eq!(s.image.width.to_string(), w);
+            assert_eq!(s.image.height.to_string(), h);
+            assert_eq!(s.camera.view_width, view_width, "--size {size}");
+        }
+        // --view-width applies after --size, so it wins.
+        let s = overridden(&["--size", "400x100", "--view-width", "5"]).unwrap();
+        assert_eq!(s.camera.view_width, 5.0);
+        // --width alone keeps view_width: the same width of the scene, more or less of it high.
+        let mut s = wide_scene();
+        crate::cli::override_size(&mut s, Some(400), None).unwrap();
+        assert_eq!((s.image.width, s.image.height), (400, 100));
+        assert_eq!(s.camera.view_width, 4.0);
+    }
+
+    #[test]
+    fn frames_list_their_numbers_and_time_steps_need_frames() {
+        let list = |argv: &[&str]| frame_list(&args(argv));
+        assert_eq!(list(&[]).unwrap(), (None, 0.05));
+        assert_eq!(
+            list(&["--frames", "2..5"]).unwrap(),
+            (Some(vec![2, 3, 4]), 0.05)
+        );
+        assert_eq!(
+            list(&["--frames", "2..=5"]).unwrap().0,
+            Some(vec![2, 3, 4, 5])
+        );
+        assert_eq!(
+            list(&["--frame", "3", "--time-step", "-0.5"]).unwrap(),
+            (Some(vec![3]), -0.5)
+        );
+        for argv in [
+            &["--time-step", "0.1"][..],
+            &["--frames", "0..2", "--time-step", "inf"],
+            &["--frames", "0..2", "--time-step", "NaN"],
+            &["--frames", "5..5"],
+            &["--frames", "5..2"],
+        ] {
+            let f = list(argv)
+                .err()
+                .unwrap_or_else(|| panic!("{argv:?} accepted"));
+            assert_eq!(f.code, exit::BAD_ARGUMENTS, "{argv:?}");
+            assert!(f.message.starts_with(argv[argv.len() - 2]), "{}", f.message);
+        }
+    }
+
+    #[test]
+    fn reference_samples_apply_to_the_reference_alone_from_1_to_65536() {
+        let samples = |argv: &[&str]| reference_samples(&args(argv));
+        assert_eq!(samples(&[]).unwrap(), 0);
+        // The documented default: 64 light directions.
+        assert_eq!(samples(&["--backend", "reference"]).unwrap(), 64);
+        for m in ["1", "65536"] {
+            let got = samples(&["--backend", "reference", "--reference-samples", m]).unwrap();
+            assert_eq!(got.to_string(), m);
+        }
+        for argv in [
+            &["--backend", "reference", "--reference-samples", "0"][..],
+            &["--backend", "reference", "--reference-samples", "65537"],
+            &["--reference-samples", "16"],
+            &["--backend", "gpu", "--reference-samples", "16"],
+        ] {
+            let f = samples(argv)
+                .err()
+                .unwrap_or_else(|| panic!("{argv:?} accepted"));
+            assert_eq!(f.code, exit::BAD_ARGUMENTS);
+            assert!(f.message.contains("--reference-samples"), "{}", f.message);
+        }
+    }
+}
