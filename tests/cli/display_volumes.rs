@@ -1,7 +1,7 @@
 //! PNG display mapping (exposure, tone curves), NIfTI volumes as textures, `diff` thresholds and
 //! the command line's frame, size and camera options.
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 

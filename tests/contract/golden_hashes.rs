@@ -16,7 +16,7 @@
 //!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test golden_hashes` and says why in its
 //!   commit.
 
-mod support;
+use crate::support;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

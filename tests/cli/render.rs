@@ -1,6 +1,6 @@
 //! `convshadow render` from the command line: the default scene, outputs, stats, refusals.
 
-mod support;
+use crate::support;
 
 #[test]
 fn render_without_arguments_writes_render_png_of_the_default_scene() {

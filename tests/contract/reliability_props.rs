@@ -2,7 +2,7 @@
 //! of procedural boxes, spheres and tori under random transforms) keep even fragment counts;
 //! random valid scenes render without NaN; random invalid scenes are rejected naming the key.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

@@ -4,7 +4,7 @@
 //! parameters (the kernel moment formulas of docs/ARCHITECTURE.md, the Gaussian CDF) or from an
 //! independent implementation, never from a render of the code under test.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

@@ -12,7 +12,7 @@ use convshadow::cpu::ldi::{BuildLdi, Ldi};
 use convshadow::cpu::sweep::{ChunkCounts, CpuOptions, SweepOptions, SweepPath, sweep_with};
 use convshadow::pipeline::image_fingerprint;
 
-mod support;
+use crate::support;
 
 /// A thin opaque wall over the image's left half at the front, and a small box far behind it so
 /// the sweep goes on for slabs after the wall.

@@ -1,7 +1,7 @@
 //! Analytic accuracy of the slab sweep. Every expected value is derived from the scene
 //! parameters (μκ = −e·μl, Σκ = d1·e·R Σl Rᵀ, the Gaussian CDF), never from a render.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

@@ -6,8 +6,8 @@
 //! distance penumbra's depth planes are part of the final light buffers compared). On other
 //! adapters the images must stay within the thresholds of docs/gpu.md.
 
-mod gpu_common;
-mod support;
+use crate::support;
+use crate::support::gpu as gpu_common;
 
 use convshadow::common::guard::GuardBandSpec;
 use convshadow::common::metrics::compare;

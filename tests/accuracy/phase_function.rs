@@ -4,7 +4,7 @@
 //! shadow-ray reference. Expected factors are computed here from the formula and the light's
 //! geometry, not taken from the code under test.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

@@ -2,7 +2,7 @@
 //! and across runs, and for the scalar and SIMD paths (with and without quiet-chunk skipping),
 //! on every example scene and every kernel.
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 

@@ -6,7 +6,7 @@
 //! The error measurements render `scenes/narrowband.toml` small; run in release mode (the 2048-
 //! slab reference is 33 M pixel·slab updates).
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

@@ -1,6 +1,6 @@
 //! `convshadow ldi` on real and broken models: clear errors, distinct exit codes, JSON stats.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

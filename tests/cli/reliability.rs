@@ -3,7 +3,7 @@
 //! temporary file is left behind, memory limits are enforced before allocating, and SIGINT/SIGTERM
 //! stop a render cleanly with exit code 130.
 
-mod support;
+use crate::support;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -5,7 +5,7 @@
 //! contrast must fall as the Gaussian transfer function of that model predicts. Bad pattern files
 //! are refused naming the key and the file.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

@@ -4,7 +4,7 @@
 //! shapes away from a derived band around their surfaces; the build must not depend
 //! on the thread count.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

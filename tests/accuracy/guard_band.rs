@@ -8,7 +8,7 @@
 //! Each case also renders with the band off and requires a clear difference, so the scene does
 //! test what it claims (its out-of-view occluder darkens the view).
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

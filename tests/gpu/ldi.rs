@@ -2,8 +2,8 @@
 //! the same `ldi_hash` and fragment counts — on every example scene, on real models, and on
 //! hand-made triangles that stress the emulated 64-bit edge functions and the top-left rule.
 
-mod gpu_common;
-mod support;
+use crate::support;
+use crate::support::gpu as gpu_common;
 
 use convshadow::common::geometry::SceneGeometry;
 use convshadow::common::guard::GuardBand;

@@ -1,7 +1,7 @@
 //! `convshadow diff` sees a known injected difference in every metric, and reports zero error for
 //! identical images (a diff tool that compares an image with itself must not pass everything).
 
-mod support;
+use crate::support;
 
 use convshadow::common::image_io::RgbImage;
 

@@ -2,7 +2,7 @@
 //! quick subset, with finite numbers or an explicit empty cell explained by the `note` column,
 //! and the plot exists as a PNG.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 
