@@ -6,7 +6,7 @@
 //! The check is an ELF constructor (`.init_array`), so it runs before `main` and before any of
 //! the program's own vector code. It reads `cpuid` and `xgetbv`, and on a missing extension
 //! writes one line and exits with `exit::UNSUPPORTED_CPU` (8).
-//! `tests/cpu_check.rs` runs the binary on an emulated processor without AVX2 (qemu-user).
+//! `tests/platform/cpu_check.rs` runs the binary on an emulated processor without AVX2 (qemu-user).
 
 /// The x86-64-v3 extensions with how to find each with `cpuid`: (name, leaf, register index
 /// in `[eax, ebx, ecx, edx]`, bit).

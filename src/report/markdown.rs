@@ -297,7 +297,7 @@ fn scene_table(md: &mut String, rows: &[Row]) {
             "\nThe image RMSE is against the 4·M reference. The self-error is the M run's \
              difference from it, an estimate of the M run's own error; the 4·M run's is smaller \
              still (its error falls at least 1.6× each time M quadruples: \
-             `tests/hard_cases.rs`)."
+             `tests/accuracy/hard_cases.rs`)."
         );
     }
 }

@@ -1,8 +1,8 @@
 //! Hard cases (grazing tilts, extreme anisotropy, 8 and 4096 slabs, depth on a slab boundary, …)
-//! that `sweep_accuracy.rs`, `ldi_parity.rs` and the reliability tests do not already cover, plus
-//! the convergence of the ground-truth reference. Every expected value comes from the scene
-//! parameters (the kernel moment formulas of docs/ARCHITECTURE.md, the Gaussian CDF) or from an
-//! independent implementation, never from a render of the code under test.
+//! that `sweep_accuracy.rs`, `tests/contract/ldi_parity.rs` and the reliability tests do not
+//! already cover, plus the convergence of the ground-truth reference. Every expected value comes
+//! from the scene parameters (the kernel moment formulas of docs/ARCHITECTURE.md, the Gaussian
+//! CDF) or from an independent implementation, never from a render of the code under test.
 
 use crate::support;
 

@@ -229,7 +229,7 @@ fn impulse_response_has_the_kernel_moments_for_every_kernel() {
     }
 }
 
-/// The light profile across the edge of `tests/sweep_accuracy.rs`'s set-up
+/// The light profile across the edge of `tests/accuracy/sweep_accuracy.rs`'s set-up
 /// ([`EdgeSetup::classic`]: e = 0.01, d1 = 0.16, 512 × 96 pixels of 0.01).
 fn edge_profile(m: u32, tilt: f64, variance: f64, kernel: &str) -> Vec<f64> {
     EdgeSetup::classic(m, tilt, variance, kernel).profile().0

@@ -74,7 +74,8 @@ fn check_case_counts(t: &Csv<'_>) {
         );
     }
     // Pre-integration beats one sample per slab on the narrow band at each slab count (by 2× and
-    // more at 128², tests/preintegration.rs; here only the order is asserted, the frame is small).
+    // more at 128², tests/accuracy/preintegration.rs; here only the order is asserted, the frame
+    // is small).
     for n in ["64", "128"] {
         let err = |pre: &str| -> f64 {
             rows.iter()

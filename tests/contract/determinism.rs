@@ -100,7 +100,8 @@ fn simd_and_scalar_paths_give_the_same_bits() {
                     path: path_kind,
                     skip_quiet,
                     // Every slab, so that the light compared is every slab's (the dark chunks
-                    // behind the wall included); tests/early_finish.rs compares the early finish.
+                    // behind the wall included); tests/contract/early_finish.rs compares the
+                    // early finish.
                     every_slab: true,
                     ..RenderRequest::default()
                 };

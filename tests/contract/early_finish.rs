@@ -2,8 +2,8 @@
 //! exactly 1), since no later slab can change the image (`SweepOptions::every_slab`). Held to it
 //! here: the same image bits as a sweep of every slab on both paths and any thread count, the same
 //! stopping slab for all of them, every slab swept while one image pixel can still change, and a
-//! progress callback that still reaches the last slab. (`tests/golden_hashes.rs` holds the early
-//! finish to the `image_hash` values of the commit before it, for every example scene.)
+//! progress callback that still reaches the last slab. (`tests/contract/golden_hashes.rs` holds
+//! the early finish to the `image_hash` values of the commit before it, for every example scene.)
 
 use std::sync::atomic::{AtomicU32, Ordering};
 

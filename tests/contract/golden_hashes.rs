@@ -13,8 +13,8 @@
 //! - `tests/data/golden_hashes.tsv`: the same cases with the defaults (automatic guard band,
 //!   distance penumbra), recorded when the distance penumbra became the default. A change that is
 //!   meant to change an image (a new default) re-records this table with
-//!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test golden_hashes` and says why in its
-//!   commit.
+//!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test contract golden_hashes::` and says
+//!   why in its commit.
 
 use crate::support;
 
@@ -122,7 +122,7 @@ fn every_example_scene_and_kernel_keeps_its_recorded_bits() {
         // Only the defaults' table: the others are earlier defaults' bits.
         let mut text = String::from(
             "# key\timage_hash\tldi_hash — written by CONVSHADOW_RECORD_GOLDEN=1 (see \
-             tests/golden_hashes.rs)\n",
+             tests/contract/golden_hashes.rs)\n",
         );
         for (key, scene, args) in cases() {
             let args: Vec<&str> = args.iter().map(String::as_str).collect();
