@@ -6,7 +6,7 @@ line or a path written in code (`crate::x::y`, `super::y`, `self::y`), test code
 test module kept in a file of its own, `mod tests;`, is a node of its own). `mod` declarations
 and the crate root's `pub mod`/`pub use` lines are not dependencies. The script
 prints every strongly connected component of more than one file and exits 1 if there is one,
-0 otherwise. `tests/rules.rs` runs it.
+0 otherwise. `tests/contract/rules.rs` runs it.
 
 Usage: scripts/import_cycles.py [REPO_ROOT]
 """

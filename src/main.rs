@@ -1,10 +1,10 @@
 //! The `convshadow` command line.
 
 use clap::{Parser, Subcommand};
-use convshadow::commands;
-use convshadow::exit;
 
-mod cpu_check;
+mod cli;
+
+use cli::exit;
 
 /// Iterative convolution shadows for closed meshes filled with volumetric detail.
 #[derive(Parser, Debug)]
@@ -18,14 +18,14 @@ struct Cli {
 enum Command {
     /// Compare two images (EXR or PNG; A is the reference): errors, PSNR, FLIP, 8-bit sRGB
     /// differences, optional JSON and heat-map.
-    Diff(commands::diff::DiffArgs),
+    Diff(cli::diff::DiffArgs),
     /// Build the layered depth image and report fragments, layers and mesh defects.
-    Ldi(commands::ldi::LdiArgs),
+    Ldi(cli::ldi::LdiArgs),
     /// Render a scene (the embedded default scene without SCENE) to PNG and/or EXR.
-    Render(commands::render::RenderArgs),
+    Render(cli::render::RenderArgs),
     /// Speed against error: render a grid of cases (kernels × slab counts × lights) and write
     /// report.csv, report.md and speed_vs_error.png.
-    Report(commands::report::ReportArgs),
+    Report(cli::report::ReportArgs),
 }
 
 /// Gives the process a private runtime folder when `XDG_RUNTIME_DIR` is unset or unusable (not
@@ -70,10 +70,10 @@ fn main() {
         }
     };
     let result = match &cli.command {
-        Command::Diff(a) => commands::diff::run(a),
-        Command::Ldi(a) => commands::ldi::run(a),
-        Command::Render(a) => commands::render::run(a),
-        Command::Report(a) => commands::report::run(a),
+        Command::Diff(a) => cli::diff::run(a),
+        Command::Ldi(a) => cli::ldi::run(a),
+        Command::Render(a) => cli::render::run(a),
+        Command::Report(a) => cli::report::run(a),
     };
     match result {
         Ok(code) => std::process::exit(code),

@@ -1,7 +1,7 @@
 //! The opaque-edge harness (paper appendix A.3): an opaque half-plane occluder in the
 //! first slab and a fully transparent receiver `m` slabs behind it, so the light buffer after the
 //! last slab is exactly the light the receiver gets after `m` convolutions. Shared by the
-//! accuracy report, `tests/sweep_accuracy.rs` and `tests/hard_cases.rs`.
+//! accuracy report, `tests/accuracy/sweep_accuracy.rs` and `tests/accuracy/hard_cases.rs`.
 
 use std::path::Path;
 
@@ -101,7 +101,7 @@ transport = [1.0, 1.0, 1.0]
 }
 
 impl EdgeSetup {
-    /// The set-up of `tests/sweep_accuracy.rs`: e = 0.01, d1 = 0.16, 512 × 96 pixels of 0.01.
+    /// The set-up of `tests/accuracy/sweep_accuracy.rs`: e = 0.01, d1 = 0.16, 512 × 96 pixels of 0.01.
     pub fn classic(slabs: u32, tilt_deg: f64, variance: f64, kernel: &str) -> EdgeSetup {
         EdgeSetup {
             slabs,

@@ -1,6 +1,6 @@
 //! Pure-convolution harness: an "empty" scene whose grid sees only the kernel (a marker box far
 //! outside the view sets the depth range), and the moments of a light buffer. Shared by
-//! `tests/sweep_accuracy.rs` and `tests/hard_cases.rs`.
+//! `tests/accuracy/sweep_accuracy.rs` and `tests/accuracy/hard_cases.rs`.
 
 use std::path::Path;
 

@@ -1,6 +1,6 @@
 //! `report.csv`: one line per case.
 
-use super::Row;
+use super::row::Row;
 
 /// The header line of `report.csv`.
 pub const CSV_HEADER: &str = "family,kernel,penumbra,slabs,variance_level,variance,tilt_deg,distance_over_d1,\

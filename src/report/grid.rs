@@ -23,6 +23,8 @@ pub const TILTS: [f64; 2] = [0.0, 45.0];
 pub const D1: f64 = 0.16;
 /// Pixel size of the analytic cases.
 pub const PX: f64 = 0.01;
+/// The slab count of the narrow-band family's reference (and twice it for its self-error).
+pub const NARROWBAND_REFERENCE_SLABS: u32 = 2048;
 
 /// What to run.
 #[derive(Clone, Debug)]

@@ -2,9 +2,8 @@
 
 use std::fmt::Write as _;
 
-use super::grid::{TILTS, kernels};
-use super::runner::{machine, mean};
-use super::{Report, ReportOptions, Row};
+use super::grid::{NARROWBAND_REFERENCE_SLABS, ReportOptions, TILTS, kernels};
+use super::row::{Report, Row, mean};
 
 fn fmt(v: f64) -> String {
     if v.is_nan() {
@@ -26,6 +25,21 @@ fn max_abs(v: impl Iterator<Item = f64>) -> f64 {
             m
         }
     })
+}
+
+/// The machine: `nproc` and the CPU model from /proc/cpuinfo.
+pub fn machine() -> String {
+    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".to_string());
+    format!("{cpus} logical CPUs (nproc), {model}")
 }
 
 /// The text of `report.md`.
@@ -80,7 +94,7 @@ fn narrowband_table(md: &mut String, rows: &[Row]) {
         "\n## Narrow band: pre-integrated compositing\n\n`scenes/narrowband.toml` (an opacity \
          band 0.05 wide over fBm), `ellipse2`, against its {}-slab sweep without \
          pre-integration.\n",
-        super::NARROWBAND_REFERENCE_SLABS
+        NARROWBAND_REFERENCE_SLABS
     );
     let _ = writeln!(
         md,
@@ -283,7 +297,7 @@ fn scene_table(md: &mut String, rows: &[Row]) {
             "\nThe image RMSE is against the 4·M reference. The self-error is the M run's \
              difference from it, an estimate of the M run's own error; the 4·M run's is smaller \
              still (its error falls at least 1.6× each time M quadruples: \
-             `tests/hard_cases.rs`)."
+             `tests/accuracy/hard_cases.rs`)."
         );
     }
 }

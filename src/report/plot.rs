@@ -10,9 +10,8 @@ use std::sync::OnceLock;
 
 use plotters::prelude::*;
 
-use super::Row;
 use super::grid::kernels;
-use super::runner::mean;
+use super::row::{Row, mean};
 
 /// One kernel's points: (time per frame in ms, error, slab count).
 #[derive(Clone, Debug)]

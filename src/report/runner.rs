@@ -12,23 +12,12 @@ use convshadow_reference::disk::DiskSetup;
 use convshadow_reference::edge::{self, EdgeSetup, model_profile, run_light};
 use convshadow_reference::{Reference, ReferenceOptions};
 
-use super::grid::{SLAB_COUNTS, TILTS, VARIANCES, disk_setup, edge_setup, kernels};
-use super::{Report, ReportOptions, Row, csv, markdown, plot};
-
-/// The machine: `nproc` and the CPU model from /proc/cpuinfo.
-pub fn machine() -> String {
-    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let model = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".to_string());
-    format!("{cpus} logical CPUs (nproc), {model}")
-}
+use super::grid::{
+    NARROWBAND_REFERENCE_SLABS, ReportOptions, SLAB_COUNTS, TILTS, VARIANCES, disk_setup,
+    edge_setup, kernels,
+};
+use super::row::{Report, Row};
+use super::{csv, markdown, plot};
 
 /// Runs one edge case.
 pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
@@ -279,9 +268,6 @@ pub fn narrowband_scene(size: u32, slabs: u32, preintegration: bool) -> Scene {
     scene.sweep.preintegration = preintegration;
     scene
 }
-
-/// The slab count of the narrow-band family's reference (and twice it for its self-error).
-pub const NARROWBAND_REFERENCE_SLABS: u32 = 2048;
 
 /// The narrow-band family at `size`²: per slab count, `ellipse2` without and with
 /// pre-integration, against the 2048-slab sweep without it.
@@ -562,14 +548,4 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
     narrowband_cases(&mut cases);
     check_case(options, cases.next)?;
     write_files(options, cases.rows, start)
-}
-
-/// The mean of `v`, NaN when empty.
-pub(crate) fn mean(v: impl Iterator<Item = f64>) -> f64 {
-    let (mut s, mut n) = (0.0, 0usize);
-    for x in v {
-        s += x;
-        n += 1;
-    }
-    if n == 0 { f64::NAN } else { s / n as f64 }
 }

@@ -1,5 +1,9 @@
-//! Shared helpers for the integration tests.
+//! Shared helpers for the integration tests (every test binary declares `mod support;`): the
+//! kernel list, scene fixtures, the test RNG, temporary folders, running the binary; [`gpu`]:
+//! the GPU tests' adapter and small scenes.
 #![allow(dead_code)]
+
+pub mod gpu;
 
 use std::path::{Path, PathBuf};
 

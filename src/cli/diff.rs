@@ -1,0 +1,232 @@
+//! `convshadow diff A B`: compare two images (EXR or PNG; A is the reference) with max absolute
+//! error, RMSE, PSNR, mean FLIP (nv-flip), 8-bit sRGB differences and a ULP histogram, and
+//! optionally write the numbers as JSON and a heat-map PNG.
+
+use std::path::PathBuf;
+
+use convshadow_io::image::RgbImage;
+use convshadow_io::metrics::{DiffMetrics, ULP_BUCKETS, compare, heatmap};
+use serde_json::json;
+
+use crate::cli::exit::{self, Failure};
+
+/// Arguments of `convshadow diff`.
+#[derive(clap::Args, Debug)]
+pub struct DiffArgs {
+    /// The reference image (.exr linear float, or .png sRGB 8-bit).
+    pub a: PathBuf,
+    /// The image compared with it.
+    pub b: PathBuf,
+    /// Write the numbers as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Write a heat-map PNG of the per-pixel error (black = bit-identical).
+    #[arg(long)]
+    pub heatmap: Option<PathBuf>,
+    /// Fail (exit code 1) when the RMSE exceeds this.
+    #[arg(long, value_name = "X")]
+    pub max_rmse: Option<f64>,
+    /// Fail (exit code 1) when the largest absolute error exceeds this.
+    #[arg(long, value_name = "X")]
+    pub max_abs: Option<f64>,
+    /// Fail (exit code 1) when the mean FLIP exceeds this.
+    #[arg(long, value_name = "X")]
+    pub max_flip: Option<f64>,
+    /// Fail (exit code 1) when more than N pixels differ in their 8-bit sRGB encoding.
+    #[arg(long, value_name = "N")]
+    pub max_differing_pixels: Option<u64>,
+}
+
+/// Exit code of `diff` when a threshold is exceeded (or a NaN meets any threshold).
+pub const THRESHOLD_EXCEEDED: i32 = 1;
+
+/// NaN values of one image: how many, and the first one's (x, y, channel).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NanReport {
+    /// NaN values (pixel channels).
+    pub count: u64,
+    /// The first NaN in row-major order.
+    pub first: Option<(u32, u32, u32)>,
+}
+
+impl NanReport {
+    /// The NaNs of `img`.
+    pub fn of(img: &RgbImage) -> NanReport {
+        let mut r = NanReport::default();
+        for (i, v) in img.data.iter().enumerate() {
+            if v.is_nan() {
+                if r.first.is_none() {
+                    let p = (i / 3) as u32;
+                    r.first = Some((p % img.width.max(1), p / img.width.max(1), (i % 3) as u32));
+                }
+                r.count += 1;
+            }
+        }
+        r
+    }
+
+    fn describe(&self, name: &str) -> Option<String> {
+        self.first.map(|(x, y, c)| {
+            format!(
+                "{name} has {} NaN value{} (first at ({x}, {y}, channel {c}))",
+                self.count,
+                if self.count == 1 { "" } else { "s" }
+            )
+        })
+    }
+}
+
+/// Mean FLIP (LDR, from the 8-bit sRGB encodings) of B against reference A, via nv-flip.
+pub fn mean_flip(a: &RgbImage, b: &RgbImage) -> f64 {
+    if a.width == 0 || a.height == 0 {
+        return 0.0;
+    }
+    let reference = nv_flip::FlipImageRgb8::with_data(a.width, a.height, &a.to_srgb8());
+    let test = nv_flip::FlipImageRgb8::with_data(b.width, b.height, &b.to_srgb8());
+    let error = nv_flip::flip(reference, test, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    f64::from(nv_flip::FlipPool::from_image(&error).mean())
+}
+
+/// The JSON form of a comparison (PSNR of identical images is `null`, i.e. infinite).
+pub fn metrics_json(m: &DiffMetrics, flip: f64) -> serde_json::Value {
+    let edges: Vec<String> = (0..ULP_BUCKETS)
+        .map(|k| match k {
+            0 => "0".to_string(),
+            k if k == ULP_BUCKETS - 1 => format!(">={}", 1u64 << (k - 1)),
+            k => format!("{}-{}", 1u64 << (k - 1), (1u64 << k) - 1),
+        })
+        .collect();
+    json!({
+        "width": m.width,
+        "height": m.height,
+        "max_abs_error": m.max_abs,
+        "max_abs_error_at": [m.max_abs_at.0, m.max_abs_at.1, m.max_abs_at.2],
+        "rmse": m.rmse,
+        "psnr_db": if m.psnr.is_finite() { json!(m.psnr) } else { serde_json::Value::Null },
+        "mean_flip": flip,
+        "srgb8_pixels_differ": m.srgb8_pixels_differ,
+        "srgb8_pixels_differ_fraction": m.srgb8_fraction(),
+        "srgb8_max_diff": m.srgb8_max_diff,
+        "values_differ": m.values_differ,
+        "bit_identical": m.bit_identical(),
+        "ulp_histogram": edges.iter().zip(m.ulp_histogram).map(|(e, c)| json!([e, c])).collect::<Vec<_>>(),
+    })
+}
+
+/// Runs `convshadow diff`.
+pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
+    super::require_png("--heatmap", args.heatmap.as_ref())?;
+    super::refuse_collisions(args.json.iter().chain(&args.heatmap))?;
+    for p in args.json.iter().chain(&args.heatmap) {
+        convshadow_io::image::check_writable(p)?;
+    }
+    let load =
+        |p: &PathBuf| RgbImage::load(p).map_err(|e| Failure::new(exit::BAD_INPUT, e.to_string()));
+    let a = load(&args.a)?;
+    let b = load(&args.b)?;
+    let m = compare(&a, &b).map_err(|e| {
+        Failure::new(
+            exit::BAD_INPUT,
+            format!("{} vs {}: {e}", args.a.display(), args.b.display()),
+        )
+    })?;
+    let flip = mean_flip(&a, &b);
+    let nans = [NanReport::of(&a), NanReport::of(&b)];
+    let any_nan = nans.iter().any(|n| n.count > 0);
+    let psnr = if any_nan {
+        "n/a (NaN)".to_string()
+    } else if m.psnr.is_finite() {
+        format!("{:.2} dB", m.psnr)
+    } else {
+        "inf".to_string()
+    };
+    println!(
+        "diff {}x{}: max abs error {:.3e} at ({}, {}, channel {}), RMSE {:.3e}, PSNR {psnr}, mean \
+         FLIP {flip:.5}, {} pixels ({:.4} %) differ in 8-bit sRGB (largest by {} levels), {} values \
+         differ in their bits{}",
+        m.width,
+        m.height,
+        m.max_abs,
+        m.max_abs_at.0,
+        m.max_abs_at.1,
+        m.max_abs_at.2,
+        m.rmse,
+        m.srgb8_pixels_differ,
+        100.0 * m.srgb8_fraction(),
+        m.srgb8_max_diff,
+        m.values_differ,
+        if m.bit_identical() {
+            " (bit-identical)"
+        } else {
+            ""
+        },
+    );
+    for (n, name) in nans.iter().zip(["A", "B"]) {
+        if let Some(text) = n.describe(name) {
+            println!("  NaN: {text}");
+        }
+    }
+    let mut failed = Vec::new();
+    let mut check = |what: &str, value: f64, limit: Option<f64>| {
+        if let Some(limit) = limit
+            && (any_nan || value.is_nan() || value > limit)
+        {
+            failed.push(format!("{what} {value:.4e} (limit {limit:.4e})"));
+        }
+    };
+    check("RMSE", m.rmse, args.max_rmse);
+    check("max abs error", m.max_abs, args.max_abs);
+    check("mean FLIP", flip, args.max_flip);
+    check(
+        "8-bit differing pixels",
+        m.srgb8_pixels_differ as f64,
+        args.max_differing_pixels.map(|n| n as f64),
+    );
+    if let Some(p) = &args.heatmap {
+        let data = heatmap(&a, &b, m.max_abs);
+        image::save_buffer_with_format(
+            p,
+            &data,
+            a.width,
+            a.height,
+            image::ExtendedColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| {
+            Failure::new(
+                exit::OUTPUT_FAILED,
+                format!("{}: cannot write: {e}", p.display()),
+            )
+        })?;
+    }
+    if let Some(p) = &args.json {
+        let mut v = metrics_json(&m, flip);
+        if let Some(o) = v.as_object_mut() {
+            if any_nan {
+                // PSNR is only infinite for identical finite images.
+                o.insert("psnr_db".into(), serde_json::Value::String("nan".into()));
+            }
+            for (n, key) in nans.iter().zip(["nan_a", "nan_b"]) {
+                o.insert(
+                    key.into(),
+                    json!({"count": n.count, "first": n.first.map(|(x, y, c)| [x, y, c])}),
+                );
+            }
+            o.insert("thresholds_failed".into(), json!(failed));
+        }
+        super::write_json(p, &v)?;
+    }
+    if !failed.is_empty() {
+        eprintln!(
+            "diff: threshold exceeded: {}{}",
+            failed.join(", "),
+            if any_nan {
+                " (an image has NaN values: every threshold fails)"
+            } else {
+                ""
+            }
+        );
+        return Ok(THRESHOLD_EXCEEDED);
+    }
+    Ok(exit::OK)
+}

@@ -1,0 +1,208 @@
+//! The output files of `convshadow render`, checked before any work (a refusal costs no render):
+//! the defaults, frame-number patterns, image extensions, collisions between outputs, and
+//! whether each can be written.
+
+use std::path::PathBuf;
+
+use super::args::{RenderArgs, RenderBackend};
+use crate::cli::exit::{self, Failure};
+use crate::cli::frames;
+
+/// The output files (defaults, frame patterns), checked before any work: writable, not colliding,
+/// with an image extension.
+pub(super) fn output_paths(
+    args: &RenderArgs,
+    frame_list: Option<&[u32]>,
+) -> Result<Vec<PathBuf>, Failure> {
+    let outputs = if args.outputs.is_empty() {
+        match frame_list {
+            Some(_) => vec![PathBuf::from("render_%04d.png")],
+            None => vec![PathBuf::from("render.png")],
+        }
+    } else {
+        args.outputs.clone()
+    };
+    if let Some(list) = frame_list
+        && list.len() > 1
+        && let Some(p) = outputs.iter().find(|p| !frames::has_frame_pattern(p))
+    {
+        return Err(Failure::new(
+            exit::BAD_ARGUMENTS,
+            format!(
+                "{}: {} frames would overwrite one file; put a frame number pattern in the \
+                 name, such as out_%04d.png",
+                p.display(),
+                list.len()
+            ),
+        ));
+    }
+    if args.backend == RenderBackend::Reference && frame_list.is_some() {
+        return Err(Failure::new(
+            exit::BAD_ARGUMENTS,
+            "--frames/--frame do not apply to --backend reference",
+        ));
+    }
+    let first_outputs: Vec<PathBuf> = match frame_list {
+        Some(list) => outputs
+            .iter()
+            .map(|p| frames::frame_path(p, list[0]))
+            .collect(),
+        None => outputs.clone(),
+    };
+    crate::cli::refuse_collisions(first_outputs.iter().chain(&args.stats_json))?;
+    for p in first_outputs.iter().chain(&args.stats_json) {
+        convshadow_io::image::check_writable(p)?;
+        let ext = p
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        if args.stats_json.as_ref() != Some(p) && !matches!(ext.as_deref(), Some("png" | "exr")) {
+            return Err(Failure::new(
+                exit::BAD_ARGUMENTS,
+                format!(
+                    "{}: unknown image extension; expected .png or .exr",
+                    p.display()
+                ),
+            ));
+        }
+    }
+
+    Ok(outputs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::args::parse;
+    use super::*;
+
+    /// A fresh folder for one test, removed when the test ends.
+    struct Dir(PathBuf);
+
+    impl Dir {
+        fn new(name: &str) -> Dir {
+            let d =
+                std::env::temp_dir().join(format!("convshadow-unit-{name}-{}", std::process::id()));
+            let _ = std::fs::remove_dir_all(&d);
+            std::fs::create_dir_all(&d).unwrap();
+            Dir(d)
+        }
+
+        /// `name` in the folder, as a command-line argument.
+        fn arg(&self, name: &str) -> String {
+            self.0.join(name).display().to_string()
+        }
+    }
+
+    impl Drop for Dir {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn outputs(argv: &[&str], frames: Option<&[u32]>) -> Result<Vec<PathBuf>, Failure> {
+        let args = parse(argv).unwrap_or_else(|e| panic!("{argv:?}: {e}"));
+        output_paths(&args, frames)
+    }
+
+    fn refused(argv: &[&str], frames: Option<&[u32]>, code: i32, words: &str) {
+        let f = outputs(argv, frames)
+            .err()
+            .unwrap_or_else(|| panic!("{argv:?} accepted"));
+        assert_eq!(f.code, code, "{argv:?}: {}", f.message);
+        assert!(f.message.contains(words), "{argv:?}: {}", f.message);
+    }
+
+    #[test]
+    fn without_outputs_a_render_writes_render_png_and_a_sequence_a_numbered_pattern() {
+        assert_eq!(outputs(&[], None).unwrap(), [PathBuf::from("render.png")]);
+        assert_eq!(
+            outputs(&[], Some(&[0, 1])).unwrap(),
+            [PathBuf::from("render_%04d.png")]
+        );
+    }
+
+    #[test]
+    fn png_and_exr_outputs_in_any_case_are_kept_in_order_with_a_json_of_any_name() {
+        let d = Dir::new("outputs-kept");
+        let (a, b, s) = (d.arg("a.PNG"), d.arg("b.exr"), d.arg("stats.json"));
+        let got = outputs(&["-o", &a, "-o", &b, "--stats-json", &s], None).unwrap();
+        assert_eq!(got, [PathBuf::from(&a), PathBuf::from(&b)]);
+        // Checking writes nothing that stays.
+        assert_eq!(std::fs::read_dir(&d.0).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn other_extensions_are_refused_as_bad_arguments() {
+        let d = Dir::new("outputs-ext");
+        for name in ["a.jpg", "a", "a.png.txt"] {
+            let p = d.arg(name);
+            refused(
+                &["-o", &p],
+                None,
+                exit::BAD_ARGUMENTS,
+                "unknown image extension",
+            );
+        }
+    }
+
+    #[test]
+    fn two_outputs_naming_one_file_are_refused_however_spelled() {
+        let d = Dir::new("outputs-collide");
+        let a = d.arg("a.png");
+        let same = format!("{}/./a.png", d.0.display());
+        refused(
+            &["-o", &a, "-o", &same],
+            None,
+            exit::BAD_ARGUMENTS,
+            "same file",
+        );
+        refused(
+            &["-o", &a, "--stats-json", &a],
+            None,
+            exit::BAD_ARGUMENTS,
+            "same file",
+        );
+        // A sequence checks its first frame's names: f_%02d.png is f_03.png for frame 3.
+        let pattern = d.arg("f_%02d.png");
+        let first = d.arg("f_03.png");
+        let argv = ["-o", pattern.as_str(), "--stats-json", first.as_str()];
+        refused(&argv, Some(&[3, 4]), exit::BAD_ARGUMENTS, "same file");
+        assert!(outputs(&argv, Some(&[4, 5])).is_ok());
+    }
+
+    #[test]
+    fn a_sequence_needs_a_frame_pattern_in_every_output_but_one_frame_does_not() {
+        let d = Dir::new("outputs-frames");
+        let (plain, pattern) = (d.arg("f.png"), d.arg("f_%d.exr"));
+        refused(
+            &["-o", &pattern, "-o", &plain],
+            Some(&[0, 1, 2]),
+            exit::BAD_ARGUMENTS,
+            "3 frames would overwrite one file",
+        );
+        assert_eq!(
+            outputs(&["-o", &plain], Some(&[7])).unwrap(),
+            [PathBuf::from(&plain)]
+        );
+        let reference = ["--backend", "reference", "-o", pattern.as_str()];
+        refused(
+            &reference,
+            Some(&[0, 1]),
+            exit::BAD_ARGUMENTS,
+            "--backend reference",
+        );
+    }
+
+    #[test]
+    fn an_output_that_cannot_be_written_is_an_output_failure_before_any_work() {
+        let d = Dir::new("outputs-unwritable");
+        let missing = d.arg("no/such/folder/a.png");
+        refused(
+            &["-o", &missing],
+            None,
+            exit::OUTPUT_FAILED,
+            "does not exist",
+        );
+        let folder = d.0.display().to_string();
+        refused(&["-o", &folder], None, exit::OUTPUT_FAILED, "is a folder");
+    }
+}

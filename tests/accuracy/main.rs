@@ -1,0 +1,18 @@
+//! Accuracy against independent references: the analytic edge, disk and impulse, the
+//! shadow-ray reference, and expected values computed from the scene's parameters (never from a
+//! render of the code under test); the guard band against a wider frame; pre-integration
+//! against many slabs.
+//!
+//! One test binary of several (docs/ARCHITECTURE.md, Tests): `cargo test --release --test
+//! accuracy [NAME::]`.
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod distance_penumbra;
+mod guard_band;
+mod hard_cases;
+mod patterned_light;
+mod phase_function;
+mod preintegration;
+mod sweep_accuracy;

@@ -1,0 +1,195 @@
+//! `convshadow ldi` on real and broken models: clear errors, distinct exit codes, JSON stats.
+
+use crate::support;
+
+use std::path::Path;
+
+/// Exit code for meshes that are not closed (docs/errors.md).
+const MESH_DEFECT: i32 = 6;
+/// Exit code for a bad scene or mesh file.
+const BAD_INPUT: i32 = 3;
+
+/// A scene framing the OBJ (when it loads; broken files get a fixed view).
+fn write_obj_scene(dir: &Path, obj: &Path, width: u32) -> std::path::PathBuf {
+    let scene = dir.join(format!(
+        "{}.toml",
+        obj.file_stem().unwrap().to_string_lossy()
+    ));
+    let text = support::framed_obj_scene(obj, width, 1.2);
+    std::fs::write(&scene, text).unwrap();
+    scene
+}
+
+#[test]
+fn every_bad_model_is_rejected_or_reported_and_the_control_is_accepted() {
+    let Some(models) = support::models_dir() else {
+        return;
+    };
+    let dir = support::temp_dir("bad-models");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(models.join("bad")).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let scene = write_obj_scene(&dir, &path, 64);
+        let (code, out, err) = support::run_cli(&["ldi", scene.to_str().unwrap()], &dir);
+        assert!(!err.contains("panicked"), "{name}: {err}");
+        if name == "tetra_ok.obj" {
+            assert_eq!(code, 0, "{name} must be accepted: {out}{err}");
+            assert!(out.contains("0 odd pixels"), "{out}");
+        } else {
+            assert_ne!(code, 0, "{name} must be refused");
+            assert!(
+                code == BAD_INPUT || code == MESH_DEFECT,
+                "{name}: exit code {code}"
+            );
+            if code == BAD_INPUT {
+                // A parse error names the OBJ file and the line.
+                assert!(
+                    err.contains(&name),
+                    "{name}: message must name the file: {err}"
+                );
+                assert!(
+                    err.contains(&format!("{name}:")),
+                    "{name}: message must name a line: {err}"
+                );
+            } else {
+                assert!(err.contains("not closed"), "{name}: {err}");
+                assert!(out.contains("NOT CLOSED"), "{name}: per-mesh report: {out}");
+            }
+        }
+        seen += 1;
+    }
+    assert!(
+        seen >= 9,
+        "expected the nine files of models/bad, saw {seen}"
+    );
+}
+
+#[test]
+fn open_models_exit_with_the_defect_code_and_report_edges() {
+    let Some(models) = support::models_dir() else {
+        return;
+    };
+    let dir = support::temp_dir("open-models");
+    for name in [
+        "teapot.obj",
+        "cube_no_bottom.obj",
+        "stanford_bunny_original.obj",
+    ] {
+        let scene = write_obj_scene(&dir, &models.join(name), 128);
+        let json = dir.join("s.json");
+        let (code, out, err) = support::run_cli(
+            &[
+                "ldi",
+                scene.to_str().unwrap(),
+                "--stats-json",
+                json.to_str().unwrap(),
+            ],
+            &dir,
+        );
+        assert_eq!(code, MESH_DEFECT, "{name}: {out}{err}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert!(v["boundary_edges"][0].as_u64().unwrap() > 0, "{name}: {v}");
+        assert!(v["odd_pixels"].as_u64().unwrap() > 0, "{name}: {v}");
+    }
+}
+
+#[test]
+fn bunny_hr_at_1024_reports_stats_and_build_time() {
+    let Some(models) = support::models_dir() else {
+        return;
+    };
+    let dir = support::temp_dir("bunny-1024");
+    let scene = dir.join("bunny.toml");
+    // The bunny spans about 0.15 units around (−0.02, 0.11, 0); frame it.
+    let text = support::obj_scene(&models.join("bunny_hr.obj"), 1024, 0.3).replace(
+        "direction = [0.3, -0.2, 1.0]",
+        "direction = [0.3, -0.2, 1.0]\ncenter = [-0.02, 0.1, 0.0]",
+    );
+    std::fs::write(&scene, text).unwrap();
+    let json = dir.join("stats.json");
+    let png = dir.join("layers.png");
+    let (code, out, err) = support::run_cli(
+        &[
+            "ldi",
+            scene.to_str().unwrap(),
+            "--stats-json",
+            json.to_str().unwrap(),
+            "--layers-png",
+            png.to_str().unwrap(),
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    for key in [
+        "fragments",
+        "max_layers",
+        "odd_pixels",
+        "degenerate_triangles",
+        "boundary_edges",
+        "seconds_ldi",
+        "ldi_hash",
+    ] {
+        assert!(!v[key].is_null(), "missing key {key}: {v}");
+    }
+    assert_eq!(v["width"], 1024);
+    assert_eq!(v["odd_pixels"], 0);
+    assert!(
+        v["fragments"].as_u64().unwrap() > 100_000,
+        "the bunny should cover much of the view: {v}"
+    );
+    assert!(v["seconds_ldi"].as_f64().unwrap() > 0.0);
+    assert_eq!(v["ldi_hash"].as_str().unwrap().len(), 16);
+    assert!(png.is_file());
+}
+
+#[test]
+fn ldi_without_a_scene_uses_the_embedded_default() {
+    let dir = support::temp_dir("ldi-default");
+    let (code, out, err) = support::run_cli(&["ldi", "--width", "64", "--height", "48"], &dir);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("64x48 px"), "{out}");
+    assert!(out.contains("ldi_hash"), "{out}");
+}
+
+#[test]
+fn ldi_hash_from_the_cli_is_the_same_for_1_2_3_8_threads() {
+    let dir = support::temp_dir("ldi-threads");
+    let hashes: Vec<String> = ["1", "2", "3", "8"]
+        .iter()
+        .map(|t| {
+            let (code, out, err) = support::run_cli(&["ldi", "--threads", t], &dir);
+            assert_eq!(code, 0, "{err}");
+            out.lines()
+                .find(|l| l.contains("ldi_hash"))
+                .unwrap()
+                .to_string()
+        })
+        .collect();
+    assert!(hashes.windows(2).all(|w| w[0] == w[1]), "{hashes:?}");
+}
+
+#[test]
+fn a_too_small_memory_budget_is_refused_with_the_need() {
+    let dir = support::temp_dir("ldi-budget");
+    let (code, _, err) = support::run_cli(
+        &[
+            "ldi",
+            "--max-memory",
+            "1",
+            "--width",
+            "2048",
+            "--height",
+            "2048",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 4, "{err}");
+    assert!(
+        err.contains("MiB") && err.contains("memory budget"),
+        "{err}"
+    );
+}

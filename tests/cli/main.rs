@@ -1,0 +1,16 @@
+//! The `convshadow` binary from the outside: `render`, `ldi`, `diff` and `report --quick`, their
+//! outputs, display mapping and volumes, and its reliability (every bad input refused with a
+//! documented exit code, memory limits, signals).
+//!
+//! One test binary of several (docs/ARCHITECTURE.md, Tests): `cargo test --release --test cli
+//! [NAME::]`.
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod diff_selftest;
+mod display_volumes;
+mod ldi;
+mod reliability;
+mod render;
+mod report_quick;

@@ -1,0 +1,261 @@
+//! `convshadow render` from the command line: the default scene, outputs, stats, refusals.
+
+use crate::support;
+
+#[test]
+fn render_without_arguments_writes_render_png_of_the_default_scene() {
+    let dir = support::temp_dir("render-default");
+    let (code, out, err) = support::run_cli(
+        &["render", "--width", "96", "--height", "96", "--slabs", "64"],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(!err.contains("panicked"));
+    let png = dir.join("render.png");
+    assert!(png.is_file(), "render.png not written: {out}");
+    assert!(
+        out.contains("render.png"),
+        "the summary names the output: {out}"
+    );
+    let img = convshadow::io::image::RgbImage::load(&png).unwrap();
+    assert_eq!((img.width, img.height), (96, 96));
+    // Not a flat image: the default scene has coloured objects, shadows and a background.
+    let (lo, hi) = img
+        .data
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    assert!(hi - lo > 0.3, "image looks flat: {lo}..{hi}");
+}
+
+#[test]
+fn repeated_outputs_png_and_exr_and_stats_json() {
+    let dir = support::temp_dir("render-outputs");
+    let (code, out, err) = support::run_cli(
+        &[
+            "render",
+            "--width",
+            "40",
+            "--height",
+            "32",
+            "--slabs",
+            "32",
+            "-o",
+            "a.png",
+            "-o",
+            "b.exr",
+            "--stats-json",
+            "s.json",
+            "--kernel",
+            "poisson8",
+            "--threads",
+            "3",
+            "--quiet",
+            // The plain encoding (the default scene maps its PNG with exposure −1 and aces).
+            "--tonemap",
+            "clamp",
+            "--exposure",
+            "0",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.is_empty(), "--quiet prints nothing: {out}");
+    let exr = convshadow::io::image::RgbImage::load(&dir.join("b.exr")).unwrap();
+    let png = convshadow::io::image::RgbImage::load(&dir.join("a.png")).unwrap();
+    assert_eq!(
+        exr.to_srgb8(),
+        png.to_srgb8(),
+        "with clamp and no exposure, the PNG is the sRGB encoding of the EXR"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    for key in [
+        "width",
+        "height",
+        "slabs",
+        "slab_distance",
+        "kernel",
+        "lights",
+        "fragments",
+        "odd_pixels",
+        "threads",
+        "path",
+        "backend",
+        "seconds_ldi",
+        "seconds_sweep",
+        "seconds_total",
+        "pixel_slab_lights_per_second",
+        "image_hash",
+    ] {
+        assert!(!v[key].is_null(), "missing {key}: {v}");
+    }
+    assert_eq!(v["kernel"], "poisson8");
+    assert_eq!(v["threads"], 3);
+    // The EXR holds exactly the hashed float image.
+    assert_eq!(
+        format!(
+            "{:016x}",
+            convshadow::pipeline::image_fingerprint(&exr.data)
+        ),
+        v["image_hash"].as_str().unwrap()
+    );
+}
+
+#[test]
+fn open_meshes_are_refused_unless_allowed() {
+    let Some(models) = support::models_dir() else {
+        return;
+    };
+    let dir = support::temp_dir("render-open");
+    let scene = dir.join("open.toml");
+    std::fs::write(
+        &scene,
+        support::obj_scene(&models.join("cube_no_bottom.obj"), 48, 4.0),
+    )
+    .unwrap();
+    let s = scene.to_str().unwrap();
+    let (code, _, err) = support::run_cli(&["render", s, "-o", "x.png"], &dir);
+    assert_eq!(code, 6, "{err}");
+    assert!(
+        err.contains("boundary") && err.contains("--allow-open"),
+        "{err}"
+    );
+    assert!(!dir.join("x.png").exists());
+    let (code, _, err) = support::run_cli(&["render", s, "-o", "x.png", "--allow-open"], &dir);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("odd fragment count"), "{err}");
+    assert!(dir.join("x.png").is_file());
+}
+
+#[test]
+fn backend_reference_renders_the_sweeps_view_samples_with_reference_light() {
+    // One opaque box and nothing between it and the light: the reference's light is exactly 1
+    // (every shadow ray leaves the scene unblocked), so its image is the sweep's up to f32
+    // rounding of 1·colour (the images differ only by the shadow error).
+    let dir = support::temp_dir("render-reference");
+    std::fs::write(dir.join("lone.toml"), support::lone_box_scene(16, 8)).unwrap();
+    let (code, out, err) = support::run_cli(&["render", "lone.toml", "-o", "cpu.exr"], &dir);
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, err) = support::run_cli(
+        &[
+            "render",
+            "lone.toml",
+            "--backend",
+            "reference",
+            "--reference-samples",
+            "16",
+            "-o",
+            "ref.exr",
+            "--stats-json",
+            "s.json",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("reference: 16 light directions"),
+        "the summary names the backend: {out}"
+    );
+    let load = |n: &str| convshadow::io::image::RgbImage::load(&dir.join(n)).unwrap();
+    let (cpu, reference) = (load("cpu.exr"), load("ref.exr"));
+    assert_eq!(cpu.data.len(), reference.data.len());
+    for (a, b) in cpu.data.iter().zip(&reference.data) {
+        assert!((a - b).abs() < 1e-6, "{a} vs {b}");
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    assert_eq!(v["backend"], "reference");
+    assert_eq!(v["reference_samples"], 16);
+}
+
+#[test]
+fn reference_samples_are_checked() {
+    let dir = support::temp_dir("render-reference-args");
+    let (code, _, err) = support::run_cli(
+        &[
+            "render",
+            "--backend",
+            "reference",
+            "--reference-samples",
+            "0",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--reference-samples"), "{err}");
+    let (code, _, err) = support::run_cli(&["render", "--reference-samples", "4"], &dir);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("only applies to --backend reference"), "{err}");
+    assert!(!dir.join("render.png").exists(), "nothing is written");
+}
+
+#[test]
+fn slabs_auto_is_printed_and_written_to_the_stats() {
+    let dir = support::temp_dir("render-auto-slabs");
+    // A 2-deep box of fBm at frequency 5, 3 octaves of lacunarity 2: finest period 1/20, so
+    // 2 · 20 · 2 = 80 slabs (81 with the depth's widening by one part in 10⁶).
+    let scene = r#"
+[image]
+width = 16
+height = 16
+[camera]
+view_width = 4.0
+[sweep]
+slabs = 8
+optimal_distance = 1.0
+[[mesh]]
+shape = "box"
+size = [2.0, 2.0, 2.0]
+material = "m"
+[material.m]
+detail = { kind = "fbm", frequency = 5.0, octaves = 3, lacunarity = 2.0 }
+gradient = [[0.0, 1.0, 1.0, 1.0, 0.2]]
+"#;
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let (code, out, err) = support::run_cli(
+        &[
+            "render",
+            "s.toml",
+            "--slabs",
+            "auto",
+            "-o",
+            "a.exr",
+            "--stats-json",
+            "s.json",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("81 slabs (auto: 2 per finest period 5.000e-2 of material.m.detail"),
+        "{out}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    assert_eq!(v["slabs"], 81, "{v}");
+    assert_eq!(v["slabs_auto"]["limited_by"], "material.m.detail", "{v}");
+    assert_eq!(v["slabs_auto"]["slab_factor"], 1.0, "{v}");
+    // A count on the command line: no auto note, `slabs_auto` null.
+    let (code, out, err) = support::run_cli(
+        &[
+            "render",
+            "s.toml",
+            "--slabs",
+            "12",
+            "-o",
+            "b.exr",
+            "--stats-json",
+            "t.json",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("12 slabs,") && !out.contains("auto"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("t.json")).unwrap()).unwrap();
+    assert!(v["slabs_auto"].is_null(), "{v}");
+    // A word other than auto is a bad argument naming the flag.
+    let (code, _, err) = support::run_cli(&["render", "s.toml", "--slabs", "many"], &dir);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--slabs") && err.contains("auto"), "{err}");
+}

@@ -1,0 +1,177 @@
+//! Bit-exactness of the CPU oracle: the same `image_hash` for 1, 2, 3 and 8 threads
+//! and across runs, and for the scalar and SIMD paths (with and without quiet-chunk skipping),
+//! on every example scene and every kernel.
+
+use crate::support;
+
+use std::path::{Path, PathBuf};
+
+use convshadow::common::model::scene::{Scene, SlabSpec};
+use convshadow::pipeline::{CpuPath, RenderRequest, render};
+
+/// The example scenes, small; scenes using ../shared/models are skipped (loudly) without it.
+fn example_scenes() -> Vec<(PathBuf, Scene)> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let have_models = support::models_dir().is_some();
+    let mut out = Vec::new();
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    paths.sort();
+    for path in paths {
+        let text = std::fs::read_to_string(&path).unwrap();
+        if text.contains("shared/models") && !have_models {
+            continue;
+        }
+        let mut scene = convshadow_io::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+        scene.image.width = 53; // not a multiple of 8: exercises row tails
+        scene.image.height = 40;
+        scene.sweep.slabs = SlabSpec::Count(24);
+        out.push((path, scene));
+    }
+    assert!(out.len() >= 4, "expected the example scenes in scenes/");
+    out
+}
+
+#[test]
+fn image_hash_is_the_same_for_any_thread_count_and_run() {
+    for (path, base) in example_scenes() {
+        for kernel in support::kernels() {
+            let mut scene = base.clone();
+            scene.sweep.kernel = kernel.parse().unwrap();
+            let hashes: Vec<u64> = [1, 2, 3, 8, 2]
+                .iter()
+                .map(|&threads| {
+                    let req = RenderRequest {
+                        threads,
+                        ..RenderRequest::default()
+                    };
+                    let r =
+                        render(&scene, &req).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                    assert!(
+                        r.image.data.iter().all(|v| v.is_finite()),
+                        "{}: {kernel}",
+                        path.display()
+                    );
+                    r.image_hash
+                })
+                .collect();
+            assert!(
+                hashes.windows(2).all(|w| w[0] == w[1]),
+                "{} {kernel}: {hashes:x?}",
+                path.display()
+            );
+        }
+    }
+}
+
+#[test]
+fn different_seeds_give_different_images_and_the_hash_sees_one_bit() {
+    // Guards the guard: the hash must be able to fail.
+    let (_, mut scene) = example_scenes().remove(0);
+    let a = render(&scene, &RenderRequest::default()).unwrap();
+    scene.sweep.seed ^= 1;
+    let b = render(&scene, &RenderRequest::default()).unwrap();
+    assert_ne!(a.image_hash, b.image_hash);
+    let mut data = a.image.data.clone();
+    data[7] = f32::from_bits(data[7].to_bits() ^ 1);
+    assert_ne!(convshadow::pipeline::image_fingerprint(&data), a.image_hash);
+}
+
+#[test]
+fn simd_and_scalar_paths_give_the_same_bits() {
+    // Widths 53 (6 chunks + a 5-pixel scalar tail) and 7 (no full chunk at all); 1, 2, 3 threads;
+    // the SIMD path with and without quiet-chunk skipping; light buffers compared too.
+    let mut skipped = [0u64; 2];
+    for (path, base) in example_scenes() {
+        for (kernel, width) in support::kernels()
+            .into_iter()
+            .map(|k| (k, 53))
+            .chain([("ellipse2", 7)])
+        {
+            let mut scene = base.clone();
+            scene.sweep.kernel = kernel.parse().unwrap();
+            scene.image.width = width;
+            let run = |path_kind: CpuPath, threads: usize, skip_quiet: bool| {
+                let req = RenderRequest {
+                    threads,
+                    path: path_kind,
+                    skip_quiet,
+                    // Every slab, so that the light compared is every slab's (the dark chunks
+                    // behind the wall included); tests/contract/early_finish.rs compares the
+                    // early finish.
+                    every_slab: true,
+                    ..RenderRequest::default()
+                };
+                render(&scene, &req).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+            };
+            let reference = run(CpuPath::Scalar, 1, false);
+            let light_hash = |l: &[f32]| convshadow::pipeline::image_fingerprint(l);
+            for (threads, skip) in [(1, true), (2, true), (3, true), (2, false)] {
+                let simd = run(CpuPath::Simd, threads, skip);
+                assert_eq!(
+                    (simd.image_hash, light_hash(&simd.light)),
+                    (reference.image_hash, light_hash(&reference.light)),
+                    "{} {kernel} width {width}: SIMD ({threads} threads, skip {skip}) differs \
+                     from scalar",
+                    path.display()
+                );
+                if skip {
+                    skipped[0] += simd.chunks[1];
+                    skipped[1] += simd.chunks[2];
+                } else {
+                    assert_eq!(simd.chunks[1] + simd.chunks[2], 0);
+                }
+            }
+        }
+    }
+    // Guards the guard: both kinds of skip actually ran, so their exactness was tested.
+    assert!(skipped[0] > 0 && skipped[1] > 0, "skips {skipped:?}");
+}
+
+#[test]
+fn simd_and_scalar_paths_give_the_same_bits_with_the_iterated_penumbra() {
+    // The iterated penumbra's one-phase-per-slab kernels gather two neighbouring chunks at once
+    // on the SIMD path (`stage::gather_pair`); width 53 has six chunks, so three such pairs a row.
+    use convshadow::common::model::scene::Penumbra;
+    let mut compared = 0;
+    for (path, base) in example_scenes() {
+        if base.sweep.optimal_distance.is_none() {
+            continue;
+        }
+        for kernel in ["ellipse2:slab", "gaussian:7", "box", "dirac", "ellipse2"] {
+            let mut scene = base.clone();
+            scene.sweep.kernel = kernel.parse().unwrap();
+            scene.sweep.penumbra = Penumbra::Iterated;
+            let run = |path_kind: CpuPath, threads: usize| {
+                let req = RenderRequest {
+                    threads,
+                    path: path_kind,
+                    every_slab: true,
+                    ..RenderRequest::default()
+                };
+                render(&scene, &req).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+            };
+            let (scalar, simd) = (run(CpuPath::Scalar, 1), run(CpuPath::Simd, 2));
+            assert_eq!(
+                (
+                    simd.image_hash,
+                    simd.light.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                ),
+                (
+                    scalar.image_hash,
+                    scalar.light.iter().map(|v| v.to_bits()).collect()
+                ),
+                "{} {kernel} iterated: SIMD differs from scalar",
+                path.display()
+            );
+            compared += 1;
+        }
+    }
+    assert!(
+        compared >= 10,
+        "only {compared} scenes had an optimal distance"
+    );
+}

@@ -1,0 +1,203 @@
+//! The image bits are a contract: every example scene × every kernel renders to the `image_hash`
+//! and `ldi_hash` recorded for it, on the scalar and the SIMD path and for 1 and 3 threads, and
+//! every example scene at its own full size renders to its recorded hash. Three tables:
+//!
+//! - `tests/data/golden_hashes_band0.tsv`: the bits of commit 2934191, before the structure, speed
+//!   and guard-band work, written through the command line by that commit (so they do not come
+//!   from the code they now check), checked with `--guard-band 0 --penumbra iterated` (the
+//!   defaults then). Never re-recorded: the sweep's rewrites for speed must keep these bits.
+//!   Scenes added later (`shaft`, `gobo`, `narrowband`) are not in it.
+//! - `tests/data/golden_hashes_iterated.tsv`: the same cases with the automatic guard band and the
+//!   iterated penumbra, recorded when the guard band became the default (new scenes added with
+//!   their rows). Never re-recorded either: checked with `--penumbra iterated`.
+//! - `tests/data/golden_hashes.tsv`: the same cases with the defaults (automatic guard band,
+//!   distance penumbra), recorded when the distance penumbra became the default. A change that is
+//!   meant to change an image (a new default) re-records this table with
+//!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test contract golden_hashes::` and says
+//!   why in its commit.
+
+use crate::support;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+const GOLDEN: &str = "tests/data/golden_hashes.tsv";
+/// The pre-guard-band bits, checked with `--guard-band 0 --penumbra iterated`.
+const GOLDEN_BAND0: &str = "tests/data/golden_hashes_band0.tsv";
+/// The iterated penumbra's bits with the automatic guard band, checked with `--penumbra iterated`.
+const GOLDEN_ITERATED: &str = "tests/data/golden_hashes_iterated.tsv";
+
+/// One render through the CLI: `(image_hash, ldi_hash)` from `--stats-json`.
+fn hashes(scene: &Path, extra: &[&str], dir: &Path) -> (String, String) {
+    let stats = dir.join("stats.json");
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        "out.exr",
+        "--quiet",
+        "--stats-json",
+        stats.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let (code, _, err) = support::run_cli(&args, dir);
+    assert_eq!(code, 0, "{} {extra:?}: {err}", scene.display());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let field = |k: &str| {
+        json[k]
+            .as_str()
+            .unwrap_or_else(|| panic!("{k} in stats"))
+            .to_string()
+    };
+    (field("image_hash"), field("ldi_hash"))
+}
+
+/// The example scenes in file-name order; model scenes only where ../shared/models exists.
+fn example_scenes() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let have_models = support::models_dir().is_some();
+    // The MRI scene reads ../shared/volumes, like the model scenes read ../shared/models.
+    let have_volumes = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/volumes")
+        .is_dir()
+        || std::env::var_os("CI").is_some();
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .filter(|p| {
+            let text = std::fs::read_to_string(p).unwrap();
+            (have_models || !text.contains("shared/models"))
+                && (have_volumes || !text.contains("shared/volumes"))
+        })
+        .collect();
+    paths.sort();
+    assert!(paths.len() >= 5, "expected the example scenes in scenes/");
+    paths
+}
+
+fn golden_path(file: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(file)
+}
+
+/// `key → (image_hash, ldi_hash)` from a golden file.
+fn read_golden(file: &str) -> BTreeMap<String, (String, String)> {
+    let text = std::fs::read_to_string(golden_path(file)).expect(file);
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| {
+            let f: Vec<&str> = l.split('\t').collect();
+            assert_eq!(f.len(), 3, "golden line {l:?}");
+            (f[0].to_string(), (f[1].to_string(), f[2].to_string()))
+        })
+        .collect()
+}
+
+/// Every case as `(key, scene, CLI arguments)`: the small grid and the full-size scenes.
+fn cases() -> Vec<(String, PathBuf, Vec<String>)> {
+    let mut out = Vec::new();
+    for scene in example_scenes() {
+        let name = scene.file_stem().unwrap().to_string_lossy().into_owned();
+        for kernel in support::kernels() {
+            let args = [
+                "--width", "53", "--height", "40", "--slabs", "24", "--kernel", kernel,
+            ];
+            out.push((
+                format!("{name}/{kernel}/53x40x24"),
+                scene.clone(),
+                args.iter().map(|s| s.to_string()).collect(),
+            ));
+        }
+        out.push((format!("{name}/full"), scene.clone(), Vec::new()));
+    }
+    out
+}
+
+#[test]
+fn every_example_scene_and_kernel_keeps_its_recorded_bits() {
+    let dir = support::temp_dir("golden");
+    let record = std::env::var_os("CONVSHADOW_RECORD_GOLDEN").is_some();
+    if record {
+        // Only the defaults' table: the others are earlier defaults' bits.
+        let mut text = String::from(
+            "# key\timage_hash\tldi_hash — written by CONVSHADOW_RECORD_GOLDEN=1 (see \
+             tests/contract/golden_hashes.rs)\n",
+        );
+        for (key, scene, args) in cases() {
+            let args: Vec<&str> = args.iter().map(String::as_str).collect();
+            let (image, ldi) = hashes(&scene, &args, &dir);
+            text += &format!("{key}\t{image}\t{ldi}\n");
+        }
+        std::fs::write(golden_path(GOLDEN), text).unwrap();
+        return;
+    }
+    let checked = check_table(GOLDEN, &[], true, &dir);
+    assert!(checked > 100, "only {checked} cases checked");
+}
+
+#[test]
+fn every_example_scene_and_kernel_keeps_the_iterated_bits() {
+    let dir = support::temp_dir("golden-iterated");
+    let checked = check_table(GOLDEN_ITERATED, &["--penumbra", "iterated"], true, &dir);
+    assert!(checked > 100, "only {checked} cases checked");
+}
+
+#[test]
+fn every_example_scene_and_kernel_keeps_the_starting_bits_without_a_guard_band() {
+    let dir = support::temp_dir("golden-band0");
+    let extra = ["--guard-band", "0", "--penumbra", "iterated"];
+    let checked = check_table(GOLDEN_BAND0, &extra, false, &dir);
+    assert!(checked > 100, "only {checked} cases checked");
+}
+
+/// Renders every case with `extra` arguments and compares with `file` (every case must be in
+/// it when `complete`, else cases of scenes it does not know are skipped); returns the count.
+fn check_table(file: &str, extra: &[&str], complete: bool, dir: &Path) -> usize {
+    let golden = read_golden(file);
+    let mut checked = 0;
+    for (key, scene, args) in cases() {
+        let Some(want) = golden.get(&key) else {
+            assert!(!complete, "{key} is not in {file}");
+            continue;
+        };
+        let base: Vec<&str> = args
+            .iter()
+            .map(String::as_str)
+            .chain(extra.iter().copied())
+            .collect();
+        // The full-size scenes once on the default path; the small grid on both paths and
+        // thread counts.
+        let variants: &[&[&str]] = if key.ends_with("/full") {
+            &[&[]]
+        } else {
+            &[
+                &["--path", "scalar", "--threads", "1"],
+                &["--path", "simd", "--threads", "3"],
+            ]
+        };
+        for variant in variants {
+            let all: Vec<&str> = base.iter().chain(variant.iter()).copied().collect();
+            let got = hashes(&scene, &all, dir);
+            assert_eq!(
+                &got, want,
+                "{file}: {key} {variant:?}: (image_hash, ldi_hash) changed"
+            );
+            checked += 1;
+        }
+    }
+    checked
+}
+
+#[test]
+fn the_golden_check_can_fail() {
+    // Guards the guard: another seed is another image, so a changed image cannot pass.
+    let dir = support::temp_dir("golden-fail");
+    let golden = read_golden(GOLDEN);
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/default.toml");
+    let args = [
+        "--width", "53", "--height", "40", "--slabs", "24", "--kernel", "ellipse2", "--seed", "7",
+    ];
+    let got = hashes(&scene, &args, &dir);
+    assert_ne!(got.0, golden["default/ellipse2/53x40x24"].0);
+}

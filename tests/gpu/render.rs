@@ -1,0 +1,605 @@
+//! On lavapipe the GPU image is bit-identical to the CPU image (same `image_hash`, same final
+//! light buffers) for every example scene, every kernel, and scenes that reach every shader path
+//! (3D and 4D noise of every kind, 3D textures, specular, jitter off, monochrome light, a fixed
+//! guard band and an automatic one, different on each side, pre-integrated compositing), with the
+//! iterated and the distance penumbra (every kernel family, volumes, a patterned light; the
+//! distance penumbra's depth planes are part of the final light buffers compared). On other
+//! adapters the images must stay within the thresholds of docs/gpu.md.
+
+use crate::support;
+use crate::support::gpu as gpu_common;
+
+use convshadow::common::model::scene::GuardBandSpec;
+use convshadow::common::model::scene::{Penumbra, Scene};
+use convshadow::io::metrics::compare;
+use convshadow::pipeline::{Backend, RenderRequest, Rendered, render};
+use convshadow_gpu::GpuContext;
+
+fn run(scene: &Scene, backend: Backend) -> Rendered {
+    let req = RenderRequest {
+        backend,
+        threads: 2,
+        allow_open: true,
+        // The GPU sweeps every slab: so must the CPU for their final light buffers to compare.
+        every_slab: true,
+        ..RenderRequest::default()
+    };
+    render(scene, &req).unwrap_or_else(|f| panic!("{}: {}", scene.source, f))
+}
+
+/// Renders on both backends and checks the contract for the adapter; returns the CPU render.
+fn check(ctx: &GpuContext, scene: &Scene, what: &str) -> Rendered {
+    let cpu = run(scene, Backend::Cpu);
+    let gpu = run(scene, Backend::Gpu);
+    assert_eq!(cpu.backend, "cpu");
+    assert_eq!(gpu.backend, "gpu");
+    assert!(gpu.adapter.is_some());
+    assert_eq!(cpu.ldi_hash, gpu.ldi_hash, "{what}: ldi_hash");
+    let m = compare(&cpu.image, &gpu.image).unwrap();
+    eprintln!(
+        "{what}: cpu {:016x} gpu {:016x}; max abs {:.3e}, RMSE {:.3e}, {} values differ, ULP \
+         histogram {:?}",
+        cpu.image_hash,
+        gpu.image_hash,
+        m.max_abs,
+        m.rmse,
+        m.values_differ,
+        &m.ulp_histogram[..8]
+    );
+    if ctx.is_software() {
+        assert_eq!(
+            cpu.image_hash, gpu.image_hash,
+            "{what}: on lavapipe the GPU image must be bit-identical ({} values differ, max abs {:e} at {:?})",
+            m.values_differ, m.max_abs, m.max_abs_at
+        );
+        let light_differ = cpu
+            .light
+            .iter()
+            .zip(&gpu.light)
+            .filter(|(a, b)| a.to_bits() != b.to_bits())
+            .count();
+        assert_eq!(light_differ, 0, "{what}: final light buffers differ");
+        assert_eq!(cpu.light.len(), gpu.light.len());
+    } else {
+        assert!(m.rmse <= 1e-4, "{what}: RMSE {}", m.rmse);
+        assert!(m.max_abs <= 1e-3, "{what}: max abs {}", m.max_abs);
+        assert!(
+            m.srgb8_fraction() <= 1e-3,
+            "{what}: {} 8-bit pixels differ",
+            m.srgb8_pixels_differ
+        );
+        assert!(
+            m.srgb8_max_diff <= 1,
+            "{what}: 8-bit difference {}",
+            m.srgb8_max_diff
+        );
+    }
+    // A render that shows nothing would pass trivially: require some structure.
+    let lo = cpu.image.data.iter().cloned().fold(f32::INFINITY, f32::min);
+    let hi = cpu
+        .image
+        .data
+        .iter()
+        .cloned()
+        .fold(f32::NEG_INFINITY, f32::max);
+    assert!(hi - lo > 0.05, "{what}: the image is flat ({lo}..{hi})");
+    cpu
+}
+
+/// `scene` with `sweep.penumbra = "distance"` (re-validated).
+fn with_distance(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    s.sweep.penumbra = Penumbra::Distance;
+    s.revalidate().unwrap_or_else(|e| panic!("{e}"));
+    s
+}
+
+/// [`check`] with the distance penumbra, after checks that it is live: the CPU image differs
+/// from the iterated penumbra's (so the comparison is not of a path the mode skips), and the
+/// final light buffers hold one depth plane per light after its channels, some of it non-zero
+/// (occluders were recorded and read back from the device).
+fn check_distance(ctx: &GpuContext, scene: &Scene, what: &str) {
+    let mut iterated = scene.clone();
+    iterated.sweep.penumbra = Penumbra::Iterated;
+    let iterated = run(&iterated, Backend::Cpu);
+    let cpu = check(
+        ctx,
+        &with_distance(scene),
+        &format!("{what}, distance penumbra"),
+    );
+    assert_ne!(
+        cpu.image_hash, iterated.image_hash,
+        "{what}: the distance penumbra changed nothing"
+    );
+    let plan = &cpu.plan;
+    assert_eq!(plan.penumbra, Penumbra::Distance);
+    let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
+    let planes = ch + 1;
+    assert_eq!(
+        cpu.light.len(),
+        plan.lights.len() * planes * w * plan.grid_height as usize,
+        "{what}: light buffers of lights × (channels + 1 depth plane) × pixels"
+    );
+    let depth_nonzero = cpu
+        .light
+        .chunks(w)
+        .enumerate()
+        .filter(|(p, _)| p % planes == ch)
+        .flat_map(|(_, plane)| plane)
+        .filter(|&&d| d != 0.0)
+        .count();
+    assert!(depth_nonzero > 0, "{what}: every depth plane is 0");
+}
+
+#[test]
+fn gpu_image_equals_cpu_on_every_example_scene() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    for path in gpu_common::example_scenes() {
+        let scene = gpu_common::small(&path, 64, 32);
+        check(&ctx, &scene, &path.display().to_string());
+    }
+}
+
+#[test]
+fn gpu_image_equals_cpu_for_every_kernel() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let mut scene = Scene::default_scene();
+    gpu_common::shrink(&mut scene, 48, 24);
+    for kernel in support::kernels() {
+        scene.sweep.kernel = kernel.parse().unwrap();
+        for compensate in [true, false] {
+            scene.sweep.variance_compensation = compensate;
+            check(
+                &ctx,
+                &scene,
+                &format!("kernel {kernel}, compensation {compensate}"),
+            );
+        }
+    }
+}
+
+/// A scene that reaches the shader paths the example scenes may not: every detail kind in 3D and
+/// 4D, a 3D texture, specular highlights, phase functions (forward and backward), no jitter, a guard band and a grey (1-channel) or
+/// coloured light buffer, a narrow light (mean carried in whole pixels).
+fn path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
+    let dims = [5u32, 4, 3];
+    let voxels: Vec<u8> = (0..60u32).map(|i| (i * 37 % 256) as u8).collect();
+    std::fs::write(dir.join("tex.raw"), &voxels).unwrap();
+    let transport = if monochrome {
+        "[0.3, 0.3, 0.3]"
+    } else {
+        "[0.6, 0.4, 0.2]"
+    };
+    let text = format!(
+        r#"
+[image]
+width = 40
+height = 36
+background = [0.1, 0.2, 0.3]
+[camera]
+direction = [0.2, -0.3, 1.0]
+view_width = 5.0
+[sweep]
+slabs = 20
+optimal_distance = 0.7
+jitter = {jitter}
+seed = 99
+guard_band = 3
+[[light]]
+color = [1.0, 0.8, 0.6]
+tilt_deg = [-35.0, 20.0]
+variance = [0.03, 0.005]
+rotation_deg = 30.0
+[[light]]
+color = [0.3, 0.4, 0.9]
+tilt_deg = [10.0, -5.0]
+variance = [0.0, 0.0]
+[[light]]
+color = [0.2, 0.2, 0.2]
+tilt_deg = [60.0, 0.0]
+variance = [0.08, 0.08]
+[[mesh]]
+shape = "sphere"
+size = [0.7, 3]
+translate = [-1.1, -0.9, 0.0]
+material = "perlin4"
+[[mesh]]
+shape = "torus"
+size = [0.6, 0.25, 24]
+translate = [0.9, -0.9, 0.2]
+rotate_deg = [50.0, 10.0, 0.0]
+material = "ridged"
+[[mesh]]
+shape = "box"
+size = [1.0, 1.0, 1.0]
+translate = [-1.0, 1.0, 0.3]
+rotate_deg = [20.0, 30.0, 0.0]
+material = "tex"
+[[mesh]]
+shape = "sphere"
+size = [0.6, 2]
+translate = [1.0, 1.0, -0.2]
+material = "turb"
+[[mesh]]
+shape = "box"
+size = [6.0, 6.0, 0.3]
+translate = [0.0, 0.0, 1.5]
+material = "wall"
+[material.perlin4]
+detail = {{ kind = "perlin", frequency = 2.0, time = 0.37 }}
+gradient = [[0.0, 0.9, 0.2, 0.1, 0.0], [1.0, 1.0, 0.9, 0.5, 0.9]]
+transport = {transport}
+reference_length = 0.05
+[material.ridged]
+detail = {{ kind = "ridged", frequency = 1.5, octaves = 3, time = -2.5 }}
+gradient = [[0.0, 0.2, 0.9, 0.2, 0.0], [0.6, 0.5, 0.9, 0.5, 0.4], [1.0, 1.0, 1.0, 1.0, 1.0]]
+transport = {transport}
+reference_length = 0.05
+specular = {{ strength = 0.8, exponent = 17 }}
+phase = {{ g = 0.5 }}
+[material.tex]
+texture = {{ path = "tex.raw", dims = [{}, {}, {}], type = "u8" }}
+gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 0.9, 0.6, 0.3, 1.0]]
+transport = {transport}
+reference_length = 0.05
+[material.turb]
+detail = {{ kind = "turbulence", frequency = 3.0, octaves = 4, lacunarity = 2.3, gain = 0.6 }}
+gradient = [[0.0, 0.1, 0.1, 0.1, 0.1], [1.0, 0.9, 0.9, 0.9, 0.8]]
+transport = {transport}
+reference_length = 0.05
+specular = {{ strength = 0.5, exponent = 4 }}
+phase = {{ g = -0.4 }}
+[material.wall]
+color = [0.8, 0.8, 0.75]
+opacity = 1.0
+specular = {{ strength = 0.2, exponent = 64 }}
+"#,
+        dims[0], dims[1], dims[2]
+    );
+    support::scene(&text, dir)
+}
+
+#[test]
+fn gpu_image_equals_cpu_on_every_shader_path() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-paths");
+    for (monochrome, jitter) in [(false, true), (true, false)] {
+        let mut scene = path_scene(&dir, monochrome, jitter);
+        assert_eq!(scene.is_monochrome(), monochrome);
+        check(
+            &ctx,
+            &scene,
+            &format!("shader paths, monochrome {monochrome}, jitter {jitter}"),
+        );
+        // The automatic band: a different width on each side (the wall reaches beyond every
+        // edge, the lights shift shadows unequally), so the grid origin and the image-keyed
+        // hashes are offset differently in x and y.
+        scene.sweep.guard_band = GuardBandSpec::Auto;
+        let band = run(&scene, Backend::Cpu).plan.guard;
+        assert!(
+            band.left != band.right && band.top != band.bottom,
+            "expected an asymmetric band, got {band}"
+        );
+        check(
+            &ctx,
+            &scene,
+            &format!("shader paths, monochrome {monochrome}, jitter {jitter}, band {band}"),
+        );
+    }
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_preintegration() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-pre");
+    // Every detail kind, a 3D texture, constant materials between them (their pixels forget the
+    // kept front value), crossings in and out, a grey and a coloured light buffer.
+    for (monochrome, jitter) in [(false, true), (true, false)] {
+        let mut scene = path_scene(&dir, monochrome, jitter);
+        scene.sweep.preintegration = true;
+        check(
+            &ctx,
+            &scene,
+            &format!("pre-integration, monochrome {monochrome}, jitter {jitter}"),
+        );
+    }
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_a_patterned_light() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-pattern");
+    // A coloured 7×5 pattern (non-grey, so three light channels), smaller than the view, with
+    // texels that do not align with pixels: bilinear samples, clamped edges.
+    let (w, h) = (7u32, 5u32);
+    let data: Vec<f32> = (0..w * h * 3)
+        .map(|i| ((i * 53 + 11) % 97) as f32 / 96.0)
+        .collect();
+    convshadow::io::image::RgbImage {
+        width: w,
+        height: h,
+        data,
+    }
+    .save(&dir.join("gobo.png"))
+    .unwrap();
+    let mut scene = path_scene(&dir, true, true);
+    scene.lights[0].pattern = Some(convshadow::common::model::scene::PatternSpec {
+        path: dir.join("gobo.png"),
+        size: [3.1, 2.3],
+        center: [0.4, -0.3],
+    });
+    assert!(
+        !scene.is_monochrome(),
+        "a pattern takes three light channels"
+    );
+    check(&ctx, &scene, "patterned light");
+}
+
+#[test]
+fn render_backend_gpu_without_scene_names_the_adapter() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-cli");
+    let (code, out, err) = support::run_cli(
+        &[
+            "render",
+            "--backend",
+            "gpu",
+            "--width",
+            "48",
+            "--height",
+            "48",
+            "--slabs",
+            "16",
+            "-o",
+            "gpu.png",
+            "--stats-json",
+            "gpu.json",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains(&ctx.info.name),
+        "the summary names the adapter: {out}"
+    );
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("gpu.json")).unwrap()).unwrap();
+    assert_eq!(stats["backend"], "gpu");
+    assert!(stats["adapter"].as_str().unwrap().contains(&ctx.info.name));
+    assert!(dir.join("gpu.png").is_file());
+    let (code, out, err) = support::run_cli(
+        &[
+            "ldi",
+            "--backend",
+            "auto",
+            "--width",
+            "48",
+            "--height",
+            "48",
+            "--stats-json",
+            "ldi.json",
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("ldi.json")).unwrap()).unwrap();
+    assert_eq!(stats["backend"], "gpu");
+    assert!(stats["ldi_hash"].as_str().is_some_and(|h| h.len() == 16));
+}
+
+#[test]
+fn auto_counts_the_memory_of_the_backend_it_picks() {
+    use convshadow::pipeline::MemoryNeed;
+    let Some(_ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-auto-budget");
+    let text = "[image]\nwidth = 512\nheight = 512\n[camera]\nview_width = 3.0\n[sweep]\n\
+                slabs = 8\noptimal_distance = 0.5\n[[mesh]]\nshape = \"box\"\n\
+                size = [1.0, 1.0, 1.0]\nmaterial = \"m\"\n[material.m]\nopacity = 0.5\n";
+    std::fs::write(dir.join("s.toml"), text).unwrap();
+    let scene = convshadow_io::load_scene(&dir.join("s.toml")).unwrap();
+    // The box lies inside the view: the automatic guard band is 0, its lower bound.
+    let band = scene.sweep.guard_band.lower_bound();
+    let cpu = MemoryNeed::for_backend(&scene, band, true, Backend::Cpu).total();
+    let gpu = MemoryNeed::for_backend(&scene, band, true, Backend::Gpu).total();
+    // A budget (whole MiB, as --max-memory takes it) between the two needs, leaving the CPU
+    // several MiB for the box's fragments (about 60k of 17 bytes).
+    let mib = (cpu + (gpu - cpu) / 2) >> 20;
+    assert!(
+        cpu + (4 << 20) <= mib << 20 && mib << 20 < gpu,
+        "{cpu} {mib} MiB {gpu}"
+    );
+    let budget = mib.to_string();
+    let args = |backend: &'static str| {
+        [
+            "render",
+            "s.toml",
+            "-o",
+            "o.png",
+            "-q",
+            "--backend",
+            backend,
+            "--max-memory",
+        ]
+        .into_iter()
+        .map(String::from)
+        .chain([budget.clone()])
+        .collect::<Vec<_>>()
+    };
+    let run = |backend: &'static str, adapter: Option<&str>| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_convshadow"));
+        cmd.args(args(backend)).current_dir(&dir);
+        if let Some(a) = adapter {
+            cmd.env(convshadow_gpu::device::ADAPTER_ENV, a);
+        }
+        let out = cmd.output().unwrap();
+        let _ = std::fs::remove_file(dir.join("o.png"));
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    // The CPU fits, the GPU is refused naming its device buffers.
+    assert_eq!(run("cpu", None).0, Some(0));
+    let (code, err) = run("gpu", None);
+    assert_eq!(code, Some(4), "{err}");
+    assert!(err.contains("GPU buffers"), "{err}");
+    // `auto` with an adapter runs on the GPU, so it is counted (and refused) as the GPU.
+    let (code, err) = run("auto", None);
+    assert_eq!(code, Some(4), "auto picked the GPU: {err}");
+    assert!(
+        err.contains("GPU buffers") && err.contains("--backend auto opened the GPU"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!(
+            "--backend cpu needs {} MiB",
+            cpu.div_ceil(1 << 20)
+        )),
+        "{err}"
+    );
+    // `auto` without one (no adapter has this name) falls back to the CPU, and fits as the CPU.
+    let (code, err) = run("auto", Some("no adapter is called this"));
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("rendering on the CPU"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_the_distance_penumbra() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    // The default scene (a cloud, a marble sphere, a wall; two coloured lights) with 40 slabs:
+    // distance levels of one slab up to 16, of two from 32 (docs/gpu.md), so `level_of` maps
+    // several distances to one level.
+    let mut scene = Scene::default_scene();
+    gpu_common::shrink(&mut scene, 48, 40);
+    check_distance(&ctx, &scene, "default scene");
+    // A volume of haze under a plate with a window, one hard light (grey: one channel).
+    let shaft = gpu_common::small(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/shaft.toml"),
+        48,
+        32,
+    );
+    check_distance(&ctx, &shaft, "shaft scene");
+    // Every shader path: 4D noise, a 3D texture, specular, three lights (one of zero variance),
+    // 1- and 3-channel light, jitter on and off, a fixed and an automatic guard band.
+    let dir = support::temp_dir("gpu-distance-paths");
+    for (monochrome, jitter) in [(false, true), (true, false)] {
+        let mut scene = path_scene(&dir, monochrome, jitter);
+        check_distance(
+            &ctx,
+            &scene,
+            &format!("shader paths, monochrome {monochrome}, jitter {jitter}"),
+        );
+        scene.sweep.guard_band = GuardBandSpec::Auto;
+        check_distance(
+            &ctx,
+            &scene,
+            &format!("shader paths, monochrome {monochrome}, jitter {jitter}, automatic band"),
+        );
+    }
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_the_distance_penumbra_for_every_kernel() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    // Per-pixel, per-slab and scheduled phases (a schedule's phase is per level), with and
+    // without variance compensation (the mean carried in whole pixels or not).
+    let mut scene = Scene::default_scene();
+    gpu_common::shrink(&mut scene, 40, 36);
+    for (k, kernel) in support::kernels().into_iter().enumerate() {
+        scene.sweep.kernel = kernel.parse().unwrap();
+        scene.sweep.variance_compensation = k % 2 == 0;
+        check_distance(
+            &ctx,
+            &scene,
+            &format!(
+                "kernel {kernel}, compensation {}",
+                scene.sweep.variance_compensation
+            ),
+        );
+    }
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_a_patterned_light_and_the_distance_penumbra() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-pattern-distance");
+    let (w, h) = (5u32, 4u32);
+    let data: Vec<f32> = (0..w * h * 3)
+        .map(|i| ((i * 41 + 7) % 89) as f32 / 88.0)
+        .collect();
+    convshadow::io::image::RgbImage {
+        width: w,
+        height: h,
+        data,
+    }
+    .save(&dir.join("gobo.png"))
+    .unwrap();
+    let mut scene = path_scene(&dir, true, true);
+    scene.lights[1].pattern = Some(convshadow::common::model::scene::PatternSpec {
+        path: dir.join("gobo.png"),
+        size: [2.7, 3.3],
+        center: [-0.2, 0.5],
+    });
+    // The initial light buffer comes from the pattern, with the depth planes at 0.
+    check_distance(&ctx, &scene, "patterned light");
+}
+
+#[test]
+fn render_backend_gpu_with_the_distance_penumbra_matches_the_cpu() {
+    let Some(_ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-cli-distance");
+    let hash = |backend: &str| {
+        let json = format!("{backend}.json");
+        let (code, out, err) = support::run_cli(
+            &[
+                "render",
+                "--backend",
+                backend,
+                "--penumbra",
+                "distance",
+                "--width",
+                "40",
+                "--height",
+                "40",
+                "--slabs",
+                "20",
+                "-o",
+                &format!("{backend}.png"),
+                "--stats-json",
+                &json,
+            ],
+            &dir,
+        );
+        assert_eq!(code, 0, "{out}{err}");
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join(&json)).unwrap()).unwrap();
+        assert_eq!(stats["backend"], backend);
+        assert_eq!(stats["penumbra"], "distance", "{stats}");
+        stats["image_hash"].as_str().unwrap().to_string()
+    };
+    assert_eq!(hash("gpu"), hash("cpu"));
+}
