@@ -7,7 +7,7 @@
 
 use convshadow_common::hash::{phase_index, pixel_hash, row_hash};
 use convshadow_common::kernel::{KernelTable, PhaseMode, Tap};
-use convshadow_common::lane::{Lane, MAX_LANES, halves, load_halves, splat_within_halves};
+use convshadow_common::lane::{Layout, MAX_LANES, halves, load_halves, splat_within_halves};
 use convshadow_common::plan::LIT_LEVEL;
 use std::ops::Range;
 use wide::i32x8;
@@ -122,7 +122,7 @@ impl LightPlanes<'_> {
 
 /// `acc + w0·v0 + w1·v1 + w2·v2 + w3·v3`, added left to right (the fixed sum order).
 #[inline(always)]
-fn add_bilinear<L: Lane>(acc: L, w: &[L; 4], v: &[L; 4]) -> L {
+fn add_bilinear<L: Layout>(acc: L, w: &[L; 4], v: &[L; 4]) -> L {
     let mut s = acc;
     for (wk, vk) in w.iter().zip(v) {
         s = s + *wk * *vk;
@@ -133,7 +133,7 @@ fn add_bilinear<L: Lane>(acc: L, w: &[L; 4], v: &[L; 4]) -> L {
 /// The four bilinear corners (0,0), (1,0), (0,1), (1,1) of lane i's sample at
 /// (`sx[i]`, `sy[i]`) in `plane` (reads outside give its outside value; [`Lane::fetch_grid`]).
 #[inline(always)]
-fn fetch_corners<L: Lane>(plane: &Plane<'_>, sx: L::U, sy: L::U) -> [L; 4] {
+fn fetch_corners<L: Layout>(plane: &Plane<'_>, sx: L::U, sy: L::U) -> [L; 4] {
     let one = L::u_splat(1);
     let (sx1, sy1) = (L::u_add(sx, one), L::u_add(sy, one));
     let (w, h) = (plane.width, plane.height);
@@ -189,7 +189,7 @@ pub fn reads_inside(
 /// corner by corner, so every lane has the bits of any other lane count.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn gather<L: Lane>(
+pub fn gather<L: Layout>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     extent: [i32; 4],
@@ -218,7 +218,7 @@ pub fn gather<L: Lane>(
 /// [`RowRun`]s where they do not. Every plane of a pixel-interleaved buffer is summed in the
 /// buffer's order (the runs' values put in it), as [`gather_inside`] sums it.
 #[inline(always)]
-fn gather_near_edge<L: Lane, const C: usize>(
+fn gather_near_edge<L: Layout, const C: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     shift: [i32; 2],
@@ -314,7 +314,7 @@ impl RowRun {
     /// The run at (x.., y) of a `width` × `height` grid with rows and pixels `[row_stride,
     /// pixel_step]` apart.
     #[inline(always)]
-    fn at<L: Lane>(width: i32, height: i32, strides: [usize; 2], x: i32, y: i32) -> RowRun {
+    fn at<L: Layout>(width: i32, height: i32, strides: [usize; 2], x: i32, y: i32) -> RowRun {
         let [row_stride, step] = strides;
         let lanes = L::LANES as i32;
         if y < 0 || y >= height || x >= width || x + lanes <= 0 {
@@ -341,7 +341,7 @@ impl RowRun {
 
     /// The run's values in `plane`.
     #[inline(always)]
-    fn read<L: Lane>(self, plane: &Plane<'_>) -> L {
+    fn read<L: Layout>(self, plane: &Plane<'_>) -> L {
         match self {
             RowRun::Outside => L::splat(plane.outside),
             RowRun::Load { at, by } => {
@@ -362,7 +362,7 @@ impl RowRun {
 /// `data[at + i·step]` in lane i: one contiguous load when `step` is 1, else a gather (a plane
 /// of a pixel-interleaved buffer read on its own).
 #[inline(always)]
-fn load_step<L: Lane>(data: &[f32], at: usize, step: usize) -> L {
+fn load_step<L: Layout>(data: &[f32], at: usize, step: usize) -> L {
     if step == 1 {
         return L::load(data, at);
     }
@@ -378,7 +378,7 @@ fn load_step<L: Lane>(data: &[f32], at: usize, step: usize) -> L {
 /// whose pixel x's plane 0 is `data[at]` (the planes of a pixel side by side, `planes.len()` of
 /// them).
 #[inline(always)]
-pub fn store_pixels<L: Lane>(planes: &[L], data: &mut [f32], at: usize) {
+pub fn store_pixels<L: Layout>(planes: &[L], data: &mut [f32], at: usize) {
     match planes {
         [p] => p.store(data, at),
         [a, b] => store_in_pixel_order(&[*a, *b], data, at),
@@ -390,7 +390,7 @@ pub fn store_pixels<L: Lane>(planes: &[L], data: &mut [f32], at: usize) {
 
 /// [`store_pixels`] for `C` planes.
 #[inline(always)]
-fn store_in_pixel_order<L: Lane, const C: usize>(planes: &[L; C], data: &mut [f32], at: usize) {
+fn store_in_pixel_order<L: Layout, const C: usize>(planes: &[L; C], data: &mut [f32], at: usize) {
     // One bounds check for the run (a check per value cost 1 % of the sweep's instructions).
     let run = &mut data[at..at + C * L::LANES];
     for (j, v) in L::pixel_order(*planes).iter().enumerate() {
@@ -407,7 +407,7 @@ fn store_in_pixel_order<L: Lane, const C: usize>(planes: &[L; C], data: &mut [f3
 /// ([`Lane::plane_order`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn gather_inside<L: Lane, const K: usize>(
+pub fn gather_inside<L: Layout, const K: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     extent: [i32; 4],
@@ -442,7 +442,7 @@ pub fn gather_inside<L: Lane, const K: usize>(
 /// [`gather_inside`] plane by plane, after its bounds proof (`x`, `y`: the chunks' shifted
 /// origin): contiguous loads in a planar buffer, strided ones otherwise.
 #[inline(always)]
-fn gather_planes<L: Lane, const K: usize>(
+fn gather_planes<L: Layout, const K: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     x: i64,
@@ -484,7 +484,7 @@ fn gather_planes<L: Lane, const K: usize>(
 /// its bounds proof: `C` contiguous loads per corner and chunk, summed value by value in the
 /// buffer's order, then put in plane order.
 #[inline(always)]
-fn gather_pixels<L: Lane, const K: usize, const C: usize>(
+fn gather_pixels<L: Layout, const K: usize, const C: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     x: i64,
@@ -591,7 +591,7 @@ pub struct LaneRows {
 impl LaneRows {
     /// The summary of the lanes' rows `rows` in `columns`.
     #[inline(always)]
-    pub fn of<L: Lane>(columns: &TapColumns, rows: L::U) -> LaneRows {
+    pub fn of<L: Layout>(columns: &TapColumns, rows: L::U) -> LaneRows {
         let mut r = [0u32; MAX_LANES];
         L::u_store(rows, &mut r);
         let mut most = i32x8::splat(i32::MIN);
@@ -607,7 +607,7 @@ impl LaneRows {
     /// extent and offset span hold for any rows, and inside the grid they only prove reads).
     /// Kept apart from `of`'s body: one shared body measured +3.7 % sweep instructions.
     #[inline(always)]
-    pub fn within<L: Lane>(columns: &TapColumns, rows: L::U, interior: bool) -> LaneRows {
+    pub fn within<L: Layout>(columns: &TapColumns, rows: L::U, interior: bool) -> LaneRows {
         if !(interior && columns.same_counts) {
             return LaneRows::of::<L>(columns, rows);
         }
@@ -747,7 +747,7 @@ impl TapColumns {
 /// arithmetic in the same order.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn gather_per_lane<L: Lane>(
+pub(crate) fn gather_per_lane<L: Layout>(
     planes: &LightPlanes<'_>,
     table: &KernelTable,
     columns: &TapColumns,
@@ -826,7 +826,7 @@ enum Bounds {
 
 /// The per-lane gather's reads inside the grid: every plane's two pixel pairs per lane and tap
 /// ([`Lane::acc_blocks`]), lane i at `pixel + lane_shift[i] +` its tap's offset.
-struct PairLoads<'a, L: Lane> {
+struct PairLoads<'a, L: Layout> {
     planes: &'a LightPlanes<'a>,
     columns: &'a TapColumns,
     phases: L::U,
@@ -839,7 +839,7 @@ struct PairLoads<'a, L: Lane> {
     offset_span: [i64; 2],
 }
 
-impl<L: Lane> PairLoads<'_, L> {
+impl<L: Layout> PairLoads<'_, L> {
     /// Adds taps `taps` (every corner of every lane inside the grid) to `acc`, plane by plane.
     #[inline(always)]
     fn add_taps(&self, taps: std::ops::Range<usize>, acc: &mut [L], bounds: Bounds) {
@@ -1137,7 +1137,7 @@ pub(crate) fn level_block_minima(
 /// that was just crossed does not blur the darkness behind that surface over itself.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn distance_rows<L: Lane>(
+pub(crate) fn distance_rows<L: Layout>(
     levels: &LevelPlane<'_>,
     table: &KernelTable,
     columns: &TapColumns,
@@ -1249,7 +1249,7 @@ pub(crate) fn distance_rows<L: Lane>(
 /// The rows of levels `level` at the lanes' phases: `level · phase_count + phase`, or for a
 /// scheduled kernel the level's phase of slab `slab`, `slab_phase[level · slabs + slab]`.
 #[inline(always)]
-fn level_rows<L: Lane>(
+fn level_rows<L: Layout>(
     table: &KernelTable,
     level: L::U,
     phase: L::U,
@@ -1266,7 +1266,7 @@ fn level_rows<L: Lane>(
 /// Distance penumbra with a scheduled kernel: `rows` (level · phase_count, phase 0) moved to the
 /// level's phase of slab `slab`, `slab_phase[level · slabs + slab]`.
 #[inline(always)]
-pub fn schedule_rows<L: Lane>(table: &KernelTable, rows: L::U, slabs: u32, slab: u32) -> L::U {
+pub fn schedule_rows<L: Layout>(table: &KernelTable, rows: L::U, slabs: u32, slab: u32) -> L::U {
     let mut r = [0u32; MAX_LANES];
     L::u_store(rows, &mut r);
     let pc = table.phase_count;
@@ -1280,7 +1280,7 @@ pub fn schedule_rows<L: Lane>(table: &KernelTable, rows: L::U, slabs: u32, slab:
 /// The per-pixel phases of pixels x0.. as integer lanes ([`phase_at`] for `PerPixel` tables): the
 /// pixel hash on integer lanes.
 #[inline(always)]
-pub fn phases<L: Lane>(table: &KernelTable, row_hash_v: u32, x0: u32) -> L::U {
+pub fn phases<L: Layout>(table: &KernelTable, row_hash_v: u32, x0: u32) -> L::U {
     let bits = table.phase_bits();
     if bits == 0 {
         return L::u_splat(0);
@@ -1297,6 +1297,7 @@ pub fn phases<L: Lane>(table: &KernelTable, row_hash_v: u32, x0: u32) -> L::U {
 mod tests {
     use convshadow_common::hash::TestRng;
     use convshadow_common::kernel::{KernelMoments, KernelSpec, build_distance_table};
+    use convshadow_common::lane::Lane;
     use wide::{f32x8, u32x8};
 
     use super::*;
@@ -1602,8 +1603,7 @@ mod tests {
                         );
                         // And one pixel at a time (the scalar path's gathers).
                         let mut one = [[0.0f32; 8]; 4];
-                        for i in 0..8 {
-                            let r = rows.to_array()[i];
+                        for (i, r) in rows.to_array().into_iter().enumerate() {
                             let lane_reads = LaneRows::of::<f32>(columns, r);
                             let mut sums = [0.0f32; 4];
                             let x = x0 + i as i32;

@@ -8,7 +8,7 @@
 //! table look-ups. Lanes on different meshes are shaded one lane at a time.
 
 use convshadow_common::kernel::PhaseMode;
-use convshadow_common::lane::{Lane, MAX_LANES};
+use convshadow_common::lane::{Lane, Layout, MAX_LANES};
 
 use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowState, SlabContext};
 use super::quiet::{ChunkState, Values};
@@ -91,7 +91,7 @@ pub(crate) fn shape_of(plan: &RenderPlan) -> u8 {
 /// The [`sweep_chunk`] instance for `planes` light channels and the shape `shape` (see
 /// [`shape_of`]; [`ANY_SHAPE`] always serves): the smallest capacity that holds them (zeroing a
 /// 48-entry array per chunk costs).
-pub(crate) fn chunk_fn<L: Lane>(planes: usize, shape: u8) -> ChunkFn {
+pub(crate) fn chunk_fn<L: Layout>(planes: usize, shape: u8) -> ChunkFn {
     match (planes, shape) {
         (3..=6, RGB_ITERATED) => sweep_chunk::<L, 6, RGB_ITERATED>,
         (3..=6, RGB_DISTANCE) => sweep_chunk::<L, 6, RGB_DISTANCE>,
@@ -203,7 +203,7 @@ pub(crate) fn gather_pair(
 /// lanes' cursors are not visited when it shows that none crosses a fragment in this slab).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
+pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     ctx: &SlabContext<'_>,
     y: usize,
     x0: usize,
@@ -418,7 +418,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
 /// `dst = src` for a light's channels, as fixed-length copies for 1 and 3 channels (a run-time
 /// length is a `memcpy` call per light and chunk).
 #[inline(always)]
-fn copy_channels<L: Lane>(dst: &mut [L], src: &[L]) {
+fn copy_channels<L: Layout>(dst: &mut [L], src: &[L]) {
     match (dst, src) {
         ([d], [s]) => *d = *s,
         ([d0, d1, d2], [s0, s1, s2]) => (*d0, *d1, *d2) = (*s0, *s1, *s2),
@@ -432,7 +432,7 @@ fn copy_channels<L: Lane>(dst: &mut [L], src: &[L]) {
 /// copies).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn every_light_rows<L: Lane>(
+fn every_light_rows<L: Layout>(
     ctx: &SlabContext<'_>,
     prev: &Previous<'_>,
     row_hashes: &[u32; MAX_LIGHT_CHANNELS],
@@ -470,7 +470,7 @@ fn every_light_rows<L: Lane>(
 /// ([`every_light_rows`]); contiguous loads when every lane has the same row.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn distance_gather<L: Lane>(
+fn distance_gather<L: Layout>(
     ctx: &SlabContext<'_>,
     l: usize,
     planes: &LightPlanes<'_>,
@@ -511,7 +511,7 @@ fn distance_gather<L: Lane>(
 /// for the caller to store with the light's channels.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn finish_depth<L: Lane>(
+fn finish_depth<L: Layout>(
     ctx: &SlabContext<'_>,
     row: &mut RowState<'_>,
     l: usize,
@@ -582,7 +582,7 @@ pub(crate) fn dark_depth_chunk(
 /// without a mesh).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn shade_chunk<L: Lane>(
+fn shade_chunk<L: Layout>(
     ctx: &SlabContext<'_>,
     y: usize,
     x0: usize,
@@ -680,7 +680,7 @@ fn shade_chunk<L: Lane>(
 /// keeping it only saves an evaluation, and forgetting it never changes the image.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn preintegrated<L: Lane>(
+fn preintegrated<L: Layout>(
     ctx: &SlabContext<'_>,
     x0: usize,
     row: &mut RowState<'_>,
