@@ -6,7 +6,7 @@
 //! over [`Lane`]: the scalar path is the 1-lane instance.
 
 use convshadow_common::pixel::hash::{phase_index, pixel_hash, row_hash};
-use convshadow_common::pixel::lane::{Lane, MAX_LANES, halves, load_halves, splat_within_halves};
+use convshadow_common::pixel::lane::{Layout, MAX_LANES, halves, load_halves, splat_within_halves};
 use convshadow_common::plan::LIT_LEVEL;
 use convshadow_common::plan::kernel::{KernelTable, PhaseMode, Tap};
 use std::ops::Range;
@@ -38,11 +38,17 @@ pub struct Plane<'a> {
 }
 
 impl Plane<'_> {
-    /// The value at (x, y), or [`Plane::outside`] beyond the grid.
+    /// The value at (x, y), inside the grid.
+    #[inline(always)]
+    pub fn at(&self, x: i32, y: i32) -> f32 {
+        self.data[self.base + y as usize * self.row_stride + x as usize * self.pixel_step]
+    }
+
+    /// The value at (x, y), or [`Plane::outside`] beyond the grid (kernels.wgsl's `fetch`).
     #[inline(always)]
     pub fn fetch(&self, x: i32, y: i32) -> f32 {
         if x >= 0 && y >= 0 && x < self.width && y < self.height {
-            self.data[self.base + y as usize * self.row_stride + x as usize * self.pixel_step]
+            self.at(x, y)
         } else {
             self.outside
         }
@@ -63,6 +69,156 @@ pub fn phase_at(table: &KernelTable, slab: u32, slab_hash: u32, row_hash_v: u32,
 #[inline(always)]
 pub fn light_row_hash(slab_hash: u32, y: u32) -> u32 {
     row_hash(slab_hash, y)
+}
+
+/// Where one pixel's taps read: grid pixel (x, y), moved by the slab's whole-pixel shift.
+#[derive(Clone, Copy, Debug)]
+pub struct TapOrigin {
+    pub x: i32,
+    pub y: i32,
+    /// The slab's shift (`KernelTable::slab_shift`).
+    pub shift: [i32; 2],
+    /// Every read of every tap of every row lies inside the grid (the sweep's `Reach`): no read
+    /// needs the outside value, so none is tested.
+    pub inside: bool,
+}
+
+impl TapOrigin {
+    /// The top-left corner tap `t` reads.
+    #[inline(always)]
+    fn corner(&self, t: &Tap) -> (i32, i32) {
+        (self.x + t.dx + self.shift[0], self.y + t.dy + self.shift[1])
+    }
+}
+
+/// One light's tap table as the sweep reads it, built once per sweep from its [`KernelTable`]
+/// (the same taps): per row, the taps with a nonzero weight and the taps the level search visits.
+pub struct LightTaps {
+    /// Every row's taps with a nonzero weight, row after row, each row in its order. A tap whose
+    /// four weights are 0 adds +0 to a sum that is never −0 (weights and values are ≥ 0 and
+    /// finite), so a gather that leaves it out keeps every bit; a box kernel's phases and the
+    /// distance penumbra's levels (padded to the widest level) hold many.
+    weighted: Vec<Tap>,
+    /// Row r's taps in `weighted`: `weighted[start..end]`.
+    rows: Vec<[u32; 2]>,
+    /// Per row, the taps [`distance_row`] visits ([`level_taps`]).
+    level_taps: Vec<u32>,
+}
+
+impl LightTaps {
+    /// The rows of `table`.
+    pub fn new(table: &KernelTable) -> LightTaps {
+        let mut taps = LightTaps {
+            weighted: Vec::new(),
+            rows: Vec::with_capacity(table.rows() as usize),
+            level_taps: (0..table.rows()).map(|r| level_taps(table, r)).collect(),
+        };
+        for row in 0..table.rows() {
+            let start = taps.weighted.len() as u32;
+            let weighted = table.phase(row).iter().filter(|t| t.w != [0.0; 4]);
+            taps.weighted.extend(weighted);
+            taps.rows.push([start, taps.weighted.len() as u32]);
+        }
+        taps
+    }
+
+    /// Row `row`'s taps with a nonzero weight, in the row's order.
+    #[inline(always)]
+    pub fn weighted(&self, row: u32) -> &[Tap] {
+        let [start, end] = self.rows[row as usize];
+        &self.weighted[start as usize..end as usize]
+    }
+
+    /// How many of row `row`'s taps [`distance_row`] visits.
+    #[inline(always)]
+    pub fn level_taps(&self, row: u32) -> usize {
+        self.level_taps[row as usize] as usize
+    }
+}
+
+/// The taps of row `row` of `table` that the level search must visit: up to the last that is not
+/// the zero tap at (0, 0), plus one such tap if any follows. Every padding tap reads the same four
+/// level corners, so one stands for all: the same minimum.
+pub fn level_taps(table: &KernelTable, row: u32) -> u32 {
+    let taps = table.phase(row);
+    let padding = |t: &Tap| t.dx == 0 && t.dy == 0 && t.w == [0.0; 4];
+    let real = taps.iter().rposition(|t| !padding(t)).map_or(0, |i| i + 1);
+    (real + usize::from(real < taps.len())) as u32
+}
+
+/// The convolution of one light at one pixel: kernels.wgsl's `gather` for every plane of
+/// `planes` (the light's channels, then its depth plane if any), through `taps` (one row of the
+/// light's table, its zero taps left out: [`LightTaps`]) from `at`: tap by tap, the corners
+/// (0,0), (1,0), (0,1), (1,1), each `acc = acc + w·v`; a read beyond the grid gives the plane's
+/// outside value. Returns plane c's sum at c (0 beyond the light's planes).
+#[inline(always)]
+pub fn gather(planes: &LightPlanes<'_>, taps: &[Tap], at: TapOrigin) -> [f32; 4] {
+    // A constant number of sums, so that they stay in registers.
+    match planes.channels {
+        1 => gather_c::<1>(planes, taps, at),
+        2 => gather_c::<2>(planes, taps, at),
+        3 => gather_c::<3>(planes, taps, at),
+        4 => gather_c::<4>(planes, taps, at),
+        n => panic!("a light has 1 or 3 channels and at most one depth plane, not {n} planes"),
+    }
+}
+
+/// [`gather`] of `C` planes.
+#[inline(always)]
+fn gather_c<const C: usize>(planes: &LightPlanes<'_>, taps: &[Tap], at: TapOrigin) -> [f32; 4] {
+    let mut acc = [0.0f32; 4];
+    for t in taps {
+        let (sx, sy) = at.corner(t);
+        let v = planes.corners::<C>(sx, sy, at.inside);
+        for (c, a) in acc.iter_mut().enumerate().take(C) {
+            // `a += p` is `a = a + p`: no fused multiply-add.
+            *a += t.w[0] * v[0][c];
+            *a += t.w[1] * v[1][c];
+            *a += t.w[2] * v[2][c];
+            *a += t.w[3] * v[3][c];
+        }
+    }
+    acc
+}
+
+/// Distance penumbra: the tap row light `taps` (of `table`) gathers through at one pixel
+/// (kernels.wgsl's `distance_row`). The pixel's own level (level 0's when it has none) gives a
+/// row; the smallest level among its own and those at the four corners of every tap of that row
+/// (from `at`) is the nearest occluder's in reach, whose row (level 0's when there is none) the
+/// pixel gathers through. `phase`: the pixel's phase within a level ([`level_row`]).
+#[inline(always)]
+pub fn distance_row(
+    levels: &LevelPlane<'_>,
+    table: &KernelTable,
+    taps: &LightTaps,
+    phase: u32,
+    slab: u32,
+    slabs: u32,
+    at: TapOrigin,
+) -> u32 {
+    let or_zero = |level: u32| if level == LIT_LEVEL { 0 } else { level };
+    let own = levels.at(at.x, at.y);
+    let own_row = level_row(table, or_zero(own), phase, slabs, slab);
+    let mut nearest = own;
+    // The row's taps (`table.phase(own_row)`), up to the last padding tap the search needs.
+    let first = own_row as usize * table.taps_per_phase as usize;
+    for t in &table.taps[first..][..taps.level_taps(own_row)] {
+        let (sx, sy) = at.corner(t);
+        nearest = nearest.min(levels.corners(sx, sy, at.inside));
+    }
+    level_row(table, or_zero(nearest), phase, slabs, slab)
+}
+
+/// The tap row of level `level` at phase `phase` (kernels.wgsl's `level_row`):
+/// `level · phase_count + phase`, or for a scheduled kernel the level's own phase of slab `slab`,
+/// `slab_phase[level · slabs + slab]`.
+#[inline(always)]
+pub fn level_row(table: &KernelTable, level: u32, phase: u32, slabs: u32, slab: u32) -> u32 {
+    let first = level * table.phase_count;
+    match table.phase_mode {
+        PhaseMode::Schedule => first + table.slab_phase[(level * slabs + slab) as usize],
+        _ => first + phase,
+    }
 }
 
 /// The light buffers of one light as the gather reads them: `channels` planes of one
@@ -101,6 +257,29 @@ impl LightPlanes<'_> {
         self.channels > 1 && self.pixel_step == self.channels && self.plane_step == 1
     }
 
+    /// The corners (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1) of the first `C` planes, as
+    /// `[corner][plane]`; beyond the grid, a plane's outside value. `inside`: the caller knows
+    /// that every corner lies in the grid. Where they do and the planes are a pixel's every plane
+    /// side by side, the block is two runs of `2·C` values, one bounds check each.
+    #[inline(always)]
+    pub fn corners<const C: usize>(&self, x: i32, y: i32, inside: bool) -> [[f32; C]; 4] {
+        let inside = inside || (x >= 0 && y >= 0 && x + 1 < self.width && y + 1 < self.height);
+        if inside && self.pixel_step == C && self.plane_step == 1 {
+            let rs = self.row_stride;
+            let at = self.base + y as usize * rs + x as usize * C;
+            let (top, bottom) = (&self.data[at..][..2 * C], &self.data[at + rs..][..2 * C]);
+            let run = |r: &[f32], from: usize| std::array::from_fn(|c| r[from + c]);
+            return [run(top, 0), run(top, C), run(bottom, 0), run(bottom, C)];
+        }
+        let corner = |cx, cy| std::array::from_fn(|c| self.plane(c).fetch(cx, cy));
+        [
+            corner(x, y),
+            corner(x + 1, y),
+            corner(x, y + 1),
+            corner(x + 1, y + 1),
+        ]
+    }
+
     /// Plane `c` as a scalar [`Plane`].
     #[inline(always)]
     pub fn plane(&self, c: usize) -> Plane<'_> {
@@ -122,7 +301,7 @@ impl LightPlanes<'_> {
 
 /// `acc + w0·v0 + w1·v1 + w2·v2 + w3·v3`, added left to right (the fixed sum order).
 #[inline(always)]
-fn add_bilinear<L: Lane>(acc: L, w: &[L; 4], v: &[L; 4]) -> L {
+fn add_bilinear<L: Layout>(acc: L, w: &[L; 4], v: &[L; 4]) -> L {
     let mut s = acc;
     for (wk, vk) in w.iter().zip(v) {
         s = s + *wk * *vk;
@@ -133,7 +312,7 @@ fn add_bilinear<L: Lane>(acc: L, w: &[L; 4], v: &[L; 4]) -> L {
 /// The four bilinear corners (0,0), (1,0), (0,1), (1,1) of lane i's sample at
 /// (`sx[i]`, `sy[i]`) in `plane` (reads outside give its outside value; [`Lane::fetch_grid`]).
 #[inline(always)]
-fn fetch_corners<L: Lane>(plane: &Plane<'_>, sx: L::U, sy: L::U) -> [L; 4] {
+fn fetch_corners<L: Layout>(plane: &Plane<'_>, sx: L::U, sy: L::U) -> [L; 4] {
     let one = L::u_splat(1);
     let (sx1, sy1) = (L::u_add(sx, one), L::u_add(sy, one));
     let (w, h) = (plane.width, plane.height);
@@ -189,7 +368,7 @@ pub fn reads_inside(
 /// corner by corner, so every lane has the bits of any other lane count.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn gather<L: Lane>(
+pub fn gather_lanes<L: Layout>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     extent: [i32; 4],
@@ -213,12 +392,12 @@ pub fn gather<L: Lane>(
     }
 }
 
-/// [`gather`] of a chunk whose reads may leave the grid, for `C` planes (a constant, so that
+/// [`gather_lanes`] of a chunk whose reads may leave the grid, for `C` planes (a constant, so that
 /// the sums stay in registers): tap by tap, contiguous loads where the tap's corners lie inside,
 /// [`RowRun`]s where they do not. Every plane of a pixel-interleaved buffer is summed in the
 /// buffer's order (the runs' values put in it), as [`gather_inside`] sums it.
 #[inline(always)]
-fn gather_near_edge<L: Lane, const C: usize>(
+fn gather_near_edge<L: Layout, const C: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     shift: [i32; 2],
@@ -314,7 +493,7 @@ impl RowRun {
     /// The run at (x.., y) of a `width` × `height` grid with rows and pixels `[row_stride,
     /// pixel_step]` apart.
     #[inline(always)]
-    fn at<L: Lane>(width: i32, height: i32, strides: [usize; 2], x: i32, y: i32) -> RowRun {
+    fn at<L: Layout>(width: i32, height: i32, strides: [usize; 2], x: i32, y: i32) -> RowRun {
         let [row_stride, step] = strides;
         let lanes = L::LANES as i32;
         if y < 0 || y >= height || x >= width || x + lanes <= 0 {
@@ -341,7 +520,7 @@ impl RowRun {
 
     /// The run's values in `plane`.
     #[inline(always)]
-    fn read<L: Lane>(self, plane: &Plane<'_>) -> L {
+    fn read<L: Layout>(self, plane: &Plane<'_>) -> L {
         match self {
             RowRun::Outside => L::splat(plane.outside),
             RowRun::Load { at, by } => {
@@ -362,7 +541,7 @@ impl RowRun {
 /// `data[at + i·step]` in lane i: one contiguous load when `step` is 1, else a gather (a plane
 /// of a pixel-interleaved buffer read on its own).
 #[inline(always)]
-fn load_step<L: Lane>(data: &[f32], at: usize, step: usize) -> L {
+fn load_step<L: Layout>(data: &[f32], at: usize, step: usize) -> L {
     if step == 1 {
         return L::load(data, at);
     }
@@ -378,7 +557,7 @@ fn load_step<L: Lane>(data: &[f32], at: usize, step: usize) -> L {
 /// whose pixel x's plane 0 is `data[at]` (the planes of a pixel side by side, `planes.len()` of
 /// them).
 #[inline(always)]
-pub fn store_pixels<L: Lane>(planes: &[L], data: &mut [f32], at: usize) {
+pub fn store_pixels<L: Layout>(planes: &[L], data: &mut [f32], at: usize) {
     match planes {
         [p] => p.store(data, at),
         [a, b] => store_in_pixel_order(&[*a, *b], data, at),
@@ -390,7 +569,7 @@ pub fn store_pixels<L: Lane>(planes: &[L], data: &mut [f32], at: usize) {
 
 /// [`store_pixels`] for `C` planes.
 #[inline(always)]
-fn store_in_pixel_order<L: Lane, const C: usize>(planes: &[L; C], data: &mut [f32], at: usize) {
+fn store_in_pixel_order<L: Layout, const C: usize>(planes: &[L; C], data: &mut [f32], at: usize) {
     // One bounds check for the run (a check per value cost 1 % of the sweep's instructions).
     let run = &mut data[at..at + C * L::LANES];
     for (j, v) in L::pixel_order(*planes).iter().enumerate() {
@@ -398,7 +577,7 @@ fn store_in_pixel_order<L: Lane, const C: usize>(planes: &[L; C], data: &mut [f3
     }
 }
 
-/// [`gather`] of `K` neighbouring chunks at once (chunk k at pixels x0 + k·LANES..), every read
+/// [`gather_lanes`] of `K` neighbouring chunks at once (chunk k at pixels x0 + k·LANES..), every read
 /// inside the grid: each tap's weights are splat once for all chunks, and the chunks' sums are
 /// independent chains the processor overlaps (one chunk's sums wait on the add latency). Each
 /// lane's sum has the same terms in the same order as one chunk alone: the same bits. A
@@ -407,7 +586,7 @@ fn store_in_pixel_order<L: Lane, const C: usize>(planes: &[L; C], data: &mut [f3
 /// ([`Lane::plane_order`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn gather_inside<L: Lane, const K: usize>(
+pub fn gather_inside<L: Layout, const K: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     extent: [i32; 4],
@@ -442,7 +621,7 @@ pub fn gather_inside<L: Lane, const K: usize>(
 /// [`gather_inside`] plane by plane, after its bounds proof (`x`, `y`: the chunks' shifted
 /// origin): contiguous loads in a planar buffer, strided ones otherwise.
 #[inline(always)]
-fn gather_planes<L: Lane, const K: usize>(
+fn gather_planes<L: Layout, const K: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     x: i64,
@@ -484,7 +663,7 @@ fn gather_planes<L: Lane, const K: usize>(
 /// its bounds proof: `C` contiguous loads per corner and chunk, summed value by value in the
 /// buffer's order, then put in plane order.
 #[inline(always)]
-fn gather_pixels<L: Lane, const K: usize, const C: usize>(
+fn gather_pixels<L: Layout, const K: usize, const C: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     x: i64,
@@ -591,7 +770,7 @@ pub struct LaneRows {
 impl LaneRows {
     /// The summary of the lanes' rows `rows` in `columns`.
     #[inline(always)]
-    pub fn of<L: Lane>(columns: &TapColumns, rows: L::U) -> LaneRows {
+    pub fn of<L: Layout>(columns: &TapColumns, rows: L::U) -> LaneRows {
         let mut r = [0u32; MAX_LANES];
         L::u_store(rows, &mut r);
         let mut most = i32x8::splat(i32::MIN);
@@ -607,7 +786,7 @@ impl LaneRows {
     /// extent and offset span hold for any rows, and inside the grid they only prove reads).
     /// Kept apart from `of`'s body: one shared body measured +3.7 % sweep instructions.
     #[inline(always)]
-    pub fn within<L: Lane>(columns: &TapColumns, rows: L::U, interior: bool) -> LaneRows {
+    pub fn within<L: Layout>(columns: &TapColumns, rows: L::U, interior: bool) -> LaneRows {
         if !(interior && columns.same_counts) {
             return LaneRows::of::<L>(columns, rows);
         }
@@ -689,14 +868,7 @@ impl TapColumns {
                     last.map_or(0, |i| i + 1) as u32
                 })
                 .collect(),
-            level_taps: (0..pc as u32)
-                .map(|p| {
-                    let taps = table.phase(p);
-                    let padding = |t: &Tap| t.dx == 0 && t.dy == 0 && t.w == [0.0; 4];
-                    let real = taps.iter().rposition(|t| !padding(t)).map_or(0, |i| i + 1);
-                    (real + usize::from(real < taps.len())) as u32
-                })
-                .collect(),
+            level_taps: (0..pc as u32).map(|p| level_taps(table, p)).collect(),
             extent: (0..pc as u32)
                 .map(|p| {
                     let taps = table.phase(p);
@@ -742,12 +914,12 @@ impl TapColumns {
     }
 }
 
-/// [`gather`] where lane i uses phase `phases[i]` of `table` (per-pixel hashed phases; `columns`
+/// [`gather_lanes`] where lane i uses phase `phases[i]` of `table` (per-pixel hashed phases; `columns`
 /// is the same table by tap, `lane_rows` its [`LaneRows`] summary of `phases`): gathered weights and, inside the grid, gathered loads; lane
 /// arithmetic in the same order.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn gather_per_lane<L: Lane>(
+pub(crate) fn gather_per_lane<L: Layout>(
     planes: &LightPlanes<'_>,
     table: &KernelTable,
     columns: &TapColumns,
@@ -826,7 +998,7 @@ enum Bounds {
 
 /// The per-lane gather's reads inside the grid: every plane's two pixel pairs per lane and tap
 /// ([`Lane::acc_blocks`]), lane i at `pixel + lane_shift[i] +` its tap's offset.
-struct PairLoads<'a, L: Lane> {
+struct PairLoads<'a, L: Layout> {
     planes: &'a LightPlanes<'a>,
     columns: &'a TapColumns,
     phases: L::U,
@@ -839,7 +1011,7 @@ struct PairLoads<'a, L: Lane> {
     offset_span: [i64; 2],
 }
 
-impl<L: Lane> PairLoads<'_, L> {
+impl<L: Layout> PairLoads<'_, L> {
     /// Adds taps `taps` (every corner of every lane inside the grid) to `acc`, plane by plane.
     #[inline(always)]
     fn add_taps(&self, taps: std::ops::Range<usize>, acc: &mut [L], bounds: Bounds) {
@@ -1085,6 +1257,53 @@ pub struct LevelPlane<'a> {
     pub height: i32,
 }
 
+impl LevelPlane<'_> {
+    /// Whether (x, y) lies in the grid.
+    #[inline(always)]
+    fn inside(&self, x: i32, y: i32) -> bool {
+        x >= 0 && y >= 0 && x < self.width && y < self.height
+    }
+
+    /// Index of (x, y) in `data` (and `blocks`).
+    #[inline(always)]
+    fn index(&self, x: i32, y: i32) -> usize {
+        self.base + y as usize * self.row_stride + x as usize
+    }
+
+    /// The level at (x, y), inside the grid.
+    #[inline(always)]
+    pub fn at(&self, x: i32, y: i32) -> u32 {
+        self.data[self.index(x, y)]
+    }
+
+    /// The level at (x, y), or [`LIT_LEVEL`] beyond the grid (kernels.wgsl's `fetch_level`).
+    #[inline(always)]
+    pub fn fetch(&self, x: i32, y: i32) -> u32 {
+        if self.inside(x, y) {
+            self.at(x, y)
+        } else {
+            LIT_LEVEL
+        }
+    }
+
+    /// The smallest level at the corners (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1), each
+    /// [`LIT_LEVEL`] beyond the grid: one read of the block minima where (x, y) lies in the grid
+    /// ([`level_block_minima`] gives the corners beyond it the same `LIT_LEVEL`; a minimum is
+    /// exact and order-free, so one read gives the bits of four), the four corners elsewhere.
+    /// `inside`: the caller knows that every corner lies in the grid.
+    #[inline(always)]
+    pub fn corners(&self, x: i32, y: i32, inside: bool) -> u32 {
+        if inside || self.inside(x, y) {
+            return self.blocks[self.index(x, y)];
+        }
+        let corners = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)];
+        corners
+            .map(|(cx, cy)| self.fetch(cx, cy))
+            .into_iter()
+            .fold(LIT_LEVEL, u32::min)
+    }
+}
+
 /// Distance penumbra: one row of the level plane's 2×2 block minima, at pixels `xs` of every
 /// light. `levels` is row y of the plane (every light's `width` levels side by side), `below`
 /// row y + 1 (`None` for the last row); `out[i]` becomes the smallest of `levels[i]`,
@@ -1137,7 +1356,7 @@ pub(crate) fn level_block_minima(
 /// that was just crossed does not blur the darkness behind that surface over itself.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn distance_rows<L: Lane>(
+pub(crate) fn distance_rows<L: Layout>(
     levels: &LevelPlane<'_>,
     table: &KernelTable,
     columns: &TapColumns,
@@ -1249,7 +1468,7 @@ pub(crate) fn distance_rows<L: Lane>(
 /// The rows of levels `level` at the lanes' phases: `level · phase_count + phase`, or for a
 /// scheduled kernel the level's phase of slab `slab`, `slab_phase[level · slabs + slab]`.
 #[inline(always)]
-fn level_rows<L: Lane>(
+fn level_rows<L: Layout>(
     table: &KernelTable,
     level: L::U,
     phase: L::U,
@@ -1266,7 +1485,7 @@ fn level_rows<L: Lane>(
 /// Distance penumbra with a scheduled kernel: `rows` (level · phase_count, phase 0) moved to the
 /// level's phase of slab `slab`, `slab_phase[level · slabs + slab]`.
 #[inline(always)]
-pub fn schedule_rows<L: Lane>(table: &KernelTable, rows: L::U, slabs: u32, slab: u32) -> L::U {
+pub fn schedule_rows<L: Layout>(table: &KernelTable, rows: L::U, slabs: u32, slab: u32) -> L::U {
     let mut r = [0u32; MAX_LANES];
     L::u_store(rows, &mut r);
     let pc = table.phase_count;
@@ -1280,7 +1499,7 @@ pub fn schedule_rows<L: Lane>(table: &KernelTable, rows: L::U, slabs: u32, slab:
 /// The per-pixel phases of pixels x0.. as integer lanes ([`phase_at`] for `PerPixel` tables): the
 /// pixel hash on integer lanes.
 #[inline(always)]
-pub fn phases<L: Lane>(table: &KernelTable, row_hash_v: u32, x0: u32) -> L::U {
+pub fn phases<L: Layout>(table: &KernelTable, row_hash_v: u32, x0: u32) -> L::U {
     let bits = table.phase_bits();
     if bits == 0 {
         return L::u_splat(0);
@@ -1296,6 +1515,7 @@ pub fn phases<L: Lane>(table: &KernelTable, row_hash_v: u32, x0: u32) -> L::U {
 #[cfg(test)]
 mod tests {
     use convshadow_common::model::kernel::KernelSpec;
+    use convshadow_common::pixel::lane::Lane;
     use convshadow_common::plan::kernel::{KernelMoments, build_distance_table};
     use convshadow_testkit::TestRng;
     use wide::{f32x8, u32x8};
@@ -1488,7 +1708,7 @@ mod tests {
                     // The uniform gather skips zero taps; the per-lane one visits them all.
                     let extent = columns.extent[row as usize];
                     let taps = columns.weighted_taps(row);
-                    gather(&planes, taps, extent, shift, x0, y, false, &mut uniform);
+                    gather_lanes(&planes, taps, extent, shift, x0, y, false, &mut uniform);
                     let rows = f32x8::u_splat(row);
                     let reads = LaneRows::of::<f32x8>(&columns, rows);
                     gather_per_lane(
@@ -1591,7 +1811,7 @@ mod tests {
                         let (taps, extent) =
                             (columns.weighted_taps(row), columns.extent[row as usize]);
                         let mut uniform = [f32x8::splat(0.0); 4];
-                        gather(
+                        gather_lanes(
                             planes,
                             taps,
                             extent,
@@ -1603,10 +1823,7 @@ mod tests {
                         );
                         // And one pixel at a time (the scalar path's gathers).
                         let mut one = [[0.0f32; 8]; 4];
-                        #[allow(clippy::needless_range_loop)]
-                        // `i` is both the lane and the pixel offset.
-                        for i in 0..8 {
-                            let r = rows.to_array()[i];
+                        for (i, r) in rows.to_array().into_iter().enumerate() {
                             let lane_reads = LaneRows::of::<f32>(columns, r);
                             let mut sums = [0.0f32; 4];
                             let x = x0 + i as i32;

@@ -1,12 +1,13 @@
 //! The per-pixel kit every lane path of the sweep uses: what a slab shares ([`SlabContext`]),
-//! one row's mutable state ([`RowState`]), the row hashes and the gather's reach.
+//! what a row's pixels read ([`RowContext`]: the previous slab's buffers, the row hashes), one
+//! row's mutable state ([`RowState`]), the light buffer's layout and the gather's reach.
 
 use convshadow_common::pixel::hash::row_hash;
 use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::prepare::raster::RasterSetup;
 
-use crate::kernels::{TapColumns, light_row_hash};
+use crate::kernels::{LevelPlane, LightPlanes, LightTaps, TapColumns, light_row_hash};
 use crate::ldi::Ldi;
 
 pub use convshadow_common::contract::sweep_io::MAX_LIGHT_CHANNELS;
@@ -17,6 +18,8 @@ pub(crate) struct SlabContext<'a> {
     pub plan: &'a RenderPlan,
     pub raster: &'a RasterSetup,
     pub ldi: &'a Ldi,
+    /// Every light's tap rows, as the gather and the level search read them.
+    pub taps: &'a [LightTaps],
     /// Every light's tap table by tap (for per-pixel phases).
     pub columns: &'a [TapColumns],
     pub slab: u32,
@@ -64,6 +67,69 @@ pub(crate) struct RowState<'a> {
     /// With pre-integration: per pixel the detail value at the slab's front face kept from the
     /// previous slab (NaN: none kept). Without: one unused float.
     pub pre: &'a mut [f32],
+}
+
+/// What every pixel of one row reads: its slab, the previous slab's buffers, the row's index and
+/// its hashes.
+pub(crate) struct RowContext<'a> {
+    pub ctx: &'a SlabContext<'a>,
+    pub prev: &'a Previous<'a>,
+    pub y: usize,
+    /// Every light's row hash ([`light_row_hashes`]).
+    pub light_hashes: [u32; MAX_LIGHT_CHANNELS],
+    /// The row's jitter hash ([`jitter_row_hash`]).
+    pub jitter_hash: u32,
+}
+
+impl<'a> RowContext<'a> {
+    /// Row y of the slab `ctx`, reading `prev`.
+    pub(crate) fn new(ctx: &'a SlabContext<'a>, prev: &'a Previous<'a>, y: usize) -> Self {
+        RowContext {
+            ctx,
+            prev,
+            y,
+            light_hashes: light_row_hashes(ctx, y),
+            jitter_hash: jitter_row_hash(ctx, y),
+        }
+    }
+}
+
+/// Where light `l`'s pixel (0, 0) starts in a pixel-interleaved light-buffer row (see
+/// [`LightPlanes`]): its planes side by side per pixel, `planes_per_light` of them.
+#[inline(always)]
+pub(crate) fn light_block(plan: &RenderPlan, l: usize) -> usize {
+    plan.light_plane(l, 0) * plan.grid_width as usize
+}
+
+/// Every plane of light `l` (its channels, then its depth plane if any) in the pixel-interleaved
+/// light buffer `light` (every row), as the gather reads them.
+#[inline(always)]
+pub(crate) fn light_planes<'a>(plan: &RenderPlan, light: &'a [f32], l: usize) -> LightPlanes<'a> {
+    let planes = plan.planes_per_light();
+    LightPlanes {
+        data: light,
+        base: light_block(plan, l),
+        channels: planes,
+        light_channels: plan.channels as usize,
+        row_stride: plan.light_row_len(),
+        pixel_step: planes,
+        plane_step: 1,
+        width: plan.grid_width as i32,
+        height: plan.grid_height as i32,
+    }
+}
+
+/// Distance penumbra: light `l`'s level plane of the previous slab, with its block minima.
+#[inline(always)]
+pub(crate) fn level_plane<'a>(plan: &RenderPlan, prev: &Previous<'a>, l: usize) -> LevelPlane<'a> {
+    LevelPlane {
+        data: prev.levels,
+        blocks: prev.level_blocks,
+        base: l * plan.grid_width as usize,
+        row_stride: plan.level_row_len(),
+        width: plan.grid_width as i32,
+        height: plan.grid_height as i32,
+    }
 }
 
 /// Every light's row hash for row `y` of the slab (the prefix of each per-pixel phase hash).

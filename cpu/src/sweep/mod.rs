@@ -9,18 +9,21 @@
 //! pixel is opaque (alpha exactly 1; no later slab can change an image bit) unless
 //! [`SweepOptions::every_slab`] asks for every slab.
 //!
-//! Two code paths run the same stage code: [`SweepPath::Scalar`], one pixel at a time (its 1-lane
-//! instance), and [`SweepPath::Simd`], eight pixels at a time with `wide` (its 8-lane instance),
-//! which gives the same bits and may skip provably quiet pixels.
+//! Two code paths give the same bits: [`SweepPath::Scalar`] runs the per-pixel stage (`pixel`,
+//! which reads like `sweep.wgsl`) one pixel at a time, and [`SweepPath::Simd`] eight pixels at a
+//! time with `wide` (`stage`, held to the per-pixel stage's bits lane by lane by its tests),
+//! skipping provably quiet pixels; a row's last `width mod 8` pixels go through the per-pixel
+//! stage.
 
 //!
 //! Modules, with imports in one direction only: this driver (the per-slab loop, ping-pong
 //! buffers, cancel and progress) → `rows` (the lane paths: a row at a time, scalar or 8 lanes with
-//! `quiet` chunk skipping) → `stage` (the per-pixel stage, generic over the lane type) → `kit`
-//! (slab context, row state, row hashes) → the stage functions in `kernels`, `parity`, `shading`
-//! and `composite`.
+//! `quiet` chunk skipping) → `stage` (the 8-lane chunk stage) → `pixel` (the per-pixel stage) →
+//! `kit` (slab context, row context and state, row hashes) → the stage functions in `kernels`,
+//! `parity`, `shading` and `composite`.
 
 mod kit;
+mod pixel;
 mod quiet;
 mod rows;
 mod stage;
@@ -32,7 +35,7 @@ use convshadow_common::prepare::raster::RasterSetup;
 use rayon::prelude::*;
 
 use crate::composite::finish;
-use crate::kernels::{TapColumns, level_block_minima};
+use crate::kernels::{LightTaps, TapColumns, level_block_minima};
 use crate::ldi::Ldi;
 use convshadow_common::plan::levels::initial_levels;
 use kit::{Previous, Reach, RowState, SlabContext, dark_levels};
@@ -499,6 +502,11 @@ pub fn sweep_with(
         })
         .collect();
 
+    let taps: Vec<LightTaps> = plan
+        .lights
+        .iter()
+        .map(|l| LightTaps::new(&l.table))
+        .collect();
     let mut opaque = OpaqueImage::new(plan);
     let mut slabs_swept = plan.slabs;
     for slab in 0..plan.slabs {
@@ -509,6 +517,7 @@ pub fn sweep_with(
             plan,
             raster,
             ldi,
+            taps: &taps,
             columns: &columns,
             slab,
             back: plan.slab_back[slab as usize],

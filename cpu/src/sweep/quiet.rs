@@ -25,7 +25,7 @@ use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::RenderPlan;
 use wide::f32x8;
 
-use super::kit::{Reach, SlabContext};
+use super::kit::{Reach, SlabContext, light_block};
 use crate::ldi::Ldi;
 
 /// Lanes per chunk.
@@ -150,6 +150,31 @@ impl Values {
         not_zero: false,
         light_not_zero: false,
     };
+
+    /// What pixel x wrote to the pixel-interleaved light-buffer row `light`: every light's
+    /// channels (quiet at exactly 1 or exactly 0) and depth plane (quiet at exactly 0).
+    pub(crate) fn written(plan: &RenderPlan, light: &[f32], x: usize) -> Values {
+        let (ch, planes) = (plan.channels as usize, plan.planes_per_light());
+        let mut v = Values {
+            not_one: false,
+            not_zero: false,
+            light_not_zero: false,
+        };
+        for l in 0..plan.lights.len() {
+            let pixel = &light[light_block(plan, l) + x * planes..][..planes];
+            for (p, &value) in pixel.iter().enumerate() {
+                let not_zero = value != 0.0;
+                v.not_zero |= not_zero;
+                if p < ch {
+                    v.not_one |= value != 1.0;
+                    v.light_not_zero |= not_zero;
+                } else {
+                    v.not_one |= not_zero;
+                }
+            }
+        }
+        v
+    }
 }
 
 /// Whether span `[lo, hi)` meets the closed range `a..=b` (the per-chunk test [`RowHits`]

@@ -1,23 +1,21 @@
 //! The lane paths of the sweep: one row of one slab, either one pixel at a time (the scalar
-//! path, the 1-lane instance of the stage) or eight at a time (the SIMD path, with quiet-chunk
-//! skipping; the row's last `width mod 8` pixels go through the 1-lane instance).
+//! path: the per-pixel stage, `pixel`) or eight at a time (the SIMD path, with quiet-chunk
+//! skipping; the row's last `width mod 8` pixels go through the per-pixel stage).
 
 use std::ops::Range;
 
 use wide::f32x8;
 
 use super::kit::{
-    MAX_LIGHT_CHANNELS, Previous, Reach, RowState, SlabContext, jitter_row_hash, light_row_hashes,
+    MAX_LIGHT_CHANNELS, Previous, Reach, RowContext, RowState, SlabContext, light_block,
 };
+use super::pixel;
 use super::quiet::{ChunkCounts, ChunkWork, LANES, Moved, QuietRow, RowSpans, Values};
-use super::stage::{
-    ANY_SHAPE, ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, light_block, pairs_gathers,
-    shape_of,
-};
+use super::stage::{ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, pairs_gathers, shape_of};
 use crate::parity::{NO_CROSSING, advance};
 use convshadow_common::plan::LIT_LEVEL;
 
-/// Processes one row of one slab, one pixel at a time.
+/// Processes one row of one slab, one pixel at a time: the per-pixel stage (`pixel`).
 pub(crate) fn sweep_row_scalar(
     ctx: &SlabContext<'_>,
     reach: &Reach,
@@ -25,42 +23,25 @@ pub(crate) fn sweep_row_scalar(
     prev: &Previous<'_>,
     mut row: RowState<'_>,
 ) {
-    let w = ctx.plan.grid_width as usize;
-    let row_hashes = light_row_hashes(ctx, y);
-    let jitter_row = jitter_row_hash(ctx, y);
-    let mut spans = RowSpans::EMPTY;
-    let hashes = (&row_hashes, jitter_row);
-    sweep_pixels(ctx, reach, y, 0..w, prev, &mut row, hashes, &mut spans);
+    pixel::sweep_row(&RowContext::new(ctx, prev, y), reach, &mut row);
 }
 
-/// Runs the 1-lane stage on pixels `xs` of row y (`hashes`: the row's light and jitter
-/// hashes), recording their outgoing light in `spans`. Returns whether some pixel crossed a
-/// fragment or was shaded.
-#[allow(clippy::too_many_arguments)]
-fn sweep_pixels(
-    ctx: &SlabContext<'_>,
+/// The row's tail (pixels `xs`, fewer than a chunk): the per-pixel stage, pixel by pixel, each
+/// pixel's outgoing light recorded in `spans`.
+fn sweep_tail(
+    row: &RowContext<'_>,
     reach: &Reach,
-    y: usize,
     xs: Range<usize>,
-    prev: &Previous<'_>,
-    row: &mut RowState<'_>,
-    hashes: (&[u32; MAX_LIGHT_CHANNELS], u32),
+    state: &mut RowState<'_>,
     spans: &mut RowSpans,
-) -> bool {
-    let plan = ctx.plan;
+) {
+    let plan = row.ctx.plan;
     let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
-    let pixel: ChunkFn = chunk_fn::<f32>(plan.lights.len() * plan.channels as usize, ANY_SHAPE);
-    let (row_hashes, jitter_row) = hashes;
-    let mut moved = false;
     for x in xs {
-        let interior = reach.interior(x, 1, y, w, h);
-        let out = pixel(
-            ctx, y, x, prev, row, row_hashes, jitter_row, interior, None, None, None,
-        );
-        spans.record(x, 1, out.values());
-        moved |= out.shaded;
+        let inside = reach.interior(x, 1, row.y, w, h);
+        pixel::sweep_pixel(row, state, x, inside);
+        spans.record(x, 1, Values::written(plan, state.light, x));
     }
-    moved
 }
 
 /// A quiet chunk's outgoing light for pixels x0..x0 + lanes: 1 (unoccluded) or 0 (dark) in every
@@ -126,7 +107,7 @@ fn advance_dark(ctx: &SlabContext<'_>, row: &mut RowState<'_>, y: usize, xs: Ran
 }
 
 /// Processes one row of one slab, 8 pixels at a time (quiet chunks skipped when `quiet` is
-/// given); the last `width mod 8` pixels go through the 1-lane stage, or are skipped as one
+/// given); the last `width mod 8` pixels go through the per-pixel stage, or are skipped as one
 /// quiet chunk.
 pub(crate) fn sweep_row_simd(
     ctx: &SlabContext<'_>,
@@ -141,9 +122,8 @@ pub(crate) fn sweep_row_simd(
     let w = plan.grid_width as usize;
     let h = plan.grid_height as usize;
     let planes = plan.lights.len() * plan.channels as usize;
-    let row_hashes = light_row_hashes(ctx, y);
-    let jitter_row = jitter_row_hash(ctx, y);
-    let hashes = (&row_hashes, jitter_row);
+    let row_ctx = RowContext::new(ctx, prev, y);
+    let (row_hashes, jitter_row) = (&row_ctx.light_hashes, row_ctx.jitter_hash);
     let mut spans = RowSpans::EMPTY;
     let mut tally = [0u64; 3];
     // The SIMD path takes the instance that knows the plan's shape, where there is one.
@@ -215,7 +195,7 @@ pub(crate) fn sweep_row_simd(
                 tally[2] += 1;
                 let moved = advance_dark(ctx, &mut row, y, x0..x0 + LANES);
                 let interior = reach.interior(x0, LANES, y, w, h);
-                let not_zero = dark_depth_chunk(ctx, y, x0, prev, &mut row, &row_hashes, interior);
+                let not_zero = dark_depth_chunk(ctx, y, x0, prev, &mut row, row_hashes, interior);
                 let values = Values {
                     not_zero,
                     ..Values::DARK
@@ -245,7 +225,7 @@ pub(crate) fn sweep_row_simd(
                     }
                     _ => None,
                 };
-                let (rh, jr) = hashes;
+                let (rh, jr) = (row_hashes, jitter_row);
                 let (known, inner) = (known_light, interior);
                 // The chunk's cursor summary, current: refreshed whenever its cursors move.
                 let summary = quiet.as_ref().map(|q| q.chunks[c]);
@@ -255,12 +235,12 @@ pub(crate) fn sweep_row_simd(
                 spans.record(x0, LANES, out.values());
                 Moved::of(out.crossed, out.shaded)
             }
-            // The row's tail: the 1-lane stage, pixel by pixel.
+            // The row's tail: the per-pixel stage, pixel by pixel.
             ChunkWork::Full(_) | ChunkWork::DarkDepth => {
                 tally[0] += 1;
-                // Whether some pixel crossed a fragment or was shaded: refreshed whole.
-                let moved = sweep_pixels(ctx, reach, y, x0..w, prev, &mut row, hashes, &mut spans);
-                Moved::of(moved, moved)
+                sweep_tail(&row_ctx, reach, x0..w, &mut row, &mut spans);
+                // Its summary recomputed whole.
+                Moved::Cursors
             }
         };
         if let Some(q) = &mut quiet {

@@ -1,20 +1,24 @@
-//! The per-pixel stage of the sweep, written once over [`Lane`]: all five stages for the
-//! [`Lane::LANES`] pixels x0.. of one row. The scalar path is the 1-lane instance, the SIMD path
-//! the 8-lane one, so both run the same IEEE operations in the same order, lane by lane.
+//! The SIMD path's chunk stage: all five stages of the per-pixel stage (`super::pixel`) for the
+//! [`Lane::LANES`] pixels x0.. of one row, written over [`Lane`] and run by the SIMD path as its
+//! 8-lane instance. Each lane runs the per-pixel stage's IEEE operations in the same order (the
+//! tests below compare the two bit for bit).
 //!
 //! Lane work: the gather's arithmetic (and its loads, when a slab's phase is the same for every
 //! pixel), the phase hash, the detail function, the transfer-function interpolation, shading,
 //! compositing and attenuation. Per lane: the layer cursor (a short data-dependent loop) and
 //! table look-ups. Lanes on different meshes are shaded one lane at a time.
 
-use convshadow_common::pixel::lane::{Lane, MAX_LANES};
+use convshadow_common::pixel::lane::{Lane, Layout, MAX_LANES};
 use convshadow_common::plan::kernel::PhaseMode;
 
-use super::kit::{MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowState, SlabContext};
+use super::kit::{
+    MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, light_block,
+};
+use super::pixel::shade_and_composite;
 use super::quiet::{ChunkState, Values};
 use crate::composite::{attenuate, composite, deepen};
 use crate::kernels::{
-    LaneRows, LevelPlane, LightPlanes, distance_rows, gather, gather_inside, gather_per_lane,
+    LaneRows, LevelPlane, LightPlanes, distance_rows, gather_inside, gather_lanes, gather_per_lane,
     phase_at, phases, store_pixels,
 };
 use crate::parity::{NO_CROSSING, advance, first_mesh};
@@ -91,7 +95,7 @@ pub(crate) fn shape_of(plan: &RenderPlan) -> u8 {
 /// The [`sweep_chunk`] instance for `planes` light channels and the shape `shape` (see
 /// [`shape_of`]; [`ANY_SHAPE`] always serves): the smallest capacity that holds them (zeroing a
 /// 48-entry array per chunk costs).
-pub(crate) fn chunk_fn<L: Lane>(planes: usize, shape: u8) -> ChunkFn {
+pub(crate) fn chunk_fn<L: Layout>(planes: usize, shape: u8) -> ChunkFn {
     match (planes, shape) {
         (3..=6, RGB_ITERATED) => sweep_chunk::<L, 6, RGB_ITERATED>,
         (3..=6, RGB_DISTANCE) => sweep_chunk::<L, 6, RGB_DISTANCE>,
@@ -100,13 +104,6 @@ pub(crate) fn chunk_fn<L: Lane>(planes: usize, shape: u8) -> ChunkFn {
         (7..=12, _) => sweep_chunk::<L, 12, ANY_SHAPE>,
         _ => sweep_chunk::<L, MAX_LIGHT_CHANNELS, ANY_SHAPE>,
     }
-}
-
-/// Where light `l`'s pixel (0, 0) starts in a pixel-interleaved light-buffer row (see
-/// [`LightPlanes`]): its planes side by side per pixel, `planes_per_light` of them.
-#[inline(always)]
-pub(crate) fn light_block(plan: &RenderPlan, l: usize) -> usize {
-    plan.light_plane(l, 0) * plan.grid_width as usize
 }
 
 /// A `SHAPE` instance's light channels and planes per light: compile-time constants where the
@@ -203,7 +200,7 @@ pub(crate) fn gather_pair(
 /// lanes' cursors are not visited when it shows that none crosses a fragment in this slab).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
+pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     ctx: &SlabContext<'_>,
     y: usize,
     x0: usize,
@@ -312,7 +309,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
                         let mut sums = [L::splat(0.0); 3];
                         let sums = &mut sums[..ch];
                         let taps = ctx.columns[l].weighted_taps(p);
-                        gather(&planes, taps, extent, shift, x0, yi, interior, sums);
+                        gather_lanes(&planes, taps, extent, shift, x0, yi, interior, sums);
                         copy_channels(acc, sums);
                     }
                     None => {
@@ -337,29 +334,23 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
         if lane_mesh.iter().all(|&k| k.is_none() || k == Some(m)) {
             attenuation = shade_chunk(ctx, y, x0, row, &iin[..n], m, &mesh, &crossed, jitter_row);
         } else {
-            // Lanes on different meshes: the 1-lane stage, lane by lane.
+            // Lanes on different meshes: the per-pixel stage's shading, lane by lane.
             let mut att = [[1.0f32; MAX_LANES]; 3];
+            let one_row = RowContext {
+                ctx,
+                prev,
+                y,
+                light_hashes: *row_hashes,
+                jitter_hash: jitter_row,
+            };
             for (i, lm) in lane_mesh.iter().enumerate() {
                 let Some(mi) = *lm else { continue };
                 let mut lane_iin = [0.0f32; N];
                 for (dst, v) in lane_iin.iter_mut().zip(&iin[..n]) {
                     *dst = v.lane(i);
                 }
-                let mut one_mesh = [None; MAX_LANES];
-                one_mesh[0] = Some(mi);
-                let mut one_crossed = [NO_CROSSING; MAX_LANES];
-                one_crossed[0] = crossed[i];
-                let a = shade_chunk::<f32>(
-                    ctx,
-                    y,
-                    x0 + i,
-                    row,
-                    &lane_iin[..n],
-                    mi,
-                    &one_mesh,
-                    &one_crossed,
-                    jitter_row,
-                );
+                let lane_iin = &lane_iin[..n];
+                let a = shade_and_composite(&one_row, row, x0 + i, lane_iin, mi, crossed[i]);
                 for k in 0..3 {
                     att[k][i] = a[k];
                 }
@@ -418,7 +409,7 @@ pub(crate) fn sweep_chunk<L: Lane, const N: usize, const SHAPE: u8>(
 /// `dst = src` for a light's channels, as fixed-length copies for 1 and 3 channels (a run-time
 /// length is a `memcpy` call per light and chunk).
 #[inline(always)]
-fn copy_channels<L: Lane>(dst: &mut [L], src: &[L]) {
+fn copy_channels<L: Layout>(dst: &mut [L], src: &[L]) {
     match (dst, src) {
         ([d], [s]) => *d = *s,
         ([d0, d1, d2], [s0, s1, s2]) => (*d0, *d1, *d2) = (*s0, *s1, *s2),
@@ -432,7 +423,7 @@ fn copy_channels<L: Lane>(dst: &mut [L], src: &[L]) {
 /// copies).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn every_light_rows<L: Lane>(
+fn every_light_rows<L: Layout>(
     ctx: &SlabContext<'_>,
     prev: &Previous<'_>,
     row_hashes: &[u32; MAX_LIGHT_CHANNELS],
@@ -470,7 +461,7 @@ fn every_light_rows<L: Lane>(
 /// ([`every_light_rows`]); contiguous loads when every lane has the same row.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn distance_gather<L: Lane>(
+fn distance_gather<L: Layout>(
     ctx: &SlabContext<'_>,
     l: usize,
     planes: &LightPlanes<'_>,
@@ -488,7 +479,7 @@ fn distance_gather<L: Lane>(
         // Every lane at the same level and phase: contiguous loads.
         Some(row) => {
             let extent = columns.extent[row as usize];
-            gather(
+            gather_lanes(
                 planes,
                 columns.weighted_taps(row),
                 extent,
@@ -511,7 +502,7 @@ fn distance_gather<L: Lane>(
 /// for the caller to store with the light's channels.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn finish_depth<L: Lane>(
+fn finish_depth<L: Layout>(
     ctx: &SlabContext<'_>,
     row: &mut RowState<'_>,
     l: usize,
@@ -582,7 +573,7 @@ pub(crate) fn dark_depth_chunk(
 /// without a mesh).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn shade_chunk<L: Lane>(
+fn shade_chunk<L: Layout>(
     ctx: &SlabContext<'_>,
     y: usize,
     x0: usize,
@@ -680,7 +671,7 @@ fn shade_chunk<L: Lane>(
 /// keeping it only saves an evaluation, and forgetting it never changes the image.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn preintegrated<L: Lane>(
+fn preintegrated<L: Layout>(
     ctx: &SlabContext<'_>,
     x0: usize,
     row: &mut RowState<'_>,
@@ -740,9 +731,10 @@ mod tests {
     use wide::f32x8;
 
     use super::*;
-    use crate::kernels::TapColumns;
+    use crate::kernels::{LightTaps, TapColumns};
     use crate::ldi::Ldi;
     use crate::sweep::kit::{Reach, jitter_row_hash, light_row_hashes};
+    use crate::sweep::pixel::sweep_pixel;
 
     use convshadow_testkit::TestRng;
 
@@ -827,9 +819,9 @@ mod tests {
         crate::sweep::built_scene(&text, "lanes")
     }
 
-    /// Runs `eight` (an 8-lane stage) and the 1-lane stage eight times on the same random
-    /// inputs, at every chunk position of some rows of every slab; returns the first
-    /// difference.
+    /// Runs `eight` (an 8-lane stage) and the per-pixel stage (`pixel::sweep_pixel`) on each of
+    /// its eight pixels on the same random inputs, at every chunk position of some rows of every
+    /// slab; returns the first difference.
     fn compare_lanes(
         kernel: &str,
         penumbra: &str,
@@ -844,7 +836,6 @@ mod tests {
         let meshes = plan.mesh_material.len() as u32;
         let planes = plan.lights.len() * plan.channels as usize;
         assert_eq!(planes, 6, "two lights, three channels");
-        let one: ChunkFn = chunk_fn::<f32>(planes, ANY_SHAPE);
         let reach = Reach::of(&plan);
         let mut rng = TestRng::new(seed);
         // Pixel-interleaved, with the sweep's slack after the last row.
@@ -873,11 +864,17 @@ mod tests {
             .iter()
             .map(|l| TapColumns::new(&l.table, row_len, plan.planes_per_light(), lrl))
             .collect();
+        let taps: Vec<LightTaps> = plan
+            .lights
+            .iter()
+            .map(|l| LightTaps::new(&l.table))
+            .collect();
         for slab in 0..plan.slabs {
             let ctx = SlabContext {
                 plan: &plan,
                 raster: &g.raster,
                 ldi: &ldi,
+                taps: &taps,
                 columns: &columns,
                 slab,
                 back: plan.slab_back[slab as usize],
@@ -920,7 +917,7 @@ mod tests {
                 for x0 in 0..=w - 8 {
                     let (mut a, mut b) = (row.clone(), row.clone());
                     let interior = reach.interior(x0, 8, y, w, h);
-                    // Every other chunk with its cursor summary (the 1-lane stage visits every
+                    // Every other chunk with its cursor summary (the per-pixel stage visits every
                     // cursor).
                     let summary = (x0 % 2 == 0).then(|| {
                         ChunkState::of(&ldi, y, x0, 8, &row.next, &row.inside, &row.alpha)
@@ -942,21 +939,11 @@ mod tests {
                         None,
                         summary,
                     );
+                    // The reference: the per-pixel stage, pixel by pixel.
+                    let row_ctx = RowContext::new(&ctx, &prev, y);
                     for x in x0..x0 + 8 {
                         let interior = reach.interior(x, 1, y, w, h);
-                        one(
-                            &ctx,
-                            y,
-                            x,
-                            &prev,
-                            &mut b.state(),
-                            rh,
-                            jr,
-                            interior,
-                            None,
-                            None,
-                            None,
-                        );
+                        sweep_pixel(&row_ctx, &mut b.state(), x, interior);
                     }
                     if let Some(d) = mismatch(&a, &b) {
                         return Some(format!(

@@ -1,0 +1,280 @@
+//! The per-pixel stage of the sweep: what one pixel does in one slab, in the five steps of
+//! `gpu/src/shaders/sweep.wgsl` (`sweep_slab`) and in its order, each step one call:
+//!
+//! 1. convolution of every light buffer (`crate::kernels`);
+//! 2. intersection: the layer cursor (`crate::parity`);
+//! 3. shading at one point (`crate::shading`);
+//! 4. compositing and
+//! 5. attenuation with the flush (`crate::composite`).
+//!
+//! `--path scalar` runs it on every pixel of every row ([`sweep_row`]); the SIMD path on the
+//! pixels of a row's tail that fill no 8-lane chunk. The SIMD path's 8-lane chunks (`super::fast`)
+//! must give its bits in every lane; the tests there hold them to it.
+//!
+//! Plain `f32` code, one pixel, as the shader writes it. The stage modules it calls are written
+//! over `Lane` (their 8-lane instances serve the fast chunks), and this file calls their 1-lane
+//! instances, so its arithmetic is theirs by construction; only the control flow around them is
+//! written here for one pixel: which lights, the cursor, whether to shade. That control flow,
+//! written once for both lane counts, carried the 8-lane path's machinery (lane masks, per-lane
+//! scratch arrays, compile-time shapes, skipped cursors, known light) into the scalar path, where
+//! it did nothing but hide the five steps.
+//!
+//! Where it reads its inputs differently from sweep.wgsl, the values are the same (none of these
+//! changes a bit): the light buffers are pixel-interleaved (`crate::kernels::LightPlanes`); the
+//! gather leaves out taps whose four weights are 0 (`crate::kernels::LightTaps`); the level search
+//! visits one padding tap for all and reads a tap's four level corners as one 2×2 block minimum
+//! (`crate::kernels::LevelPlane::corners`).
+
+use convshadow_common::pixel::levels::pixel_level;
+use convshadow_common::plan::TfEntry;
+
+use super::kit::{
+    MAX_LIGHT_CHANNELS, MAX_LIGHTS, Reach, RowContext, RowState, SlabContext, level_plane,
+    light_block, light_planes,
+};
+use crate::composite::{attenuate, composite, deepen};
+use crate::kernels::{TapOrigin, distance_row, gather, phase_at};
+use crate::parity::{NO_CROSSING, advance, first_mesh};
+use crate::shading::{
+    Specular, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
+};
+
+/// The light a pixel gathered in step 1: every light's channels and (distance penumbra) its
+/// occluder depth.
+struct LightIn {
+    /// Light l's channel c at `l · channels + c`.
+    iin: [f32; MAX_LIGHT_CHANNELS],
+    /// Light l's gathered depth plane.
+    depth: [f32; MAX_LIGHTS],
+}
+
+impl LightIn {
+    /// Nothing gathered yet.
+    const ZERO: LightIn = LightIn {
+        iin: [0.0; MAX_LIGHT_CHANNELS],
+        depth: [0.0; MAX_LIGHTS],
+    };
+}
+
+/// What step 2 found: the first fragment the cursor crossed in this slab ([`NO_CROSSING`] if
+/// none) and the mesh the pixel shades, if any.
+#[derive(Clone, Copy)]
+pub(crate) struct Hit {
+    pub crossed: u32,
+    pub mesh: Option<u32>,
+}
+
+/// Processes one row of one slab, one pixel at a time (`--path scalar`).
+pub(crate) fn sweep_row(row: &RowContext<'_>, reach: &Reach, state: &mut RowState<'_>) {
+    let plan = row.ctx.plan;
+    let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
+    for x in 0..w {
+        let inside = reach.interior(x, 1, row.y, w, h);
+        sweep_pixel(row, state, x, inside);
+    }
+}
+
+/// Pixel x of the row through this slab: sweep.wgsl's `sweep_slab` for one pixel. `inside`:
+/// every read of its gathers lies inside the grid.
+#[inline(always)]
+pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usize, inside: bool) {
+    // 1. Convolution of every light buffer (and, distance penumbra, its depth plane).
+    let mut light = LightIn::ZERO;
+    convolve(row, x, inside, &mut light);
+    // 2. Intersection: advance the layer cursor to the slab's back face.
+    let hit = intersect(row.ctx, row.y, state, x);
+    // 3. Shading at one point, if inside a mesh or a surface was crossed; 4. composite.
+    let attenuation = match hit.mesh {
+        Some(mesh) => shade_and_composite(row, state, x, &light.iin, mesh, hit.crossed),
+        None => [1.0; 3],
+    };
+    // 5. Attenuate (and flush) into this slab's outgoing light buffer; distance penumbra: the
+    // light this slab removed, at this slab's depth, into the depth plane, and the next level.
+    attenuate_light(row.ctx, state, x, &light, attenuation);
+}
+
+/// Step 1: every light's planes gathered at pixel x through its kernel's tap row for this slab
+/// and pixel (distance penumbra: the row of the nearest occluder's level in reach), into `light`.
+/// (Filled in place: a returned copy of it cost 5 % of the scalar sweep in store-forwarding
+/// stalls.)
+#[inline(always)]
+fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
+    let (ctx, plan) = (row.ctx, row.ctx.plan);
+    let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
+    let distance = plan.depth_planes() > 0;
+    for (l, light_plan) in plan.lights.iter().enumerate() {
+        let table = &light_plan.table;
+        let taps = &ctx.taps[l];
+        let at = TapOrigin {
+            x: x as i32,
+            y: row.y as i32,
+            shift: table.slab_shift[slab],
+            inside,
+        };
+        let hashes = (light_plan.slab_hash[slab], row.light_hashes[l]);
+        let mut tap_row = phase_at(table, ctx.slab, hashes.0, hashes.1, plan.hash_x(x as u32));
+        if distance {
+            let levels = level_plane(plan, row.prev, l);
+            tap_row = distance_row(&levels, table, taps, tap_row, ctx.slab, plan.slabs, at);
+        }
+        // The light's channels, then its depth plane if any (0 without one).
+        let planes = light_planes(plan, row.prev.light, l);
+        let sums = gather(&planes, taps.weighted(tap_row), at);
+        copy_planes(&mut light.iin[l * ch..(l + 1) * ch], &sums);
+        light.depth[l] = sums[ch];
+    }
+}
+
+/// Step 2: pixel x's layer cursor advanced past every fragment before the slab's back face.
+#[inline(always)]
+pub(crate) fn intersect(
+    ctx: &SlabContext<'_>,
+    y: usize,
+    state: &mut RowState<'_>,
+    x: usize,
+) -> Hit {
+    let ldi = ctx.ldi;
+    let end = ldi.offsets[y * ldi.width as usize + x + 1];
+    let crossed = advance(ldi, &mut state.next[x], end, &mut state.inside[x], ctx.back);
+    let mesh = if crossed != NO_CROSSING {
+        Some(u32::from(ldi.mesh[crossed as usize]))
+    } else {
+        first_mesh(state.inside[x])
+    };
+    Hit { crossed, mesh }
+}
+
+/// Steps 3 and 4 at pixel x, which lies in mesh `mesh` or crossed its surface at fragment
+/// `crossed`: the transfer-function entry at the one point it shades, the light `iin` (every
+/// light's channels) shaded with it, composited front to back. Returns the attenuation per
+/// channel for step 5.
+pub(crate) fn shade_and_composite(
+    row: &RowContext<'_>,
+    state: &mut RowState<'_>,
+    x: usize,
+    iin: &[f32],
+    mesh: u32,
+    crossed: u32,
+) -> [f32; 3] {
+    let (ctx, plan) = (row.ctx, row.ctx.plan);
+    let z = shading_depth(plan, ctx.ldi, crossed, ctx.front, row.jitter_hash, x);
+    let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
+    let (xi, yi) = plan.image_xy(x, row.y);
+    let tf = match &material.pre {
+        // Pre-integrated compositing (shading.wgsl `preintegrated`).
+        Some(table) => preintegrated(row, state, x, mesh, table, crossed),
+        None => {
+            if plan.preintegration {
+                state.pre[x] = f32::NAN;
+            }
+            material_at(plan, mesh, xi, yi, z)
+        }
+    };
+    let spec = match material.specular {
+        // A highlight only where a surface was crossed, with its triangle's normal.
+        Some((strength, exponent)) if crossed != NO_CROSSING => {
+            let triangle = ctx.ldi.triangle[crossed as usize] as usize;
+            Some(Specular {
+                strength,
+                exponent,
+                normal: ctx.raster.triangles[triangle].normal,
+                lanes: true,
+            })
+        }
+        _ => None,
+    };
+    let shaded = shade(plan, material, tf.color, iin, spec.as_ref());
+    let w = plan.grid_width as usize;
+    let mut color = [state.color[x], state.color[w + x], state.color[2 * w + x]];
+    composite(&mut color, &mut state.alpha[x], shaded, tf.alpha, true);
+    [state.color[x], state.color[w + x], state.color[2 * w + x]] = color;
+    tf.attenuation
+}
+
+/// Pre-integrated shading (`sweep.preintegration`) at pixel x in mesh `mesh`, whose material has
+/// the pre-integration table `table`: the table's entry at the detail values on the slab's front
+/// and back faces. The front value is the one the previous slab kept in `state.pre` (NaN: none),
+/// else evaluated at the front face, or at the crossed fragment's depth where the pixel crosses a
+/// surface in this slab. The back value is kept for the next slab when the pixel is still in
+/// mesh `mesh` at the back face (the next slab shades it unless it crosses a surface), else NaN.
+/// The detail is a pure function of pixel, mesh and depth, and slab k's back face is slab
+/// k + 1's front face bit for bit, so a kept value has the bits of a fresh one: keeping it only
+/// saves an evaluation, and forgetting it never changes the image.
+fn preintegrated(
+    row: &RowContext<'_>,
+    state: &mut RowState<'_>,
+    x: usize,
+    mesh: u32,
+    table: &[TfEntry],
+    crossed: u32,
+) -> TfLanes<f32> {
+    let (ctx, plan) = (row.ctx, row.ctx.plan);
+    let (xi, yi) = plan.image_xy(x, row.y);
+    let kept = state.pre[x];
+    let front = if crossed == NO_CROSSING && !kept.is_nan() {
+        kept
+    } else if crossed != NO_CROSSING {
+        detail_at(plan, mesh, xi, yi, ctx.ldi.depth[crossed as usize])
+    } else {
+        detail_at(plan, mesh, xi, yi, ctx.front)
+    };
+    let back = detail_at(plan, mesh, xi, yi, ctx.back);
+    state.pre[x] = if first_mesh(state.inside[x]) == Some(mesh) {
+        back
+    } else {
+        f32::NAN
+    };
+    pre_transfer(table, front, back)
+}
+
+/// Step 5 at pixel x: every light's gathered channels attenuated (and flushed) into this slab's
+/// outgoing buffer; with the distance penumbra, the light the slab removed (Σ in − Σ out) deepens
+/// the occluder depth, stored with the channels, and gives the level the pixel gathers through
+/// in the next slab.
+#[inline(always)]
+fn attenuate_light(
+    ctx: &SlabContext<'_>,
+    state: &mut RowState<'_>,
+    x: usize,
+    light: &LightIn,
+    attenuation: [f32; 3],
+) {
+    let plan = ctx.plan;
+    let (w, ch, planes) = (
+        plan.grid_width as usize,
+        plan.channels as usize,
+        plan.planes_per_light(),
+    );
+    for l in 0..plan.lights.len() {
+        let (mut lit_in, mut lit_out) = (0.0f32, 0.0f32);
+        let mut out = [0.0f32; 4];
+        for c in 0..ch {
+            let iin = light.iin[l * ch + c];
+            out[c] = attenuate(iin, attenuation[c]);
+            lit_in += iin;
+            lit_out += out[c];
+        }
+        if plan.depth_planes() > 0 {
+            out[ch] = deepen(light.depth[l], ctx.slab, lit_in - lit_out);
+            let occluded = ch as f32 - lit_out;
+            let table = &plan.lights[l].table;
+            state.levels[l * w + x] = pixel_level::<f32>(table, occluded, out[ch], ctx.slab + 1);
+        }
+        copy_planes(
+            &mut state.light[light_block(plan, l) + x * planes..][..planes],
+            &out,
+        );
+    }
+}
+
+/// `dst = src[..dst.len()]` for one light's channels or planes (1 to 4), as fixed-length copies:
+/// a run-time length is a `memcpy` call per light and pixel.
+#[inline(always)]
+fn copy_planes(dst: &mut [f32], src: &[f32; 4]) {
+    match dst {
+        [d] => *d = src[0],
+        [d0, d1, d2] => (*d0, *d1, *d2) = (src[0], src[1], src[2]),
+        [d0, d1, d2, d3] => (*d0, *d1, *d2, *d3) = (src[0], src[1], src[2], src[3]),
+        dst => dst.copy_from_slice(&src[..dst.len()]),
+    }
+}
