@@ -1,7 +1,8 @@
 //! Stages 4 and 5: front-to-back compositing and light attenuation with the explicit flush
 //! (steps 4–5 of the per-pixel sweep). Mirrors `gpu/src/shaders/composite.wgsl`.
 //!
-//! Written once over [`Lane`]: the scalar path is the 1-lane instance.
+//! Written once over [`Lane`]: the per-pixel stage (`crate::sweep::pixel`) calls the 1-lane
+//! instance, the SIMD path's chunks the 8-lane one.
 
 use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::FLUSH_BELOW;

@@ -2,7 +2,8 @@
 //! light sum and specular highlight (step 3 of the per-pixel sweep, paper §4.2). Mirrors
 //! `gpu/src/shaders/shading.wgsl`.
 //!
-//! Written once over [`Lane`]: the scalar path is the 1-lane instance. Table look-ups are per
+//! Written once over [`Lane`]: the per-pixel stage (`crate::sweep::pixel`) calls the 1-lane
+//! instance, the SIMD path's chunks the 8-lane one. Table look-ups are per
 //! lane, arithmetic is on lanes in one fixed order.
 
 use convshadow_common::pixel::hash::{pixel_hash, unit_float};

@@ -7,7 +7,8 @@ use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::prepare::raster::RasterSetup;
 
-use crate::kernels::{LevelPlane, LightPlanes, LightTaps, TapColumns, light_row_hash};
+use super::fast::TapColumns;
+use crate::kernels::{LevelPlane, LightPlanes, LightTaps, light_row_hash};
 use crate::ldi::Ldi;
 
 pub use convshadow_common::contract::sweep_io::MAX_LIGHT_CHANNELS;
@@ -51,7 +52,7 @@ pub(crate) fn dark_levels(plan: &RenderPlan, slab: u32) -> Vec<u32> {
 pub(crate) struct Previous<'a> {
     pub light: &'a [f32],
     pub levels: &'a [u32],
-    /// The level plane's 2×2 block minima (`kernels::level_block_minima`), laid out as `levels`.
+    /// The level plane's 2×2 block minima (`level_blocks::LevelBlocks`), laid out as `levels`.
     pub level_blocks: &'a [u32],
 }
 

@@ -11,22 +11,20 @@
 //!
 //! Two code paths give the same bits: [`SweepPath::Scalar`] runs the per-pixel stage (`pixel`,
 //! which reads like `sweep.wgsl`) one pixel at a time, and [`SweepPath::Simd`] eight pixels at a
-//! time with `wide` (`stage`, held to the per-pixel stage's bits lane by lane by its tests),
-//! skipping provably quiet pixels; a row's last `width mod 8` pixels go through the per-pixel
-//! stage.
-
+//! time with `wide` (`fast`, each of whose fast paths is held to the per-pixel stage's bits by
+//! its tests), skipping provably quiet pixels; a row's last `width mod 8` pixels go through the
+//! per-pixel stage.
 //!
 //! Modules, with imports in one direction only: this driver (the per-slab loop, ping-pong
-//! buffers, cancel and progress) → `rows` (the lane paths: a row at a time, scalar or 8 lanes with
-//! `quiet` chunk skipping) → `stage` (the 8-lane chunk stage) → `pixel` (the per-pixel stage) →
-//! `kit` (slab context, row context and state, row hashes) → the stage functions in `kernels`,
-//! `parity`, `shading` and `composite`.
+//! buffers, cancel and progress) → `fast` (the SIMD path: the 8-lane row and chunk, quiet-chunk
+//! skipping, the lane gathers) → `pixel` (the per-pixel stage) → `kit` (slab and row context,
+//! row state, row hashes) → the stage functions in `kernels`, `parity`, `shading` and
+//! `composite`; `level_blocks` (the level plane's block minima, which both paths read) beside.
 
+mod fast;
 mod kit;
+mod level_blocks;
 mod pixel;
-mod quiet;
-mod rows;
-mod stage;
 
 use std::sync::atomic::Ordering;
 
@@ -35,17 +33,17 @@ use convshadow_common::prepare::raster::RasterSetup;
 use rayon::prelude::*;
 
 use crate::composite::finish;
-use crate::kernels::{LightTaps, TapColumns, level_block_minima};
+use crate::kernels::LightTaps;
 use crate::ldi::Ldi;
 use convshadow_common::plan::levels::initial_levels;
-use kit::{Previous, Reach, RowState, SlabContext, dark_levels};
-use quiet::{QuietRow, QuietSetup, RowSpans};
-use rows::{sweep_row_scalar, sweep_row_simd};
+use fast::{ChunkState, QuietRow, QuietSetup, RowSpans, TapColumns, sweep_row_simd};
+use kit::{Previous, Reach, RowContext, RowState, SlabContext, dark_levels};
+use level_blocks::LevelBlocks;
 
 pub use convshadow_common::contract::sweep_io::{
     MAX_LIGHT_CHANNELS, SweepError, SweepOptions, SweepOutput,
 };
-pub use quiet::ChunkCounts;
+pub use fast::ChunkCounts;
 
 /// Which CPU code path runs the sweep. Both give the same bits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -97,7 +95,7 @@ struct PixelState {
     prev: Vec<f32>,
     cur: Vec<f32>,
     /// Distance penumbra: each light's level per pixel for the next slab (ping-pong like the
-    /// light; see `kernels::distance_rows`). One unused entry per row otherwise.
+    /// light; see `kernels::distance_row`). One unused entry per row otherwise.
     levels_prev: Vec<u32>,
     levels_cur: Vec<u32>,
     /// `levels_prev`'s 2×2 block minima.
@@ -136,86 +134,6 @@ impl PixelState {
             pre: vec![f32::NAN; pre_stride * h],
             pre_stride,
         }
-    }
-}
-
-/// Distance penumbra: the level plane's 2×2 block minima
-/// ([`crate::kernels::level_block_minima`]), laid out as the plane, and per row the pixels
-/// outside which every block is [`LIT_LEVEL`](convshadow_common::plan::LIT_LEVEL); empty
-/// without depth planes.
-pub(crate) struct LevelBlocks {
-    pub(crate) blocks: Vec<u32>,
-    /// Per row, `[lo, hi)`: every block of the row outside it (any light) is `LIT_LEVEL`.
-    spans: Vec<(i32, i32)>,
-    /// The grid's width and the plane's row stride.
-    width: usize,
-    row_stride: usize,
-}
-
-impl LevelBlocks {
-    /// The block minima of `plan`'s level plane `levels`.
-    pub(crate) fn new(plan: &RenderPlan, levels: &[u32]) -> LevelBlocks {
-        if plan.depth_planes() == 0 {
-            return LevelBlocks::of(&[], 1, 1);
-        }
-        LevelBlocks::of(levels, plan.grid_width as usize, plan.level_row_len())
-    }
-
-    /// The block minima of a level plane `levels` of rows `row_stride` apart, each holding
-    /// every light's `width` levels.
-    fn of(levels: &[u32], width: usize, row_stride: usize) -> LevelBlocks {
-        let mut blocks = LevelBlocks {
-            blocks: vec![0u32; levels.len()],
-            spans: vec![(0, width as i32); levels.len() / row_stride],
-            width,
-            row_stride,
-        };
-        blocks.update(levels, None);
-        blocks
-    }
-
-    /// The block minima of the level plane `levels`, which may differ from the last one only
-    /// where `not_one` allows: where given, per row, the span outside which every pixel's
-    /// outgoing light was exactly 1 in every channel, so its level is `LIT_LEVEL`
-    /// (`pixel_level`: nothing occluded). Rows are rebuilt in parallel, each only over the
-    /// pixels whose block can differ from `LIT_LEVEL` now or did before.
-    fn update(&mut self, levels: &[u32], not_one: Option<&[RowSpans]>) {
-        let (w, rs) = (self.width, self.row_stride);
-        assert_eq!(
-            levels.len(),
-            self.blocks.len(),
-            "a level plane of another size"
-        );
-        let span_of = |y: usize| match not_one {
-            None => (0, w as i32),
-            Some(spans) => spans.get(y).map_or((i32::MAX, i32::MIN), |r| r.not_one),
-        };
-        self.blocks
-            .par_chunks_mut(rs)
-            .zip(self.spans.par_iter_mut())
-            .enumerate()
-            .for_each(|(y, (out, span))| {
-                // Block x reads pixels x and x + 1 of rows y and y + 1.
-                let (a, b) = (span_of(y), span_of(y + 1));
-                let (lo, hi) = (a.0.min(b.0).saturating_sub(1), a.1.max(b.1));
-                let now = if lo < hi {
-                    (lo.max(0), hi.min(w as i32))
-                } else {
-                    (0, 0)
-                };
-                // The blocks outside both the old span and the new are LIT_LEVEL already.
-                let (from, to) = if span.0 < span.1 {
-                    (now.0.min(span.0), now.1.max(span.1))
-                } else {
-                    now
-                };
-                *span = now;
-                if from < to {
-                    let below = levels.get((y + 1) * rs..(y + 2) * rs);
-                    let xs = from as usize..to as usize;
-                    level_block_minima(&levels[y * rs..(y + 1) * rs], below, w, xs, out);
-                }
-            });
     }
 }
 
@@ -262,13 +180,13 @@ fn to_plane_rows(plan: &RenderPlan, pixels: &[f32]) -> Vec<f32> {
 /// cursor summaries, so quiet chunks can be recognised without touching their pixels.
 struct QuietState {
     setup: QuietSetup,
-    spans_prev: Vec<quiet::RowSpans>,
-    spans_cur: Vec<quiet::RowSpans>,
-    chunk_states: Vec<quiet::ChunkState>,
+    spans_prev: Vec<RowSpans>,
+    spans_cur: Vec<RowSpans>,
+    chunk_states: Vec<ChunkState>,
     /// Per row, the hull of `spans_prev` over the rows within the kernels' vertical reach
-    /// (`quiet::window_hulls`), and that function's scratch buffers.
-    windows: Vec<quiet::RowSpans>,
-    window_scratch: [Vec<quiet::RowSpans>; 2],
+    /// (`fast::window_hulls`), and that function's scratch buffers.
+    windows: Vec<RowSpans>,
+    window_scratch: [Vec<RowSpans>; 2],
     /// Per chunk, bit b: light buffer b (slab mod 2 writes it) already holds this chunk's
     /// unoccluded fill, written two slabs ago and not since (see `QuietRow::filled`).
     filled: Vec<u8>,
@@ -294,7 +212,7 @@ impl QuietState {
                 windows: Vec::new(),
                 window_scratch: [Vec::new(), Vec::new()],
                 filled: vec![0; setup.chunks.len()],
-                chunks_per_row: quiet::chunks_per_row(plan.grid_width as usize),
+                chunks_per_row: fast::chunks_per_row(plan.grid_width as usize),
                 setup,
             };
             q.update_windows(reach);
@@ -305,7 +223,7 @@ impl QuietState {
     /// `windows` for the current `spans_prev`.
     fn update_windows(&mut self, reach: &Reach) {
         let (spans, out) = (&self.spans_prev, &mut self.windows);
-        quiet::window_hulls(spans, reach.y0, reach.y1, out, &mut self.window_scratch);
+        fast::window_hulls(spans, reach.y0, reach.y1, out, &mut self.window_scratch);
     }
 }
 
@@ -350,8 +268,8 @@ fn sweep_slab(
             },
         );
     match (cpu.path, quiet.as_deref_mut()) {
-        (SweepPath::Scalar, _) => rows.for_each(|(y, row)| {
-            sweep_row_scalar(ctx, reach, y, prev_ref, row);
+        (SweepPath::Scalar, _) => rows.for_each(|(y, mut row)| {
+            pixel::sweep_row(&RowContext::new(ctx, prev_ref, y), reach, &mut row);
         }),
         (SweepPath::Simd, None) => rows.for_each(|(y, row)| {
             sweep_row_simd(ctx, reach, y, prev_ref, row, None, cpu.chunk_counts);
@@ -387,8 +305,17 @@ fn sweep_slab(
     std::mem::swap(&mut state.prev, &mut state.cur);
     std::mem::swap(&mut state.levels_prev, &mut state.levels_cur);
     if ctx.plan.depth_planes() > 0 {
-        let not_one = quiet.map(|q| &q.spans_prev[..]);
-        state.level_blocks.update(&state.levels_prev, not_one);
+        // Where a row's outgoing light was exactly 1 in every channel, its level is `LIT_LEVEL`.
+        let w = ctx.plan.grid_width as i32;
+        let levels = &state.levels_prev;
+        match quiet {
+            Some(q) => state.level_blocks.update(levels, |y| {
+                q.spans_prev
+                    .get(y)
+                    .map_or(RowSpans::EMPTY.not_one, |r| r.not_one)
+            }),
+            None => state.level_blocks.update(levels, |_| (0, w)),
+        }
     }
 }
 
@@ -565,27 +492,7 @@ pub(crate) fn built_scene(
 
 #[cfg(test)]
 mod tests {
-    use super::{LevelBlocks, OpaqueImage, RowSpans};
-    use convshadow_common::plan::LIT_LEVEL;
-    use convshadow_testkit::TestRng;
-
-    /// The smallest level of the 2×2 block at pixel x of row y of light l, corners beyond the
-    /// grid read as `LIT_LEVEL`: straight from the definition.
-    fn block_at(
-        levels: &[u32],
-        (w, lights, h): (usize, usize, usize),
-        l: usize,
-        x: usize,
-        y: usize,
-    ) -> u32 {
-        let mut m = LIT_LEVEL;
-        for (cx, cy) in [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)] {
-            if cx < w && cy < h {
-                m = m.min(levels[cy * w * lights + l * w + cx]);
-            }
-        }
-        m
-    }
+    use super::OpaqueImage;
 
     #[test]
     fn chunk_summaries_stay_current_through_a_sweep() {
@@ -620,65 +527,6 @@ mod tests {
                 counts.snapshot()
             );
         }
-    }
-
-    #[test]
-    fn level_blocks_are_the_smallest_level_of_each_two_by_two_block() {
-        let mut rng = TestRng::new(5);
-        for (w, lights, h) in [(1, 1, 1), (2, 2, 3), (11, 2, 6), (9, 1, 2)] {
-            let levels: Vec<u32> = (0..w * lights * h)
-                .map(|_| match rng.below(3) {
-                    0 => LIT_LEVEL,
-                    _ => rng.below(6),
-                })
-                .collect();
-            let blocks = LevelBlocks::of(&levels, w, w * lights).blocks;
-            for (i, &b) in blocks.iter().enumerate() {
-                let (y, l, x) = (i / (w * lights), i % (w * lights) / w, i % w);
-                let want = block_at(&levels, (w, lights, h), l, x, y);
-                assert_eq!(b, want, "{w}×{h}, light {l}, pixel ({x}, {y})");
-            }
-        }
-    }
-
-    #[test]
-    fn level_blocks_rebuilt_within_spans_are_the_blocks_rebuilt_whole() {
-        // Planes that are LIT_LEVEL outside one random span per row (sometimes none), told
-        // with that span or a wider one: the blocks must be those of the whole plane, also where
-        // the last plane had levels and this one has none.
-        let (w, lights, h) = (13, 2, 7);
-        let mut rng = TestRng::new(9);
-        let mut blocks = LevelBlocks::of(&vec![LIT_LEVEL; w * lights * h], w, w * lights);
-        let mut rebuilt = 0;
-        for round in 0..200 {
-            let mut levels = vec![LIT_LEVEL; w * lights * h];
-            let mut spans = vec![RowSpans::EMPTY; h];
-            for y in 0..h {
-                if rng.below(3) == 0 {
-                    continue;
-                }
-                let lo = rng.below(w as u32) as usize;
-                let hi = lo + 1 + rng.below((w - lo) as u32) as usize;
-                for l in 0..lights {
-                    for x in lo..hi {
-                        if rng.below(2) == 0 {
-                            levels[y * w * lights + l * w + x] = rng.below(5);
-                        }
-                    }
-                }
-                // The told span holds every level that is not LIT_LEVEL, maybe with room.
-                let wider = (
-                    lo.saturating_sub(rng.below(2) as usize),
-                    (hi + rng.below(2) as usize).min(w),
-                );
-                spans[y].not_one = (wider.0 as i32, wider.1 as i32);
-            }
-            blocks.update(&levels, Some(&spans));
-            let whole = LevelBlocks::of(&levels, w, w * lights);
-            assert_eq!(blocks.blocks, whole.blocks, "round {round}");
-            rebuilt += usize::from(blocks.spans.iter().any(|s| s.0 < s.1));
-        }
-        assert!(rebuilt > 100, "rounds with levels {rebuilt}");
     }
 
     /// A 6×4 grid with a 3×2 image at (2, 1), every pixel opaque.

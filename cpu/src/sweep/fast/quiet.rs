@@ -11,7 +11,7 @@
 //!   still advance, so a chunk that wakes up has the scalar path's state.
 //! - *dark with depth* (distance penumbra): as *dark*, but the depth planes read are not all 0
 //!   (an occluder's depth stays in the dark behind it): the light planes are 0 as above, and only
-//!   the depth planes and levels are computed (`stage::dark_depth_chunk`); counted as dark.
+//!   the depth planes and levels are computed (`super::chunk::dark_depth_chunk`); counted as dark.
 //! - *known light*: a chunk with a mesh whose kernels read only exact 1s (or only exact 0s) is
 //!   shaded as usual, but its gather is replaced by that constant (the same bits, as above).
 //!
@@ -25,8 +25,8 @@ use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::RenderPlan;
 use wide::f32x8;
 
-use super::kit::{Reach, SlabContext, light_block};
 use crate::ldi::Ldi;
+use crate::sweep::kit::{Reach, SlabContext, light_block};
 
 /// Lanes per chunk.
 pub(crate) const LANES: usize = <f32x8 as Lane>::LANES;
@@ -399,7 +399,7 @@ pub(crate) enum ChunkWork {
     Dark,
     /// Opaque, every light value read exactly 0 but some depth value not (distance penumbra):
     /// advance the cursors, light out 0, compute only the depth planes and levels
-    /// (`stage::dark_depth_chunk`).
+    /// (`super::chunk::dark_depth_chunk`).
     DarkDepth,
 }
 

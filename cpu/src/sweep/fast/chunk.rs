@@ -1,30 +1,35 @@
-//! The SIMD path's chunk stage: all five stages of the per-pixel stage (`super::pixel`) for the
-//! [`Lane::LANES`] pixels x0.. of one row, written over [`Lane`] and run by the SIMD path as its
-//! 8-lane instance. Each lane runs the per-pixel stage's IEEE operations in the same order (the
-//! tests below compare the two bit for bit).
+//! The 8-lane chunk stage: the per-pixel stage (`crate::sweep::pixel`) for the 8 pixels x0.. of
+//! one row at once, each lane running its IEEE operations in the same order. Written over `Lane`
+//! and run as its 8-lane (`wide::f32x8`) instance, in instances that know the plan's light
+//! channels and penumbra model at compile time ([`shape_of`]: loops of fixed length), with the
+//! gathers of `super::gather`, `super::per_lane` and `super::levels`, the cursors skipped where
+//! the chunk's summary shows that none crosses a fragment (`super::quiet`), and the chunk whose
+//! depth planes alone move ([`dark_depth_chunk`]). Tests (`chunk/tests.rs`): every instance
+//! against the per-pixel stage on random inputs, lane by lane, bit for bit.
 //!
 //! Lane work: the gather's arithmetic (and its loads, when a slab's phase is the same for every
 //! pixel), the phase hash, the detail function, the transfer-function interpolation, shading,
 //! compositing and attenuation. Per lane: the layer cursor (a short data-dependent loop) and
-//! table look-ups. Lanes on different meshes are shaded one lane at a time.
+//! table look-ups. Lanes on different meshes are shaded one lane at a time, by the per-pixel
+//! stage's shading.
 
 use convshadow_common::pixel::lane::{Lane, Layout, MAX_LANES};
 use convshadow_common::plan::kernel::PhaseMode;
 
-use super::kit::{
-    MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, light_block,
-};
-use super::pixel::shade_and_composite;
+use super::gather::{gather_inside, gather_lanes, store_pixels};
+use super::levels::{distance_rows, phases};
+use super::per_lane::{LaneRows, gather_per_lane};
 use super::quiet::{ChunkState, Values};
 use crate::composite::{attenuate, composite, deepen};
-use crate::kernels::{
-    LaneRows, LevelPlane, LightPlanes, distance_rows, gather_inside, gather_lanes, gather_per_lane,
-    phase_at, phases, store_pixels,
-};
+use crate::kernels::{LevelPlane, LightPlanes, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
     Specular, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
+use crate::sweep::kit::{
+    MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, light_block,
+};
+use crate::sweep::pixel::shade_and_composite;
 use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::{RenderPlan, TfEntry};
 use wide::f32x8;
@@ -173,7 +178,7 @@ pub(crate) fn gather_pair(
         };
         let (mut a, mut b) = ([f32x8::splat(0.0); 3], [f32x8::splat(0.0); 3]);
         let extent = ctx.columns[l].extent[p as usize];
-        let taps = ctx.columns[l].weighted_taps(p);
+        let taps = ctx.taps[l].weighted(p);
         let shift = t.slab_shift[slab];
         let (xa, ya) = (x0 as i32, y as i32);
         gather_inside(
@@ -308,7 +313,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
                         // Local sums (from 0, as `iin`'s), so they stay in registers.
                         let mut sums = [L::splat(0.0); 3];
                         let sums = &mut sums[..ch];
-                        let taps = ctx.columns[l].weighted_taps(p);
+                        let taps = ctx.taps[l].weighted(p);
                         gather_lanes(&planes, taps, extent, shift, x0, yi, interior, sums);
                         copy_channels(acc, sums);
                     }
@@ -481,7 +486,7 @@ fn distance_gather<L: Layout>(
             let extent = columns.extent[row as usize];
             gather_lanes(
                 planes,
-                columns.weighted_taps(row),
+                ctx.taps[l].weighted(row),
                 extent,
                 shift,
                 x0,
@@ -723,293 +728,4 @@ fn forget_front(row: &mut RowState<'_>, x0: usize, lanes: usize, active: &[bool;
 }
 
 #[cfg(test)]
-mod tests {
-    use convshadow_common::model::scene::Scene;
-    use convshadow_common::pixel::hash::unit_float;
-    use convshadow_common::plan::{LIT_LEVEL, RenderPlan};
-    use convshadow_common::prepare::geometry::SceneGeometry;
-    use wide::f32x8;
-
-    use super::*;
-    use crate::kernels::{LightTaps, TapColumns};
-    use crate::ldi::Ldi;
-    use crate::sweep::kit::{Reach, jitter_row_hash, light_row_hashes};
-    use crate::sweep::pixel::sweep_pixel;
-
-    use convshadow_testkit::TestRng;
-
-    /// A value in [0, 1], exactly 0 or exactly 1 one time in eight each.
-    fn value(rng: &mut TestRng) -> f32 {
-        match rng.below(8) {
-            0 => 0.0,
-            1 => 1.0,
-            _ => unit_float(rng.next_u32()),
-        }
-    }
-
-    /// One row's state, owned.
-    #[derive(Clone)]
-    struct Row {
-        light: Vec<f32>,
-        levels: Vec<u32>,
-        next: Vec<u32>,
-        inside: Vec<u32>,
-        color: Vec<f32>,
-        alpha: Vec<f32>,
-        pre: Vec<f32>,
-    }
-
-    impl Row {
-        fn state(&mut self) -> RowState<'_> {
-            RowState {
-                light: &mut self.light,
-                levels: &mut self.levels,
-                next: &mut self.next,
-                inside: &mut self.inside,
-                color: &mut self.color,
-                alpha: &mut self.alpha,
-                pre: &mut self.pre,
-            }
-        }
-    }
-
-    /// The first difference in bits between two rows' states, if any.
-    fn mismatch(a: &Row, b: &Row) -> Option<String> {
-        let floats = [
-            ("light", &a.light, &b.light),
-            ("color", &a.color, &b.color),
-            ("alpha", &a.alpha, &b.alpha),
-            ("pre", &a.pre, &b.pre),
-        ];
-        for (name, u, v) in floats {
-            if let Some(i) = (0..u.len()).find(|&i| u[i].to_bits() != v[i].to_bits()) {
-                return Some(format!("{name}[{i}]: {} vs {}", u[i], v[i]));
-            }
-        }
-        let ints = [
-            ("levels", &a.levels, &b.levels),
-            ("next", &a.next, &b.next),
-            ("inside", &a.inside, &b.inside),
-        ];
-        for (name, u, v) in ints {
-            if let Some(i) = (0..u.len()).find(|&i| u[i] != v[i]) {
-                return Some(format!("{name}[{i}]: {} vs {}", u[i], v[i]));
-            }
-        }
-        None
-    }
-
-    /// The default scene, small: two coloured lights (six light channels), noise and specular
-    /// materials, three meshes, through `kernel` with `penumbra` ("iterated" or "distance") and
-    /// `preintegration`.
-    fn plan_of(
-        kernel: &str,
-        penumbra: &str,
-        preintegration: bool,
-    ) -> (Scene, SceneGeometry, Ldi, RenderPlan) {
-        let sweep = format!("[sweep]\npreintegration = {preintegration}");
-        let text = include_str!("../../../scenes/default.toml")
-            .replace("[sweep]", &sweep)
-            .replace("width = 512\nheight = 512", "width = 37\nheight = 19")
-            .replace(
-                "slabs = 512",
-                &format!("slabs = 24\npenumbra = \"{penumbra}\""),
-            )
-            .replace("kernel = \"ellipse2\"", &format!("kernel = \"{kernel}\""));
-        crate::sweep::built_scene(&text, "lanes")
-    }
-
-    /// Runs `eight` (an 8-lane stage) and the per-pixel stage (`pixel::sweep_pixel`) on each of
-    /// its eight pixels on the same random inputs, at every chunk position of some rows of every
-    /// slab; returns the first difference.
-    fn compare_lanes(
-        kernel: &str,
-        penumbra: &str,
-        pre: bool,
-        seed: u32,
-        eight: ChunkFn,
-    ) -> Option<String> {
-        let (_scene, g, ldi, plan) = plan_of(kernel, penumbra, pre);
-        assert_eq!(plan.materials.iter().any(|m| m.pre.is_some()), pre);
-        let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
-        let row_len = plan.light_row_len();
-        let meshes = plan.mesh_material.len() as u32;
-        let planes = plan.lights.len() * plan.channels as usize;
-        assert_eq!(planes, 6, "two lights, three channels");
-        let reach = Reach::of(&plan);
-        let mut rng = TestRng::new(seed);
-        // Pixel-interleaved, with the sweep's slack after the last row.
-        let light: Vec<f32> = (0..row_len * h + crate::sweep::LIGHT_SLACK)
-            .map(|_| value(&mut rng))
-            .collect();
-        // Distance penumbra: each pixel's level any of the table's, or none (one in four).
-        let lrl = plan.level_row_len();
-        let levels: Vec<u32> = (0..lrl * h)
-            .map(|_| match rng.below(4) {
-                0 => LIT_LEVEL,
-                _ => rng.below(plan.lights[0].table.levels),
-            })
-            .collect();
-        let blocks = crate::sweep::LevelBlocks::new(&plan, &levels).blocks;
-        let prev = Previous {
-            light: &light,
-            levels: &levels,
-            level_blocks: &blocks,
-        };
-        let mut counts = [0u32; 9];
-        // Chunks whose summary skipped their cursors, and chunks with a summary that did not.
-        let mut summaries = [0u32; 2];
-        let columns: Vec<TapColumns> = plan
-            .lights
-            .iter()
-            .map(|l| TapColumns::new(&l.table, row_len, plan.planes_per_light(), lrl))
-            .collect();
-        let taps: Vec<LightTaps> = plan
-            .lights
-            .iter()
-            .map(|l| LightTaps::new(&l.table))
-            .collect();
-        for slab in 0..plan.slabs {
-            let ctx = SlabContext {
-                plan: &plan,
-                raster: &g.raster,
-                ldi: &ldi,
-                taps: &taps,
-                columns: &columns,
-                slab,
-                back: plan.slab_back[slab as usize],
-                front: plan.slab_front[slab as usize],
-                dark_levels: Vec::new(),
-            };
-            for y in [0, 1, h / 2, h - 1, rng.below(h as u32) as usize] {
-                let row_hashes = light_row_hashes(&ctx, y);
-                let jitter_row = jitter_row_hash(&ctx, y);
-                // Inside masks: none, one mesh everywhere, or mixed (lanes on different meshes).
-                let mode = rng.below(3);
-                let fixed = 1 << rng.below(meshes);
-                let row = Row {
-                    light: vec![f32::NAN; row_len],
-                    levels: vec![7; lrl],
-                    next: (0..w)
-                        .map(|x| {
-                            let (a, b) = (ldi.offsets[y * w + x], ldi.offsets[y * w + x + 1]);
-                            a + rng.below(b - a + 1)
-                        })
-                        .collect(),
-                    inside: (0..w)
-                        .map(|_| match mode {
-                            0 => 0,
-                            1 => fixed,
-                            _ => rng.next_u32() & ((1 << meshes) - 1),
-                        })
-                        .collect(),
-                    color: (0..3 * w).map(|_| value(&mut rng)).collect(),
-                    alpha: (0..w).map(|_| value(&mut rng)).collect(),
-                    // Kept front values: none (NaN) one time in three, else any value (both
-                    // paths must choose kept or fresh lane by lane alike).
-                    pre: (0..w)
-                        .map(|_| match rng.below(3) {
-                            0 => f32::NAN,
-                            _ => value(&mut rng),
-                        })
-                        .collect(),
-                };
-                for x0 in 0..=w - 8 {
-                    let (mut a, mut b) = (row.clone(), row.clone());
-                    let interior = reach.interior(x0, 8, y, w, h);
-                    // Every other chunk with its cursor summary (the per-pixel stage visits every
-                    // cursor).
-                    let summary = (x0 % 2 == 0).then(|| {
-                        ChunkState::of(&ldi, y, x0, 8, &row.next, &row.inside, &row.alpha)
-                    });
-                    if let Some(s) = summary {
-                        summaries[usize::from(s.crosses_nothing(ctx.back))] += 1;
-                    }
-                    let (rh, jr) = (&row_hashes, jitter_row);
-                    eight(
-                        &ctx,
-                        y,
-                        x0,
-                        &prev,
-                        &mut a.state(),
-                        rh,
-                        jr,
-                        interior,
-                        None,
-                        None,
-                        summary,
-                    );
-                    // The reference: the per-pixel stage, pixel by pixel.
-                    let row_ctx = RowContext::new(&ctx, &prev, y);
-                    for x in x0..x0 + 8 {
-                        let interior = reach.interior(x, 1, y, w, h);
-                        sweep_pixel(&row_ctx, &mut b.state(), x, interior);
-                    }
-                    if let Some(d) = mismatch(&a, &b) {
-                        return Some(format!(
-                            "{kernel} {penumbra}, slab {slab}, row {y}, x0 {x0}: {d}"
-                        ));
-                    }
-                    let shaded = (0..8).filter(|&i| a.alpha[x0 + i] != row.alpha[x0 + i]);
-                    counts[shaded.count()] += 1;
-                }
-            }
-        }
-        // The inputs must reach every branch: chunks shaded in no lane, in some and in all.
-        assert!(
-            counts[0] > 0 && counts[8] > 0 && counts[1..8].iter().sum::<u32>() > 0,
-            "{kernel}: chunks by shaded lanes {counts:?}"
-        );
-        // And both cursor paths: summaries that skip the cursors and summaries that do not.
-        assert!(
-            summaries[0] > 0 && summaries[1] > 0,
-            "{kernel}: summaries (visit, skip) {summaries:?}"
-        );
-        None
-    }
-
-    /// [`compare_lanes`] for `kernels` (seeds from `seed`), both penumbra models, and for each
-    /// both 8-lane instances: the one that reads the shape from the plan and the one that knows it.
-    fn compare_every_instance(kernels: &[&str], pre: bool, seed: u32) {
-        for (k, kernel) in kernels.iter().enumerate() {
-            for (penumbra, shape) in [("iterated", RGB_ITERATED), ("distance", RGB_DISTANCE)] {
-                for shape in [ANY_SHAPE, shape] {
-                    let eight = chunk_fn::<f32x8>(6, shape);
-                    assert_eq!(
-                        compare_lanes(kernel, penumbra, pre, seed + k as u32, eight),
-                        None,
-                        "shape {shape}"
-                    );
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn eight_lanes_and_one_lane_give_the_same_bits() {
-        // Per-pixel, per-slab and scheduled phases.
-        let kernels = ["ellipse2", "ellipse2:slab", "gaussian:7", "poisson8"];
-        compare_every_instance(&kernels, false, 17);
-    }
-
-    #[test]
-    fn eight_lanes_and_one_lane_give_the_same_bits_with_preintegration() {
-        compare_every_instance(&["ellipse2", "gaussian:7"], true, 41);
-    }
-
-    #[test]
-    fn a_lane_that_disagrees_fails_the_comparison() {
-        // The 8-lane stage with one lane's first light value off by one bit.
-        let wrong_lane: ChunkFn = |ctx, y, x0, prev, row, hashes, jitter, inner, known, got, s| {
-            let r = sweep_chunk::<f32x8, 6, ANY_SHAPE>(
-                ctx, y, x0, prev, row, hashes, jitter, inner, known, got, s,
-            );
-            // (the outcome is returned unchanged: only the light is wrong)
-            row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
-            r
-        };
-        let d = compare_lanes("ellipse2", "distance", false, 3, wrong_lane)
-            .expect("the flipped bit is found");
-        assert!(d.contains("light["), "{d}");
-    }
-}
+mod tests;

@@ -1,30 +1,21 @@
-//! The lane paths of the sweep: one row of one slab, either one pixel at a time (the scalar
-//! path: the per-pixel stage, `pixel`) or eight at a time (the SIMD path, with quiet-chunk
-//! skipping; the row's last `width mod 8` pixels go through the per-pixel stage).
+//! The 8-lane row: one row of one slab, 8 pixels at a time. Per chunk, what it needs this slab
+//! (`super::quiet`: skipped as unoccluded or dark, its depth planes alone, or all five stages
+//! with its gather's result known or not); neighbouring chunks' gathers computed together where
+//! every lane shares a tap row (`super::chunk::gather_pair`); the row's last `width mod 8`
+//! pixels through the per-pixel stage (`crate::sweep::pixel`).
 
 use std::ops::Range;
 
 use wide::f32x8;
 
-use super::kit::{
+use super::chunk::{ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, pairs_gathers, shape_of};
+use super::quiet::{ChunkCounts, ChunkWork, LANES, Moved, QuietRow, RowSpans, Values};
+use crate::parity::{NO_CROSSING, advance};
+use crate::sweep::kit::{
     MAX_LIGHT_CHANNELS, Previous, Reach, RowContext, RowState, SlabContext, light_block,
 };
-use super::pixel;
-use super::quiet::{ChunkCounts, ChunkWork, LANES, Moved, QuietRow, RowSpans, Values};
-use super::stage::{ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, pairs_gathers, shape_of};
-use crate::parity::{NO_CROSSING, advance};
+use crate::sweep::pixel;
 use convshadow_common::plan::LIT_LEVEL;
-
-/// Processes one row of one slab, one pixel at a time: the per-pixel stage (`pixel`).
-pub(crate) fn sweep_row_scalar(
-    ctx: &SlabContext<'_>,
-    reach: &Reach,
-    y: usize,
-    prev: &Previous<'_>,
-    mut row: RowState<'_>,
-) {
-    pixel::sweep_row(&RowContext::new(ctx, prev, y), reach, &mut row);
-}
 
 /// The row's tail (pixels `xs`, fewer than a chunk): the per-pixel stage, pixel by pixel, each
 /// pixel's outgoing light recorded in `spans`.
@@ -100,7 +91,7 @@ fn advance_dark(ctx: &SlabContext<'_>, row: &mut RowState<'_>, y: usize, xs: Ran
     }
     if ctx.plan.preintegration {
         // The cursors may have crossed surfaces: forget the kept front values (a kept value is
-        // only a saved evaluation, see `stage::preintegrated`).
+        // only a saved evaluation, see `super::chunk::preintegrated`).
         row.pre[xs].fill(f32::NAN);
     }
     moved
@@ -131,7 +122,7 @@ pub(crate) fn sweep_row_simd(
     let hits = quiet.as_ref().map(|q| q.hits(reach, w.div_ceil(LANES)));
     let pairs = pairs_gathers(plan);
     // The gathers of a chunk and its right neighbour, computed together when both need them
-    // (`stage::gather_pair`); `paired` names the chunk whose result waits in `pair[1]`.
+    // (`super::chunk::gather_pair`); `paired` names the chunk whose result waits in `pair[1]`.
     // Only where pairs are gathered (3 KiB to zero per row and slab otherwise).
     let mut pair = if pairs {
         Some([[0.0f32; 8 * MAX_LIGHT_CHANNELS]; 2])

@@ -1,0 +1,32 @@
+//! The SIMD path's fast paths. Each computes what the per-pixel stage (`super::pixel`) computes,
+//! bit for bit, only faster, and a test holds it to that:
+//!
+//! - `row`: the 8-lane row: chunk by chunk, quiet chunks skipped, neighbouring chunks' gathers
+//!   paired, the row's tail through the per-pixel stage. Tests: `tests/determinism.rs` and
+//!   `tests/simd_quiet.rs` (every example scene and kernel, against the scalar path).
+//! - `chunk`: the 8-lane chunk stage, in instances that know the plan's shape at compile time,
+//!   and the chunk whose depth planes alone move. Tests: `chunk/tests.rs`, every instance against
+//!   the per-pixel stage on random inputs, lane by lane.
+//! - `quiet`: which chunks' results are known exactly without running the stages (unoccluded,
+//!   dark, a known gather), from per-row spans and per-chunk cursor summaries. Tests: its own
+//!   (the spans' hulls and hits against their definitions), the row's check of every summary in
+//!   unit tests, and the scalar-path comparisons above.
+//! - `gather`: the lane gathers through one tap row for every lane (contiguous loads, row runs
+//!   at the grid's edge, two chunks at once); `per_lane`: the gather where each lane has its own
+//!   row (tap tables by column, AVX2 gathers, two lanes' pixels to a value); `levels`: the level
+//!   search for 8 lanes. Tests: `gather/tests.rs`, against the reference gather
+//!   (`crate::kernels::gather`) and one another.
+//!
+//! Imports go one way: `row` → `chunk` → `quiet`, the gathers → the per-pixel stage and its kit.
+
+mod chunk;
+mod gather;
+mod levels;
+mod per_lane;
+mod quiet;
+mod row;
+
+pub(crate) use per_lane::TapColumns;
+pub use quiet::ChunkCounts;
+pub(crate) use quiet::{ChunkState, QuietRow, QuietSetup, RowSpans, chunks_per_row, window_hulls};
+pub(crate) use row::sweep_row_simd;
