@@ -117,7 +117,7 @@ fn pre_transfer(base: u32, front: f32, back: f32) -> TfEntry {
     );
 }
 
-// `preintegrated` (cpu/src/sweep/stage.rs): the pre-integration entry of mesh `mesh` (material
+// `preintegrated` (cpu/src/sweep/pixel.rs): the pre-integration entry of mesh `mesh` (material
 // `m`) at pixel `p` (image coordinates + 0.5: `x`, `y`) for the detail values at the slab's
 // faces. The front value is the one kept in `pre_front` unless the pixel crossed a surface (then
 // at the crossing depth `zc`) or none is kept (then at `front`); the back value is kept for the

@@ -1,4 +1,4 @@
-// The front-to-back slab sweep: mirrors cpu/src/sweep.rs. One dispatch per slab, one invocation
+// The front-to-back slab sweep: mirrors cpu/src/sweep/pixel.rs. One dispatch per slab, one invocation
 // per grid pixel, light buffers ping-pong between dispatches. Per pixel, in the CPU's order:
 // 1. convolve every light buffer (kernels.wgsl; with the distance penumbra through each pixel's
 // level, depth plane included), 2. advance the layer cursor (parity.wgsl),

@@ -2,8 +2,8 @@
 //! bit for bit, only faster, and a test holds it to that:
 //!
 //! - `row`: the 8-lane row: chunk by chunk, quiet chunks skipped, neighbouring chunks' gathers
-//!   paired, the row's tail through the per-pixel stage. Tests: `tests/determinism.rs` and
-//!   `tests/simd_quiet.rs` (every example scene and kernel, against the scalar path).
+//!   paired, the row's tail through the per-pixel stage. Tests: `tests/contract/determinism.rs` and
+//!   `tests/contract/simd_quiet.rs` (every example scene and kernel, against the scalar path).
 //! - `chunk`: the 8-lane chunk stage, in instances that know the plan's shape at compile time,
 //!   and the chunk whose depth planes alone move. Tests: `chunk/tests.rs`, every instance against
 //!   the per-pixel stage on random inputs, lane by lane.
