@@ -23,7 +23,7 @@ use crate::pixel::hash::{mix32, mix32x8};
 mod avx2;
 mod layout;
 
-pub use layout::{Layout, halves, load_halves, splat_within_halves};
+pub use layout::{Grid, Layout, halves, load_halves, splat_within_halves};
 
 /// The widest lane type's lane count: per-lane scratch arrays have this length.
 pub const MAX_LANES: usize = 8;

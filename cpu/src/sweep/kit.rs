@@ -3,11 +3,9 @@
 //! row's mutable state ([`RowState`]), the light buffer's layout and the gather's reach.
 
 use convshadow_common::pixel::hash::row_hash;
-use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::prepare::raster::RasterSetup;
 
-use super::fast::TapColumns;
 use crate::kernels::{LevelPlane, LightPlanes, LightTaps, light_row_hash};
 use crate::ldi::Ldi;
 
@@ -21,29 +19,13 @@ pub(crate) struct SlabContext<'a> {
     pub ldi: &'a Ldi,
     /// Every light's tap rows, as the gather and the level search read them.
     pub taps: &'a [LightTaps],
-    /// Every light's tap table by tap (for per-pixel phases).
-    pub columns: &'a [TapColumns],
+    /// How far any gather reads from the pixel it writes.
+    pub reach: Reach,
     pub slab: u32,
     /// Back face of the slab (the cursor advances past fragments in front of it).
     pub back: f32,
     /// Front face of the slab.
     pub front: f32,
-    /// Distance penumbra: per light, the level a dark pixel (light 0, depth 0) starts the next
-    /// slab with, for the quiet path's dark chunks (empty with the iterated penumbra).
-    pub dark_levels: Vec<u32>,
-}
-
-/// [`SlabContext::dark_levels`] of slab `slab`: what [`pixel_level`] gives a pixel whose
-/// channels are all 0 (occluded = channels) and whose depth plane is 0, as step 5 computes it.
-pub(crate) fn dark_levels(plan: &RenderPlan, slab: u32) -> Vec<u32> {
-    if plan.depth_planes() == 0 {
-        return Vec::new();
-    }
-    let ch = plan.channels as f32;
-    plan.lights
-        .iter()
-        .map(|l| pixel_level::<f32>(&l.table, ch, 0.0, slab + 1))
-        .collect()
 }
 
 /// What the previous slab left that a pixel's gather reads beyond its own row: the light

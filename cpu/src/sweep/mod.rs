@@ -36,8 +36,8 @@ use crate::composite::finish;
 use crate::kernels::LightTaps;
 use crate::ldi::Ldi;
 use convshadow_common::plan::levels::initial_levels;
-use fast::{ChunkState, QuietRow, QuietSetup, RowSpans, TapColumns, sweep_row_simd};
-use kit::{Previous, Reach, RowContext, RowState, SlabContext, dark_levels};
+use fast::{ChunkState, QuietRow, QuietSetup, RowSpans, SimdSlab, TapColumns, sweep_row_simd};
+use kit::{Previous, Reach, RowContext, RowState, SlabContext};
 use level_blocks::LevelBlocks;
 
 pub use convshadow_common::contract::sweep_io::{
@@ -227,11 +227,12 @@ impl QuietState {
     }
 }
 
-/// Sweeps one slab over every row in parallel on the chosen path, then swaps the light buffers.
+/// Sweeps one slab over every row in parallel, on the SIMD path where `simd` is given (with
+/// quiet-chunk skipping where `quiet` is), else on the scalar path; then swaps the light buffers.
 fn sweep_slab(
     ctx: &SlabContext<'_>,
-    reach: &Reach,
-    cpu: &CpuOptions<'_>,
+    simd: Option<&SimdSlab<'_>>,
+    counts: Option<&ChunkCounts>,
     state: &mut PixelState,
     mut quiet: Option<&mut QuietState>,
 ) {
@@ -267,14 +268,15 @@ fn sweep_slab(
                 )
             },
         );
-    match (cpu.path, quiet.as_deref_mut()) {
-        (SweepPath::Scalar, _) => rows.for_each(|(y, mut row)| {
-            pixel::sweep_row(&RowContext::new(ctx, prev_ref, y), reach, &mut row);
+    let row_of = |y| RowContext::new(ctx, prev_ref, y);
+    match (simd, quiet.as_deref_mut()) {
+        (None, _) => rows.for_each(|(y, mut row)| {
+            pixel::sweep_row(&row_of(y), &mut row);
         }),
-        (SweepPath::Simd, None) => rows.for_each(|(y, row)| {
-            sweep_row_simd(ctx, reach, y, prev_ref, row, None, cpu.chunk_counts);
+        (Some(simd), None) => rows.for_each(|(y, row)| {
+            sweep_row_simd(simd, &row_of(y), row, None, counts);
         }),
-        (SweepPath::Simd, Some(q)) => {
+        (Some(simd), Some(q)) => {
             let setup = &q.setup;
             rows.zip(q.spans_cur.par_iter_mut())
                 .zip(q.chunk_states.par_chunks_mut(q.chunks_per_row))
@@ -288,18 +290,10 @@ fn sweep_slab(
                         chunks,
                         filled,
                     };
-                    sweep_row_simd(
-                        ctx,
-                        reach,
-                        y,
-                        prev_ref,
-                        row,
-                        Some(quiet_row),
-                        cpu.chunk_counts,
-                    );
+                    sweep_row_simd(simd, &row_of(y), row, Some(quiet_row), counts);
                 });
             std::mem::swap(&mut q.spans_prev, &mut q.spans_cur);
-            q.update_windows(reach);
+            q.update_windows(&ctx.reach);
         }
     }
     std::mem::swap(&mut state.prev, &mut state.cur);
@@ -420,9 +414,12 @@ pub fn sweep_with(
     let mut state = PixelState::new(plan, ldi, initial);
     let reach = Reach::of(plan);
     let mut quiet = QuietState::new(plan, ldi, initial, &reach, cpu);
+    // The SIMD path's tap tables by column, for its per-lane gathers.
+    let simd = cpu.path == SweepPath::Simd;
     let columns: Vec<TapColumns> = plan
         .lights
         .iter()
+        .filter(|_| simd)
         .map(|l| {
             let (row_len, planes) = (plan.light_row_len(), plan.planes_per_light());
             TapColumns::new(&l.table, row_len, planes, plan.level_row_len())
@@ -445,13 +442,19 @@ pub fn sweep_with(
             raster,
             ldi,
             taps: &taps,
-            columns: &columns,
+            reach,
             slab,
             back: plan.slab_back[slab as usize],
             front: plan.slab_front[slab as usize],
-            dark_levels: dark_levels(plan, slab),
         };
-        sweep_slab(&ctx, &reach, cpu, &mut state, quiet.as_mut());
+        let lanes = simd.then(|| SimdSlab::new(plan, &columns, slab));
+        sweep_slab(
+            &ctx,
+            lanes.as_ref(),
+            cpu.chunk_counts,
+            &mut state,
+            quiet.as_mut(),
+        );
         (options.progress)(slab);
         if !options.every_slab && slab + 1 < plan.slabs && opaque.is_final(&state.alpha) {
             // No later slab can change an image bit (see `OpaqueImage`).

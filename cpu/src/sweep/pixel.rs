@@ -29,8 +29,8 @@ use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::TfEntry;
 
 use super::kit::{
-    MAX_LIGHT_CHANNELS, MAX_LIGHTS, Reach, RowContext, RowState, SlabContext, level_plane,
-    light_block, light_planes,
+    MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowContext, RowState, SlabContext, level_plane, light_block,
+    light_planes,
 };
 use crate::composite::{attenuate, composite, deepen};
 use crate::kernels::{TapOrigin, distance_row, gather, phase_at};
@@ -65,11 +65,11 @@ pub(crate) struct Hit {
 }
 
 /// Processes one row of one slab, one pixel at a time (`--path scalar`).
-pub(crate) fn sweep_row(row: &RowContext<'_>, reach: &Reach, state: &mut RowState<'_>) {
+pub(crate) fn sweep_row(row: &RowContext<'_>, state: &mut RowState<'_>) {
     let plan = row.ctx.plan;
     let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
     for x in 0..w {
-        let inside = reach.interior(x, 1, row.y, w, h);
+        let inside = row.ctx.reach.interior(x, 1, row.y, w, h);
         sweep_pixel(row, state, x, inside);
     }
 }

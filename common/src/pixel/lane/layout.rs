@@ -67,21 +67,23 @@ pub trait Layout: Lane {
     /// Lane i takes lane `i + by` of `self`, or `fill` where `i + by` is not a lane (a run of
     /// values moved along a row, in registers).
     fn shift_lanes(self, by: i32, fill: f32) -> Self;
-    /// Lane i: the pixel `(x[i], y[i])` (read as `i32`) of the `width` × `height` grid whose pixel
-    /// (x, y) is `data[base + y·stride + x·step]`, or `outside` beyond the grid. Panics unless the
-    /// grid lies in `data`.
-    #[allow(clippy::too_many_arguments)]
-    fn fetch_grid(
-        data: &[f32],
-        base: usize,
-        stride: usize,
-        step: usize,
-        width: i32,
-        height: i32,
-        x: Self::U,
-        y: Self::U,
-        outside: f32,
-    ) -> Self;
+    /// Lane i: the pixel `(x[i], y[i])` (read as `i32`) of `grid`, or `outside` beyond it.
+    /// Panics unless the grid lies in its data.
+    fn fetch_grid(grid: &Grid<'_>, x: Self::U, y: Self::U, outside: f32) -> Self;
+}
+
+/// A `width` × `height` grid of values in `data`: pixel (x, y) at `data[base + y·stride + x·step]`
+/// (a plane of a light buffer, as [`Layout::fetch_grid`] reads it).
+#[derive(Clone, Copy)]
+pub struct Grid<'a> {
+    pub data: &'a [f32],
+    pub base: usize,
+    /// Distance between rows.
+    pub stride: usize,
+    /// Distance between a row's neighbouring pixels.
+    pub step: usize,
+    pub width: i32,
+    pub height: i32,
 }
 
 /// Panics unless the `width` × `height` grid at `base` with rows `stride` and pixels `step`
@@ -184,20 +186,10 @@ impl Layout for f32 {
         if by == 0 { self } else { fill }
     }
     #[inline(always)]
-    fn fetch_grid(
-        data: &[f32],
-        base: usize,
-        stride: usize,
-        step: usize,
-        width: i32,
-        height: i32,
-        x: u32,
-        y: u32,
-        outside: f32,
-    ) -> f32 {
+    fn fetch_grid(grid: &Grid<'_>, x: u32, y: u32, outside: f32) -> f32 {
         let (x, y) = (x as i32, y as i32);
-        if x >= 0 && y >= 0 && x < width && y < height {
-            data[base + y as usize * stride + x as usize * step]
+        if x >= 0 && y >= 0 && x < grid.width && y < grid.height {
+            grid.data[grid.base + y as usize * grid.stride + x as usize * grid.step]
         } else {
             outside
         }
@@ -269,17 +261,15 @@ impl Layout for f32x8 {
         avx2::shift_lanes(self, by, fill)
     }
     #[inline(always)]
-    fn fetch_grid(
-        data: &[f32],
-        base: usize,
-        stride: usize,
-        step: usize,
-        width: i32,
-        height: i32,
-        x: u32x8,
-        y: u32x8,
-        outside: f32,
-    ) -> f32x8 {
+    fn fetch_grid(grid: &Grid<'_>, x: u32x8, y: u32x8, outside: f32) -> f32x8 {
+        let Grid {
+            data,
+            base,
+            stride,
+            step,
+            width,
+            height,
+        } = *grid;
         if width <= 0 || height <= 0 {
             return f32x8::splat(outside);
         }

@@ -138,17 +138,15 @@ fn a_grid_fetch_reads_inside_and_gives_the_outside_value_beyond() {
         };
         let x = h.map(|v| coord(v, width) as u32);
         let y = h.map(|v| coord(mix32(v), height) as u32);
-        let got = f32x8::fetch_grid(
-            &data,
+        let grid = Grid {
+            data: &data,
             base,
             stride,
             step,
             width,
             height,
-            u32x8::new(x),
-            u32x8::new(y),
-            -1.0,
-        );
+        };
+        let got = f32x8::fetch_grid(&grid, u32x8::new(x), u32x8::new(y), -1.0);
         agree(
             got,
             |i| {
@@ -159,8 +157,7 @@ fn a_grid_fetch_reads_inside_and_gives_the_outside_value_beyond() {
                 } else {
                     -1.0
                 };
-                let (w, h) = (width, height);
-                let one = f32::fetch_grid(&data, base, stride, step, w, h, x[i], y[i], -1.0);
+                let one = f32::fetch_grid(&grid, x[i], y[i], -1.0);
                 assert_eq!(one.to_bits(), want.to_bits(), "one lane at ({xi}, {yi})");
                 want
             },
@@ -169,8 +166,8 @@ fn a_grid_fetch_reads_inside_and_gives_the_outside_value_beyond() {
     }
 }
 
-/// [`Lane::pixel_order`], [`Lane::plane_order`], [`Lane::from_lane_pairs`] and
-/// [`Lane::to_lane_pairs`] of `C` planes against their definitions, element by element.
+/// [`Layout::pixel_order`], [`Layout::plane_order`], [`Layout::from_lane_pairs`] and
+/// [`Layout::to_lane_pairs`] of `C` planes against their definitions, element by element.
 fn check_orders<const C: usize>() {
     let planes: [f32x8; C] =
         std::array::from_fn(|c| f32x8::new(std::array::from_fn(|i| (10 * c + i) as f32)));

@@ -16,38 +16,54 @@
 use convshadow_common::pixel::lane::{Lane, Layout, MAX_LANES};
 use convshadow_common::plan::kernel::PhaseMode;
 
+use super::SimdSlab;
 use super::gather::{gather_inside, gather_lanes, store_pixels};
 use super::levels::{distance_rows, phases};
 use super::per_lane::{LaneRows, gather_per_lane};
 use super::quiet::{ChunkState, Values};
 use crate::composite::{attenuate, composite, deepen};
-use crate::kernels::{LevelPlane, LightPlanes, phase_at};
+use crate::kernels::{LightPlanes, TapOrigin, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
     Specular, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
 use crate::sweep::kit::{
-    MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, light_block,
+    MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, level_plane,
+    light_block,
 };
 use crate::sweep::pixel::shade_and_composite;
 use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::{RenderPlan, TfEntry};
 use wide::f32x8;
 
-/// [`sweep_chunk`] for one lane type and light-channel capacity.
-pub(crate) type ChunkFn = fn(
-    &SlabContext<'_>,
-    usize,
-    usize,
-    &Previous<'_>,
-    &mut RowState<'_>,
-    &[u32; MAX_LIGHT_CHANNELS],
-    u32,
-    bool,
-    Option<f32>,
-    Option<&[f32]>,
-    Option<ChunkState>,
-) -> ChunkOutcome;
+/// [`sweep_chunk`] for one lane type, light-channel capacity and shape.
+pub(crate) type ChunkFn =
+    fn(&SimdSlab<'_>, &RowContext<'_>, &mut RowState<'_>, Chunk<'_>) -> ChunkOutcome;
+
+/// One chunk of a row as the 8-lane row hands it to [`sweep_chunk`]: where it is and what is
+/// known about it.
+#[derive(Clone, Copy)]
+pub(crate) struct Chunk<'a> {
+    /// Its first pixel: the chunk is pixels x0..x0 + LANES of the row.
+    pub x0: usize,
+    /// Every read of its gathers lies inside the grid.
+    pub interior: bool,
+    /// Every value its gathers read is this constant: the gathers are skipped.
+    pub known_light: Option<f32>,
+    /// Its gathers' result, already computed (light plane i's lanes at `i · LANES..`, see
+    /// [`gather_pair`]).
+    pub gathered: Option<&'a [f32]>,
+    /// Its cursor summary, current: its lanes' cursors are not visited when it shows that none
+    /// crosses a fragment in this slab.
+    pub summary: Option<ChunkState>,
+}
+
+/// What step 2 found in every lane: the first fragment its cursor crossed in this slab
+/// ([`NO_CROSSING`] if none) and the mesh it shades, if any (the per-pixel stage's `Hit`, by lane).
+struct LaneHits {
+    crossed: [u32; MAX_LANES],
+    mesh: [Option<u32>; MAX_LANES],
+}
 
 /// What one chunk's stages tell the lane path about their lanes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -161,12 +177,12 @@ pub(crate) fn pairs_gathers(plan: &RenderPlan) -> bool {
 /// `8i..8i + 8` of each output, as [`sweep_chunk`]'s `gathered` takes them. Only where
 /// [`pairs_gathers`] holds.
 pub(crate) fn gather_pair(
-    ctx: &SlabContext<'_>,
-    y: usize,
+    simd: &SimdSlab<'_>,
+    row: &RowContext<'_>,
     x0: usize,
-    prev: &Previous<'_>,
     out: &mut [[f32; 8 * MAX_LIGHT_CHANNELS]; 2],
 ) {
+    let (ctx, prev) = (row.ctx, row.prev);
     let plan = ctx.plan;
     let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
     for (l, light) in plan.lights.iter().enumerate() {
@@ -177,19 +193,15 @@ pub(crate) fn gather_pair(
             _ => t.slab_phase[slab],
         };
         let (mut a, mut b) = ([f32x8::splat(0.0); 3], [f32x8::splat(0.0); 3]);
-        let extent = ctx.columns[l].extent[p as usize];
+        let extent = simd.columns[l].extent[p as usize];
         let taps = ctx.taps[l].weighted(p);
-        let shift = t.slab_shift[slab];
-        let (xa, ya) = (x0 as i32, y as i32);
-        gather_inside(
-            &planes,
-            taps,
-            extent,
-            shift,
-            xa,
-            ya,
-            [&mut a[..ch], &mut b[..ch]],
-        );
+        let at = TapOrigin {
+            x: x0 as i32,
+            y: row.y as i32,
+            shift: t.slab_shift[slab],
+            inside: true,
+        };
+        gather_inside(&planes, taps, extent, at, [&mut a[..ch], &mut b[..ch]]);
         for (k, sums) in [a, b].iter().enumerate() {
             for (c, v) in sums[..ch].iter().enumerate() {
                 v.store(&mut out[k], (l * ch + c) * 8);
@@ -198,26 +210,22 @@ pub(crate) fn gather_pair(
     }
 }
 
-/// All five stages for the pixels x0..x0 + LANES of row y. `interior`: every read of the gather
-/// lies inside the grid; `known_light`: every value the gather reads is this constant (the
-/// gather is skipped); `gathered`: the gather's result, already computed (light plane i's lanes
-/// at `i · LANES..`, see [`gather_pair`]); `summary`: the chunk's cursor summary, current (its
-/// lanes' cursors are not visited when it shows that none crosses a fragment in this slab).
-#[allow(clippy::too_many_arguments)]
+/// All five stages for the pixels of `chunk` in `row`.
 #[inline(always)]
 pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
-    ctx: &SlabContext<'_>,
-    y: usize,
-    x0: usize,
-    prev: &Previous<'_>,
-    row: &mut RowState<'_>,
-    row_hashes: &[u32; MAX_LIGHT_CHANNELS],
-    jitter_row: u32,
-    interior: bool,
-    known_light: Option<f32>,
-    gathered: Option<&[f32]>,
-    summary: Option<ChunkState>,
+    simd: &SimdSlab<'_>,
+    row: &RowContext<'_>,
+    state: &mut RowState<'_>,
+    chunk: Chunk<'_>,
 ) -> ChunkOutcome {
+    let (ctx, prev, y) = (row.ctx, row.prev, row.y);
+    let Chunk {
+        x0,
+        interior,
+        known_light,
+        gathered,
+        summary,
+    } = chunk;
     let plan = ctx.plan;
     let ldi = ctx.ldi;
     let w = plan.grid_width as usize;
@@ -239,19 +247,21 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     // Per light, sized N (lights ≤ lights · channels ≤ N): zeroing MAX_LIGHTS entries costs.
     let mut light_rows = [L::u_splat(0); N];
     if distance && known_light.is_none() && gathered.is_none() {
-        let (xi, yi) = (x0 as i32, y as i32);
-        every_light_rows::<L>(ctx, prev, row_hashes, xi, yi, interior, &mut light_rows);
+        every_light_rows::<L>(simd, row, x0, interior, &mut light_rows);
     }
 
     // 2. Intersection: every lane's cursor.
-    let mut crossed = [NO_CROSSING; MAX_LANES];
-    let mut mesh = [None; MAX_LANES];
+    let mut hits = LaneHits {
+        crossed: [NO_CROSSING; MAX_LANES],
+        mesh: [None; MAX_LANES],
+    };
+    let (crossed, mesh) = (&mut hits.crossed, &mut hits.mesh);
     match summary {
         // No lane crosses a fragment (`advance` would not enter its loop): meshes from the
         // inside masks, none where no lane is inside one.
         Some(s) if s.crosses_nothing(ctx.back) => {
             if s.inside_any != 0 {
-                for (m, &inside) in mesh.iter_mut().zip(&row.inside[x0..x0 + L::LANES]) {
+                for (m, &inside) in mesh.iter_mut().zip(&state.inside[x0..x0 + L::LANES]) {
                     *m = first_mesh(inside);
                 }
             }
@@ -260,11 +270,12 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
             for i in 0..L::LANES {
                 let x = x0 + i;
                 let end = ldi.offsets[y * w + x + 1];
-                crossed[i] = advance(ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
+                let (next, inside) = (&mut state.next[x], &mut state.inside[x]);
+                crossed[i] = advance(ldi, next, end, inside, ctx.back);
                 mesh[i] = if crossed[i] != NO_CROSSING {
                     Some(u32::from(ldi.mesh[crossed[i] as usize]))
                 } else {
-                    first_mesh(row.inside[x])
+                    first_mesh(state.inside[x])
                 };
             }
         }
@@ -285,9 +296,13 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
             for (l, light) in plan.lights.iter().enumerate() {
                 let t = &light.table;
                 let planes = light_planes(plan, prev, l, (ch, planes_per_light));
-                let shift = t.slab_shift[slab];
+                let at = TapOrigin {
+                    x: x0 as i32,
+                    y: y as i32,
+                    shift: t.slab_shift[slab],
+                    inside: interior,
+                };
                 let acc = &mut iin[l * ch..(l + 1) * ch];
-                let (x0, yi) = (x0 as i32, y as i32);
                 if distance {
                     // The light's channels and its depth plane, each lane through its level's row.
                     let planes = LightPlanes {
@@ -297,7 +312,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
                     let mut all = [L::splat(0.0); 4];
                     let gathered = &mut all[..=ch];
                     let rows = light_rows[l];
-                    distance_gather(ctx, l, &planes, rows, x0, yi, interior, gathered);
+                    distance_gather(simd, ctx, l, &planes, rows, at, gathered);
                     copy_channels(acc, &all[..ch]);
                     depth_in[l] = all[ch];
                     continue;
@@ -309,21 +324,19 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
                 };
                 match uniform {
                     Some(p) => {
-                        let extent = ctx.columns[l].extent[p as usize];
+                        let extent = simd.columns[l].extent[p as usize];
                         // Local sums (from 0, as `iin`'s), so they stay in registers.
                         let mut sums = [L::splat(0.0); 3];
                         let sums = &mut sums[..ch];
                         let taps = ctx.taps[l].weighted(p);
-                        gather_lanes(&planes, taps, extent, shift, x0, yi, interior, sums);
+                        gather_lanes(&planes, taps, extent, at, sums);
                         copy_channels(acc, sums);
                     }
                     None => {
-                        let ph = phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32));
-                        let columns = &ctx.columns[l];
+                        let ph = phases::<L>(t, row.light_hashes[l], plan.hash_x(x0 as u32));
+                        let columns = &simd.columns[l];
                         let reads = LaneRows::within::<L>(columns, ph, interior);
-                        gather_per_lane(
-                            &planes, t, columns, ph, &reads, shift, x0, yi, interior, acc,
-                        );
+                        gather_per_lane(&planes, t, columns, ph, &reads, at, acc);
                     }
                 }
             }
@@ -332,22 +345,15 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
 
     // 3–4. Shading and compositing.
     let mut attenuation = [L::splat(1.0); 3];
-    let lane_mesh = &mesh[..L::LANES];
-    let any_crossed = crossed[..L::LANES].iter().any(|&c| c != NO_CROSSING);
+    let lane_mesh = &hits.mesh[..L::LANES];
+    let any_crossed = hits.crossed[..L::LANES].iter().any(|&c| c != NO_CROSSING);
     let shaded = lane_mesh.iter().any(Option::is_some) || any_crossed;
     if let Some(m) = lane_mesh.iter().flatten().next().copied() {
         if lane_mesh.iter().all(|&k| k.is_none() || k == Some(m)) {
-            attenuation = shade_chunk(ctx, y, x0, row, &iin[..n], m, &mesh, &crossed, jitter_row);
+            attenuation = shade_chunk(row, state, x0, &iin[..n], m, &hits);
         } else {
             // Lanes on different meshes: the per-pixel stage's shading, lane by lane.
             let mut att = [[1.0f32; MAX_LANES]; 3];
-            let one_row = RowContext {
-                ctx,
-                prev,
-                y,
-                light_hashes: *row_hashes,
-                jitter_hash: jitter_row,
-            };
             for (i, lm) in lane_mesh.iter().enumerate() {
                 let Some(mi) = *lm else { continue };
                 let mut lane_iin = [0.0f32; N];
@@ -355,7 +361,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
                     *dst = v.lane(i);
                 }
                 let lane_iin = &lane_iin[..n];
-                let a = shade_and_composite(&one_row, row, x0 + i, lane_iin, mi, crossed[i]);
+                let a = shade_and_composite(row, state, x0 + i, lane_iin, mi, hits.crossed[i]);
                 for k in 0..3 {
                     att[k][i] = a[k];
                 }
@@ -389,7 +395,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         }
         if distance {
             // The light this slab removed, at this slab's depth; a depth plane's quiet value is 0.
-            let depth = finish_depth(ctx, row, l, x0, depth_in[l], lit_in, lit_out);
+            let depth = finish_depth(ctx, state, l, x0, depth_in[l], lit_in, lit_out);
             let moved_depth = depth.ne(zero);
             not_one = L::m_or(not_one, moved_depth);
             not_zero = L::m_or(not_zero, moved_depth);
@@ -397,7 +403,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         }
         store_pixels(
             &outs[..planes],
-            row.light,
+            state.light,
             light_block(plan, l) + x0 * planes,
         );
     }
@@ -422,82 +428,63 @@ fn copy_channels<L: Layout>(dst: &mut [L], src: &[L]) {
     }
 }
 
-/// Distance penumbra: for every light l, the rows (level and phase) its lanes at pixels x0.. of
-/// row y gather through, the level each lane's neighbourhood picks ([`distance_rows`]), into
+/// Distance penumbra: for every light l, the rows (level and phase) the lanes at pixels x0.. of
+/// the row gather through, the level each lane's neighbourhood picks ([`distance_rows`]), into
 /// `all[l]` (in place: an array returned by value cost 1.9 % of the sweep's instructions in
-/// copies).
-#[allow(clippy::too_many_arguments)]
+/// copies). `interior`: every read lies inside the grid.
 #[inline(always)]
 fn every_light_rows<L: Layout>(
-    ctx: &SlabContext<'_>,
-    prev: &Previous<'_>,
-    row_hashes: &[u32; MAX_LIGHT_CHANNELS],
-    x0: i32,
-    y: i32,
+    simd: &SimdSlab<'_>,
+    row: &RowContext<'_>,
+    x0: usize,
     interior: bool,
     all: &mut [L::U],
 ) {
+    let ctx = row.ctx;
     let plan = ctx.plan;
-    let (slab, w) = (ctx.slab as usize, plan.grid_width as usize);
+    let slab = ctx.slab as usize;
     for (l, (light, rows)) in plan.lights.iter().zip(all.iter_mut()).enumerate() {
         let t = &light.table;
         let phase = match t.phase_mode {
-            PhaseMode::PerPixel => phases::<L>(t, row_hashes[l], plan.hash_x(x0 as u32)),
+            PhaseMode::PerPixel => phases::<L>(t, row.light_hashes[l], plan.hash_x(x0 as u32)),
             PhaseMode::PerSlab => L::u_splat(phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0)),
             PhaseMode::Schedule => L::u_splat(0),
         };
-        let levels = LevelPlane {
-            data: prev.levels,
-            blocks: prev.level_blocks,
-            base: l * w,
-            row_stride: plan.level_row_len(),
-            width: w as i32,
-            height: plan.grid_height as i32,
+        let levels = level_plane(plan, row.prev, l);
+        let at = TapOrigin {
+            x: x0 as i32,
+            y: row.y as i32,
+            shift: t.slab_shift[slab],
+            inside: interior,
         };
-        let (columns, shift) = (&ctx.columns[l], t.slab_shift[slab]);
-        *rows = distance_rows::<L>(
-            &levels, t, columns, phase, plan.slabs, ctx.slab, shift, x0, y, interior,
-        );
+        let columns = &simd.columns[l];
+        *rows = distance_rows::<L>(&levels, t, columns, phase, plan.slabs, ctx.slab, at);
     }
 }
 
 /// Distance penumbra: light `l`'s planes `planes` (its channels and depth plane, or the depth
-/// plane alone) gathered at pixels x0.. of row y, each lane through its row `rows`
+/// plane alone) gathered from `at` (the chunk's first pixel), each lane through its row `rows`
 /// ([`every_light_rows`]); contiguous loads when every lane has the same row.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn distance_gather<L: Layout>(
+    simd: &SimdSlab<'_>,
     ctx: &SlabContext<'_>,
     l: usize,
     planes: &LightPlanes<'_>,
     rows: L::U,
-    x0: i32,
-    y: i32,
-    interior: bool,
+    at: TapOrigin,
     acc: &mut [L],
 ) {
     let t = &ctx.plan.lights[l].table;
-    let columns = &ctx.columns[l];
-    let shift = t.slab_shift[ctx.slab as usize];
-    let reads = LaneRows::within::<L>(columns, rows, interior);
+    let columns = &simd.columns[l];
+    let reads = LaneRows::within::<L>(columns, rows, at.inside);
     match reads.uniform {
         // Every lane at the same level and phase: contiguous loads.
         Some(row) => {
             let extent = columns.extent[row as usize];
-            gather_lanes(
-                planes,
-                ctx.taps[l].weighted(row),
-                extent,
-                shift,
-                x0,
-                y,
-                interior,
-                acc,
-            );
+            gather_lanes(planes, ctx.taps[l].weighted(row), extent, at, acc);
         }
-        None => gather_per_lane(
-            planes, t, columns, rows, &reads, shift, x0, y, interior, acc,
-        ),
+        None => gather_per_lane(planes, t, columns, rows, &reads, at, acc),
     }
 }
 
@@ -505,11 +492,10 @@ fn distance_gather<L: Layout>(
 /// `depth_in` deepened by the light the slab removed (`lit_in − lit_out`, summed over channels),
 /// and the level each pixel starts the next slab with (stored). Returns the outgoing depth,
 /// for the caller to store with the light's channels.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn finish_depth<L: Layout>(
     ctx: &SlabContext<'_>,
-    row: &mut RowState<'_>,
+    state: &mut RowState<'_>,
     l: usize,
     x0: usize,
     depth_in: L,
@@ -523,7 +509,7 @@ fn finish_depth<L: Layout>(
     let level = pixel_level::<L>(&plan.lights[l].table, occluded, out, ctx.slab + 1);
     let mut lanes = [0u32; MAX_LANES];
     L::u_store(level, &mut lanes);
-    row.levels[l * w + x0..][..L::LANES].copy_from_slice(&lanes[..L::LANES]);
+    state.levels[l * w + x0..][..L::LANES].copy_from_slice(&lanes[..L::LANES]);
     out
 }
 
@@ -533,25 +519,22 @@ fn finish_depth<L: Layout>(
 /// computed: every light value gathered is 0, so attenuated it stays 0, the slab removes
 /// `0 − 0 = 0`, compositing an opaque pixel adds `(1 − 1)·α·c = 0`, and the depth and level are
 /// those of the full stage, bit for bit. The caller advances the cursors. Returns whether some
-/// depth value is not 0.
-#[allow(clippy::too_many_arguments)]
+/// depth value is not 0. `interior`: every read of the chunk's gathers lies inside the grid.
 pub(crate) fn dark_depth_chunk(
-    ctx: &SlabContext<'_>,
-    y: usize,
+    simd: &SimdSlab<'_>,
+    row: &RowContext<'_>,
+    state: &mut RowState<'_>,
     x0: usize,
-    prev: &Previous<'_>,
-    row: &mut RowState<'_>,
-    row_hashes: &[u32; MAX_LIGHT_CHANNELS],
     interior: bool,
 ) -> bool {
+    let (ctx, prev) = (row.ctx, row.prev);
     let plan = ctx.plan;
     let ch = plan.channels as usize;
     let zero = f32x8::splat(0.0);
     let mut not_zero = false;
     // Every light's level search first (see `sweep_chunk`), then the gathers.
-    let (xi, yi) = (x0 as i32, y as i32);
     let mut light_rows = [<f32x8 as Lane>::u_splat(0); MAX_LIGHTS];
-    every_light_rows::<f32x8>(ctx, prev, row_hashes, xi, yi, interior, &mut light_rows);
+    every_light_rows::<f32x8>(simd, row, x0, interior, &mut light_rows);
     for (l, &rows) in light_rows.iter().enumerate().take(plan.lights.len()) {
         let planes = light_planes(plan, prev, l, shape_planes::<ANY_SHAPE>(plan));
         let depth_plane = LightPlanes {
@@ -560,35 +543,39 @@ pub(crate) fn dark_depth_chunk(
             light_channels: 0,
             ..planes
         };
+        let at = TapOrigin {
+            x: x0 as i32,
+            y: row.y as i32,
+            shift: plan.lights[l].table.slab_shift[ctx.slab as usize],
+            inside: interior,
+        };
         let mut depth_in = [zero];
-        distance_gather(ctx, l, &depth_plane, rows, xi, yi, interior, &mut depth_in);
+        distance_gather(simd, ctx, l, &depth_plane, rows, at, &mut depth_in);
         // Σ of the gathered and of the attenuated light, as the stage sums them: 0 + 0 + … = 0.
-        let depth = finish_depth(ctx, row, l, x0, depth_in[0], zero, zero);
+        let depth = finish_depth(ctx, state, l, x0, depth_in[0], zero, zero);
         let mut outs = [zero; 4];
         outs[ch] = depth;
         let block = light_block(plan, l) + x0 * (ch + 1);
-        store_pixels(&outs[..=ch], row.light, block);
+        store_pixels(&outs[..=ch], state.light, block);
         not_zero |= <f32x8 as Lane>::m_any(depth.ne(zero));
     }
     not_zero
 }
 
-/// Stages 3–4 for lanes whose shaded pixels all lie in mesh `m` (`mesh[i]` is `None` in lanes
-/// without a mesh): shading and compositing. Returns the attenuation per channel (1 in lanes
-/// without a mesh).
-#[allow(clippy::too_many_arguments)]
+/// Stages 3–4 for the lanes at pixels x0.. whose shaded pixels all lie in mesh `m`
+/// (`hits.mesh[i]` is `None` in lanes without a mesh): shading and compositing. Returns the
+/// attenuation per channel (1 in lanes without a mesh).
 #[inline(always)]
 fn shade_chunk<L: Layout>(
-    ctx: &SlabContext<'_>,
-    y: usize,
+    row: &RowContext<'_>,
+    state: &mut RowState<'_>,
     x0: usize,
-    row: &mut RowState<'_>,
     iin: &[L],
     m: u32,
-    mesh: &[Option<u32>; MAX_LANES],
-    crossed: &[u32; MAX_LANES],
-    jitter_row: u32,
+    hits: &LaneHits,
 ) -> [L; 3] {
+    let (ctx, y) = (row.ctx, row.y);
+    let (mesh, crossed) = (&hits.mesh, &hits.crossed);
     let plan = ctx.plan;
     let ldi = ctx.ldi;
     let w = plan.grid_width as usize;
@@ -602,7 +589,7 @@ fn shade_chunk<L: Layout>(
         is_crossed[i] = crossed[i] != NO_CROSSING;
         any_crossed |= is_crossed[i];
         xs[i] = plan.image_xy(x0 + i, y).0;
-        zs[i] = shading_depth(plan, ldi, crossed[i], ctx.front, jitter_row, x0 + i);
+        zs[i] = shading_depth(plan, ldi, crossed[i], ctx.front, row.jitter_hash, x0 + i);
     }
     let active_lanes = active;
     let active = L::m_from(&active);
@@ -610,10 +597,10 @@ fn shade_chunk<L: Layout>(
     let material = &plan.materials[plan.mesh_material[m as usize] as usize];
     let (xv, yv) = (L::load(&xs, 0), L::splat(plan.image_xy(x0, y).1));
     let tf = match &material.pre {
-        Some(table) => preintegrated(ctx, x0, row, m, table, xv, yv, &active_lanes, crossed),
+        Some(table) => preintegrated(ctx, state, x0, m, table, [xv, yv], hits),
         None => {
             if plan.preintegration {
-                forget_front(row, x0, L::LANES, &active_lanes);
+                forget_front(state, x0, L::LANES, &active_lanes);
             }
             material_at(plan, m, xv, yv, z)
         }
@@ -647,16 +634,16 @@ fn shade_chunk<L: Layout>(
     let shaded = shade(plan, material, tf.color, iin, spec.as_ref());
 
     let mut color = [
-        L::load(row.color, x0),
-        L::load(row.color, w + x0),
-        L::load(row.color, 2 * w + x0),
+        L::load(state.color, x0),
+        L::load(state.color, w + x0),
+        L::load(state.color, 2 * w + x0),
     ];
-    let mut alpha = L::load(row.alpha, x0);
+    let mut alpha = L::load(state.alpha, x0);
     composite(&mut color, &mut alpha, shaded, tf.alpha, active);
     for (k, v) in color.iter().enumerate() {
-        v.store(row.color, k * w + x0);
+        v.store(state.color, k * w + x0);
     }
-    alpha.store(row.alpha, x0);
+    alpha.store(state.alpha, x0);
     let one = L::splat(1.0);
     [
         L::select(active, tf.attenuation[0], one),
@@ -665,29 +652,28 @@ fn shade_chunk<L: Layout>(
     ]
 }
 
-/// Pre-integrated shading (`sweep.preintegration`) of the lanes of mesh `m` (those in `active`)
-/// whose material has the pre-integration table `table`: the table's entry at the detail values
-/// on the slab's front and back faces. The front value is the one the previous slab kept in
-/// `row.pre` (NaN: none), else evaluated at the front face, or at the crossed fragment's depth
+/// Pre-integrated shading (`sweep.preintegration`) of the lanes at pixels x0.. (image
+/// coordinates `xy`) of mesh `m` (those whose `hits.mesh` is some) whose material has the
+/// pre-integration table `table`: the table's entry at the detail values on the slab's front and
+/// back faces. The front value is the one the previous slab kept in `state.pre` (NaN: none), else evaluated at the front face, or at the crossed fragment's depth
 /// where the pixel crosses a surface in this slab. The back value is kept for the next slab when
 /// the pixel is still in mesh `m` at the back face (the next slab shades `m` unless it crosses a
 /// surface), else NaN. The detail is a pure function of pixel, mesh and depth, and slab k's back
 /// face is slab k + 1's front face bit for bit, so a kept value has the bits of a fresh one:
 /// keeping it only saves an evaluation, and forgetting it never changes the image.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn preintegrated<L: Layout>(
     ctx: &SlabContext<'_>,
+    state: &mut RowState<'_>,
     x0: usize,
-    row: &mut RowState<'_>,
     m: u32,
     table: &[TfEntry],
-    x: L,
-    y: L,
-    active: &[bool; MAX_LANES],
-    crossed: &[u32; MAX_LANES],
+    [x, y]: [L; 2],
+    hits: &LaneHits,
 ) -> TfLanes<L> {
     let plan = ctx.plan;
+    let crossed = &hits.crossed;
+    let active: [bool; MAX_LANES] = std::array::from_fn(|i| hits.mesh[i].is_some());
     let mut zf = [ctx.front; MAX_LANES];
     let mut use_kept = [false; MAX_LANES];
     let mut fresh = false;
@@ -696,10 +682,10 @@ fn preintegrated<L: Layout>(
         if is_crossed {
             zf[i] = ctx.ldi.depth[crossed[i] as usize];
         }
-        use_kept[i] = !is_crossed && !row.pre[x0 + i].is_nan();
+        use_kept[i] = !is_crossed && !state.pre[x0 + i].is_nan();
         fresh |= active[i] && !use_kept[i];
     }
-    let kept = L::load(row.pre, x0);
+    let kept = L::load(state.pre, x0);
     let front = if fresh {
         let v = detail_at(plan, m, x, y, L::load(&zf, 0));
         L::select(L::m_from(&use_kept), kept, v)
@@ -709,7 +695,7 @@ fn preintegrated<L: Layout>(
     let back = detail_at(plan, m, x, y, L::splat(ctx.back));
     for (i, _) in active[..L::LANES].iter().enumerate().filter(|(_, a)| **a) {
         let xi = x0 + i;
-        row.pre[xi] = if first_mesh(row.inside[xi]) == Some(m) {
+        state.pre[xi] = if first_mesh(state.inside[xi]) == Some(m) {
             back.lane(i)
         } else {
             f32::NAN
@@ -721,9 +707,9 @@ fn preintegrated<L: Layout>(
 /// Forgets the kept front value (see [`preintegrated`]) of the `active` lanes of pixels x0..:
 /// they were shaded by a material without a pre-integration table.
 #[inline(always)]
-fn forget_front(row: &mut RowState<'_>, x0: usize, lanes: usize, active: &[bool; MAX_LANES]) {
+fn forget_front(state: &mut RowState<'_>, x0: usize, lanes: usize, active: &[bool; MAX_LANES]) {
     for (i, _) in active[..lanes].iter().enumerate().filter(|(_, a)| **a) {
-        row.pre[x0 + i] = f32::NAN;
+        state.pre[x0 + i] = f32::NAN;
     }
 }
 

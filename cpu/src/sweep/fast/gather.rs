@@ -8,10 +8,10 @@
 //! once. Also the lanes' stores into that buffer ([`store_pixels`]). Tests (`gather/tests.rs`):
 //! every gather against the reference gather and against one another, bit for bit.
 
-use convshadow_common::pixel::lane::{Layout, MAX_LANES};
+use convshadow_common::pixel::lane::{Grid, Layout, MAX_LANES};
 use convshadow_common::plan::kernel::Tap;
 
-use crate::kernels::{LightPlanes, Plane};
+use crate::kernels::{LightPlanes, Plane, TapOrigin};
 
 #[cfg(test)]
 mod tests;
@@ -27,25 +27,20 @@ pub(super) fn add_bilinear<L: Layout>(acc: L, w: &[L; 4], v: &[L; 4]) -> L {
 }
 
 /// The four bilinear corners (0,0), (1,0), (0,1), (1,1) of lane i's sample at
-/// (`sx[i]`, `sy[i]`) in `plane` (reads outside give its outside value; [`Lane::fetch_grid`]).
+/// (`sx[i]`, `sy[i]`) in `plane` (reads outside give its outside value; [`Layout::fetch_grid`]).
 #[inline(always)]
 pub(super) fn fetch_corners<L: Layout>(plane: &Plane<'_>, sx: L::U, sy: L::U) -> [L; 4] {
     let one = L::u_splat(1);
     let (sx1, sy1) = (L::u_add(sx, one), L::u_add(sy, one));
-    let (w, h) = (plane.width, plane.height);
-    let fetch = |x, y| {
-        L::fetch_grid(
-            plane.data,
-            plane.base,
-            plane.row_stride,
-            plane.pixel_step,
-            w,
-            h,
-            x,
-            y,
-            plane.outside,
-        )
+    let grid = Grid {
+        data: plane.data,
+        base: plane.base,
+        stride: plane.row_stride,
+        step: plane.pixel_step,
+        width: plane.width,
+        height: plane.height,
     };
+    let fetch = |x, y| L::fetch_grid(&grid, x, y, plane.outside);
     [
         fetch(sx, sy),
         fetch(sx1, sy),
@@ -54,22 +49,20 @@ pub(super) fn fetch_corners<L: Layout>(plane: &Plane<'_>, sx: L::U, sy: L::U) ->
     ]
 }
 
-/// Whether every bilinear read of the `lanes` pixels x0.. of row y through taps whose top-left
-/// corners span `extent` (`[min dx, max dx, min dy, max dy]`), moved by `shift`, lies inside the
-/// `width` × `height` grid. The sweep's per-chunk test uses the reach of every row of every
+/// Whether every bilinear read of the `lanes` pixels from `at` through taps whose top-left
+/// corners span `extent` (`[min dx, max dx, min dy, max dy]`), moved by its shift, lies inside
+/// the `width` × `height` grid. The sweep's per-chunk test uses the reach of every row of every
 /// table; this one the rows a chunk actually reads, so that chunks near the grid's edge whose
 /// kernels stay inside take the unchecked path (the same values: only reads beyond the grid differ).
 #[inline(always)]
-pub fn reads_inside(
+pub(crate) fn reads_inside(
     extent: [i32; 4],
-    shift: [i32; 2],
-    x0: i32,
-    y: i32,
+    at: TapOrigin,
     lanes: usize,
     width: i32,
     height: i32,
 ) -> bool {
-    let (x, y) = (i64::from(x0 + shift[0]), i64::from(y + shift[1]));
+    let (x, y) = (i64::from(at.x + at.shift[0]), i64::from(at.y + at.shift[1]));
     let e = extent.map(i64::from);
     x + e[0] >= 0
         && x + lanes as i64 + e[1] < i64::from(width)
@@ -77,34 +70,30 @@ pub fn reads_inside(
         && y + e[3] + 1 < i64::from(height)
 }
 
-/// Gathers every channel of one light at pixels x0.. (one per lane) of row y when every lane
-/// uses the same `taps` (per-slab and scheduled phases, and any 1-lane gather): contiguous loads
-/// when `interior` (every read inside the grid; one bounds check for the taps' whole
+/// Gathers every channel of one light at the pixels from `at` (one per lane) when every lane
+/// uses the same `taps` (per-slab and scheduled phases, and a distance level every lane shares):
+/// contiguous loads when `at.inside` (every read inside the grid; one bounds check for the taps' whole
 /// `extent`, see `TapColumns::extent`), else tap by tap: contiguous loads where the tap's
 /// corners lie inside, `RowRun`s where they do not. Adds into `acc[c]` tap by tap,
 /// corner by corner, so every lane has the bits of any other lane count.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn gather_lanes<L: Layout>(
+pub(crate) fn gather_lanes<L: Layout>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     extent: [i32; 4],
-    shift: [i32; 2],
-    x0: i32,
-    y: i32,
-    interior: bool,
+    at: TapOrigin,
     acc: &mut [L],
 ) {
     let (w, h) = (planes.width, planes.height);
-    if interior || reads_inside(extent, shift, x0, y, L::LANES, w, h) {
-        gather_inside(planes, taps, extent, shift, x0, y, [acc]);
+    if at.inside || reads_inside(extent, at, L::LANES, w, h) {
+        gather_inside(planes, taps, extent, at, [acc]);
         return;
     }
     match planes.channels {
-        1 => gather_near_edge::<L, 1>(planes, taps, shift, x0, y, acc),
-        2 => gather_near_edge::<L, 2>(planes, taps, shift, x0, y, acc),
-        3 => gather_near_edge::<L, 3>(planes, taps, shift, x0, y, acc),
-        4 => gather_near_edge::<L, 4>(planes, taps, shift, x0, y, acc),
+        1 => gather_near_edge::<L, 1>(planes, taps, at, acc),
+        2 => gather_near_edge::<L, 2>(planes, taps, at, acc),
+        3 => gather_near_edge::<L, 3>(planes, taps, at, acc),
+        4 => gather_near_edge::<L, 4>(planes, taps, at, acc),
         n => panic!("a light has 1 or 3 channels and at most one depth plane, not {n} planes"),
     }
 }
@@ -117,11 +106,12 @@ pub fn gather_lanes<L: Layout>(
 fn gather_near_edge<L: Layout, const C: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
-    shift: [i32; 2],
-    x0: i32,
-    y: i32,
+    at: TapOrigin,
     acc: &mut [L],
 ) {
+    let TapOrigin {
+        x: x0, y, shift, ..
+    } = at;
     let (w, h, rs) = (planes.width, planes.height, planes.row_stride);
     let (step, plane_step) = (planes.pixel_step, planes.plane_step);
     let interleaved = planes.every_plane_interleaved();
@@ -199,7 +189,7 @@ enum RowRun {
     /// Wholly beyond the grid: the plane's outside value.
     Outside,
     /// `LANES` values from `at` (past the plane's pixel (0, 0)) moved by `by` lanes
-    /// ([`Lane::shift_lanes`]): 0 inside the grid; where the run crosses the grid's left or
+    /// ([`Layout::shift_lanes`]): 0 inside the grid; where the run crosses the grid's left or
     /// right edge, the row's first or last `LANES` values moved into place.
     Load { at: usize, by: i32 },
     /// Crossing an edge of a grid narrower than `LANES`: lane by lane.
@@ -300,18 +290,18 @@ fn store_in_pixel_order<L: Layout, const C: usize>(planes: &[L; C], data: &mut [
 /// lane's sum has the same terms in the same order as one chunk alone: the same bits. A
 /// pixel-interleaved buffer whose every plane is gathered is summed in its own order (every
 /// value's sum apart, so the same terms) and put back in plane order once
-/// ([`Lane::plane_order`]).
-#[allow(clippy::too_many_arguments)]
+/// ([`Layout::plane_order`]).
 #[inline(always)]
-pub fn gather_inside<L: Layout, const K: usize>(
+pub(crate) fn gather_inside<L: Layout, const K: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     extent: [i32; 4],
-    shift: [i32; 2],
-    x0: i32,
-    y: i32,
+    at: TapOrigin,
     accs: [&mut [L]; K],
 ) {
+    let TapOrigin {
+        x: x0, y, shift, ..
+    } = at;
     // The lowest index any tap's top-left corner reads, and the highest index any read reaches,
     // over every plane and chunk.
     let rs = planes.row_stride as i64;

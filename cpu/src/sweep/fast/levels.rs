@@ -10,7 +10,7 @@ use convshadow_common::plan::kernel::{KernelTable, PhaseMode};
 
 use super::gather::reads_inside;
 use super::per_lane::{LaneRows, TapColumns};
-use crate::kernels::LevelPlane;
+use crate::kernels::{LevelPlane, TapOrigin};
 
 /// Distance penumbra: the rows that pixels x0.. of row y gather through. A pixel takes the
 /// smallest level among its own and those of every pixel its own level's kernel reads (level 0's
@@ -18,7 +18,6 @@ use crate::kernels::LevelPlane;
 /// occluder in reach. So a fresh shadow's lit neighbours take its small kernel (a gather with a
 /// larger one would erode it), and a pixel in a distant occluder's penumbra next to a surface
 /// that was just crossed does not blur the darkness behind that surface over itself.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn distance_rows<L: Layout>(
     levels: &LevelPlane<'_>,
@@ -27,11 +26,14 @@ pub(crate) fn distance_rows<L: Layout>(
     phase: L::U,
     slabs: u32,
     slab: u32,
-    shift: [i32; 2],
-    x0: i32,
-    y: i32,
-    interior: bool,
+    origin: TapOrigin,
 ) -> L::U {
+    let TapOrigin {
+        x: x0,
+        y,
+        shift,
+        inside: interior,
+    } = origin;
     let lit = L::u_splat(LIT_LEVEL);
     let zero = L::u_splat(0);
     let at = levels.base + y as usize * levels.row_stride + x0 as usize;
@@ -49,7 +51,7 @@ pub(crate) fn distance_rows<L: Layout>(
     let pc = columns.phase_count;
     let rs = levels.row_stride;
     let (w, h) = (levels.width, levels.height);
-    if interior || reads_inside(own_reads.extent, shift, x0, y, L::LANES, w, h) {
+    if interior || reads_inside(own_reads.extent, origin, L::LANES, w, h) {
         let lane_shift = L::u_add(
             L::u_iota(at as u32),
             L::u_splat((shift[1] as i64 * rs as i64 + shift[0] as i64) as i32 as u32),

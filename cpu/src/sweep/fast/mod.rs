@@ -26,7 +26,42 @@ mod per_lane;
 mod quiet;
 mod row;
 
+use convshadow_common::pixel::levels::pixel_level;
+use convshadow_common::plan::RenderPlan;
+
 pub(crate) use per_lane::TapColumns;
 pub use quiet::ChunkCounts;
 pub(crate) use quiet::{ChunkState, QuietRow, QuietSetup, RowSpans, chunks_per_row, window_hulls};
 pub(crate) use row::sweep_row_simd;
+
+/// What the SIMD path reads in a slab besides the slab's context (`SlabContext`).
+pub(crate) struct SimdSlab<'a> {
+    /// Every light's tap table by column, for the per-lane gathers.
+    pub columns: &'a [TapColumns],
+    /// Distance penumbra: per light, the level a dark pixel (light 0, depth 0) starts the next
+    /// slab with, for the quiet path's dark chunks (empty with the iterated penumbra).
+    pub dark_levels: Vec<u32>,
+}
+
+impl<'a> SimdSlab<'a> {
+    /// Slab `slab` of `plan`, whose lights' tap tables by column are `columns`.
+    pub(crate) fn new(plan: &RenderPlan, columns: &'a [TapColumns], slab: u32) -> Self {
+        SimdSlab {
+            columns,
+            dark_levels: dark_levels(plan, slab),
+        }
+    }
+}
+
+/// [`SimdSlab::dark_levels`] of slab `slab`: what [`pixel_level`] gives a pixel whose channels
+/// are all 0 (occluded = channels) and whose depth plane is 0, as step 5 computes it.
+fn dark_levels(plan: &RenderPlan, slab: u32) -> Vec<u32> {
+    if plan.depth_planes() == 0 {
+        return Vec::new();
+    }
+    let ch = plan.channels as f32;
+    plan.lights
+        .iter()
+        .map(|l| pixel_level::<f32>(&l.table, ch, 0.0, slab + 1))
+        .collect()
+}

@@ -10,7 +10,7 @@ use convshadow_common::plan::kernel::KernelTable;
 use wide::i32x8;
 
 use super::gather::{add_bilinear, fetch_corners, reads_inside};
-use crate::kernels::{LightPlanes, level_taps};
+use crate::kernels::{LightPlanes, TapOrigin, level_taps};
 
 /// A light's tap table by tap, as structure-of-arrays for the per-lane gather: tap k of row p
 /// at `k * phase_count + p`, so that one gather by the lanes' rows reads a tap's column. Built
@@ -199,9 +199,9 @@ impl TapColumns {
 }
 
 /// [`gather_lanes`] where lane i uses phase `phases[i]` of `table` (per-pixel hashed phases; `columns`
-/// is the same table by tap, `lane_rows` its [`LaneRows`] summary of `phases`): gathered weights and, inside the grid, gathered loads; lane
-/// arithmetic in the same order.
-#[allow(clippy::too_many_arguments)]
+/// is the same table by tap, `lane_rows` its [`LaneRows`] summary of `phases`), at the pixels
+/// from `at`: gathered weights and, inside the grid, gathered loads; lane arithmetic in the same
+/// order.
 #[inline(always)]
 pub(crate) fn gather_per_lane<L: Layout>(
     planes: &LightPlanes<'_>,
@@ -209,12 +209,15 @@ pub(crate) fn gather_per_lane<L: Layout>(
     columns: &TapColumns,
     phases: L::U,
     lane_rows: &LaneRows,
-    shift: [i32; 2],
-    x0: i32,
-    y: i32,
-    interior: bool,
+    at: TapOrigin,
     acc: &mut [L],
 ) {
+    let TapOrigin {
+        x: x0,
+        y,
+        shift,
+        inside: interior,
+    } = at;
     let n = lane_rows.gather_taps;
     let pc = columns.phase_count;
     let (rs, step) = (planes.row_stride, planes.pixel_step);
@@ -233,7 +236,7 @@ pub(crate) fn gather_per_lane<L: Layout>(
         shift: shift_offset,
         offset_span: lane_rows.offset_span,
     };
-    if interior || reads_inside(lane_rows.extent, shift, x0, y, L::LANES, w, h) {
+    if interior || reads_inside(lane_rows.extent, at, L::LANES, w, h) {
         pair_loads.add_taps(0..n, acc, Bounds::WholeRows);
         return;
     }
@@ -259,7 +262,7 @@ pub(crate) fn gather_per_lane<L: Layout>(
             continue;
         }
         let w4 = L::gather4(&columns.weights[k * pc..(k + 1) * pc], phases);
-        // Signed coordinates as integer lanes ([`Lane::fetch_grid`] reads them back as i32).
+        // Signed coordinates as integer lanes ([`Layout::fetch_grid`] reads them back as i32).
         let (sx, sy) = (
             L::u_load(&sx.map(|v| v as u32), 0),
             L::u_load(&sy.map(|v| v as u32), 0),
@@ -281,7 +284,7 @@ enum Bounds {
 }
 
 /// The per-lane gather's reads inside the grid: every plane's two pixel pairs per lane and tap
-/// ([`Lane::acc_blocks`]), lane i at `pixel + lane_shift[i] +` its tap's offset.
+/// ([`Layout::acc_blocks`]), lane i at `pixel + lane_shift[i] +` its tap's offset.
 struct PairLoads<'a, L: Layout> {
     planes: &'a LightPlanes<'a>,
     columns: &'a TapColumns,
@@ -385,7 +388,7 @@ impl<L: Layout> PairLoads<'_, L> {
     }
 
     /// [`PairLoads::add_taps_to`] in a pixel-interleaved buffer of `C` planes (C ≤ 4), all
-    /// gathered: two lanes to a value (lanes i and i + 4, [`Lane::to_lane_pairs`]), each corner
+    /// gathered: two lanes to a value (lanes i and i + 4, [`Layout::to_lane_pairs`]), each corner
     /// pixel's planes one 16-byte read per lane ([`load_halves`]), times its weight spread over
     /// the lane's half ([`splat_within_halves`]), added in the fixed order: top left, top right,
     /// bottom left, bottom right. Each lane's arithmetic is its own, so any pairing gives the

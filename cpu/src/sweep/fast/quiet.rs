@@ -26,7 +26,7 @@ use convshadow_common::plan::RenderPlan;
 use wide::f32x8;
 
 use crate::ldi::Ldi;
-use crate::sweep::kit::{Reach, SlabContext, light_block};
+use crate::sweep::kit::{Reach, RowState, SlabContext, light_block};
 
 /// Lanes per chunk.
 pub(crate) const LANES: usize = <f32x8 as Lane>::LANES;
@@ -218,17 +218,34 @@ pub(crate) struct ChunkState {
     pub opaque: bool,
 }
 
+/// What of a row's per-pixel state a chunk summary reads: the cursors, inside masks and alphas.
+#[derive(Clone, Copy)]
+pub(crate) struct Cursors<'a> {
+    pub next: &'a [u32],
+    pub inside: &'a [u32],
+    pub alpha: &'a [f32],
+}
+
+impl<'a> Cursors<'a> {
+    /// The cursors, inside masks and alphas of `row`.
+    pub(crate) fn of(row: &'a RowState<'_>) -> Self {
+        Cursors {
+            next: row.next,
+            inside: row.inside,
+            alpha: row.alpha,
+        }
+    }
+}
+
 impl ChunkState {
-    /// The summary of pixels x0..x0 + lanes of row y (8 lanes, fewer for a row's tail).
-    pub(crate) fn of(
-        ldi: &Ldi,
-        y: usize,
-        x0: usize,
-        lanes: usize,
-        next: &[u32],
-        inside: &[u32],
-        alpha: &[f32],
-    ) -> Self {
+    /// The summary of pixels x0..x0 + lanes of row y (8 lanes, fewer for a row's tail), whose
+    /// state is `row`.
+    pub(crate) fn of(ldi: &Ldi, y: usize, x0: usize, lanes: usize, row: Cursors<'_>) -> Self {
+        let Cursors {
+            next,
+            inside,
+            alpha,
+        } = row;
         let w = ldi.width as usize;
         let mut s = ChunkState {
             event_depth: f32::INFINITY,
@@ -255,22 +272,18 @@ impl ChunkState {
     /// The summary of pixels x0..x0 + lanes of row y after the chunk's stages changed `moved`
     /// of them: recomputed when a cursor moved, its `opaque` flag alone when only alphas may
     /// have changed (no cursor moved, so the fragment depth and inside masks stay), else kept.
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(crate) fn refresh(
         &mut self,
         moved: Moved,
         ldi: &Ldi,
         y: usize,
-        x0: usize,
-        lanes: usize,
-        next: &[u32],
-        inside: &[u32],
-        alpha: &[f32],
+        (x0, lanes): (usize, usize),
+        row: Cursors<'_>,
     ) {
         match moved {
-            Moved::Cursors => *self = ChunkState::of(ldi, y, x0, lanes, next, inside, alpha),
-            Moved::Alphas => self.opaque = ChunkState::all_opaque(&alpha[x0..x0 + lanes]),
+            Moved::Cursors => *self = ChunkState::of(ldi, y, x0, lanes, row),
+            Moved::Alphas => self.opaque = ChunkState::all_opaque(&row.alpha[x0..x0 + lanes]),
             Moved::Nothing => {}
         }
     }
@@ -360,7 +373,12 @@ impl QuietSetup {
             for c in 0..w.div_ceil(LANES) {
                 let (x0, next) = (c * LANES, &next[y * w..(y + 1) * w]);
                 let lanes = LANES.min(w - x0);
-                chunks[y * per_row + c] = ChunkState::of(ldi, y, x0, lanes, next, &zeros, &alpha);
+                let row = Cursors {
+                    next,
+                    inside: &zeros,
+                    alpha: &alpha,
+                };
+                chunks[y * per_row + c] = ChunkState::of(ldi, y, x0, lanes, row);
             }
         }
         QuietSetup {
@@ -482,13 +500,13 @@ impl QuietRow<'_> {
     pub(crate) fn classify(
         &self,
         ctx: &SlabContext<'_>,
-        reach: &Reach,
         y: usize,
         c: usize,
         lanes: usize,
         hits: &RowHits,
     ) -> ChunkWork {
         let state = self.chunks[c];
+        let reach = &ctx.reach;
         let w = ctx.plan.grid_width as usize;
         let h = ctx.plan.grid_height as usize;
         let all_ones = self.setup.ones_exact && !hits.not_one(c);

@@ -8,117 +8,35 @@ use std::ops::Range;
 
 use wide::f32x8;
 
-use super::chunk::{ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, pairs_gathers, shape_of};
-use super::quiet::{ChunkCounts, ChunkWork, LANES, Moved, QuietRow, RowSpans, Values};
-use crate::parity::{NO_CROSSING, advance};
-use crate::sweep::kit::{
-    MAX_LIGHT_CHANNELS, Previous, Reach, RowContext, RowState, SlabContext, light_block,
+use super::SimdSlab;
+use super::chunk::{
+    Chunk, ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, pairs_gathers, shape_of,
 };
+use super::quiet::{ChunkCounts, ChunkWork, Cursors, LANES, Moved, QuietRow, RowSpans, Values};
+use crate::parity::{NO_CROSSING, advance};
+use crate::sweep::kit::{MAX_LIGHT_CHANNELS, RowContext, RowState, light_block};
 use crate::sweep::pixel;
 use convshadow_common::plan::LIT_LEVEL;
-
-/// The row's tail (pixels `xs`, fewer than a chunk): the per-pixel stage, pixel by pixel, each
-/// pixel's outgoing light recorded in `spans`.
-fn sweep_tail(
-    row: &RowContext<'_>,
-    reach: &Reach,
-    xs: Range<usize>,
-    state: &mut RowState<'_>,
-    spans: &mut RowSpans,
-) {
-    let plan = row.ctx.plan;
-    let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
-    for x in xs {
-        let inside = reach.interior(x, 1, row.y, w, h);
-        pixel::sweep_pixel(row, state, x, inside);
-        spans.record(x, 1, Values::written(plan, state.light, x));
-    }
-}
-
-/// A quiet chunk's outgoing light for pixels x0..x0 + lanes: 1 (unoccluded) or 0 (dark) in every
-/// light plane, 0 in every depth plane, and the levels the stage would have given (see
-/// [`ChunkWork`]).
-fn fill_quiet(ctx: &SlabContext<'_>, row: &mut RowState<'_>, x0: usize, lanes: usize, dark: bool) {
-    let plan = ctx.plan;
-    let w = plan.grid_width as usize;
-    let planes = plan.planes_per_light();
-    // One pixel's planes: its channels at 1 (0 when dark), its depth plane at 0.
-    let pixel: [f32; 4] = std::array::from_fn(|k| {
-        if dark || plan.is_depth_plane(k) {
-            0.0
-        } else {
-            1.0
-        }
-    });
-    // Pixel-interleaved (see `LightPlanes`): each light's pixels x0.. are one run.
-    for l in 0..plan.lights.len() {
-        let run = &mut row.light[light_block(plan, l) + x0 * planes..][..lanes * planes];
-        match planes {
-            1 => fill_pixels::<1>(run, pixel),
-            2 => fill_pixels::<2>(run, pixel),
-            3 => fill_pixels::<3>(run, pixel),
-            4 => fill_pixels::<4>(run, pixel),
-            n => panic!("a light has 1 or 3 channels and at most one depth plane, not {n} planes"),
-        }
-    }
-    if plan.depth_planes() > 0 {
-        for l in 0..plan.lights.len() {
-            let level = if dark { ctx.dark_levels[l] } else { LIT_LEVEL };
-            row.levels[l * w + x0..][..lanes].fill(level);
-        }
-    }
-}
-
-/// `run`'s pixels of `P` planes each set to `pixel`'s first `P` values (fixed-length copies: a
-/// plane test per value cost two integer divisions).
-#[inline(always)]
-fn fill_pixels<const P: usize>(run: &mut [f32], pixel: [f32; 4]) {
-    let pixel: [f32; P] = std::array::from_fn(|k| pixel[k]);
-    for px in run.chunks_exact_mut(P) {
-        px.copy_from_slice(&pixel);
-    }
-}
-
-/// A dark chunk's cursors (pixels x0..x0 + lanes) advanced through this slab; returns whether
-/// one crossed a fragment.
-fn advance_dark(ctx: &SlabContext<'_>, row: &mut RowState<'_>, y: usize, xs: Range<usize>) -> bool {
-    let w = ctx.plan.grid_width as usize;
-    let mut moved = false;
-    for x in xs.clone() {
-        let end = ctx.ldi.offsets[y * w + x + 1];
-        let first = advance(ctx.ldi, &mut row.next[x], end, &mut row.inside[x], ctx.back);
-        moved |= first != NO_CROSSING;
-    }
-    if ctx.plan.preintegration {
-        // The cursors may have crossed surfaces: forget the kept front values (a kept value is
-        // only a saved evaluation, see `super::chunk::preintegrated`).
-        row.pre[xs].fill(f32::NAN);
-    }
-    moved
-}
 
 /// Processes one row of one slab, 8 pixels at a time (quiet chunks skipped when `quiet` is
 /// given); the last `width mod 8` pixels go through the per-pixel stage, or are skipped as one
 /// quiet chunk.
 pub(crate) fn sweep_row_simd(
-    ctx: &SlabContext<'_>,
-    reach: &Reach,
-    y: usize,
-    prev: &Previous<'_>,
-    mut row: RowState<'_>,
+    simd: &SimdSlab<'_>,
+    row: &RowContext<'_>,
+    mut state: RowState<'_>,
     mut quiet: Option<QuietRow<'_>>,
     counts: Option<&ChunkCounts>,
 ) {
-    let plan = ctx.plan;
+    let (ctx, y) = (row.ctx, row.y);
+    let (plan, reach) = (ctx.plan, &ctx.reach);
     let w = plan.grid_width as usize;
     let h = plan.grid_height as usize;
     let planes = plan.lights.len() * plan.channels as usize;
-    let row_ctx = RowContext::new(ctx, prev, y);
-    let (row_hashes, jitter_row) = (&row_ctx.light_hashes, row_ctx.jitter_hash);
     let mut spans = RowSpans::EMPTY;
     let mut tally = [0u64; 3];
     // The SIMD path takes the instance that knows the plan's shape, where there is one.
-    let chunk: ChunkFn = chunk_fn::<f32x8>(planes, shape_of(plan));
+    let sweep_chunk: ChunkFn = chunk_fn::<f32x8>(planes, shape_of(plan));
     let hits = quiet.as_ref().map(|q| q.hits(reach, w.div_ceil(LANES)));
     let pairs = pairs_gathers(plan);
     // The gathers of a chunk and its right neighbour, computed together when both need them
@@ -138,8 +56,7 @@ pub(crate) fn sweep_row_simd(
         // Unit tests hold every summary to its definition before it is used.
         #[cfg(test)]
         if let Some(q) = &quiet {
-            let (next, inside, alpha) = (&*row.next, &*row.inside, &*row.alpha);
-            let fresh = super::quiet::ChunkState::of(ctx.ldi, y, x0, lanes, next, inside, alpha);
+            let fresh = super::quiet::ChunkState::of(ctx.ldi, y, x0, lanes, Cursors::of(&state));
             assert_eq!(
                 q.chunks[c], fresh,
                 "slab {}, row {y}, chunk {c}: a stale summary",
@@ -147,7 +64,7 @@ pub(crate) fn sweep_row_simd(
             );
         }
         let work = match (&quiet, &hits) {
-            (Some(q), Some(hits)) => q.classify(ctx, reach, y, c, lanes, hits),
+            (Some(q), Some(hits)) => q.classify(ctx, y, c, lanes, hits),
             _ => ChunkWork::Full(None),
         };
         // This slab's buffer's bit in the chunk's fill bits (see `QuietRow::filled`).
@@ -170,23 +87,23 @@ pub(crate) fn sweep_row_simd(
             ChunkWork::Unoccluded => {
                 tally[1] += 1;
                 if !already_filled {
-                    fill_quiet(ctx, &mut row, x0, lanes, false);
+                    fill_quiet(simd, row, &mut state, x0..x0 + lanes, false);
                 }
                 spans.record(x0, lanes, Values::UNOCCLUDED);
                 continue;
             }
             ChunkWork::Dark => {
                 tally[2] += 1;
-                let moved = advance_dark(ctx, &mut row, y, x0..x0 + lanes);
-                fill_quiet(ctx, &mut row, x0, lanes, true);
+                let moved = advance_dark(row, &mut state, x0..x0 + lanes);
+                fill_quiet(simd, row, &mut state, x0..x0 + lanes, true);
                 spans.record(x0, lanes, Values::DARK);
                 Moved::of(moved, false)
             }
             ChunkWork::DarkDepth if lanes == LANES => {
                 tally[2] += 1;
-                let moved = advance_dark(ctx, &mut row, y, x0..x0 + LANES);
+                let moved = advance_dark(row, &mut state, x0..x0 + LANES);
                 let interior = reach.interior(x0, LANES, y, w, h);
-                let not_zero = dark_depth_chunk(ctx, y, x0, prev, &mut row, row_hashes, interior);
+                let not_zero = dark_depth_chunk(simd, row, &mut state, x0, interior);
                 let values = Values {
                     not_zero,
                     ..Values::DARK
@@ -202,12 +119,12 @@ pub(crate) fn sweep_row_simd(
                     Some(pair) if known_light.is_none() && interior && c + 1 < full_chunks => {
                         // The neighbour's class does not depend on this chunk's work: ask now.
                         let next = match (&quiet, &hits) {
-                            (Some(q), Some(hits)) => q.classify(ctx, reach, y, c + 1, LANES, hits),
+                            (Some(q), Some(hits)) => q.classify(ctx, y, c + 1, LANES, hits),
                             _ => ChunkWork::Full(None),
                         };
                         let next_interior = reach.interior(x0 + LANES, LANES, y, w, h);
                         if matches!(next, ChunkWork::Full(None)) && next_interior {
-                            gather_pair(ctx, y, x0, prev, pair);
+                            gather_pair(simd, row, x0, pair);
                             paired = c + 1;
                             Some(&pair[0][..])
                         } else {
@@ -216,27 +133,29 @@ pub(crate) fn sweep_row_simd(
                     }
                     _ => None,
                 };
-                let (rh, jr) = (row_hashes, jitter_row);
-                let (known, inner) = (known_light, interior);
-                // The chunk's cursor summary, current: refreshed whenever its cursors move.
-                let summary = quiet.as_ref().map(|q| q.chunks[c]);
-                let out = chunk(
-                    ctx, y, x0, prev, &mut row, rh, jr, inner, known, gathered, summary,
-                );
+                let chunk = Chunk {
+                    x0,
+                    interior,
+                    known_light,
+                    gathered,
+                    // The chunk's cursor summary, current: refreshed whenever its cursors move.
+                    summary: quiet.as_ref().map(|q| q.chunks[c]),
+                };
+                let out = sweep_chunk(simd, row, &mut state, chunk);
                 spans.record(x0, LANES, out.values());
                 Moved::of(out.crossed, out.shaded)
             }
             // The row's tail: the per-pixel stage, pixel by pixel.
             ChunkWork::Full(_) | ChunkWork::DarkDepth => {
                 tally[0] += 1;
-                sweep_tail(&row_ctx, reach, x0..w, &mut row, &mut spans);
+                sweep_tail(row, x0..w, &mut state, &mut spans);
                 // Its summary recomputed whole.
                 Moved::Cursors
             }
         };
         if let Some(q) = &mut quiet {
-            let (next, inside, alpha) = (&*row.next, &*row.inside, &*row.alpha);
-            q.chunks[c].refresh(moved, ctx.ldi, y, x0, lanes, next, inside, alpha);
+            let cursors = Cursors::of(&state);
+            q.chunks[c].refresh(moved, ctx.ldi, y, (x0, lanes), cursors);
         }
     }
 
@@ -246,4 +165,96 @@ pub(crate) fn sweep_row_simd(
     if let Some(c) = counts {
         c.add(tally);
     }
+}
+
+/// The row's tail (pixels `xs`, fewer than a chunk): the per-pixel stage, pixel by pixel, each
+/// pixel's outgoing light recorded in `spans`.
+fn sweep_tail(
+    row: &RowContext<'_>,
+    xs: Range<usize>,
+    state: &mut RowState<'_>,
+    spans: &mut RowSpans,
+) {
+    let plan = row.ctx.plan;
+    let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
+    for x in xs {
+        let inside = row.ctx.reach.interior(x, 1, row.y, w, h);
+        pixel::sweep_pixel(row, state, x, inside);
+        spans.record(x, 1, Values::written(plan, state.light, x));
+    }
+}
+
+/// A quiet chunk's outgoing light for pixels `xs`: 1 (unoccluded) or 0 (dark) in every light
+/// plane, 0 in every depth plane, and the levels the stage would have given (see [`ChunkWork`]).
+fn fill_quiet(
+    simd: &SimdSlab<'_>,
+    row: &RowContext<'_>,
+    state: &mut RowState<'_>,
+    xs: Range<usize>,
+    dark: bool,
+) {
+    let plan = row.ctx.plan;
+    let w = plan.grid_width as usize;
+    let planes = plan.planes_per_light();
+    let (x0, lanes) = (xs.start, xs.len());
+    // One pixel's planes: its channels at 1 (0 when dark), its depth plane at 0.
+    let pixel: [f32; 4] = std::array::from_fn(|k| {
+        if dark || plan.is_depth_plane(k) {
+            0.0
+        } else {
+            1.0
+        }
+    });
+    // Pixel-interleaved (see `LightPlanes`): each light's pixels x0.. are one run.
+    for l in 0..plan.lights.len() {
+        let run = &mut state.light[light_block(plan, l) + x0 * planes..][..lanes * planes];
+        match planes {
+            1 => fill_pixels::<1>(run, pixel),
+            2 => fill_pixels::<2>(run, pixel),
+            3 => fill_pixels::<3>(run, pixel),
+            4 => fill_pixels::<4>(run, pixel),
+            n => panic!("a light has 1 or 3 channels and at most one depth plane, not {n} planes"),
+        }
+    }
+    if plan.depth_planes() > 0 {
+        for l in 0..plan.lights.len() {
+            let level = if dark { simd.dark_levels[l] } else { LIT_LEVEL };
+            state.levels[l * w + x0..][..lanes].fill(level);
+        }
+    }
+}
+
+/// `run`'s pixels of `P` planes each set to `pixel`'s first `P` values (fixed-length copies: a
+/// plane test per value cost two integer divisions).
+#[inline(always)]
+fn fill_pixels<const P: usize>(run: &mut [f32], pixel: [f32; 4]) {
+    let pixel: [f32; P] = std::array::from_fn(|k| pixel[k]);
+    for px in run.chunks_exact_mut(P) {
+        px.copy_from_slice(&pixel);
+    }
+}
+
+/// A dark chunk's cursors (pixels `xs`) advanced through this slab; returns whether one crossed
+/// a fragment.
+fn advance_dark(row: &RowContext<'_>, state: &mut RowState<'_>, xs: Range<usize>) -> bool {
+    let ctx = row.ctx;
+    let w = ctx.plan.grid_width as usize;
+    let mut moved = false;
+    for x in xs.clone() {
+        let end = ctx.ldi.offsets[row.y * w + x + 1];
+        let first = advance(
+            ctx.ldi,
+            &mut state.next[x],
+            end,
+            &mut state.inside[x],
+            ctx.back,
+        );
+        moved |= first != NO_CROSSING;
+    }
+    if ctx.plan.preintegration {
+        // The cursors may have crossed surfaces: forget the kept front values (a kept value is
+        // only a saved evaluation, see `super::chunk::preintegrated`).
+        state.pre[xs].fill(f32::NAN);
+    }
+    moved
 }

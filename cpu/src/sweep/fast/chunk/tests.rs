@@ -7,8 +7,10 @@ use wide::f32x8;
 use super::*;
 use crate::kernels::LightTaps;
 use crate::ldi::Ldi;
+use crate::sweep::fast::SimdSlab;
 use crate::sweep::fast::TapColumns;
-use crate::sweep::kit::{Reach, jitter_row_hash, light_row_hashes};
+use crate::sweep::fast::quiet::Cursors;
+use crate::sweep::kit::Reach;
 use crate::sweep::pixel::sweep_pixel;
 
 use convshadow_testkit::TestRng;
@@ -150,15 +152,14 @@ fn compare_lanes(
             raster: &g.raster,
             ldi: &ldi,
             taps: &taps,
-            columns: &columns,
+            reach,
             slab,
             back: plan.slab_back[slab as usize],
             front: plan.slab_front[slab as usize],
-            dark_levels: Vec::new(),
         };
+        let simd = SimdSlab::new(&plan, &columns, slab);
         for y in [0, 1, h / 2, h - 1, rng.below(h as u32) as usize] {
-            let row_hashes = light_row_hashes(&ctx, y);
-            let jitter_row = jitter_row_hash(&ctx, y);
+            let row_ctx = RowContext::new(&ctx, &prev, y);
             // Inside masks: none, one mesh everywhere, or mixed (lanes on different meshes).
             let mode = rng.below(3);
             let fixed = 1 << rng.below(meshes);
@@ -194,27 +195,24 @@ fn compare_lanes(
                 let interior = reach.interior(x0, 8, y, w, h);
                 // Every other chunk with its cursor summary (the per-pixel stage visits every
                 // cursor).
-                let summary = (x0 % 2 == 0)
-                    .then(|| ChunkState::of(&ldi, y, x0, 8, &row.next, &row.inside, &row.alpha));
+                let cursors = Cursors {
+                    next: &row.next,
+                    inside: &row.inside,
+                    alpha: &row.alpha,
+                };
+                let summary = (x0 % 2 == 0).then(|| ChunkState::of(&ldi, y, x0, 8, cursors));
                 if let Some(s) = summary {
                     summaries[usize::from(s.crosses_nothing(ctx.back))] += 1;
                 }
-                let (rh, jr) = (&row_hashes, jitter_row);
-                eight(
-                    &ctx,
-                    y,
+                let chunk = Chunk {
                     x0,
-                    &prev,
-                    &mut a.state(),
-                    rh,
-                    jr,
                     interior,
-                    None,
-                    None,
+                    known_light: None,
+                    gathered: None,
                     summary,
-                );
+                };
+                eight(&simd, &row_ctx, &mut a.state(), chunk);
                 // The reference: the per-pixel stage, pixel by pixel.
-                let row_ctx = RowContext::new(&ctx, &prev, y);
                 for x in x0..x0 + 8 {
                     let interior = reach.interior(x, 1, y, w, h);
                     sweep_pixel(&row_ctx, &mut b.state(), x, interior);
@@ -260,26 +258,25 @@ fn compare_every_instance(kernels: &[&str], pre: bool, seed: u32) {
 }
 
 #[test]
-fn eight_lanes_and_one_lane_give_the_same_bits() {
+fn every_chunk_instance_gives_the_bits_of_the_pixel_stage() {
     // Per-pixel, per-slab and scheduled phases.
     let kernels = ["ellipse2", "ellipse2:slab", "gaussian:7", "poisson8"];
     compare_every_instance(&kernels, false, 17);
 }
 
 #[test]
-fn eight_lanes_and_one_lane_give_the_same_bits_with_preintegration() {
+fn every_chunk_instance_gives_the_bits_of_the_pixel_stage_with_preintegration() {
     compare_every_instance(&["ellipse2", "gaussian:7"], true, 41);
 }
 
 #[test]
 fn a_lane_that_disagrees_fails_the_comparison() {
     // The 8-lane stage with one lane's first light value off by one bit.
-    let wrong_lane: ChunkFn = |ctx, y, x0, prev, row, hashes, jitter, inner, known, got, s| {
-        let r = sweep_chunk::<f32x8, 6, ANY_SHAPE>(
-            ctx, y, x0, prev, row, hashes, jitter, inner, known, got, s,
-        );
+    let wrong_lane: ChunkFn = |simd, row, state, chunk| {
+        let r = sweep_chunk::<f32x8, 6, ANY_SHAPE>(simd, row, state, chunk);
         // (the outcome is returned unchanged: only the light is wrong)
-        row.light[x0 + 5] = f32::from_bits(row.light[x0 + 5].to_bits() ^ 1);
+        let at = chunk.x0 + 5;
+        state.light[at] = f32::from_bits(state.light[at].to_bits() ^ 1);
         r
     };
     let d = compare_lanes("ellipse2", "distance", false, 3, wrong_lane)

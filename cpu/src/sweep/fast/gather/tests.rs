@@ -193,21 +193,16 @@ fn a_uniform_row_gathers_the_bits_of_the_per_lane_gather() {
                 // The uniform gather skips zero taps; the per-lane one visits them all.
                 let extent = columns.extent[row as usize];
                 let taps = light_taps.weighted(row);
-                gather_lanes(&planes, taps, extent, shift, x0, y, false, &mut uniform);
+                let at = TapOrigin {
+                    x: x0,
+                    y,
+                    shift,
+                    inside: false,
+                };
+                gather_lanes(&planes, taps, extent, at, &mut uniform);
                 let rows = f32x8::u_splat(row);
                 let reads = LaneRows::of::<f32x8>(&columns, rows);
-                gather_per_lane(
-                    &planes,
-                    &table,
-                    &columns,
-                    rows,
-                    &reads,
-                    shift,
-                    x0,
-                    y,
-                    false,
-                    &mut per_lane,
-                );
+                gather_per_lane(&planes, &table, &columns, rows, &reads, at, &mut per_lane);
                 for c in 0..4 {
                     let (a, b) = (uniform[c].to_array(), per_lane[c].to_array());
                     assert_eq!(
@@ -276,35 +271,22 @@ fn a_pixel_interleaved_buffer_gathers_the_bits_of_a_planar_one() {
                 let shift = [rng.below(3) as i32 - 1, rng.below(3) as i32 - 1];
                 let gather_with = |planes: &LightPlanes<'_>, columns: &TapColumns| {
                     let reads = LaneRows::of::<f32x8>(columns, rows);
-                    let inside = reads_inside(reads.extent, shift, x0, y, 8, w as i32, h as i32);
+                    let edge = TapOrigin {
+                        x: x0,
+                        y,
+                        shift,
+                        inside: false,
+                    };
+                    let inside = reads_inside(reads.extent, edge, 8, w as i32, h as i32);
+                    let at = TapOrigin { inside, ..edge };
                     let mut per_lane = [f32x8::splat(0.0); 4];
-                    let args = (shift, x0, y, inside);
-                    gather_per_lane(
-                        planes,
-                        &table,
-                        columns,
-                        rows,
-                        &reads,
-                        args.0,
-                        args.1,
-                        args.2,
-                        args.3,
-                        &mut per_lane[..gathered],
-                    );
+                    let sums = &mut per_lane[..gathered];
+                    gather_per_lane(planes, &table, columns, rows, &reads, at, sums);
                     // The first lane's row for every lane: the uniform gather.
                     let row = rows.to_array()[0];
                     let (taps, extent) = (light_taps.weighted(row), columns.extent[row as usize]);
                     let mut uniform = [f32x8::splat(0.0); 4];
-                    gather_lanes(
-                        planes,
-                        taps,
-                        extent,
-                        shift,
-                        x0,
-                        y,
-                        false,
-                        &mut uniform[..gathered],
-                    );
+                    gather_lanes(planes, taps, extent, edge, &mut uniform[..gathered]);
                     // Every lane against the reference gather (the per-pixel stage's) at its
                     // pixel, through its own row and through the first lane's.
                     let reference = |x: i32, row: u32| {
@@ -344,7 +326,13 @@ fn a_pixel_interleaved_buffer_gathers_the_bits_of_a_planar_one() {
                 let (mut a, mut b) = ([f32x8::splat(0.0); 4], [f32x8::splat(0.0); 4]);
                 let (taps, extent) = (light_taps.weighted(row), columns.extent[row as usize]);
                 let accs = [&mut a[..gathered], &mut b[..gathered]];
-                gather_inside(planes, taps, extent, [1, -1], x0, y, accs);
+                let at = TapOrigin {
+                    x: x0,
+                    y,
+                    shift: [1, -1],
+                    inside: true,
+                };
+                gather_inside(planes, taps, extent, at, accs);
                 [a, b].map(|v| v.map(|p| p.to_array().map(f32::to_bits)))
             };
             assert_eq!(
@@ -439,7 +427,11 @@ fn a_per_lane_gather_claimed_interior_at_the_corner_panics_not_reads() {
     let reads = LaneRows::of::<f32x8>(&columns, rows);
     let mut acc = [f32x8::splat(0.0); 4];
     let shift = [-3, -3];
-    gather_per_lane(
-        &planes, &table, &columns, rows, &reads, shift, 0, 0, true, &mut acc,
-    );
+    let at = TapOrigin {
+        x: 0,
+        y: 0,
+        shift,
+        inside: true,
+    };
+    gather_per_lane(&planes, &table, &columns, rows, &reads, at, &mut acc);
 }
