@@ -26,7 +26,7 @@ use convshadow_common::plan::RenderPlan;
 use wide::f32x8;
 
 use crate::ldi::Ldi;
-use crate::sweep::kit::{Reach, RowState, SlabContext, light_block};
+use crate::sweep::kit::{Reach, RowState, SlabContext};
 
 /// Lanes per chunk.
 pub(crate) const LANES: usize = <f32x8 as Lane>::LANES;
@@ -138,6 +138,12 @@ pub(crate) struct Values {
 }
 
 impl Values {
+    /// Nothing written.
+    pub(crate) const NONE: Values = Values {
+        not_one: false,
+        not_zero: false,
+        light_not_zero: false,
+    };
     /// Unoccluded: light 1, depth 0.
     pub(crate) const UNOCCLUDED: Values = Values {
         not_one: false,
@@ -151,29 +157,32 @@ impl Values {
         light_not_zero: false,
     };
 
-    /// What pixel x wrote to the pixel-interleaved light-buffer row `light`: every light's
-    /// channels (quiet at exactly 1 or exactly 0) and depth plane (quiet at exactly 0).
-    pub(crate) fn written(plan: &RenderPlan, light: &[f32], x: usize) -> Values {
-        let (ch, planes) = (plan.channels as usize, plan.planes_per_light());
-        let mut v = Values {
-            not_one: false,
-            not_zero: false,
-            light_not_zero: false,
-        };
-        for l in 0..plan.lights.len() {
-            let pixel = &light[light_block(plan, l) + x * planes..][..planes];
-            for (p, &value) in pixel.iter().enumerate() {
-                let not_zero = value != 0.0;
-                v.not_zero |= not_zero;
-                if p < ch {
-                    v.not_one |= value != 1.0;
-                    v.light_not_zero |= not_zero;
-                } else {
-                    v.not_one |= not_zero;
-                }
+    /// What a pixel wrote to one light's planes `pixel` (its `channels` light planes, quiet at
+    /// exactly 1 or exactly 0, then its depth plane if any, quiet at exactly 0).
+    #[inline(always)]
+    pub(crate) fn of_planes(pixel: &[f32], channels: usize) -> Values {
+        let mut v = Values::NONE;
+        for (p, &value) in pixel.iter().enumerate() {
+            let not_zero = value != 0.0;
+            v.not_zero |= not_zero;
+            if p < channels {
+                v.not_one |= value != 1.0;
+                v.light_not_zero |= not_zero;
+            } else {
+                v.not_one |= not_zero;
             }
         }
         v
+    }
+
+    /// Flag by flag, whether `self` or `other` has it.
+    #[inline(always)]
+    pub(crate) fn or(self, other: Values) -> Values {
+        Values {
+            not_one: self.not_one | other.not_one,
+            not_zero: self.not_zero | other.not_zero,
+            light_not_zero: self.light_not_zero | other.light_not_zero,
+        }
     }
 }
 
