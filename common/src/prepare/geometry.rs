@@ -1,5 +1,7 @@
 //! From a scene to world-space meshes, the slab range and the rasterizer set-up.
 
+use std::borrow::Cow;
+
 use glam::DVec3;
 
 use crate::contract::files::GeometryFiles;
@@ -34,26 +36,30 @@ pub struct SceneGeometry {
 
 /// A mesh spec's object-space mesh: a built-in shape, or the mesh read from its file (`read`,
 /// from [`GeometryFiles::meshes`]; `None` when the host did not read it).
-pub fn object_mesh(spec: &MeshSpec, read: Option<&TriMesh>) -> Result<TriMesh, MeshError> {
+pub fn object_mesh<'a>(
+    spec: &MeshSpec,
+    read: Option<&'a TriMesh>,
+) -> Result<Cow<'a, TriMesh>, MeshError> {
+    // A mesh file's mesh is borrowed: placing it makes a new one anyway.
     Ok(match &spec.shape {
-        ShapeSpec::Box { size } => TriMesh::unit_box(DVec3::from(*size)),
+        ShapeSpec::Obj { path } => {
+            Cow::Borrowed(read.ok_or_else(|| MeshError::NotRead { path: path.clone() })?)
+        }
+        ShapeSpec::Box { size } => Cow::Owned(TriMesh::unit_box(DVec3::from(*size))),
         ShapeSpec::Sphere {
             radius,
             subdivisions,
-        } => TriMesh::icosphere(*radius, *subdivisions),
+        } => Cow::Owned(TriMesh::icosphere(*radius, *subdivisions)),
         ShapeSpec::Torus {
             major,
             minor,
             segments,
-        } => TriMesh::torus(*major, *minor, *segments),
+        } => Cow::Owned(TriMesh::torus(*major, *minor, *segments)),
         ShapeSpec::Cylinder {
             radius,
             height,
             segments,
-        } => TriMesh::cylinder(*radius, *height, *segments),
-        ShapeSpec::Obj { path } => read
-            .cloned()
-            .ok_or_else(|| MeshError::NotRead { path: path.clone() })?,
+        } => Cow::Owned(TriMesh::cylinder(*radius, *height, *segments)),
     })
 }
 
