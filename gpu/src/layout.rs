@@ -120,11 +120,12 @@ pub struct Globals {
     /// Distance penumbra: occluded light at or below this has no mean occluder depth
     /// (`plan::OCCLUSION_EPS`, uploaded as its f32 bits).
     pub occlusion_eps: f32,
+    /// 1 when some surface is held (`RenderPlan::has_surface_hold`: `hold` then holds one word
+    /// per grid pixel, `surface_hold` one per triangle).
+    pub surface_holds: u32,
     /// Uniform structs are a multiple of 16 bytes.
-    pub _pad0: u32,
-    /// See `_pad0`.
     pub _pad1: u32,
-    /// See `_pad0`.
+    /// See `_pad1`.
     pub _pad2: u32,
 }
 
@@ -348,6 +349,8 @@ pub mod slot {
         LEVEL_TABLE = "level_table", 31;
         LEVEL_PREV = "level_prev", 32;
         LEVEL_CUR = "level_cur", 33;
+        HOLD = "hold", 34;
+        SURFACE_HOLD = "surface_hold", 35;
     }
 }
 

@@ -39,7 +39,7 @@ const TILE: u32 = 8;
 /// Storage buffers the `sweep_slab` entry point binds (the two light buffers and every table of
 /// [`slab_groups`], and the two level planes); checked against the adapter's per-stage limit before the pipeline is made
 /// (lavapipe allows 32), and against the WGSL by a test.
-const SWEEP_STORAGE_BUFFERS: u32 = 22;
+const SWEEP_STORAGE_BUFFERS: u32 = 24;
 
 /// Everything the sweep reads besides the LDI and the light buffers, as the shader's structs.
 struct Tables {
@@ -249,6 +249,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             depth_planes: plan.depth_planes() as u32,
             occlusion_eps: OCCLUSION_EPS,
             preintegration: u32::from(plan.preintegration),
+            surface_holds: u32::from(plan.has_surface_hold()),
             ..Globals::default()
         },
         slabs: (0..slabs)
@@ -348,6 +349,8 @@ struct SweepBuffers {
     normals: wgpu::Buffer,
     light_colors: wgpu::Buffer,
     pre_front: wgpu::Buffer,
+    hold: wgpu::Buffer,
+    surface_hold: wgpu::Buffer,
     image: wgpu::Buffer,
     image_words: u64,
     globals: wgpu::Buffer,
@@ -418,6 +421,15 @@ fn upload_buffers(
         &vec![PRE_NONE; pre_words as usize],
         false,
     )?;
+    // Surface holds: one word per grid pixel (none held yet) and per triangle, else one each.
+    let hold_words = if plan.has_surface_hold() { pixels } else { 1 };
+    let hold = upload(ctx, "surface hold", &vec![0u32; hold_words as usize], false)?;
+    let per_triangle: &[u32] = if plan.has_surface_hold() {
+        &plan.surface_hold
+    } else {
+        &[0]
+    };
+    let surface_hold = upload(ctx, "triangle surface hold", per_triangle, false)?;
     let image_words = u64::from(plan.width) * u64::from(plan.height) * 3;
     let image = zeroed(ctx, "image", image_words)?;
     let globals = uniform(ctx, "globals", &tables.globals);
@@ -446,6 +458,8 @@ fn upload_buffers(
         normals,
         light_colors,
         pre_front,
+        hold,
+        surface_hold,
         image,
         image_words,
         globals,
@@ -491,7 +505,7 @@ fn slab_groups(
     slab_pipe: &wgpu::ComputePipeline,
     b: &SweepBuffers,
 ) -> [wgpu::BindGroup; 2] {
-    let common: [(u32, &wgpu::Buffer); 20] = [
+    let common: [(u32, &wgpu::Buffer); 22] = [
         (slot::SLAB_PARAMS, &b.slab_param),
         (slot::GLOBALS, &b.globals),
         (slot::CURSORS, &b.cursors),
@@ -512,6 +526,8 @@ fn slab_groups(
         (slot::NORMALS, &b.normals),
         (slot::LIGHT_COLORS, &b.light_colors),
         (slot::PRE_FRONT, &b.pre_front),
+        (slot::HOLD, &b.hold),
+        (slot::SURFACE_HOLD, &b.surface_hold),
     ];
     let group_for = |prev: [&wgpu::Buffer; 2], cur: [&wgpu::Buffer; 2]| {
         let mut e: Vec<(u32, &wgpu::Buffer)> = common.to_vec();

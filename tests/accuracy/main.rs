@@ -12,6 +12,7 @@ mod support;
 mod distance_penumbra;
 mod guard_band;
 mod hard_cases;
+mod oblique_receiver;
 mod patterned_light;
 mod phase_function;
 mod preintegration;

@@ -8,6 +8,7 @@
 pub mod kernel;
 pub mod levels;
 pub mod pattern;
+pub mod surface_hold;
 
 use std::sync::Arc;
 
@@ -83,6 +84,16 @@ pub struct MaterialPlan {
     /// scattering angle ([`phase_factor`]); exactly the light's colour for an isotropic medium
     /// (g = 0). Shading sums `Iin ⊙ light_color`; the specular term uses the bare colour.
     pub light_color: Vec<[f32; 3]>,
+}
+
+impl MaterialPlan {
+    /// Whether every slab of this material takes out all light: attenuation exactly 0 in every
+    /// channel of every transfer-function entry (and pre-integrated entry). Such a material's
+    /// surfaces are held ([`RenderPlan::surface_hold`]).
+    pub fn blocks_light(&self) -> bool {
+        let blocks = |t: &TfEntry| t.attenuation == [0.0; 3];
+        self.tf.iter().all(blocks) && self.pre.iter().flatten().all(blocks)
+    }
 }
 
 /// A light's per-render tables.
@@ -191,6 +202,10 @@ pub struct RenderPlan {
     /// [`MaterialPlan::pre`] table are shaded from their detail at the slab's faces, and the
     /// sweep keeps one more float per pixel (the next slab's front value).
     pub preintegration: bool,
+    /// Per rasterized triangle (`RasterSetup::triangles`' order): how many slabs an opaque
+    /// crossing of it keeps passing its pixel's light before removing it
+    /// ([`surface_hold::surface_hold`]; 0: removed at the crossing).
+    pub surface_hold: Vec<u32>,
 }
 
 impl RenderPlan {
@@ -340,8 +355,57 @@ impl RenderPlan {
             pixel_size: px,
             initial_light: None,
             preintegration: scene.sweep.preintegration,
+            surface_hold: Vec::new(),
         }
+        .with_surface_hold(scene, geometry)
         .with_patterns(scene, files)
+    }
+
+    /// Sets every triangle's surface hold ([`RenderPlan::surface_hold`]) from its depth slopes
+    /// and the lights' kernels.
+    fn with_surface_hold(mut self, scene: &Scene, geometry: &SceneGeometry) -> RenderPlan {
+        let moments: Vec<KernelMoments> = self.lights.iter().map(|l| l.moments).collect();
+        let e = geometry.slab_distance;
+        let compensation = scene.sweep.variance_compensation;
+        // Only surfaces that take out all light at every crossing are held: whether one does is
+        // then known from the crossed triangle alone, before shading.
+        let blocks: Vec<bool> = self
+            .materials
+            .iter()
+            .map(MaterialPlan::blocks_light)
+            .collect();
+        let holds: Vec<u32> = geometry
+            .raster
+            .triangles
+            .iter()
+            .map(|t| {
+                if !blocks[self.mesh_material[t.mesh as usize] as usize] {
+                    return 0;
+                }
+                surface_hold::surface_hold(
+                    &moments,
+                    self.penumbra,
+                    compensation,
+                    t.depth_dx,
+                    t.depth_dy,
+                    e,
+                )
+            })
+            .collect();
+        // No per-pixel hold state where no surface holds (camera-facing receivers).
+        self.surface_hold = if holds.iter().any(|&h| h != 0) {
+            holds
+        } else {
+            Vec::new()
+        };
+        self
+    }
+
+    /// Whether some surface is held ([`RenderPlan::surface_hold`]): the sweep then keeps one
+    /// hold state per pixel.
+    #[inline(always)]
+    pub fn has_surface_hold(&self) -> bool {
+        !self.surface_hold.is_empty()
     }
 
     /// Samples every light's pattern into the initial light buffer (`None` without patterns);

@@ -50,6 +50,9 @@ pub(crate) struct RowState<'a> {
     /// With pre-integration: per pixel the detail value at the slab's front face kept from the
     /// previous slab (NaN: none kept). Without: one unused float.
     pub pre: &'a mut [f32],
+    /// With surface holds (`RenderPlan::surface_hold`): per pixel its packed hold
+    /// (`crate::composite::hold_step`). Without: one unused 0.
+    pub hold: &'a mut [u32],
 }
 
 /// What every pixel of one row reads: its slab, the previous slab's buffers, the row's index and

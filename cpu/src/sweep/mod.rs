@@ -107,6 +107,9 @@ struct PixelState {
     /// Pre-integration's kept front values ([`RowState::pre`]), `pre_stride` per row.
     pre: Vec<f32>,
     pre_stride: usize,
+    /// Surface holds ([`RowState::hold`]), `hold_stride` per row.
+    hold: Vec<u32>,
+    hold_stride: usize,
 }
 
 impl PixelState {
@@ -119,6 +122,7 @@ impl PixelState {
         // One float per pixel with pre-integration, one per row (unused) without: every row
         // needs a slice.
         let pre_stride = if plan.preintegration { w } else { 1 };
+        let hold_stride = if plan.has_surface_hold() { w } else { 1 };
         let levels_prev = initial_levels(plan, initial);
         let prev = to_pixel_rows(plan, initial);
         PixelState {
@@ -133,6 +137,8 @@ impl PixelState {
             alpha: vec![0.0f32; w * h],
             pre: vec![f32::NAN; pre_stride * h],
             pre_stride,
+            hold: vec![0u32; hold_stride * h],
+            hold_stride,
         }
     }
 }
@@ -251,9 +257,10 @@ fn sweep_slab(
         .zip(state.color.par_chunks_mut(w * 3))
         .zip(state.alpha.par_chunks_mut(w))
         .zip(state.pre.par_chunks_mut(state.pre_stride))
+        .zip(state.hold.par_chunks_mut(state.hold_stride))
         .enumerate()
         .map(
-            |(y, ((((((light, levels), next), inside), color), alpha), pre))| {
+            |(y, (((((((light, levels), next), inside), color), alpha), pre), hold))| {
                 (
                     y,
                     RowState {
@@ -264,6 +271,7 @@ fn sweep_slab(
                         color,
                         alpha,
                         pre,
+                        hold,
                     },
                 )
             },
@@ -502,7 +510,9 @@ mod tests {
         // The row loop checks each summary against `ChunkState::of` before it uses it (in unit
         // tests). A thick hazy box turns its chunks opaque a few slabs past its front face,
         // where no cursor moves (summaries refreshed for their alphas alone); a wall behind it
-        // over the image's left half leaves chunks in the dark, the space beside them unoccluded.
+        // over the image's left half leaves chunks in the dark, the space beside them unoccluded;
+        // a thin opaque plate turned 50° is held (surface holds start and release, also where
+        // the light around is unoccluded).
         for penumbra in ["iterated", "distance"] {
             let text = format!(
                 "[image]\nwidth = 45\nheight = 27\n[camera]\nview_width = 4.0\n[sweep]\n\
@@ -510,9 +520,12 @@ mod tests {
                  [[light]]\ntilt_deg = [20.0, 10.0]\nvariance = [0.04, 0.02]\n\
                  [[mesh]]\nshape = \"box\"\nsize = [2.0, 2.0, 2.0]\nmaterial = \"haze\"\n\
                  [[mesh]]\nshape = \"box\"\nsize = [4.0, 6.0, 0.1]\ntranslate = [-2.0, 0.0, 1.5]\n\
-                 material = \"wall\"\n[material.haze]\nopacity = 0.999\n[material.wall]\nopacity = 1.0\n"
+                 material = \"wall\"\n[[mesh]]\nshape = \"box\"\nsize = [1.5, 1.5, 0.05]\n\
+                 translate = [1.3, 0.0, -2.0]\nrotate_deg = [50.0, 0.0, 0.0]\nmaterial = \"wall\"\n\
+                 [material.haze]\nopacity = 0.999\n[material.wall]\nopacity = 1.0\n"
             );
             let (_scene, g, ldi, plan) = super::built_scene(&text, "summaries");
+            assert!(plan.has_surface_hold(), "the turned plate is held");
             let counts = super::ChunkCounts::default();
             let cpu = super::CpuOptions {
                 chunk_counts: Some(&counts),

@@ -32,7 +32,7 @@ use super::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowContext, RowState, SlabContext, level_plane, light_block,
     light_planes,
 };
-use crate::composite::{attenuate, composite, deepen};
+use crate::composite::{Held, attenuate, composite, deepen, hold_step};
 use crate::kernels::{TapOrigin, distance_row, gather, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
@@ -83,14 +83,42 @@ pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usi
     convolve(row, x, inside, &mut light);
     // 2. Intersection: advance the layer cursor to the slab's back face.
     let hit = intersect(row.ctx, row.y, state, x);
+    let held = hold(row.ctx, state, x, hit.crossed);
     // 3. Shading at one point, if inside a mesh or a surface was crossed; 4. composite.
     let attenuation = match hit.mesh {
         Some(mesh) => shade_and_composite(row, state, x, &light.iin, mesh, hit.crossed),
         None => [1.0; 3],
     };
-    // 5. Attenuate (and flush) into this slab's outgoing light buffer; distance penumbra: the
-    // light this slab removed, at this slab's depth, into the depth plane, and the next level.
-    attenuate_light(row.ctx, state, x, &light, attenuation);
+    // 5. Attenuate (and flush) into this slab's outgoing light buffer — a held surface passes
+    // it, a released one removes it; distance penumbra: the light this slab removed, at its
+    // depth, into the depth plane, and the next level.
+    let (attenuation, removed_at) = match held {
+        Held::Free => (attenuation, row.ctx.slab),
+        Held::Pass => ([1.0; 3], row.ctx.slab),
+        Held::Release { removed_at } => ([0.0; 3], removed_at),
+    };
+    attenuate_light(row.ctx, state, x, &light, attenuation, removed_at);
+}
+
+/// Step 2's surface hold at pixel x, whose cursor crossed fragment `crossed` in this slab
+/// ([`NO_CROSSING`]: none): [`hold_step`] with the crossed triangle's hold.
+#[inline(always)]
+pub(crate) fn hold(
+    ctx: &SlabContext<'_>,
+    state: &mut RowState<'_>,
+    x: usize,
+    crossed: u32,
+) -> Held {
+    let plan = ctx.plan;
+    if !plan.has_surface_hold() {
+        return Held::Free;
+    }
+    let crossed_hold = if crossed == NO_CROSSING {
+        0
+    } else {
+        plan.surface_hold[ctx.ldi.triangle[crossed as usize] as usize]
+    };
+    hold_step(&mut state.hold[x], ctx.slab, crossed_hold)
 }
 
 /// Step 1: every light's planes gathered at pixel x through its kernel's tap row for this slab
@@ -228,9 +256,9 @@ fn preintegrated(
 }
 
 /// Step 5 at pixel x: every light's gathered channels attenuated (and flushed) into this slab's
-/// outgoing buffer; with the distance penumbra, the light the slab removed (Σ in − Σ out) deepens
-/// the occluder depth, stored with the channels, and gives the level the pixel gathers through
-/// in the next slab.
+/// outgoing buffer; with the distance penumbra, the light the slab removed (Σ in − Σ out) at
+/// depth `removed_at` (slabs) deepens the occluder depth, stored with the channels, and gives the
+/// level the pixel gathers through in the next slab.
 #[inline(always)]
 fn attenuate_light(
     ctx: &SlabContext<'_>,
@@ -238,6 +266,7 @@ fn attenuate_light(
     x: usize,
     light: &LightIn,
     attenuation: [f32; 3],
+    removed_at: u32,
 ) {
     let plan = ctx.plan;
     let (w, ch, planes) = (
@@ -255,7 +284,7 @@ fn attenuate_light(
             lit_out += out[c];
         }
         if plan.depth_planes() > 0 {
-            out[ch] = deepen(light.depth[l], ctx.slab, lit_in - lit_out);
+            out[ch] = deepen(light.depth[l], removed_at as f32, lit_in - lit_out);
             let occluded = ch as f32 - lit_out;
             let table = &plan.lights[l].table;
             state.levels[l * w + x] = pixel_level::<f32>(table, occluded, out[ch], ctx.slab + 1);

@@ -63,7 +63,7 @@ fn rust_layouts() -> Vec<Layout> {
             planes,
             depth_planes,
             occlusion_eps,
-            _pad0,
+            surface_holds,
             _pad1,
             _pad2,
         }),

@@ -16,10 +16,40 @@ fn attenuate(v_in: f32, attenuation: f32) -> f32 {
 }
 
 // `deepen` (distance penumbra): the occluder-depth plane after a slab, D + slab · removed
-// (`removed`: the light the slab took out, summed over channels), flushed like the light.
+// (`removed`: the light the slab took out, summed over channels, at depth `slab`: this slab, or a
+// released surface's crossing slab), flushed like the light.
 fn deepen(depth: f32, slab: u32, removed: f32) -> f32 {
     let v = depth + f32(slab) * removed;
     return select(v, 0.0, v < globals.flush_below);
+}
+
+// `Held`: what step 5 does with a pixel's light under its surface hold.
+const HELD_FREE: u32 = 0u;    // the slab's own attenuation
+const HELD_PASS: u32 = 1u;    // attenuation 1
+const HELD_RELEASE: u32 = 2u; // attenuation 0, removed light recorded at `removed_at`
+const HOLD_SHIFT: u32 = 20u;
+
+struct HoldStep {
+    state: u32,
+    held: u32,
+    removed_at: u32,
+}
+
+// `hold_step`: a pixel's packed hold `state` through slab `slab`, where it crossed a surface that
+// holds `crossed_hold` slabs (0: none): a pending hold passes until its release slab and is
+// cleared there, else such a crossing starts one.
+fn hold_step(state: u32, slab: u32, crossed_hold: u32) -> HoldStep {
+    if state != 0u {
+        let release = state & ((1u << HOLD_SHIFT) - 1u);
+        if slab < release {
+            return HoldStep(state, HELD_PASS, slab);
+        }
+        return HoldStep(0u, HELD_RELEASE, release - (state >> HOLD_SHIFT));
+    }
+    if crossed_hold != 0u {
+        return HoldStep((slab + crossed_hold) | (crossed_hold << HOLD_SHIFT), HELD_PASS, slab);
+    }
+    return HoldStep(0u, HELD_FREE, slab);
 }
 
 // `finish`: C += (1 − A)·background.

@@ -73,6 +73,20 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         mesh = frag_meta[adv.first] & MESH_MASK;
     }
 
+    // The surface hold (composite.wgsl `hold_step`).
+    var held = HELD_FREE;
+    var removed_at = slab;
+    if globals.surface_holds != 0u {
+        var crossed_hold = 0u;
+        if crossed {
+            crossed_hold = surface_hold[frag_meta[adv.first] >> MESH_BITS];
+        }
+        let step = hold_step(hold[p], slab, crossed_hold);
+        hold[p] = step.state;
+        held = step.held;
+        removed_at = step.removed_at;
+    }
+
     // 3. Shading at one point, if inside a mesh or a surface was crossed; 4. composite.
     var attenuation = vec3<f32>(1.0, 1.0, 1.0);
     if mesh != NO_CROSSING {
@@ -114,8 +128,14 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         attenuation = e.attenuation;
     }
 
-    // 5. Attenuate (and flush) into this slab's outgoing light buffer; distance penumbra: the
-    // light this slab removed, at this slab's depth, into the depth plane (`deepen`).
+    // 5. Attenuate (and flush) into this slab's outgoing light buffer — a held surface passes
+    // it, a released one removes it; distance penumbra: the light this slab removed, at its
+    // depth, into the depth plane (`deepen`).
+    if held == HELD_PASS {
+        attenuation = vec3<f32>(1.0, 1.0, 1.0);
+    } else if held == HELD_RELEASE {
+        attenuation = vec3<f32>(0.0, 0.0, 0.0);
+    }
     let row_base = y * globals.row_len;
     for (var l = 0u; l < globals.lights; l++) {
         var lit_in = 0.0;
@@ -128,7 +148,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             lit_out = lit_out + out;
         }
         if distance {
-            let depth_out = deepen(depth_in[l], slab, lit_in - lit_out);
+            let depth_out = deepen(depth_in[l], removed_at, lit_in - lit_out);
             light_cur[row_base + (l * planes + ch) * w + x] = depth_out;
             // The level this pixel starts the next slab with.
             let occluded = f32(ch) - lit_out;

@@ -21,7 +21,7 @@ use super::gather::{gather_inside, gather_lanes, store_pixels};
 use super::levels::{distance_rows, phases};
 use super::per_lane::{LaneRows, gather_per_lane};
 use super::quiet::{ChunkState, Values};
-use crate::composite::{attenuate, composite, deepen};
+use crate::composite::{Held, attenuate, composite, deepen};
 use crate::kernels::{LightPlanes, TapOrigin, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
@@ -31,7 +31,7 @@ use crate::sweep::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, level_plane,
     light_block,
 };
-use crate::sweep::pixel::shade_and_composite;
+use crate::sweep::pixel::{hold, shade_and_composite};
 use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::{RenderPlan, TfEntry};
 use wide::f32x8;
@@ -281,6 +281,20 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         }
     }
 
+    // Every lane's surface hold (after its cursor, as in the per-pixel stage).
+    let mut held = [Held::Free; MAX_LANES];
+    let mut released = false;
+    let crossing = hits.crossed[..L::LANES].iter().any(|&c| c != NO_CROSSING);
+    // Most chunks hold nothing and cross nothing: one look at their hold words.
+    if plan.has_surface_hold()
+        && (crossing || state.hold[x0..x0 + L::LANES].iter().any(|&h| h != 0))
+    {
+        for (i, h) in held.iter_mut().enumerate().take(L::LANES) {
+            *h = hold(ctx, state, x0 + i, hits.crossed[i]);
+            released |= matches!(h, Held::Release { .. });
+        }
+    }
+
     // 1. Convolution of every light buffer (and, distance penumbra, its depth plane).
     let mut iin = [L::splat(0.0); N];
     let mut depth_in = [L::splat(0.0); N];
@@ -374,7 +388,12 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         }
     }
 
-    // 5. Attenuate (and flush) into this slab's outgoing light buffer.
+    // 5. Attenuate (and flush) into this slab's outgoing light buffer: held lanes pass the
+    // light, released ones remove it (recorded at their crossing's depth).
+    let mut removed_at = L::splat(ctx.slab as f32);
+    if held[..L::LANES].iter().any(|&h| h != Held::Free) {
+        (attenuation, removed_at) = held_attenuation(ctx.slab, &held, attenuation);
+    }
     let (zero, one) = (L::splat(0.0), L::splat(1.0));
     let mut not_one = zero.ne(zero);
     let mut not_zero = not_one;
@@ -395,7 +414,8 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         }
         if distance {
             // The light this slab removed, at this slab's depth; a depth plane's quiet value is 0.
-            let depth = finish_depth(ctx, state, l, x0, depth_in[l], lit_in, lit_out);
+            let removed = (lit_in, lit_out, removed_at);
+            let depth = finish_depth(ctx, state, l, x0, depth_in[l], removed);
             let moved_depth = depth.ne(zero);
             not_one = L::m_or(not_one, moved_depth);
             not_zero = L::m_or(not_zero, moved_depth);
@@ -413,8 +433,39 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         not_zero: L::m_any(not_zero),
         light_not_zero: L::m_any(light_not_zero),
         shaded,
-        crossed: any_crossed,
+        crossed: any_crossed || released,
     }
+}
+
+/// Step 5's attenuation per lane under the lanes' surface holds `held`: 1 where held, 0 where
+/// released, else `attenuation`; and the depth (slabs) each lane's removed light is recorded at:
+/// a released lane's crossing slab, else this slab.
+#[inline(always)]
+fn held_attenuation<L: Layout>(
+    slab: u32,
+    held: &[Held; MAX_LANES],
+    attenuation: [L; 3],
+) -> ([L; 3], L) {
+    let (mut pass, mut release, mut at) = (
+        [0.0f32; MAX_LANES],
+        [0.0f32; MAX_LANES],
+        [0.0f32; MAX_LANES],
+    );
+    for i in 0..L::LANES {
+        at[i] = slab as f32;
+        match held[i] {
+            Held::Free => {}
+            Held::Pass => pass[i] = 1.0,
+            Held::Release { removed_at } => {
+                release[i] = 1.0;
+                at[i] = removed_at as f32;
+            }
+        }
+    }
+    let (zero, one) = (L::splat(0.0), L::splat(1.0));
+    let (pass, release) = (L::load(&pass, 0).gt(zero), L::load(&release, 0).gt(zero));
+    let attenuation = attenuation.map(|a| L::select(pass, one, L::select(release, zero, a)));
+    (attenuation, L::load(&at, 0))
 }
 
 /// `dst = src` for a light's channels, as fixed-length copies for 1 and 3 channels (a run-time
@@ -489,7 +540,8 @@ fn distance_gather<L: Layout>(
 }
 
 /// Distance penumbra, step 5 for light `l`'s depth plane at pixels x0..: the gathered depth
-/// `depth_in` deepened by the light the slab removed (`lit_in − lit_out`, summed over channels),
+/// `depth_in` deepened by the light the slab removed (`lit_in − lit_out`, summed over channels,
+/// at depth `removed_at` per lane),
 /// and the level each pixel starts the next slab with (stored). Returns the outgoing depth,
 /// for the caller to store with the light's channels.
 #[inline(always)]
@@ -499,12 +551,11 @@ fn finish_depth<L: Layout>(
     l: usize,
     x0: usize,
     depth_in: L,
-    lit_in: L,
-    lit_out: L,
+    (lit_in, lit_out, removed_at): (L, L, L),
 ) -> L {
     let plan = ctx.plan;
     let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
-    let out = deepen(depth_in, ctx.slab, lit_in - lit_out);
+    let out = deepen(depth_in, removed_at, lit_in - lit_out);
     let occluded = L::splat(ch as f32) - lit_out;
     let level = pixel_level::<L>(&plan.lights[l].table, occluded, out, ctx.slab + 1);
     let mut lanes = [0u32; MAX_LANES];
@@ -552,7 +603,8 @@ pub(crate) fn dark_depth_chunk(
         let mut depth_in = [zero];
         distance_gather(simd, ctx, l, &depth_plane, rows, at, &mut depth_in);
         // Σ of the gathered and of the attenuated light, as the stage sums them: 0 + 0 + … = 0.
-        let depth = finish_depth(ctx, state, l, x0, depth_in[0], zero, zero);
+        let at = f32x8::splat(ctx.slab as f32);
+        let depth = finish_depth(ctx, state, l, x0, depth_in[0], (zero, zero, at));
         let mut outs = [zero; 4];
         outs[ch] = depth;
         let block = light_block(plan, l) + x0 * (ch + 1);

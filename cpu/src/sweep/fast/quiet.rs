@@ -25,6 +25,7 @@ use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::RenderPlan;
 use wide::f32x8;
 
+use crate::composite::HOLD_SHIFT;
 use crate::ldi::Ldi;
 use crate::sweep::kit::{Reach, RowState, SlabContext};
 
@@ -225,6 +226,9 @@ pub(crate) struct ChunkState {
     pub inside_any: u32,
     /// Every lane's alpha is exactly 1.
     pub opaque: bool,
+    /// The first slab in which a lane's surface hold releases (`u32::MAX`: none holds): the
+    /// chunk is not skipped as unoccluded there, where a lane's light drops to 0.
+    pub release: u32,
 }
 
 /// What of a row's per-pixel state a chunk summary reads: the cursors, inside masks and alphas.
@@ -233,6 +237,8 @@ pub(crate) struct Cursors<'a> {
     pub next: &'a [u32],
     pub inside: &'a [u32],
     pub alpha: &'a [f32],
+    /// Surface holds (shorter than the row when the plan has none).
+    pub hold: &'a [u32],
 }
 
 impl<'a> Cursors<'a> {
@@ -242,6 +248,7 @@ impl<'a> Cursors<'a> {
             next: row.next,
             inside: row.inside,
             alpha: row.alpha,
+            hold: row.hold,
         }
     }
 }
@@ -254,13 +261,22 @@ impl ChunkState {
             next,
             inside,
             alpha,
+            hold,
         } = row;
         let w = ldi.width as usize;
         let mut s = ChunkState {
             event_depth: f32::INFINITY,
             inside_any: 0,
             opaque: true,
+            release: u32::MAX,
         };
+        if hold.len() == w {
+            for &h in &hold[x0..x0 + lanes] {
+                if h != 0 {
+                    s.release = s.release.min(h & ((1 << HOLD_SHIFT) - 1));
+                }
+            }
+        }
         for x in x0..x0 + lanes {
             let end = ldi.offsets[y * w + x + 1];
             if next[x] < end {
@@ -386,6 +402,7 @@ impl QuietSetup {
                     next,
                     inside: &zeros,
                     alpha: &alpha,
+                    hold: &[],
                 };
                 chunks[y * per_row + c] = ChunkState::of(ldi, y, x0, lanes, row);
             }
@@ -519,7 +536,8 @@ impl QuietRow<'_> {
         let w = ctx.plan.grid_width as usize;
         let h = ctx.plan.grid_height as usize;
         let all_ones = self.setup.ones_exact && !hits.not_one(c);
-        if all_ones && state.inside_any == 0 && state.crosses_nothing(ctx.back) {
+        let releases = state.release == ctx.slab;
+        if all_ones && state.inside_any == 0 && state.crosses_nothing(ctx.back) && !releases {
             return ChunkWork::Unoccluded;
         }
         let interior = reach.interior(c * LANES, lanes, y, w, h);

@@ -13,6 +13,7 @@ use super::chunk::{
     Chunk, ChunkFn, chunk_fn, dark_depth_chunk, gather_pair, pairs_gathers, shape_of,
 };
 use super::quiet::{ChunkCounts, ChunkWork, Cursors, LANES, Moved, QuietRow, RowSpans, Values};
+use crate::composite::Held;
 use crate::parity::{NO_CROSSING, advance};
 use crate::sweep::kit::{MAX_LIGHT_CHANNELS, RowContext, RowState, light_block};
 use crate::sweep::pixel;
@@ -187,6 +188,7 @@ fn sweep_tail(
     let (mut crossed, mut shaded) = (false, false);
     for x in xs {
         let (next, alpha) = (state.next[x], state.alpha[x]);
+        let hold = state.hold.get(x).copied();
         let inside = row.ctx.reach.interior(x, 1, row.y, w, h);
         pixel::sweep_pixel(row, state, x, inside);
         // What it wrote: each light's planes side by side (light l's pixel x at `(l·w + x)·planes`).
@@ -194,7 +196,8 @@ fn sweep_tail(
             .map(|l| Values::of_planes(&state.light[(l * w + x) * planes..][..planes], ch))
             .fold(Values::NONE, Values::or);
         spans.record(x, 1, written);
-        crossed |= state.next[x] != next;
+        // A hold that started or ended moves the summary like a crossing.
+        crossed |= state.next[x] != next || state.hold.get(x).copied() != hold;
         shaded |= state.alpha[x].to_bits() != alpha.to_bits();
     }
     Moved::of(crossed, shaded)
@@ -266,6 +269,8 @@ fn advance_dark(row: &RowContext<'_>, state: &mut RowState<'_>, xs: Range<usize>
             ctx.back,
         );
         moved |= first != NO_CROSSING;
+        // The surface hold moves as in the full stage (the light it passes or removes is 0).
+        moved |= matches!(pixel::hold(ctx, state, x, first), Held::Release { .. });
     }
     if ctx.plan.preintegration {
         // The cursors may have crossed surfaces: forget the kept front values (a kept value is

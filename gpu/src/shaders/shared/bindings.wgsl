@@ -76,7 +76,7 @@ struct Globals {
     planes: u32,      // planes per light: channels, then the depth plane (distance penumbra)
     depth_planes: u32, // 1 with the distance penumbra, else 0
     occlusion_eps: f32, // OCCLUSION_EPS (its f32 bits from Rust)
-    _pad0: u32,
+    surface_holds: u32, // 1: some surface is held (`hold` per grid pixel, `surface_hold` per triangle)
     _pad1: u32,
     _pad2: u32,
 }
@@ -193,3 +193,8 @@ struct Cursor {
 // `[row][light][x]`, ping-pong like the light buffers: the previous slab's and this slab's.
 @group(0) @binding(32) var<storage, read> level_prev: array<u32>;
 @group(0) @binding(33) var<storage, read_write> level_cur: array<u32>;
+// Surface holds (`RenderPlan::surface_hold`): per grid pixel its packed hold (`hold_step`), and
+// per rasterized triangle how many slabs an opaque crossing of it holds (one unused word each
+// where no surface is held).
+@group(0) @binding(34) var<storage, read_write> hold: array<u32>;
+@group(0) @binding(35) var<storage, read> surface_hold: array<u32>;

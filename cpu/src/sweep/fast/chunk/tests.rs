@@ -34,6 +34,7 @@ struct Row {
     color: Vec<f32>,
     alpha: Vec<f32>,
     pre: Vec<f32>,
+    hold: Vec<u32>,
 }
 
 impl Row {
@@ -46,6 +47,7 @@ impl Row {
             color: &mut self.color,
             alpha: &mut self.alpha,
             pre: &mut self.pre,
+            hold: &mut self.hold,
         }
     }
 }
@@ -67,6 +69,7 @@ fn mismatch(a: &Row, b: &Row) -> Option<String> {
         ("levels", &a.levels, &b.levels),
         ("next", &a.next, &b.next),
         ("inside", &a.inside, &b.inside),
+        ("hold", &a.hold, &b.hold),
     ];
     for (name, u, v) in ints {
         if let Some(i) = (0..u.len()).find(|&i| u[i] != v[i]) {
@@ -76,8 +79,8 @@ fn mismatch(a: &Row, b: &Row) -> Option<String> {
     None
 }
 
-/// The default scene, small: two coloured lights (six light channels), noise and specular
-/// materials, three meshes, through `kernel` with `penumbra` ("iterated" or "distance") and
+/// The default scene, small, its wall turned 30° about x so that it is held (surface holds):
+/// two coloured lights (six light channels), noise and specular materials, three meshes, through `kernel` with `penumbra` ("iterated" or "distance") and
 /// `preintegration`.
 fn plan_of(
     kernel: &str,
@@ -92,7 +95,11 @@ fn plan_of(
             "slabs = 512",
             &format!("slabs = 24\npenumbra = \"{penumbra}\""),
         )
-        .replace("kernel = \"ellipse2\"", &format!("kernel = \"{kernel}\""));
+        .replace("kernel = \"ellipse2\"", &format!("kernel = \"{kernel}\""))
+        .replace(
+            "translate = [0.0, 0.0, 1.3]",
+            "translate = [0.0, 0.0, 1.3]\nrotate_deg = [30.0, 0.0, 0.0]",
+        );
     crate::sweep::built_scene(&text, "lanes")
 }
 
@@ -108,6 +115,7 @@ fn compare_lanes(
 ) -> Option<String> {
     let (_scene, g, ldi, plan) = plan_of(kernel, penumbra, pre);
     assert_eq!(plan.materials.iter().any(|m| m.pre.is_some()), pre);
+    assert!(plan.has_surface_hold(), "the turned wall is held");
     let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
     let row_len = plan.light_row_len();
     let meshes = plan.mesh_material.len() as u32;
@@ -189,6 +197,20 @@ fn compare_lanes(
                         _ => value(&mut rng),
                     })
                     .collect(),
+                // Surface holds: none one time in two, else releasing in this slab or up to
+                // three later, held 1 to 4 slabs (released at or after the slab held).
+                hold: (0..w)
+                    .map(|_| match rng.below(2) {
+                        0 => 0,
+                        _ => match slab + rng.below(4) {
+                            0 => 0,
+                            release => {
+                                let held = 1 + rng.below(release.min(4));
+                                release | (held << crate::composite::HOLD_SHIFT)
+                            }
+                        },
+                    })
+                    .collect(),
             };
             for x0 in 0..=w - 8 {
                 let (mut a, mut b) = (row.clone(), row.clone());
@@ -199,6 +221,7 @@ fn compare_lanes(
                     next: &row.next,
                     inside: &row.inside,
                     alpha: &row.alpha,
+                    hold: &row.hold,
                 };
                 let summary = (x0 % 2 == 0).then(|| ChunkState::of(&ldi, y, x0, 8, cursors));
                 if let Some(s) = summary {
