@@ -405,6 +405,7 @@ material = "fog"
 [material.fog]
 opacity = 0.5
 transport = [0.3, 0.3, 0.3]
+reference_length = 0.01  # one slab: opacity 0.5 per slab
 "#;
     let (_, out) = run(&support::scene(text, Path::new(".")), None);
     // 400 slabs of attenuation 1 − 0.5·0.7 = 0.65 would reach 1e-75: far below f32's range.

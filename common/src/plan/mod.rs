@@ -37,6 +37,11 @@ pub const PI_STEPS_PER_UNIT: f64 = 512.0;
 /// The fewest thin slabs a pre-integration entry is integrated over, also for a constant value
 /// (`front == back`): the slab's self-shadowing is integrated alike everywhere in the table.
 pub const PI_MIN_STEPS: f64 = 16.0;
+/// The length a material's opacity is given for when it sets no `reference_length`: one world
+/// unit, so that opacity is per unit length (as extinction is in Mitsuba or pbrt) and a material
+/// looks the same at any slab count. (It was the slab distance, which made the same material
+/// more opaque the fewer the slabs.)
+pub const DEFAULT_REFERENCE_LENGTH: f64 = 1.0;
 /// Light values below this are flushed to zero after attenuation (no subnormals, same zeros on
 /// CPU and GPU); products with tap weights (≥ 2^-24) then stay far above f32's normal range.
 pub const FLUSH_BELOW: f32 = 1.0e-20;
@@ -634,7 +639,7 @@ fn material_plan(
     preintegration: bool,
     texture: Option<TextureFile>,
 ) -> Result<MaterialPlan, TextureError> {
-    let ratio = e / m.reference_length.unwrap_or(e);
+    let ratio = e / m.reference_length.unwrap_or(DEFAULT_REFERENCE_LENGTH);
     let tf = if m.gradient.is_empty() {
         vec![tf_entry(m.color, m.opacity, m.transport, ratio)]
     } else {
