@@ -15,4 +15,5 @@ mod hard_cases;
 mod patterned_light;
 mod phase_function;
 mod preintegration;
+mod surface_shading;
 mod sweep_accuracy;
