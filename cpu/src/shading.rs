@@ -1,14 +1,15 @@
 //! Stage 3, shading: material lookup at one point per slab, detail function, transfer function,
-//! light sum and specular highlight (step 3 of the per-pixel sweep, paper §4.2). Mirrors
+//! light sum, Lambert cosine at opaque crossings and specular highlight (step 3 of the per-pixel sweep, paper §4.2). Mirrors
 //! `gpu/src/shaders/shading.wgsl`.
 //!
 //! Written once over [`Lane`]: the per-pixel stage (`crate::sweep::pixel`) calls the 1-lane
 //! instance, the SIMD path's chunks the 8-lane one. Table look-ups are per
 //! lane, arithmetic is on lanes in one fixed order.
 
+use convshadow_common::model::scene::SpecularModel;
 use convshadow_common::pixel::hash::{pixel_hash, unit_float};
 use convshadow_common::pixel::lane::{Lane, MAX_LANES};
-use convshadow_common::plan::{MaterialPlan, PI_SIZE, RenderPlan, TF_SIZE, TfEntry};
+use convshadow_common::plan::{MaterialPlan, PI_SIZE, RenderPlan, SpecularPlan, TF_SIZE, TfEntry};
 
 use crate::ldi::Ldi;
 use crate::parity::NO_CROSSING;
@@ -216,35 +217,84 @@ pub fn powi_by_squaring<L: Lane>(mut x: L, mut n: u32) -> L {
     r
 }
 
+/// The normal `n` flipped to face the viewer (who looks along +z: a facing normal has z ≤ 0).
+#[inline(always)]
+pub fn facing<L: Lane>(n: [L; 3]) -> [L; 3] {
+    let s = L::select(n[2].gt(L::splat(0.0)), L::splat(-1.0), L::splat(1.0));
+    [s * n[0], s * n[1], s * n[2]]
+}
+
+/// `(f₀·v₀ + f₁·v₁) + f₂·v₂`, in that order.
+#[inline(always)]
+fn dot<L: Lane>(f: [L; 3], v: [f32; 3]) -> L {
+    (f[0] * L::splat(v[0]) + f[1] * L::splat(v[1])) + f[2] * L::splat(v[2])
+}
+
+/// `max(0, d)` (`d` when d > 0, else 0; NaN gives 0).
+#[inline(always)]
+fn positive<L: Lane>(d: L) -> L {
+    let zero = L::splat(0.0);
+    L::select(d.gt(zero), d, zero)
+}
+
 /// Specular weight of one light at a surface with camera-space normal `n` (flipped to face the
-/// viewer): `strength · max(0, n·h)^exponent`.
+/// viewer): `strength · max(0, n·h)^exponent` (Blinn–Phong).
 #[inline(always)]
 pub fn specular<L: Lane>(n: [L; 3], h: [f32; 3], strength: f32, exponent: u32) -> L {
-    let zero = L::splat(0.0);
-    let s = L::select(n[2].gt(zero), L::splat(-1.0), L::splat(1.0));
-    let h = [L::splat(h[0]), L::splat(h[1]), L::splat(h[2])];
-    let d = ((s * n[0]) * h[0] + (s * n[1]) * h[1]) + (s * n[2]) * h[2];
-    let d = L::select(d.gt(zero), d, zero);
+    let d = positive(dot(facing(n), h));
     L::splat(strength) * powi_by_squaring(d, exponent)
 }
 
-/// The specular input of [`shade`]: strength, exponent, per-lane normals, and the lanes that
-/// crossed a surface (the only ones that get a highlight).
-pub struct Specular<L: Lane> {
-    /// Strength.
-    pub strength: f32,
-    /// Exponent.
-    pub exponent: u32,
-    /// Camera-space normal per lane.
-    pub normal: [L; 3],
-    /// The lanes that get the highlight.
-    pub lanes: L::M,
+/// The Lambert cosine `max(0, f·l)` of a facing normal `f` and the direction towards a light.
+#[inline(always)]
+pub fn lambert<L: Lane>(f: [L; 3], to_light: [f32; 3]) -> L {
+    positive(dot(f, to_light))
 }
 
-/// The shaded colour `c ⊙ Σ_l (Iin_l ⊙ colour_l)` plus specular terms, summed light by light.
-/// `colour_l` is `material.light_color[l]`: the light's colour times the material's phase
+/// The Ashikmin–Shirley weight of one light (isotropic lobe, Schlick Fresnel) at a facing normal
+/// `f`, the cosine included: `a · (f·h)^e · (f·l) / max(f·l, f·v)` with v = (0, 0, −1), so
+/// f·v = −f_z, and `a = scale · (b + f0·c)` the light's Fresnel-over-(h·k) constants
+/// ([`convshadow_common::plan::fresnel_terms`]) times the normalised strength. Every dot product
+/// is clamped at 0; where both cosines are 0 the quotient's denominator is taken as 1 (the
+/// numerator is 0 then, so the weight is 0 instead of NaN).
+#[inline(always)]
+pub fn ashikmin_shirley<L: Lane>(
+    f: [L; 3],
+    h: [f32; 3],
+    to_light: [f32; 3],
+    fresnel: [f32; 2],
+    sp: &SpecularPlan,
+) -> L {
+    let zero = L::splat(0.0);
+    let nh = positive(dot(f, h));
+    let nl = positive(dot(f, to_light));
+    let nv = positive(zero - f[2]);
+    let den = L::select(nl.gt(nv), nl, nv);
+    let den = L::select(den.gt(zero), den, L::splat(1.0));
+    let a = sp.scale * (fresnel[0] + sp.f0 * fresnel[1]);
+    L::splat(a) * (powi_by_squaring(nh, sp.exponent) * (nl / den))
+}
+
+/// The crossed-surface input of [`shade`]: per-lane normals, the lanes that crossed a surface
+/// in this slab (the only ones that get a highlight or the Lambert cosine), and the slab
+/// opacity at the shading point (the Lambert cosine applies only where it is exactly 1: an
+/// opaque crossing).
+pub struct Surface<L: Lane> {
+    /// Camera-space normal per lane (the crossed fragment's triangle normal, either facing).
+    pub normal: [L; 3],
+    /// The lanes that crossed a surface.
+    pub lanes: L::M,
+    /// Slab opacity at the shading point (the transfer-function entry's).
+    pub alpha: L,
+}
+
+/// The shaded colour `c ⊙ Σ_l (Iin_l ⊙ colour_l · cos_l)` plus specular terms, summed light by
+/// light. `colour_l` is `material.light_color[l]`: the light's colour times the material's phase
 /// function for that light (the bare colour for isotropic media); the specular term, a surface
-/// reflection, uses the bare colour.
+/// reflection, uses the bare colour. `cos_l` is the Lambert cosine `max(0, n·l)` in lanes that
+/// crossed an opaque surface (slab opacity exactly 1) of a `lambert` material, else exactly 1
+/// (so a flat material, a volume sample or a translucent crossing keeps the bits it had
+/// without the factor: `x·1 = x`).
 ///
 /// `iin` holds `lights × channels` values; with one channel the light is grey.
 #[inline(always)]
@@ -253,24 +303,44 @@ pub fn shade<L: Lane>(
     material: &MaterialPlan,
     color: [L; 3],
     iin: &[L],
-    spec: Option<&Specular<L>>,
+    surface: Option<&Surface<L>>,
 ) -> [L; 3] {
     let ch = plan.channels as usize;
+    let one = L::splat(1.0);
+    let f = surface.map(|sf| facing(sf.normal));
+    // The lanes whose Lambert cosine applies: crossed, and opaque (alpha < 1 keeps 1).
+    let diffuse = match (surface, f, material.lambert) {
+        (Some(sf), Some(f), true) => Some((sf, f, sf.alpha.lt(one))),
+        _ => None,
+    };
     let mut sum = [L::splat(0.0); 3];
     for (l, lc) in material.light_color.iter().enumerate() {
+        let cos = diffuse.map(|(sf, f, translucent)| {
+            let d = lambert(f, plan.lights[l].to_light);
+            L::select(sf.lanes, L::select(translucent, one, d), one)
+        });
         for (c, s) in sum.iter_mut().enumerate() {
             let i = iin[l * ch + if ch == 1 { 0 } else { c }];
-            *s = *s + i * L::splat(lc[c]);
+            let t = i * L::splat(lc[c]);
+            *s = *s + cos.map_or(t, |k| t * k);
         }
     }
     let mut out = [color[0] * sum[0], color[1] * sum[1], color[2] * sum[2]];
-    if let Some(sp) = spec {
+    if let (Some(sf), Some(f), Some(sp)) = (surface, f, material.specular.as_ref()) {
         for (l, light) in plan.lights.iter().enumerate() {
-            let w = specular(sp.normal, light.half_vector, sp.strength, sp.exponent);
+            let w = match sp.model {
+                SpecularModel::BlinnPhong => {
+                    L::splat(sp.scale)
+                        * powi_by_squaring(positive(dot(f, light.half_vector)), sp.exponent)
+                }
+                SpecularModel::AshikminShirley { .. } => {
+                    ashikmin_shirley(f, light.half_vector, light.to_light, light.fresnel, sp)
+                }
+            };
             for (c, o) in out.iter_mut().enumerate() {
                 let i = iin[l * ch + if ch == 1 { 0 } else { c }];
                 let lit = *o + w * (i * L::splat(light.color[c]));
-                *o = L::select(sp.lanes, lit, *o);
+                *o = L::select(sf.lanes, lit, *o);
             }
         }
     }

@@ -167,6 +167,11 @@ pub struct LightHeader {
     pub color: [f32; 3],
     /// Blinn–Phong half vector.
     pub half_vector: [f32; 3],
+    /// Unit direction towards the light (camera space): the Lambert cosine's and
+    /// Ashikmin–Shirley's `l`.
+    pub to_light: [f32; 3],
+    /// Ashikmin–Shirley's Fresnel-over-(h·k) constants (`plan::fresnel_terms`).
+    pub fresnel: [f32; 2],
 }
 
 /// One light's per-slab values (`light · slabs + slab` in the light-slab buffer).
@@ -219,15 +224,20 @@ pub struct MaterialHeader {
     pub dims: [u32; 3],
     /// 1 when the material has a 3D texture.
     pub has_texture: u32,
-    /// 1 when the material has a specular term.
+    /// The specular model: [`SPEC_NONE`], [`SPEC_BLINN_PHONG`] or [`SPEC_ASHIKMIN_SHIRLEY`].
     pub has_specular: u32,
-    /// Specular strength.
+    /// Specular scale (`SpecularPlan::scale`: Blinn–Phong's strength, Ashikmin–Shirley's
+    /// strength · (e + 1)/(8π)).
     pub spec_strength: f32,
     /// Specular exponent.
     pub spec_exponent: u32,
     /// Index of the first entry of the pre-integration table (`PI_SIZE²` entries in
     /// `tf_entries`, front-major), or [`NO_PRE`] without one.
     pub pre: u32,
+    /// Ashikmin–Shirley's reflectance at normal incidence (0 otherwise).
+    pub spec_f0: f32,
+    /// 1 when crossed opaque surfaces get the Lambert cosine (`surface = "lambert"`).
+    pub lambert: u32,
 }
 
 /// [`MaterialHeader::pre`] of a material without a pre-integration table.
@@ -287,6 +297,12 @@ pub const PHASE_PER_PIXEL: u32 = 0;
 pub const PHASE_PER_SLAB: u32 = 1;
 /// See [`PHASE_PER_PIXEL`].
 pub const PHASE_SCHEDULE: u32 = 2;
+/// [`MaterialHeader::has_specular`] codes: no highlight.
+pub const SPEC_NONE: u32 = 0;
+/// See [`SPEC_NONE`]: Blinn–Phong.
+pub const SPEC_BLINN_PHONG: u32 = 1;
+/// See [`SPEC_NONE`]: Ashikmin–Shirley.
+pub const SPEC_ASHIKMIN_SHIRLEY: u32 = 2;
 /// `detail_kind` codes.
 pub const DETAIL_NONE: u32 = 0;
 /// See [`DETAIL_NONE`].

@@ -11,8 +11,8 @@
 
 use convshadow_common::contract::ldi::Ldi;
 use convshadow_common::contract::sweep_io::{MAX_LIGHT_CHANNELS, SweepOptions, SweepOutput};
-use convshadow_common::model::scene::DetailKind;
 use convshadow_common::model::scene::MAX_MESHES;
+use convshadow_common::model::scene::{DetailKind, SpecularModel};
 use convshadow_common::pixel::noise::PERLIN4_SCALE;
 use convshadow_common::plan::kernel::PhaseMode;
 use convshadow_common::plan::levels::initial_levels;
@@ -26,7 +26,8 @@ use crate::device::{GpuContext, GpuError};
 use crate::layout::{
     Cursor, DETAIL_FBM, DETAIL_NONE, DETAIL_PERLIN, DETAIL_RIDGED, DETAIL_TURBULENCE, Globals,
     LightHeader, LightSlab, MESH_BITS, MaterialHeader, MeshHeader, NO_PRE, Octave, PHASE_PER_PIXEL,
-    PHASE_PER_SLAB, PHASE_SCHEDULE, PRE_NONE, Slab, SlabParams, Tap, TransferEntry, slot,
+    PHASE_PER_SLAB, PHASE_SCHEDULE, PRE_NONE, SPEC_ASHIKMIN_SHIRLEY, SPEC_BLINN_PHONG, Slab,
+    SlabParams, Tap, TransferEntry, slot,
 };
 use crate::shader::sweep_wgsl;
 
@@ -153,6 +154,8 @@ fn light_tables(light: &LightPlan, slabs: usize, distance: bool, t: &mut Tables)
         },
         color: light.color,
         half_vector: light.half_vector,
+        to_light: light.to_light,
+        fresnel: light.fresnel,
     };
     t.taps.extend(table.taps.iter().map(|tap| Tap {
         dx: tap.dx,
@@ -214,11 +217,16 @@ fn material_tables(m: &MaterialPlan, t: &mut Tables) -> MaterialHeader {
         header.dims = tex.dims;
         header.has_texture = 1;
     }
-    if let Some((strength, exponent)) = m.specular {
-        header.has_specular = 1;
-        header.spec_strength = strength;
-        header.spec_exponent = exponent;
+    if let Some(sp) = m.specular {
+        header.has_specular = match sp.model {
+            SpecularModel::BlinnPhong => SPEC_BLINN_PHONG,
+            SpecularModel::AshikminShirley { .. } => SPEC_ASHIKMIN_SHIRLEY,
+        };
+        header.spec_strength = sp.scale;
+        header.spec_exponent = sp.exponent;
+        header.spec_f0 = sp.f0;
     }
+    header.lambert = u32::from(m.lambert);
     header
 }
 

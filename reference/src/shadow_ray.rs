@@ -43,7 +43,7 @@ use rayon::prelude::*;
 use convshadow_cpu::composite::{composite, finish};
 use convshadow_cpu::ldi::Ldi;
 use convshadow_cpu::parity::{NO_CROSSING, advance, first_mesh};
-use convshadow_cpu::shading::{Specular, detail_value, material_at, shade, shading_depth};
+use convshadow_cpu::shading::{Surface, detail_value, material_at, shade, shading_depth};
 
 /// Optical depth beyond which a shadow ray is treated as fully blocked (e^-40 ≈ 4e-18).
 const OPAQUE_DEPTH: f64 = 40.0;
@@ -512,22 +512,18 @@ impl<'a> Reference<'a> {
                                 *dst = v as f32;
                             }
                         }
-                        let spec = match material.specular {
-                            Some((strength, exponent)) if crossed != NO_CROSSING => {
-                                let n = self.geometry.raster.triangles
-                                    [ldi.triangle[crossed as usize] as usize]
-                                    .normal;
-                                Some(Specular {
-                                    strength,
-                                    exponent,
-                                    normal: n,
-                                    lanes: true,
-                                })
-                            }
-                            _ => None,
-                        };
+                        // The sweep's surface model: highlight and Lambert cosine at a
+                        // crossing, with the crossed triangle's normal.
+                        let has_surface = material.specular.is_some() || material.lambert;
+                        let surface = (crossed != NO_CROSSING && has_surface).then(|| Surface {
+                            normal: self.geometry.raster.triangles
+                                [ldi.triangle[crossed as usize] as usize]
+                                .normal,
+                            lanes: true,
+                            alpha: tf.alpha,
+                        });
                         let iin = &iin[..lights * ch];
-                        let shaded = shade(plan, material, tf.color, iin, spec.as_ref());
+                        let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
                         composite(&mut color, &mut alpha, shaded, tf.alpha, true);
                     }
                     finish(&mut color, alpha, plan.background);

@@ -113,6 +113,16 @@ pub fn parse_penumbra(s: &str) -> Result<convshadow_common::model::scene::Penumb
     s.parse()
 }
 
+/// `--surface`: `flat` or `lambert` (every material's `surface`).
+pub fn parse_surface(s: &str) -> Result<convshadow_common::model::scene::SurfaceModel, String> {
+    use convshadow_common::model::scene::SurfaceModel;
+    match s {
+        "flat" => Ok(SurfaceModel::Flat),
+        "lambert" => Ok(SurfaceModel::Lambert),
+        _ => Err(format!("expected `flat` or `lambert`, got {s:?}")),
+    }
+}
+
 /// `--slabs`: a slab count (its range is checked with the scene) or `auto`.
 pub fn parse_slabs(s: &str) -> Result<convshadow_common::model::scene::SlabSpec, String> {
     use convshadow_common::model::scene::{MAX_SLABS, SlabSpec};

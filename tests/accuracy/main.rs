@@ -16,4 +16,5 @@ mod oblique_receiver;
 mod patterned_light;
 mod phase_function;
 mod preintegration;
+mod surface_shading;
 mod sweep_accuracy;

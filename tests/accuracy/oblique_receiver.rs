@@ -83,6 +83,7 @@ rotate_deg = [{tilt}, 0.0, 0.0]
 material = "white"
 [material.white]
 opacity = 1.0
+surface = "flat"  # the light itself, without the cosine: the shadow is measured
 "#,
             slabs = self.slabs,
             ze = self.occluder_depth() - 0.01,

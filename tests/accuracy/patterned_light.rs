@@ -193,6 +193,9 @@ material = "receiver"
 [material.air]
 opacity = 0.0
 [material.receiver]
+# The isoline of the projected pattern is measured at 0.5 of the unshaded light: no Lambert
+# cosine (cos 30° would move the 0.5 crossing into the penumbra).
+surface = "flat"
 "#,
         dir,
     )

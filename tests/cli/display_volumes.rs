@@ -37,10 +37,12 @@ fn default_scene_png_does_not_clip_and_its_float_image_is_unchanged() {
     let r = render(&scene, &RenderRequest::default()).unwrap();
     let peak = r.image.data.iter().cloned().fold(0.0f32, f32::max);
     assert!(peak > 1.0, "the linear image peaks above 1 ({peak})");
-    // The plain clamp would clip the wall; the scene's own mapping does not.
+    // The plain clamp would clip the brightest wall and the highlights (1.4 % of the values
+    // since the wall is shaded with the cosine, lambert; 20 % and more when it was flat); the
+    // scene's own mapping clips nothing.
     let clamp = DisplayMap::CLAMP.clipped_fraction(&r.image.data);
     let mapped = scene.image.display_map().clipped_fraction(&r.image.data);
-    assert!(clamp > 0.2, "clamp clips {clamp}");
+    assert!(clamp > 0.01, "clamp clips {clamp}");
     assert!(mapped < 1e-3, "the default mapping clips {mapped}");
     assert_eq!(scene.image.tonemap, Tonemap::Aces);
 }

@@ -175,3 +175,103 @@ fn simd_and_scalar_paths_give_the_same_bits_with_the_iterated_penumbra() {
         "only {compared} scenes had an optimal distance"
     );
 }
+
+/// A scene of every surface model: a Lambert box with an Ashikmin–Shirley highlight, a flat
+/// Blinn–Phong sphere, a translucent Lambert sphere (whose crossings keep the flat model) and a
+/// Lambert wall, under three lights (one hard, one tilted far).
+fn surface_models_scene() -> Scene {
+    let text = r#"
+[image]
+width = 53
+height = 40
+[camera]
+direction = [0.2, -0.1, 1.0]
+view_width = 4.0
+[sweep]
+slabs = 24
+seed = 7
+[[light]]
+color = [1.0, 0.9, 0.8]
+tilt_deg = [25.0, -15.0]
+variance = [0.02, 0.01]
+[[light]]
+color = [0.3, 0.4, 0.9]
+tilt_deg = [-10.0, 5.0]
+[[light]]
+color = [0.4, 0.4, 0.4]
+tilt_deg = [-60.0, 20.0]
+variance = [0.05, 0.05]
+[[mesh]]
+shape = "box"
+size = [1.2, 1.0, 0.8]
+translate = [-0.8, 0.3, 0.0]
+rotate_deg = [25.0, 35.0, 10.0]
+material = "as"
+[[mesh]]
+shape = "sphere"
+size = [0.6, 3]
+translate = [0.9, -0.5, -0.2]
+material = "flat"
+[[mesh]]
+shape = "sphere"
+size = [0.5, 2]
+translate = [0.6, 0.8, -0.6]
+material = "glass"
+[[mesh]]
+shape = "box"
+size = [5.0, 5.0, 0.2]
+translate = [0.0, 0.0, 1.2]
+material = "wall"
+[material.as]
+color = [0.8, 0.5, 0.3]
+specular = { model = "ashikmin-shirley", exponent = 24, f0 = 0.2 }
+[material.flat]
+color = [0.3, 0.8, 0.4]
+surface = "flat"
+specular = { strength = 0.6, exponent = 16 }
+[material.glass]
+color = [0.6, 0.7, 1.0]
+opacity = 0.4
+transport = [0.5, 0.7, 0.9]
+specular = { model = "ashikmin-shirley", exponent = 64, f0 = 0.04 }
+[material.wall]
+color = [0.9, 0.9, 0.85]
+"#;
+    support::scene(text, Path::new("."))
+}
+
+#[test]
+fn surface_models_give_the_same_bits_on_every_path_and_thread_count() {
+    let scene = surface_models_scene();
+    for kernel in ["ellipse2", "gaussian:7", "box"] {
+        let mut scene = scene.clone();
+        scene.sweep.kernel = kernel.parse().unwrap();
+        let run = |path: CpuPath, threads: usize, skip_quiet: bool| {
+            let req = RenderRequest {
+                threads,
+                path,
+                skip_quiet,
+                every_slab: true,
+                ..RenderRequest::default()
+            };
+            let r = render(&scene, &req).unwrap_or_else(|e| panic!("{e}"));
+            (
+                r.image_hash,
+                convshadow::pipeline::image_fingerprint(&r.light),
+            )
+        };
+        let reference = run(CpuPath::Scalar, 1, false);
+        for (threads, skip) in [(1, true), (3, true), (2, false), (8, true)] {
+            assert_eq!(
+                run(CpuPath::Simd, threads, skip),
+                reference,
+                "{kernel}: SIMD ({threads} threads, skip {skip}) differs from scalar"
+            );
+        }
+        assert_eq!(
+            run(CpuPath::Scalar, 3, false),
+            reference,
+            "{kernel}: threads"
+        );
+    }
+}

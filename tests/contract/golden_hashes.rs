@@ -6,12 +6,14 @@
 //!   and guard-band work, written through the command line by that commit (so they do not come
 //!   from the code they now check), checked with `--guard-band 0 --penumbra iterated` (the
 //!   defaults then). Never re-recorded: the sweep's rewrites for speed must keep these bits.
-//!   Scenes added later (`shaft`, `gobo`, `narrowband`) are not in it.
+//!   Scenes added later (`shaft`, `gobo`, `narrowband`, `floor`) are not in it. Checked with
+//!   `--surface flat` since lambert surfaces became the default (2026-12-04), like the next.
 //! - `tests/data/golden_hashes_iterated.tsv`: the same cases with the automatic guard band and the
 //!   iterated penumbra, recorded when the guard band became the default (new scenes added with
-//!   their rows). Never re-recorded either: checked with `--penumbra iterated`.
+//!   their rows). Never re-recorded either: checked with `--penumbra iterated --surface flat`.
 //! - `tests/data/golden_hashes.tsv`: the same cases with the defaults (automatic guard band,
-//!   distance penumbra), recorded when the distance penumbra became the default. A change that is
+//!   distance penumbra), recorded when the distance penumbra became the default and re-recorded
+//!   when lambert surfaces did (2026-12-04, issue 40: opaque surfaces get max(0, n·l)). A change that is
 //!   meant to change an image (a new default) re-records this table with
 //!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test contract golden_hashes::` and says
 //!   why in its commit.
@@ -139,14 +141,22 @@ fn every_example_scene_and_kernel_keeps_its_recorded_bits() {
 #[test]
 fn every_example_scene_and_kernel_keeps_the_iterated_bits() {
     let dir = support::temp_dir("golden-iterated");
-    let checked = check_table(GOLDEN_ITERATED, &["--penumbra", "iterated"], true, &dir);
+    let extra = ["--penumbra", "iterated", "--surface", "flat"];
+    let checked = check_table(GOLDEN_ITERATED, &extra, true, &dir);
     assert!(checked > 100, "only {checked} cases checked");
 }
 
 #[test]
 fn every_example_scene_and_kernel_keeps_the_starting_bits_without_a_guard_band() {
     let dir = support::temp_dir("golden-band0");
-    let extra = ["--guard-band", "0", "--penumbra", "iterated"];
+    let extra = [
+        "--guard-band",
+        "0",
+        "--penumbra",
+        "iterated",
+        "--surface",
+        "flat",
+    ];
     let checked = check_table(GOLDEN_BAND0, &extra, false, &dir);
     assert!(checked > 100, "only {checked} cases checked");
 }

@@ -163,7 +163,8 @@ fn gpu_image_equals_cpu_for_every_kernel() {
 }
 
 /// A scene that reaches the shader paths the example scenes may not: every detail kind in 3D and
-/// 4D, a 3D texture, specular highlights, phase functions (forward and backward), no jitter, a guard band and a grey (1-channel) or
+/// 4D, a 3D texture, specular highlights (Blinn–Phong and Ashikmin–Shirley, on opaque and
+/// translucent crossings), Lambert and flat surfaces, phase functions (forward and backward), no jitter, a guard band and a grey (1-channel) or
 /// coloured light buffer, a narrow light (mean carried in whole pixels).
 fn path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
     let dims = [5u32, 4, 3];
@@ -229,6 +230,11 @@ shape = "box"
 size = [6.0, 6.0, 0.3]
 translate = [0.0, 0.0, 1.5]
 material = "wall"
+[[mesh]]
+shape = "sphere"
+size = [0.4, 3]
+translate = [0.0, 0.0, -0.6]
+material = "glossy"
 [material.perlin4]
 detail = {{ kind = "perlin", frequency = 2.0, time = 0.37 }}
 gradient = [[0.0, 0.9, 0.2, 0.1, 0.0], [1.0, 1.0, 0.9, 0.5, 0.9]]
@@ -239,7 +245,7 @@ detail = {{ kind = "ridged", frequency = 1.5, octaves = 3, time = -2.5 }}
 gradient = [[0.0, 0.2, 0.9, 0.2, 0.0], [0.6, 0.5, 0.9, 0.5, 0.4], [1.0, 1.0, 1.0, 1.0, 1.0]]
 transport = {transport}
 reference_length = 0.05
-specular = {{ strength = 0.8, exponent = 17 }}
+specular = {{ model = "ashikmin-shirley", exponent = 17, f0 = 0.3, strength = 0.8 }}
 phase = {{ g = 0.5 }}
 [material.tex]
 texture = {{ path = "tex.raw", dims = [{}, {}, {}], type = "u8" }}
@@ -253,10 +259,15 @@ transport = {transport}
 reference_length = 0.05
 specular = {{ strength = 0.5, exponent = 4 }}
 phase = {{ g = -0.4 }}
+surface = "flat"
 [material.wall]
 color = [0.8, 0.8, 0.75]
 opacity = 1.0
 specular = {{ strength = 0.2, exponent = 64 }}
+[material.glossy]
+color = [0.7, 0.3, 0.2]
+opacity = 1.0
+specular = {{ model = "ashikmin-shirley", exponent = 40 }}
 "#,
         dims[0], dims[1], dims[2]
     );

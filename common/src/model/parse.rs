@@ -194,6 +194,7 @@ struct RawMaterial {
     gradient: Option<Vec<[f64; 5]>>,
     specular: Option<RawSpecular>,
     phase: Option<RawPhase>,
+    surface: Option<String>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -228,8 +229,10 @@ struct RawTexture {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 struct RawSpecular {
-    strength: f64,
+    model: Option<String>,
+    strength: Option<f64>,
     exponent: u32,
+    f0: Option<f64>,
 }
 
 fn toml_error(source: &str, text: &str, e: &toml::de::Error) -> SceneError {

@@ -348,12 +348,46 @@ pub enum TextureFormat {
     },
 }
 
+/// How a material shades the light at a crossed opaque surface (`surface = "flat" | "lambert"`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SurfaceModel {
+    /// The medium's model everywhere: colour × light, no dependence on the surface normal.
+    Flat,
+    /// Colour × light × max(0, n·l) where the shading point is a crossed surface whose slab
+    /// opacity is exactly 1 (an opaque crossing); volume samples and translucent crossings keep
+    /// the flat (purely diffuse, paper §4.2) model. The default.
+    #[default]
+    Lambert,
+}
+
+/// The specular model of a material's highlight (`specular.model`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SpecularModel {
+    /// `strength · max(0, n·h)^exponent` (the default, and the meaning of a `specular` table
+    /// without `model`).
+    BlinnPhong,
+    /// The isotropic Ashikmin–Shirley (2000) microfacet lobe with Schlick's Fresnel term:
+    /// `strength · (e + 1)/(8π) · (n·h)^e / ((h·k)·max(n·l, n·v)) · F(h·k) · (n·l)`, where
+    /// `F(x) = f0 + (1 − f0)(1 − x)^5`.
+    AshikminShirley {
+        /// Reflectance at normal incidence, 0–1.
+        f0: f32,
+    },
+}
+
+/// `specular.f0` of an Ashikmin–Shirley highlight when not given: 0.04, the reflectance at
+/// normal incidence of a dielectric of refractive index 1.5 (((n − 1)/(n + 1))²).
+pub const DEFAULT_F0: f64 = 0.04;
+
 /// A specular highlight at crossed surfaces.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpecularSpec {
+    /// Which model.
+    pub model: SpecularModel,
     /// Multiplier of the highlight.
     pub strength: f32,
-    /// Blinn–Phong exponent (evaluated by repeated squaring).
+    /// The lobe's exponent (Blinn–Phong's, or Ashikmin–Shirley's n_u = n_v; evaluated by
+    /// repeated squaring).
     pub exponent: u32,
 }
 
@@ -389,6 +423,8 @@ pub struct MaterialSpec {
     pub gradient: Vec<GradientStop>,
     /// Optional specular highlight.
     pub specular: Option<SpecularSpec>,
+    /// The diffuse model at crossed opaque surfaces.
+    pub surface: SurfaceModel,
     /// Henyey–Greenstein asymmetry g of the medium's scattering (0 = isotropic, > 0 forward,
     /// < 0 backward); with distant lights and an orthographic camera the phase function is one
     /// constant per light, applied to the light's colour in shading (not to the specular term).

@@ -16,7 +16,9 @@ use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
 
 use crate::contract::files::{PlanFiles, TextureFile};
-use crate::model::scene::{MaterialSpec, Penumbra, Scene};
+use crate::model::scene::{
+    MaterialSpec, Penumbra, Scene, SpecularModel, SpecularSpec, SurfaceModel,
+};
 use crate::pixel::hash::{JITTER_STREAM, slab_hash};
 use crate::pixel::noise::Detail;
 use crate::pixel::texture3d::{Texture3d, TextureError};
@@ -83,8 +85,11 @@ pub struct MaterialPlan {
     /// The texture's physical extent (NIfTI: dims · spacing), whose aspect its mapping keeps;
     /// `None` (raw textures): stretched to the mesh's bounds.
     pub texture_extent: Option<[f64; 3]>,
-    /// Specular strength and exponent.
-    pub specular: Option<(f32, u32)>,
+    /// The specular highlight at crossed surfaces, if any.
+    pub specular: Option<SpecularPlan>,
+    /// Whether crossed opaque surfaces are shaded with the Lambert cosine (`surface =
+    /// "lambert"`); false: flat (the medium's model everywhere).
+    pub lambert: bool,
     /// Per light: the light's colour times this material's phase function at the light's
     /// scattering angle ([`phase_factor`]); exactly the light's colour for an isotropic medium
     /// (g = 0). Shading sums `Iin ⊙ light_color`; the specular term uses the bare colour.
@@ -101,6 +106,52 @@ impl MaterialPlan {
     }
 }
 
+/// A material's specular highlight, as the shading stage evaluates it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpecularPlan {
+    /// Which model.
+    pub model: SpecularModel,
+    /// The factor in front of the lobe: Blinn–Phong's strength; for Ashikmin–Shirley the
+    /// strength times the normalisation (e + 1)/(8π), computed in f64.
+    pub scale: f32,
+    /// The lobe's exponent (repeated squaring).
+    pub exponent: u32,
+    /// Ashikmin–Shirley: reflectance at normal incidence (Schlick's Fresnel term); 0 for
+    /// Blinn–Phong.
+    pub f0: f32,
+}
+
+impl SpecularPlan {
+    /// The plan of a material's `specular` table.
+    pub fn new(s: &SpecularSpec) -> SpecularPlan {
+        match s.model {
+            SpecularModel::BlinnPhong => SpecularPlan {
+                model: s.model,
+                scale: s.strength,
+                exponent: s.exponent,
+                f0: 0.0,
+            },
+            SpecularModel::AshikminShirley { f0 } => SpecularPlan {
+                model: s.model,
+                scale: (f64::from(s.strength) * (f64::from(s.exponent) + 1.0)
+                    / (8.0 * std::f64::consts::PI)) as f32,
+                exponent: s.exponent,
+                f0,
+            },
+        }
+    }
+}
+
+/// The Ashikmin–Shirley constants of a light whose half vector `h` and direction towards the
+/// light `to_light` are given (camera space, unit length): with k = l (h·l = h·v), Schlick's
+/// F(h·k)/(h·k) = p/(h·k) + f0·(1 − p)/(h·k), p = (1 − h·k)^5; returns [p/(h·k), (1 − p)/(h·k)]
+/// (f64 on the host; the shading stage forms `scale · (b + f0·c)` in f32).
+pub fn fresnel_terms(h: DVec3, to_light: DVec3) -> [f32; 2] {
+    let hk = h.dot(to_light);
+    let p = (1.0 - hk).powi(5);
+    [(p / hk) as f32, ((1.0 - p) / hk) as f32]
+}
+
 /// A light's per-render tables.
 #[derive(Clone, Debug)]
 pub struct LightPlan {
@@ -115,6 +166,11 @@ pub struct LightPlan {
     pub slab_hash: Vec<u32>,
     /// Blinn–Phong half vector in camera space (towards light + towards viewer, normalised).
     pub half_vector: [f32; 3],
+    /// Unit direction towards the light in camera space, (tan ωx, tan ωy, −1)/‖·‖: the `l` of
+    /// the Lambert cosine and of Ashikmin–Shirley (the mean direction of an area light).
+    pub to_light: [f32; 3],
+    /// Ashikmin–Shirley's Fresnel-over-(h·k) constants ([`fresnel_terms`]).
+    pub fresnel: [f32; 2],
 }
 
 /// cos θ of the scattering angle of a distant light with tilt `tilt_deg` towards an orthographic
@@ -266,6 +322,8 @@ impl RenderPlan {
                     table,
                     slab_hash: (0..slabs).map(|k| slab_hash(seed, l as u32, k)).collect(),
                     half_vector: [h.x as f32, h.y as f32, h.z as f32],
+                    to_light: [to_light.x as f32, to_light.y as f32, to_light.z as f32],
+                    fresnel: fresnel_terms(h, to_light),
                 }
             })
             .collect();
@@ -677,7 +735,8 @@ fn material_plan(
         detail,
         texture,
         texture_extent,
-        specular: m.specular.as_ref().map(|s| (s.strength, s.exponent)),
+        specular: m.specular.as_ref().map(SpecularPlan::new),
+        lambert: m.surface == SurfaceModel::Lambert,
         light_color: Vec::new(),
     })
 }
@@ -748,6 +807,7 @@ mod tests {
                 })
                 .collect(),
             specular: None,
+            surface: crate::model::scene::SurfaceModel::Lambert,
             phase_g: 0.0,
         }
     }

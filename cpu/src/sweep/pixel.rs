@@ -36,7 +36,7 @@ use crate::composite::{Held, attenuate, composite, deepen, hold_step};
 use crate::kernels::{TapOrigin, distance_row, gather, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
-    Specular, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
+    Surface, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
 
 /// The light a pixel gathered in step 1: every light's channels and (distance penumbra) its
@@ -198,20 +198,18 @@ pub(crate) fn shade_and_composite(
             material_at(plan, mesh, xi, yi, z)
         }
     };
-    let spec = match material.specular {
-        // A highlight only where a surface was crossed, with its triangle's normal.
-        Some((strength, exponent)) if crossed != NO_CROSSING => {
+    // A crossed surface (its triangle's normal) gets the highlight and, where opaque, the
+    // Lambert cosine.
+    let surface = (crossed != NO_CROSSING && (material.specular.is_some() || material.lambert))
+        .then(|| {
             let triangle = ctx.ldi.triangle[crossed as usize] as usize;
-            Some(Specular {
-                strength,
-                exponent,
+            Surface {
                 normal: ctx.raster.triangles[triangle].normal,
                 lanes: true,
-            })
-        }
-        _ => None,
-    };
-    let shaded = shade(plan, material, tf.color, iin, spec.as_ref());
+                alpha: tf.alpha,
+            }
+        });
+    let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
     let w = plan.grid_width as usize;
     let mut color = [state.color[x], state.color[w + x], state.color[2 * w + x]];
     composite(&mut color, &mut state.alpha[x], shaded, tf.alpha, true);

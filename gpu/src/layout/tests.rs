@@ -82,7 +82,9 @@ fn rust_layouts() -> Vec<Layout> {
             phase_bits,
             phase_mode,
             color,
-            half_vector
+            half_vector,
+            to_light,
+            fresnel
         }),
         layout!(LightSlab { hash, phase, shift }),
         layout!(Tap { dx, dy, w }),
@@ -102,6 +104,8 @@ fn rust_layouts() -> Vec<Layout> {
             spec_strength,
             spec_exponent,
             pre,
+            spec_f0,
+            lambert,
         }),
         layout!(TransferEntry {
             color,

@@ -1,5 +1,5 @@
-// Stage 3, shading: mirrors cpu/src/shading.rs (detail value, transfer function, light sum,
-// specular by repeated squaring).
+// Stage 3, shading: mirrors cpu/src/shading.rs (detail value, transfer function, light sum with
+// the Lambert cosine at opaque crossings, specular by repeated squaring).
 
 #import shared/constants
 #import shared/bindings
@@ -162,12 +162,33 @@ fn powi_by_squaring(x0: f32, n0: u32) -> f32 {
     return r;
 }
 
-// `specular`: strength · max(0, n·h)^exponent with n flipped to face the viewer.
-fn specular(n: vec3<f32>, h: vec3<f32>, strength: f32, exponent: u32) -> f32 {
+// The normal flipped to face the viewer (shading.rs `facing`).
+fn facing(n: vec3<f32>) -> vec3<f32> {
     let s = select(1.0, -1.0, n.z > 0.0);
-    var d = ((s * n.x) * h.x + (s * n.y) * h.y) + (s * n.z) * h.z;
-    d = select(0.0, d, d > 0.0);
-    return strength * powi_by_squaring(d, exponent);
+    return vec3<f32>(s * n.x, s * n.y, s * n.z);
+}
+
+// (f.x·v0 + f.y·v1) + f.z·v2, in that order (shading.rs `dot`).
+fn dot_fixed(f: vec3<f32>, v: array<f32, 3>) -> f32 {
+    return (f.x * v[0] + f.y * v[1]) + f.z * v[2];
+}
+
+// max(0, d) (NaN gives 0).
+fn positive(d: f32) -> f32 {
+    return select(0.0, d, d > 0.0);
+}
+
+// `ashikmin_shirley`: a · (f·h)^e · (f·l) / max(f·l, f·v), v = (0, 0, −1), a = the material's
+// normalised strength · (b + f0·c) with the light's Fresnel constants; a zero denominator is 1.
+fn ashikmin_shirley(f: vec3<f32>, l: u32, m: MaterialHeader) -> f32 {
+    let nh = positive(dot_fixed(f, lights[l].half_vector));
+    let nl = positive(dot_fixed(f, lights[l].to_light));
+    let nv = positive(0.0 - f.z);
+    var den = select(nv, nl, nl > nv);
+    den = select(1.0, den, den > 0.0);
+    let fr = lights[l].fresnel;
+    let a = m.spec_strength * (fr[0] + m.spec_f0 * fr[1]);
+    return a * (powi_by_squaring(nh, m.spec_exponent) * (nl / den));
 }
 
 fn light_color(l: u32) -> vec3<f32> {
@@ -186,22 +207,35 @@ fn phase_light_color(material: u32, l: u32) -> vec3<f32> {
     return vec3<f32>(c[0], c[1], c[2]);
 }
 
-// `shade`: c ⊙ Σ_l (Iin_l ⊙ colour_l) with the material's phase-weighted light colours, then the
-// specular terms light by light with the bare light colours.
-fn shade(material: u32, color: vec3<f32>, has_spec: bool, strength: f32, exponent: u32, n: vec3<f32>) -> vec3<f32> {
+// `shade`: c ⊙ Σ_l (Iin_l ⊙ colour_l · cos_l) with the material's phase-weighted light colours,
+// then the specular terms light by light with the bare light colours. `surface`: the pixel
+// crossed a surface of normal `n` in this slab (and the material uses it); cos_l is the Lambert
+// cosine where the material is `lambert` and the crossing opaque (alpha exactly 1), else 1.
+fn shade(material: u32, color: vec3<f32>, alpha: f32, surface: bool, n: vec3<f32>) -> vec3<f32> {
+    let m = materials[material];
+    let f = facing(n);
+    let diffuse = surface && m.lambert != 0u && !(alpha < 1.0);
     var sum = vec3<f32>(0.0, 0.0, 0.0);
     for (var l = 0u; l < globals.lights; l++) {
         let lc = phase_light_color(material, l);
+        var k = 1.0;
+        if diffuse {
+            k = positive(dot_fixed(f, lights[l].to_light));
+        }
         for (var c = 0u; c < 3u; c++) {
-            sum[c] = sum[c] + iin_at(l, c) * lc[c];
+            sum[c] = sum[c] + (iin_at(l, c) * lc[c]) * k;
         }
     }
     var out = vec3<f32>(color.x * sum.x, color.y * sum.y, color.z * sum.z);
-    if has_spec {
+    if surface && m.has_specular != SPEC_NONE {
         for (var l = 0u; l < globals.lights; l++) {
-            let hv = lights[l].half_vector;
-            let h = vec3<f32>(hv[0], hv[1], hv[2]);
-            let w = specular(n, h, strength, exponent);
+            var w: f32;
+            if m.has_specular == SPEC_BLINN_PHONG {
+                let d = positive(dot_fixed(f, lights[l].half_vector));
+                w = m.spec_strength * powi_by_squaring(d, m.spec_exponent);
+            } else {
+                w = ashikmin_shirley(f, l, m);
+            }
             let lc = light_color(l);
             for (var c = 0u; c < 3u; c++) {
                 out[c] = out[c] + w * (iin_at(l, c) * lc[c]);

@@ -117,13 +117,15 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             e = transfer(m, value);
         }
-        let has_spec = crossed && m.has_specular != 0u;
+        // A crossed surface (its triangle's normal) gets the highlight and, where opaque, the
+        // Lambert cosine.
+        let surface = crossed && (m.has_specular != SPEC_NONE || m.lambert != 0u);
         var n = vec3<f32>(0.0, 0.0, 0.0);
-        if has_spec {
+        if surface {
             let o = normals[frag_meta[adv.first] >> MESH_BITS];
             n = vec3<f32>(o[0], o[1], o[2]);
         }
-        let shaded = shade(mi, e.color, has_spec, m.spec_strength, m.spec_exponent, n);
+        let shaded = shade(mi, e.color, e.alpha, surface, n);
         accum[p] = composite(accum[p], shaded, e.alpha);
         attenuation = e.attenuation;
     }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use convshadow::pipeline::{Backend, CpuPath};
 use convshadow_common::model::kernel::KERNEL_SYNTAX;
 use convshadow_common::model::scene::GuardBandSpec;
-use convshadow_common::model::scene::{Penumbra, SlabSpec};
+use convshadow_common::model::scene::{Penumbra, SlabSpec, SurfaceModel};
 
 /// Most light directions `--reference-samples` takes (256²: seconds per pixel at most, so even
 /// a 1×1 image cannot run for minutes).
@@ -100,6 +100,10 @@ pub struct RenderArgs {
     /// sweep.optimal_distance only) or `distance` (follows each pixel's occluder distance).
     #[arg(long, value_name = "iterated|distance", value_parser = crate::cli::parse_penumbra)]
     pub penumbra: Option<Penumbra>,
+    /// Override every material's surface model (`material.NAME.surface`): `lambert` (the
+    /// cosine at crossed opaque surfaces, the default) or `flat` (colour × light).
+    #[arg(long, value_name = "flat|lambert", value_parser = crate::cli::parse_surface)]
+    pub surface: Option<SurfaceModel>,
     /// Override the guard band: `auto` (sized from the scene's lights, depth and meshes) or
     /// pixels beyond every image edge (0: none), as `sweep.guard_band`.
     #[arg(long, value_name = "auto|N", value_parser = parse_guard_band)]

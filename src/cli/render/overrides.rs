@@ -79,8 +79,8 @@ pub(super) fn frame_list(args: &RenderArgs) -> Result<(Option<Vec<u32>>, f64), F
     Ok((frame_list, time_step))
 }
 
-/// `--slabs`, `--kernel`, `--seed`, `--penumbra`, `--guard-band`, `--variance-compensation` and
-/// `--preintegration`, then the scene re-validated.
+/// `--slabs`, `--kernel`, `--seed`, `--penumbra`, `--surface`, `--guard-band`,
+/// `--variance-compensation` and `--preintegration`, then the scene re-validated.
 pub(super) fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Failure> {
     if let Some(n) = args.slabs {
         scene.sweep.slabs = n;
@@ -95,6 +95,11 @@ pub(super) fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Res
     }
     if let Some(p) = args.penumbra {
         scene.sweep.penumbra = p;
+    }
+    if let Some(s) = args.surface {
+        for m in &mut scene.materials {
+            m.surface = s;
+        }
     }
     if let Some(g) = args.guard_band {
         scene.sweep.guard_band = g;

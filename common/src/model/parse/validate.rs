@@ -657,6 +657,16 @@ impl Validator<'_> {
             ));
         }
         let specular = raw.specular.map(|s| self.specular(&key, s)).transpose()?;
+        let surface = match raw.surface.as_deref() {
+            None | Some("lambert") => SurfaceModel::Lambert,
+            Some("flat") => SurfaceModel::Flat,
+            Some(other) => {
+                return Err(self.err(
+                    key("surface"),
+                    format!("expected \"flat\" or \"lambert\", got \"{other}\""),
+                ));
+            }
+        };
         let phase_g = match raw.phase {
             None => 0.0,
             Some(p) => {
@@ -685,6 +695,7 @@ impl Validator<'_> {
             texture,
             gradient,
             specular,
+            surface,
             phase_g,
         })
     }
@@ -774,21 +785,42 @@ impl Validator<'_> {
         key: &dyn Fn(&str) -> String,
         s: RawSpecular,
     ) -> Result<SpecularSpec, SceneError> {
-        self.finite(&key("specular.strength"), s.strength)?;
-        if !(0.0..=MAX_COLOR).contains(&s.strength) {
+        let model = match s.model.as_deref() {
+            None | Some("blinn-phong") => SpecularModel::BlinnPhong,
+            Some("ashikmin-shirley") => SpecularModel::AshikminShirley {
+                f0: self.unit_interval(&key("specular.f0"), s.f0.unwrap_or(DEFAULT_F0))? as f32,
+            },
+            Some(other) => {
+                return Err(self.err(
+                    key("specular.model"),
+                    format!("expected \"blinn-phong\" or \"ashikmin-shirley\", got \"{other}\""),
+                ));
+            }
+        };
+        if s.f0.is_some() && model == SpecularModel::BlinnPhong {
+            return Err(self.err(
+                key("specular.f0"),
+                "`f0` (Fresnel reflectance at normal incidence) applies to \
+                 model = \"ashikmin-shirley\" only",
+            ));
+        }
+        let strength = s.strength.unwrap_or(1.0);
+        self.finite(&key("specular.strength"), strength)?;
+        if !(0.0..=MAX_COLOR).contains(&strength) {
             return Err(self.err(
                 key("specular.strength"),
-                format!(
-                    "expected a strength from 0 to {MAX_COLOR:e}, got {:e}",
-                    s.strength
-                ),
+                format!("expected a strength from 0 to {MAX_COLOR:e}, got {strength:e}"),
             ));
         }
         if s.exponent == 0 || s.exponent > 4096 {
-            return Err(self.err(key("specular.exponent"), "expected 1 to 4096"));
+            return Err(self.err(
+                key("specular.exponent"),
+                format!("expected 1 to 4096, got {}", s.exponent),
+            ));
         }
         Ok(SpecularSpec {
-            strength: s.strength as f32,
+            model,
+            strength: strength as f32,
             exponent: s.exponent,
         })
     }

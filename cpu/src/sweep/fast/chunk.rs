@@ -25,7 +25,7 @@ use crate::composite::{Held, attenuate, composite, deepen};
 use crate::kernels::{LightPlanes, TapOrigin, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh};
 use crate::shading::{
-    Specular, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
+    Surface, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
 use crate::sweep::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, level_plane,
@@ -657,33 +657,33 @@ fn shade_chunk<L: Layout>(
             material_at(plan, m, xv, yv, z)
         }
     };
-    let spec = match material.specular {
-        Some((strength, exponent)) if any_crossed => {
-            let mut normal = [[0.0f32; MAX_LANES]; 3];
-            for i in 0..L::LANES {
-                let nv = if is_crossed[i] {
-                    ctx.raster.triangles[ldi.triangle[crossed[i] as usize] as usize].normal
-                } else {
-                    [0.0, 0.0, 1.0]
-                };
-                for k in 0..3 {
-                    normal[k][i] = nv[k];
-                }
+    // Lanes that crossed a surface get the highlight and, where opaque, the Lambert cosine,
+    // with their triangles' normals.
+    let surface = if any_crossed && (material.specular.is_some() || material.lambert) {
+        let mut normal = [[0.0f32; MAX_LANES]; 3];
+        for i in 0..L::LANES {
+            let nv = if is_crossed[i] {
+                ctx.raster.triangles[ldi.triangle[crossed[i] as usize] as usize].normal
+            } else {
+                [0.0, 0.0, 1.0]
+            };
+            for k in 0..3 {
+                normal[k][i] = nv[k];
             }
-            Some(Specular {
-                strength,
-                exponent,
-                normal: [
-                    L::load(&normal[0], 0),
-                    L::load(&normal[1], 0),
-                    L::load(&normal[2], 0),
-                ],
-                lanes: L::m_from(&is_crossed),
-            })
         }
-        _ => None,
+        Some(Surface {
+            normal: [
+                L::load(&normal[0], 0),
+                L::load(&normal[1], 0),
+                L::load(&normal[2], 0),
+            ],
+            lanes: L::m_from(&is_crossed),
+            alpha: tf.alpha,
+        })
+    } else {
+        None
     };
-    let shaded = shade(plan, material, tf.color, iin, spec.as_ref());
+    let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
 
     let mut color = [
         L::load(state.color, x0),

@@ -100,6 +100,8 @@ struct LightHeader {
     phase_mode: u32,  // PHASE_*
     color: array<f32, 3>,
     half_vector: array<f32, 3>,
+    to_light: array<f32, 3>, // unit direction towards the light (Lambert, Ashikmin–Shirley)
+    fresnel: array<f32, 2>,  // Ashikmin–Shirley: [p/(h·k), (1 − p)/(h·k)], p = (1 − h·k)^5
 }
 
 // A light's values in one slab, at `light · slabs + slab`.
@@ -129,10 +131,12 @@ struct MaterialHeader {
     texture: u32,
     dims: array<u32, 3>,
     has_texture: u32,
-    has_specular: u32,
+    has_specular: u32, // SPEC_*
     spec_strength: f32,
     spec_exponent: u32,
     pre: u32,         // first entry of the PI_SIZE² pre-integration table, or NO_PRE
+    spec_f0: f32,     // Ashikmin–Shirley reflectance at normal incidence
+    lambert: u32,     // 1: Lambert cosine at crossed opaque surfaces
 }
 
 struct TransferEntry {
