@@ -22,7 +22,7 @@ enum Command {
     /// Build the layered depth image and report fragments, layers and mesh defects.
     Ldi(cli::ldi::LdiArgs),
     /// Render a scene (the embedded default scene without SCENE) to PNG and/or EXR.
-    Render(cli::render::RenderArgs),
+    Render(Box<cli::render::RenderArgs>),
     /// Speed against error: render a grid of cases (kernels × slab counts × lights) and write
     /// report.csv, report.md and speed_vs_error.png.
     Report(cli::report::ReportArgs),
