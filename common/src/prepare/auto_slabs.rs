@@ -180,7 +180,7 @@ pub fn auto_slabs(
         finest_period: found.as_ref().map(|f| f.0),
         limited_by: found.map(|f| f.1),
         thinnest,
-        minimum: !(needed > floor),
+        minimum: needed.is_nan() || needed <= floor,
         factor,
     })
 }
