@@ -259,3 +259,59 @@ gradient = [[0.0, 1.0, 1.0, 1.0, 0.2]]
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("--slabs") && err.contains("auto"), "{err}");
 }
+
+#[test]
+fn slabs_auto_names_the_thinnest_mesh_in_the_summary_and_the_stats() {
+    let dir = support::temp_dir("render-auto-thin");
+    // A 0.03 plate at z = 0 in front of a unit box reaching z = 3: 3.015 deep, 2 slabs across
+    // 0.03: 2 · 3.015 / 0.03 = 201, 202 with the depth's widening by one part in 10⁶.
+    let scene = r#"
+[image]
+width = 32
+height = 32
+[camera]
+view_width = 6.0
+[sweep]
+slabs = "auto"
+optimal_distance = 1.0
+[[mesh]]
+shape = "box"
+size = [4.0, 4.0, 0.03]
+material = "m"
+[[mesh]]
+shape = "box"
+size = [1.0, 1.0, 1.0]
+translate = [0.0, 0.0, 2.5]
+material = "m"
+[material.m]
+"#;
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let (code, out, err) = support::run_cli(
+        &["render", "s.toml", "-o", "a.exr", "--stats-json", "s.json"],
+        &dir,
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains(
+            "202 slabs (auto: 2 across the thinnest feature 3.000e-2 of mesh[0] thickness"
+        ),
+        "{out}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    assert_eq!(v["slabs"], 202, "{v}");
+    let a = &v["slabs_auto"];
+    assert_eq!(a["limited_by"], "mesh[0] thickness", "{v}");
+    assert_eq!(a["minimum"], false, "{v}");
+    assert_eq!(a["thinnest"]["mesh"], 0, "{v}");
+    let t = a["thinnest"]["thickness"].as_f64().unwrap();
+    assert!((t - 0.03).abs() < 1e-6, "{v}");
+    // A plate too thin for 65536 slabs: exit code 4 naming the key and the mesh.
+    std::fs::write(dir.join("t.toml"), scene.replace("0.03]", "0.00001]")).unwrap();
+    let (code, out, err) = support::run_cli(&["render", "t.toml", "-o", "b.exr"], &dir);
+    assert_eq!(code, 4, "{out}{err}");
+    assert!(
+        err.contains("sweep.slabs") && err.contains("mesh[0] thickness"),
+        "{err}"
+    );
+}

@@ -12,19 +12,30 @@
 //!   voxels (`size` is the object-space box the texture is mapped onto, the NIfTI extent fitted
 //!   into it like the plan does).
 //!
+//! Every closed mesh contributes its thinnest feature along the view, measured on a subsampled
+//! rasterization of the meshes ([`thickness`]): a sheet thinner than the slabs would fall
+//! between two back faces or be sampled once, so it too gets 2 slabs across.
+//!
 //! The count is `⌈depth · 2 · slab_factor / p_min⌉` over the scene's depth range (2 slabs per
-//! finest period p_min), and at least `⌈AUTO_MIN_SLABS · slab_factor⌉` (a scene without detail,
-//! or with very coarse detail, still gets enough slabs for its shadows to iterate smoothly).
+//! finest length p_min: the smallest detail period or mesh thickness), and at least
+//! `⌈AUTO_MIN_SLABS · slab_factor⌉` (a scene with only thick meshes and coarse detail still gets
+//! enough slabs for its shadows to iterate smoothly).
 
 use glam::DVec3;
 
 use crate::contract::files::GeometryFiles;
 use crate::model::scene::{DetailKind, MAX_SLABS, Scene, TextureFormat};
 use crate::pixel::texture3d::TextureError;
+use crate::prepare::camera::Camera;
 use crate::prepare::error::GeometryError;
 use crate::prepare::placement::{WorldMesh, fit_extent};
 
-/// Slabs per finest period of the detail (Nyquist: two samples per period).
+pub mod thickness;
+
+pub use thickness::Thinnest;
+
+/// Slabs per finest period of the detail, or across the thinnest mesh feature (Nyquist: two
+/// samples per period).
 pub const SLABS_PER_PERIOD: f64 = 2.0;
 /// The fewest slabs `"auto"` chooses (times `slab_factor`), also for scenes without detail.
 pub const AUTO_MIN_SLABS: f64 = 64.0;
@@ -34,11 +45,16 @@ pub const AUTO_MIN_SLABS: f64 = 64.0;
 pub struct AutoSlabs {
     /// The slab count.
     pub count: u32,
-    /// The finest period along the view direction, world units (`None`: no detail; the minimum
-    /// count applies).
+    /// The finest length along the view direction the slabs sample twice, world units: the
+    /// smallest detail period or mesh thickness (`None`: neither; the minimum count applies).
     pub finest_period: Option<f64>,
-    /// The scene key of the detail that sets it (`material.NAME.detail` or `.texture`).
+    /// What sets it: the scene key of a detail (`material.NAME.detail` or `.texture`) or
+    /// `mesh[i] thickness`.
     pub limited_by: Option<String>,
+    /// The thinnest mesh feature measured, whether or not it sets the count.
+    pub thinnest: Option<Thinnest>,
+    /// Whether the minimum count applies (the finest length asks for fewer slabs).
+    pub minimum: bool,
     /// `sweep.slab_factor`.
     pub factor: f64,
 }
@@ -116,17 +132,32 @@ pub fn finest_period(
     Ok(best)
 }
 
-/// The `"auto"` slab count over a depth range of `depth` world units (see the module
-/// documentation); more than [`MAX_SLABS`] is an error naming `sweep.slabs`.
+/// The `"auto"` slab count over a depth range of `depth` world units starting at camera depth
+/// `z_origin` (see the module documentation); more than [`MAX_SLABS`] is an error naming
+/// `sweep.slabs`.
 pub fn auto_slabs(
     scene: &Scene,
     files: &GeometryFiles,
-    forward: DVec3,
+    camera: &Camera,
     meshes: &[WorldMesh],
+    z_origin: f64,
     depth: f64,
 ) -> Result<AutoSlabs, GeometryError> {
     let factor = scene.sweep.slab_factor;
-    let found = finest_period(scene, files, forward, meshes)?;
+    let detail = finest_period(scene, files, camera.forward, meshes)?;
+    let thinnest =
+        thickness::thinnest_feature(camera, meshes, z_origin, depth).map_err(|source| {
+            GeometryError::Raster {
+                scene: scene.source.clone(),
+                source,
+            }
+        })?;
+    let mut found = detail;
+    if let Some(t) = thinnest
+        && found.as_ref().is_none_or(|(p, _)| t.thickness < *p)
+    {
+        found = Some((t.thickness, format!("mesh[{}] thickness", t.mesh)));
+    }
     let floor = (AUTO_MIN_SLABS * factor).ceil().max(1.0);
     let needed = match &found {
         Some((period, _)) => (depth * SLABS_PER_PERIOD * factor / period).ceil(),
@@ -148,6 +179,8 @@ pub fn auto_slabs(
         count: count as u32,
         finest_period: found.as_ref().map(|f| f.0),
         limited_by: found.map(|f| f.1),
+        thinnest,
+        minimum: needed.is_nan() || needed <= floor,
         factor,
     })
 }

@@ -50,8 +50,8 @@ pub enum GeometryError {
     },
     /// `slabs = "auto"` needs more slabs than the limit.
     #[error(
-        "{scene}: key `sweep.slabs`: \"auto\" needs {count} slabs (2 per finest period of \
-         {period:.4e} world units of `{limited_by}` over the scene's depth of {depth:.4e}, times \
+        "{scene}: key `sweep.slabs`: \"auto\" needs {count} slabs (2 per {period:.4e} world \
+         units along the view of `{limited_by}` over the scene's depth of {depth:.4e}, times \
          sweep.slab_factor = {factor}), expected at most {MAX_SLABS}; lower `sweep.slab_factor` \
          or give `sweep.slabs` a count"
     )]
@@ -62,9 +62,9 @@ pub enum GeometryError {
         count: f64,
         /// Scene depth.
         depth: f64,
-        /// The finest period (world units along the view).
+        /// The finest period or thickness (world units along the view).
         period: f64,
-        /// The key of the detail that sets it.
+        /// The key of the detail or the mesh (`mesh[i] thickness`) that sets it.
         limited_by: String,
         /// `sweep.slab_factor`.
         factor: f64,

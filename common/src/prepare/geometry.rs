@@ -110,7 +110,7 @@ impl SceneGeometry {
         let (slab_distance, slabs) = match scene.sweep.slabs {
             SlabSpec::Count(n) => (depth / f64::from(n), n),
             SlabSpec::Auto => {
-                let a = auto_slabs(scene, files, camera.forward, &meshes, depth)?;
+                let a = auto_slabs(scene, files, &camera, &meshes, z_min, depth)?;
                 let n = a.count;
                 auto = Some(a);
                 (depth / f64::from(n), n)

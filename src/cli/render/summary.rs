@@ -169,11 +169,24 @@ fn auto_note(r: &Rendered) -> String {
     match &r.plan.auto_slabs {
         None => String::new(),
         Some(a) => match (&a.finest_period, &a.limited_by) {
+            (Some(p), Some(key)) if a.minimum => format!(
+                " (auto: the minimum × slab_factor {}; the finest length along the view, \
+                 {p:.3e} of {key}, asks fewer)",
+                a.factor
+            ),
+            (Some(p), Some(key)) if key.starts_with("mesh[") => format!(
+                " (auto: 2 across the thinnest feature {p:.3e} of {key} along the view, × \
+                 slab_factor {})",
+                a.factor
+            ),
             (Some(p), Some(key)) => format!(
                 " (auto: 2 per finest period {p:.3e} of {key} along the view, × slab_factor {})",
                 a.factor
             ),
-            _ => format!(" (auto: no detail, the minimum × slab_factor {})", a.factor),
+            _ => format!(
+                " (auto: no detail or mesh thickness seen, the minimum × slab_factor {})",
+                a.factor
+            ),
         },
     }
 }
@@ -217,6 +230,11 @@ fn stats_value(
             "slabs_auto": r.plan.auto_slabs.as_ref().map(|a| json!({
                 "finest_period": a.finest_period,
                 "limited_by": a.limited_by,
+                "minimum": a.minimum,
+                "thinnest": a.thinnest.map(|t| json!({
+                    "mesh": t.mesh,
+                    "thickness": t.thickness,
+                })),
                 "slab_factor": a.factor,
             })),
             "slab_distance": f64::from(r.plan.slab_distance),
