@@ -6,6 +6,7 @@
 //! - [`pipeline`]: scene → image ([`pipeline::render`]) and scene → LDI
 //!   ([`pipeline::build_ldi`]) on the CPU or the GPU, with a typed error.
 //! - [`report`]: the speed-against-error grid.
+//! - [`console`]: stdout and stderr written without panicking (closed pipes, full devices).
 //!
 //! The command line (its subcommands and exit codes) is private to the `convshadow` binary
 //! (`src/cli/`).
@@ -15,5 +16,6 @@ pub use convshadow_cpu as cpu;
 pub use convshadow_io as io;
 pub use convshadow_reference as reference;
 
+pub mod console;
 pub mod pipeline;
 pub mod report;

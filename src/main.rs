@@ -62,11 +62,11 @@ fn main() {
             // Arguments may hold control characters: print them escaped.
             let text = exit::escape_controls(&e.render().to_string());
             if e.use_stderr() {
-                eprint!("{text}");
+                convshadow::err!("{text}");
             } else {
-                print!("{text}");
+                convshadow::out!("{text}");
             }
-            std::process::exit(code);
+            std::process::exit(convshadow::console::final_code(code));
         }
     };
     let result = match &cli.command {
@@ -76,9 +76,9 @@ fn main() {
         Command::Report(a) => cli::report::run(a),
     };
     match result {
-        Ok(code) => std::process::exit(code),
+        Ok(code) => std::process::exit(convshadow::console::final_code(code)),
         Err(f) => {
-            eprintln!("error: {}", exit::escape_line(&f.message));
+            convshadow::errln!("error: {}", exit::escape_line(&f.message));
             std::process::exit(f.code);
         }
     }

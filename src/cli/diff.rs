@@ -140,7 +140,7 @@ pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
     } else {
         "inf".to_string()
     };
-    println!(
+    convshadow::outln!(
         "diff {}x{}: max abs error {:.3e} at ({}, {}, channel {}), RMSE {:.3e}, PSNR {psnr}, mean \
          FLIP {flip:.5}, {} pixels ({:.4} %) differ in 8-bit sRGB (largest by {} levels), {} values \
          differ in their bits{}",
@@ -163,7 +163,7 @@ pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
     );
     for (n, name) in nans.iter().zip(["A", "B"]) {
         if let Some(text) = n.describe(name) {
-            println!("  NaN: {text}");
+            convshadow::outln!("  NaN: {text}");
         }
     }
     let mut failed = Vec::new();
@@ -217,7 +217,7 @@ pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
         super::write_json(p, &v)?;
     }
     if !failed.is_empty() {
-        eprintln!(
+        convshadow::errln!(
             "diff: threshold exceeded: {}{}",
             failed.join(", "),
             if any_nan {

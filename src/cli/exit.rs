@@ -17,7 +17,7 @@ pub const GPU_UNAVAILABLE: i32 = 5;
 /// The meshes are not closed (open, non-manifold or inconsistently wound; or odd LDI pixels).
 pub const MESH_DEFECT: i32 = 6;
 /// The output could not be written.
-pub const OUTPUT_FAILED: i32 = 7;
+pub const OUTPUT_FAILED: i32 = convshadow::console::OUTPUT_FAILED;
 /// This build uses instructions (x86-64-v3: AVX2, FMA, BMI) the processor lacks; checked
 /// before `main` (`src/cli/cpu_check.rs`).
 pub const UNSUPPORTED_CPU: i32 = 8;
@@ -57,7 +57,7 @@ pub fn install_exit_on_signal(cleanup: Option<std::path::PathBuf>) {
                 // Only an empty folder: remove_dir refuses one with files in it.
                 let _ = std::fs::remove_dir(dir);
             }
-            eprintln!("error: interrupted; no output written");
+            convshadow::errln!("error: interrupted; no output written");
             std::process::exit(INTERRUPTED);
         });
     });

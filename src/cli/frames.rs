@@ -53,7 +53,24 @@ pub fn has_frame_pattern(path: &Path) -> bool {
     find_pattern(&path.to_string_lossy()).is_some()
 }
 
-/// The first `%d` / `%0Nd` in `s`: (start byte, end byte, zero-padded width).
+/// The widest zero padding a frame pattern may ask for (`%020d`): a `u32` frame number has at
+/// most 10 digits; wider is refused as a bad argument rather than formatted (a width beyond
+/// `u16::MAX` made `format!` panic, one of millions wrote a name no file system takes).
+pub const MAX_PATTERN_WIDTH: usize = 20;
+
+/// Why `path`'s frame pattern cannot be used (`None` when it has none or a usable one).
+pub fn pattern_error(path: &Path) -> Option<String> {
+    let (_, _, width) = find_pattern(&path.to_string_lossy())?;
+    (width > MAX_PATTERN_WIDTH).then(|| {
+        format!(
+            "{}: the frame number pattern pads to at most {MAX_PATTERN_WIDTH} digits (%0{MAX_PATTERN_WIDTH}d)",
+            path.display()
+        )
+    })
+}
+
+/// The first `%d` / `%0Nd` in `s`: (start byte, end byte, zero-padded width; `usize::MAX` when
+/// the width's digits overflow).
 fn find_pattern(s: &str) -> Option<(usize, usize, usize)> {
     let b = s.as_bytes();
     let mut i = 0;
@@ -64,7 +81,12 @@ fn find_pattern(s: &str) -> Option<(usize, usize, usize)> {
                 j += 1;
             }
             if j < b.len() && b[j] == b'd' {
-                let width = s[i + 1..j].parse().unwrap_or(0);
+                let digits = &s[i + 1..j];
+                let width = if digits.is_empty() {
+                    0
+                } else {
+                    digits.parse().unwrap_or(usize::MAX)
+                };
                 return Some((i, j + 1, width));
             }
         }
@@ -77,7 +99,11 @@ fn find_pattern(s: &str) -> Option<(usize, usize, usize)> {
 pub fn frame_path(path: &Path, frame: u32) -> PathBuf {
     let s = path.to_string_lossy();
     match find_pattern(&s) {
-        Some((a, b, width)) => PathBuf::from(format!("{}{frame:0width$}{}", &s[..a], &s[b..])),
+        Some((a, b, width)) => {
+            // `pattern_error` refuses wider patterns before any frame; never a panic here.
+            let width = width.min(MAX_PATTERN_WIDTH);
+            PathBuf::from(format!("{}{frame:0width$}{}", &s[..a], &s[b..]))
+        }
         None => path.to_path_buf(),
     }
 }

@@ -55,7 +55,7 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
         });
     let built = build_ldi(&scene, args.backend, args.threads, budget)?;
     if let Some(note) = &built.backend_note {
-        eprintln!("note: {}", crate::cli::exit::escape_line(note));
+        convshadow::errln!("note: {}", crate::cli::exit::escape_line(note));
     }
     let hash = built.ldi.fingerprint();
     print_summary(&built, hash);
@@ -67,10 +67,10 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
     }
     let (geometry, stats) = (&built.geometry, &built.stats);
     for w in geometry.mesh_warnings() {
-        eprintln!("warning: {}", crate::cli::exit::escape_line(&w));
+        convshadow::errln!("warning: {}", crate::cli::exit::escape_line(&w));
     }
     if geometry.defect_edges() > 0 || stats.odd_pixels > 0 {
-        eprintln!(
+        convshadow::errln!(
             "error: the meshes are not closed ({} defective edges, {} pixels with an odd fragment \
              count): the inside/outside parity test needs closed, consistently wound meshes",
             geometry.defect_edges(),
@@ -118,7 +118,7 @@ fn print_summary(built: &BuiltLdi, hash: u64) {
         ..
     } = built;
     let (_, _, _, degenerate) = defect_counts(built);
-    println!(
+    convshadow::outln!(
         "ldi: {}x{} px (grid {}x{}, guard band {}), {} triangles rasterized of {}, {} fragments, \
          max {} layers, {} odd pixels, {} degenerate triangles dropped, {:.3} s build ({:.1} M \
          fragments/s)",
@@ -141,7 +141,7 @@ fn print_summary(built: &BuiltLdi, hash: u64) {
         stats.fragments as f64 / seconds_ldi.max(1e-9) / 1e6,
     );
     for (i, m) in geometry.meshes.iter().enumerate() {
-        println!(
+        convshadow::outln!(
             "  mesh[{i}]: {} triangles, {} boundary edges, {} non-manifold edges, {} flipped edges{}",
             m.mesh.triangles.len(),
             m.report.boundary_edges,
@@ -154,9 +154,9 @@ fn print_summary(built: &BuiltLdi, hash: u64) {
             }
         );
     }
-    println!("  ldi_hash {hash:016x}");
+    convshadow::outln!("  ldi_hash {hash:016x}");
     if let Some(a) = &adapter {
-        println!("  backend gpu: {a}");
+        convshadow::outln!("  backend gpu: {a}");
     }
 }
 

@@ -63,14 +63,14 @@ pub fn run(args: &ReportArgs) -> Result<i32, Failure> {
         Failure::new(code, e)
     })?;
     if let Some(c) = args.case {
-        println!(
+        convshadow::outln!(
             "report: case {c} in {:.1} s → {}/report.csv",
             report.seconds,
             args.out.display()
         );
         return Ok(exit::OK);
     }
-    println!(
+    convshadow::outln!(
         "report: {} cases in {:.0} s → {}/report.csv, report.md, speed_vs_error.png",
         report.rows.len(),
         report.seconds,

@@ -217,7 +217,7 @@ fn scene_rows(
     );
     let self_err = rmse_f32(&ref_m, &ref_4m);
     if verbose {
-        eprintln!(
+        crate::errln!(
             "scene {size}² slabs {slabs}: reference M={samples} and {} in {:.1} s, self error {self_err:.2e}",
             4 * samples,
             t.elapsed().as_secs_f64()
@@ -277,7 +277,7 @@ fn narrowband_rows(size: u32, slab_counts: &[u32], verbose: bool) -> Vec<Row> {
     let (_, _, _, finer, _) = render_scene(&narrowband_scene(size, 2 * n_ref, false));
     let self_err = rmse_f32(&reference, &finer);
     if verbose {
-        eprintln!(
+        crate::errln!(
             "narrowband {size}²: reference {n_ref} slabs, self error (vs {}) {self_err:.2e}",
             2 * n_ref
         );
@@ -355,7 +355,7 @@ impl Cases<'_> {
 /// One line per case on stderr, when verbose.
 fn log_row(options: &ReportOptions, r: &Row) {
     if options.verbose {
-        eprintln!(
+        crate::errln!(
             "{} {} n={} var={} tilt={:?} d/d1={:?} comp={} pre={} {:.1} ms rmse_c={:?} rmse_i={:?} ref={:?}",
             r.family,
             r.kernel,

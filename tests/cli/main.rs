@@ -8,6 +8,7 @@
 #[path = "../support/mod.rs"]
 mod support;
 
+mod closed_output;
 mod diff_selftest;
 mod display_volumes;
 mod ldi;

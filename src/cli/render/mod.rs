@@ -92,7 +92,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     let Some(list) = frame_list else {
         let r = render(&scene, &request)?;
         if let Some(note) = &r.backend_note {
-            eprintln!("note: {}", crate::cli::exit::escape_line(note));
+            convshadow::errln!("note: {}", crate::cli::exit::escape_line(note));
         }
         return finish(&scene, args, &outputs, &r, bar.as_ref(), 0);
     };
@@ -154,7 +154,7 @@ impl Sequence<'_> {
             let r = render(&frame_scene, request)?;
             if i == 0 {
                 if let Some(note) = &r.backend_note {
-                    eprintln!("note: {}", crate::cli::exit::escape_line(note));
+                    convshadow::errln!("note: {}", crate::cli::exit::escape_line(note));
                 }
                 slab_count.store(u64::from(r.plan.slabs), Relaxed);
                 if let Some(b) = &bar {

@@ -22,6 +22,9 @@ pub(super) fn output_paths(
     } else {
         args.outputs.clone()
     };
+    if let Some(message) = outputs.iter().find_map(|p| frames::pattern_error(p)) {
+        return Err(Failure::new(exit::BAD_ARGUMENTS, message));
+    }
     if let Some(list) = frame_list
         && list.len() > 1
         && let Some(p) = outputs.iter().find(|p| !frames::has_frame_pattern(p))

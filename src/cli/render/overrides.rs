@@ -25,7 +25,7 @@ pub(super) fn apply_view_overrides(scene: &mut Scene, args: &RenderArgs) -> Resu
         if let Some(note) = frames::apply_size(scene, w, h)?
             && !args.quiet
         {
-            eprintln!("note: {}", crate::cli::exit::escape_line(&note));
+            convshadow::errln!("note: {}", crate::cli::exit::escape_line(&note));
         }
     }
     let direction = args

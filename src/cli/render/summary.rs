@@ -41,17 +41,17 @@ pub(super) fn finish(
         crate::cli::write_json(p, &stats_value(scene, args, r, samples, outputs))?;
     }
     for w in &r.mesh_warnings {
-        eprintln!("warning: {}", crate::cli::exit::escape_line(w));
+        convshadow::errln!("warning: {}", crate::cli::exit::escape_line(w));
     }
     if r.ldi.odd_pixels > 0 {
-        eprintln!(
+        convshadow::errln!(
             "warning: {} pixels have an odd fragment count (open meshes, rendered with --allow-open)",
             r.ldi.odd_pixels
         );
     }
     let throughput = throughput(r);
     if !args.quiet {
-        println!(
+        convshadow::outln!(
             "rendered {}x{} px, {} slabs{}{}, {}, {}, guard band {}, {} fragments: {:.2} s (LDI \
              {:.2} s, sweep {:.2} s, {:.1} M pixel·slab·light/s, {}) → {}",
             scene.image.width,
@@ -127,7 +127,7 @@ pub(super) fn finish_frames(
     }
     if !args.quiet {
         for f in done {
-            println!(
+            convshadow::outln!(
                 "frame {} (time {}): image_hash {:016x}, {:.2} s → {}",
                 f.frame,
                 f.time.map_or_else(|| "-".to_string(), |t| format!("{t}")),
@@ -140,7 +140,7 @@ pub(super) fn finish_frames(
                     .join(", ")
             );
         }
-        println!(
+        convshadow::outln!(
             "rendered {} frame{} of {}x{} px, {} slabs{}, {}: {:.2} s",
             done.len(),
             if done.len() == 1 { "" } else { "s" },
