@@ -65,10 +65,41 @@ pub fn install_exit_on_signal(cleanup: Option<std::path::PathBuf>) {
 
 /// The interrupted failure (exit code 130) if a signal has raised [`INTERRUPT`].
 pub fn check_interrupt() -> Result<(), Failure> {
+    check_interrupt_after(&[])
+}
+
+/// The interrupted failure (exit code 130) if a signal has raised [`INTERRUPT`], naming the
+/// output files `written` (complete: each was renamed into place whole) before it was seen.
+/// Outputs are written one after the other with this check before each, so a signal that
+/// arrives while they are written stops the run before the next one (docs/errors.md).
+pub fn check_interrupt_after(written: &[std::path::PathBuf]) -> Result<(), Failure> {
     if INTERRUPT.load(Ordering::SeqCst) {
-        return Err(Failure::new(INTERRUPTED, "interrupted; no output written"));
+        return Err(interrupted_after(written));
     }
     Ok(())
+}
+
+/// The interrupted failure naming the complete output files `written` before the signal: all
+/// of them up to 8, else the count, the first and the last.
+pub fn interrupted_after(written: &[std::path::PathBuf]) -> Failure {
+    let name = |p: &std::path::PathBuf| escape_line(&p.display().to_string());
+    let message = match written {
+        [] => "interrupted; no output written".to_string(),
+        [first, .., last] if written.len() > 8 => format!(
+            "interrupted; written before the signal, complete: {} files, {} … {}",
+            written.len(),
+            name(first),
+            name(last)
+        ),
+        _ => {
+            let names: Vec<String> = written.iter().map(name).collect();
+            format!(
+                "interrupted; written before the signal, complete: {}",
+                names.join(", ")
+            )
+        }
+    };
+    Failure::new(INTERRUPTED, message)
 }
 
 /// An error with the exit code it maps to.

@@ -1025,3 +1025,63 @@ fn a_signal_during_nifti_loading_stops_the_render_promptly() {
     drop(f);
     interrupt_while_loading(&dir, "texture = { path = \"t.nii\" }", "t.nii");
 }
+
+#[test]
+fn a_signal_between_frames_names_the_complete_frames_written() {
+    // Issue 43, class 3: a signal after some frames said "no output written" while the frames
+    // were on disk (and one during the outputs' writing was swallowed: exit 0). Now every output
+    // is written after a check of the signal flag, and the message names what is on disk.
+    for (signal, name) in [
+        (libc::SIGINT, "rel-frames-int"),
+        (libc::SIGTERM, "rel-frames-term"),
+    ] {
+        let dir = support::temp_dir(name);
+        let args = [
+            "render",
+            "--size",
+            "8x8",
+            "--slabs",
+            "4",
+            "--frames",
+            "0..1000000",
+            "-o",
+            "f_%07d.png",
+            "--quiet",
+        ];
+        let mut child = spawn_cli(&args, &dir);
+        let start = std::time::Instant::now();
+        while files_in(&dir)
+            .iter()
+            .filter(|n| n.ends_with(".png"))
+            .count()
+            < 3
+        {
+            assert!(start.elapsed().as_secs() < 120, "no frames written");
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        let (code, err, _) = signal_and_wait(&mut child, signal);
+        assert_eq!(code, Some(130), "{name}: {err}");
+        let on_disk = files_in(&dir);
+        assert!(
+            on_disk
+                .iter()
+                .all(|n| n.starts_with("f_") && n.ends_with(".png")),
+            "{name}: only complete frames, no temporary file: {on_disk:?}"
+        );
+        let first = on_disk.first().unwrap();
+        let last = on_disk.last().unwrap();
+        assert_eq!(first, "f_0000000.png");
+        // Up to 8 files by name, else the count, the first and the last.
+        let listed = if on_disk.len() <= 8 {
+            on_disk.join(", ")
+        } else {
+            format!("{} files, {first} … {last}", on_disk.len())
+        };
+        let want = format!("error: interrupted; written before the signal, complete: {listed}");
+        assert!(err.contains(&want), "{name}: {err}\nwanted: {want}");
+        for n in &on_disk {
+            let img = image::open(dir.join(n)).unwrap_or_else(|e| panic!("{n}: {e}"));
+            assert_eq!((img.width(), img.height()), (8, 8), "{n}");
+        }
+    }
+}

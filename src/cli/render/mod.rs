@@ -143,6 +143,8 @@ impl Sequence<'_> {
             (self.frame_index, self.slab_count, self.time_step);
         let frame_count = list.len() as u64;
         let mut done: Vec<FrameStats> = Vec::new();
+        // Every complete output file so far, for the message if a signal stops the sequence.
+        let mut written: Vec<PathBuf> = Vec::new();
         let mut last = None;
         for (i, &k) in list.iter().enumerate() {
             use std::sync::atomic::Ordering::Relaxed;
@@ -151,7 +153,14 @@ impl Sequence<'_> {
                 b.set_message(format!("frame {}/{}", i + 1, list.len()));
             }
             let frame_scene = frames::scene_at_frame(scene, k, time_step);
-            let r = render(&frame_scene, request)?;
+            let r = render(&frame_scene, request).map_err(|e| {
+                let f = Failure::from(e);
+                if f.code == exit::INTERRUPTED {
+                    exit::interrupted_after(&written)
+                } else {
+                    f
+                }
+            })?;
             if i == 0 {
                 if let Some(note) = &r.backend_note {
                     convshadow::errln!("note: {}", crate::cli::exit::escape_line(note));
@@ -161,10 +170,11 @@ impl Sequence<'_> {
                     b.set_length(u64::from(r.plan.slabs) * frame_count);
                 }
             }
-            exit::check_interrupt()?;
             let paths: Vec<PathBuf> = outputs.iter().map(|p| frames::frame_path(p, k)).collect();
             for p in &paths {
+                exit::check_interrupt_after(&written)?;
                 r.image.save_mapped(p, &scene.image.display_map())?;
+                written.push(p.clone());
             }
             done.push(FrameStats {
                 frame: k,
@@ -176,6 +186,7 @@ impl Sequence<'_> {
             });
             last = Some(r);
         }
+        exit::check_interrupt_after(&written)?;
         let r = last.expect("a parsed frame list is not empty");
         Ok((r, done))
     }

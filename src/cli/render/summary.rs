@@ -33,13 +33,19 @@ pub(super) fn finish(
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    exit::check_interrupt()?;
+    // A signal while the outputs are written stops before the next one and names those done.
+    let mut written: Vec<PathBuf> = Vec::new();
     for p in outputs {
+        exit::check_interrupt_after(&written)?;
         r.image.save_mapped(p, &scene.image.display_map())?;
+        written.push(p.clone());
     }
     if let Some(p) = &args.stats_json {
+        exit::check_interrupt_after(&written)?;
         crate::cli::write_json(p, &stats_value(scene, args, r, samples, outputs))?;
+        written.push(p.clone());
     }
+    exit::check_interrupt_after(&written)?;
     for w in &r.mesh_warnings {
         convshadow::errln!("warning: {}", crate::cli::exit::escape_line(w));
     }
