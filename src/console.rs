@@ -24,18 +24,7 @@ pub fn write_out(args: fmt::Arguments<'_>, newline: bool) {
     if failed.is_some() {
         return;
     }
-    let mut out = std::io::stdout().lock();
-    let result = out
-        .write_fmt(args)
-        .and_then(|()| {
-            if newline {
-                out.write_all(b"\n")
-            } else {
-                Ok(())
-            }
-        })
-        .and_then(|()| out.flush());
-    if let Err(e) = result {
+    if let Err(e) = write_to(&mut std::io::stdout().lock(), args, newline) {
         *failed = Some(if e.kind() == std::io::ErrorKind::BrokenPipe {
             None
         } else {
@@ -47,17 +36,16 @@ pub fn write_out(args: fmt::Arguments<'_>, newline: bool) {
 /// Writes `args` (and a newline when `newline`) to stderr, ignoring failures. Use
 /// [`errln!`](crate::errln) / [`err!`](crate::err).
 pub fn write_err(args: fmt::Arguments<'_>, newline: bool) {
-    let mut err = std::io::stderr().lock();
-    let _ = err
-        .write_fmt(args)
-        .and_then(|()| {
-            if newline {
-                err.write_all(b"\n")
-            } else {
-                Ok(())
-            }
-        })
-        .and_then(|()| err.flush());
+    let _ = write_to(&mut std::io::stderr().lock(), args, newline);
+}
+
+/// `args`, a newline when `newline`, then a flush (so that a full device fails here, not later).
+fn write_to(w: &mut impl Write, args: fmt::Arguments<'_>, newline: bool) -> std::io::Result<()> {
+    w.write_fmt(args)?;
+    if newline {
+        w.write_all(b"\n")?;
+    }
+    w.flush()
 }
 
 /// The exit code of a command that would exit with `code`, given what stdout did: 7 (output
