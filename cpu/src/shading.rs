@@ -237,12 +237,11 @@ fn positive<L: Lane>(d: L) -> L {
     L::select(d.gt(zero), d, zero)
 }
 
-/// Specular weight of one light at a surface with camera-space normal `n` (flipped to face the
-/// viewer): `strength · max(0, n·h)^exponent` (Blinn–Phong).
+/// The Blinn–Phong weight of one light at a facing normal `f` ([`facing`]):
+/// `strength · max(0, f·h)^exponent`.
 #[inline(always)]
-pub fn specular<L: Lane>(n: [L; 3], h: [f32; 3], strength: f32, exponent: u32) -> L {
-    let d = positive(dot(facing(n), h));
-    L::splat(strength) * powi_by_squaring(d, exponent)
+pub fn blinn_phong<L: Lane>(f: [L; 3], h: [f32; 3], strength: f32, exponent: u32) -> L {
+    L::splat(strength) * powi_by_squaring(positive(dot(f, h)), exponent)
 }
 
 /// The Lambert cosine `max(0, f·l)` of a facing normal `f` and the direction towards a light.
@@ -330,8 +329,7 @@ pub fn shade<L: Lane>(
         for (l, light) in plan.lights.iter().enumerate() {
             let w = match sp.model {
                 SpecularModel::BlinnPhong => {
-                    L::splat(sp.scale)
-                        * powi_by_squaring(positive(dot(f, light.half_vector)), sp.exponent)
+                    blinn_phong(f, light.half_vector, sp.scale, sp.exponent)
                 }
                 SpecularModel::AshikminShirley { .. } => {
                     ashikmin_shirley(f, light.half_vector, light.to_light, light.fresnel, sp)

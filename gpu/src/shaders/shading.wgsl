@@ -178,6 +178,12 @@ fn positive(d: f32) -> f32 {
     return select(0.0, d, d > 0.0);
 }
 
+// `blinn_phong`: strength · max(0, f·h)^exponent at a facing normal f.
+fn blinn_phong(f: vec3<f32>, l: u32, m: MaterialHeader) -> f32 {
+    let d = positive(dot_fixed(f, lights[l].half_vector));
+    return m.spec_strength * powi_by_squaring(d, m.spec_exponent);
+}
+
 // `ashikmin_shirley`: a · (f·h)^e · (f·l) / max(f·l, f·v), v = (0, 0, −1), a = the material's
 // normalised strength · (b + f0·c) with the light's Fresnel constants; a zero denominator is 1.
 fn ashikmin_shirley(f: vec3<f32>, l: u32, m: MaterialHeader) -> f32 {
@@ -231,8 +237,7 @@ fn shade(material: u32, color: vec3<f32>, alpha: f32, surface: bool, n: vec3<f32
         for (var l = 0u; l < globals.lights; l++) {
             var w: f32;
             if m.has_specular == SPEC_BLINN_PHONG {
-                let d = positive(dot_fixed(f, lights[l].half_vector));
-                w = m.spec_strength * powi_by_squaring(d, m.spec_exponent);
+                w = blinn_phong(f, l, m);
             } else {
                 w = ashikmin_shirley(f, l, m);
             }
