@@ -16,5 +16,6 @@ mod oblique_receiver;
 mod patterned_light;
 mod phase_function;
 mod preintegration;
+mod slab_convergence;
 mod surface_shading;
 mod sweep_accuracy;
