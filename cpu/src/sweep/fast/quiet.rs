@@ -96,6 +96,10 @@ pub(crate) fn window_hulls(
     out: &mut Vec<RowSpans>,
     scratch: &mut [Vec<RowSpans>; 2],
 ) {
+    // Offsets beyond ±h rows read only rows outside the buffer: clamped there, every window keeps
+    // its rows and the scratch stays within 3·h rows whatever the kernels' reach.
+    let rows = i32::try_from(spans.len()).unwrap_or(i32::MAX);
+    let (y0, y1) = (y0.clamp(-rows, rows), y1.clamp(-rows, rows));
     let (h, width) = (spans.len(), (i64::from(y1) - i64::from(y0) + 1) as usize);
     // Row k of the padded sequence is buffer row k + y0 (EMPTY outside the buffer); window y is
     // padded rows y ..= y + width − 1.
@@ -634,15 +638,24 @@ mod tests {
         let mut out = Vec::new();
         for _ in 0..500 {
             let h = 1 + rng.below(40) as usize;
-            let (y0, y1) = (-(rng.below(13) as i32), rng.below(13) as i32);
+            // Windows around the row, beside it, wholly outside the buffer, and (one in ten)
+            // reaches of millions of rows, which must cost no more scratch than short ones.
+            let (mut y0, mut y1) = (rng.below(121) as i32 - 60, rng.below(61) as i32);
+            y1 += y0;
+            if rng.below(10) == 0 {
+                (y0, y1) = (y0 * 10_000_000, y1 * 10_000_000);
+                (y0, y1) = (y0.min(y1), y0.max(y1));
+            }
             let spans: Vec<RowSpans> = (0..h).map(|_| random_spans(&mut rng)).collect();
             window_hulls(&spans, y0, y1, &mut out, &mut scratch);
             assert_eq!(out.len(), h);
+            assert!(scratch[0].len() <= 3 * h, "scratch of {} rows", scratch[0].len());
             for (y, got) in out.iter().enumerate() {
-                let lo = (y as i64 + i64::from(y0)).max(0) as usize;
-                let hi = (y as i64 + i64::from(y1)).min(h as i64 - 1) as usize;
-                let mut want = [(i32::MAX, i32::MIN); 3];
-                for row in &spans[lo..=hi] {
+                let lo = (y as i64 + i64::from(y0)).max(0);
+                let hi = (y as i64 + i64::from(y1)).min(h as i64 - 1);
+                let mut want = kinds(&RowSpans::EMPTY);
+                let rows = if lo <= hi { &spans[lo as usize..=hi as usize] } else { &[][..] };
+                for row in rows {
                     for (w, r) in want.iter_mut().zip(kinds(row)) {
                         *w = (w.0.min(r.0), w.1.max(r.1));
                     }
