@@ -20,9 +20,10 @@ mod error;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use convshadow_common::model::scene::Scene;
+use convshadow_common::model::scene::{Penumbra, Scene};
 use convshadow_common::pixel::hash::Fingerprint;
 use convshadow_common::plan::RenderPlan;
+use convshadow_common::plan::kernel::{TableGuard, distance_levels};
 use convshadow_common::prepare::geometry::SceneGeometry;
 use convshadow_cpu::ldi::{BuildLdi, Ldi, LdiStats};
 use convshadow_cpu::sweep::{
@@ -195,7 +196,8 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     let seconds_ldi = start.elapsed().as_secs_f64();
     // 4. The plan, whose kernel tables must fit in what the fragments left.
     let t_plan = Instant::now();
-    let plan = engine.plan(scene, &geometry, req.cancel)?;
+    let allowance = budget::table_allowance(fragment_budget, stats.fragments);
+    let plan = engine.plan(scene, &geometry, req.cancel, allowance, stats.fragments)?;
     let seconds_plan = t_plan.elapsed().as_secs_f64();
     engine.check_tables(scene, &plan, fragment_budget, stats.fragments)?;
     check_cancel(req.cancel)?;
@@ -284,22 +286,43 @@ impl Engine {
     }
 
     /// The plan: every table the sweep reads. 3D textures (raw and NIfTI) load in chunks and
-    /// stop once the cancel flag is raised. In the pool: the distance penumbra builds its levels'
-    /// tables in parallel.
+    /// stop once the cancel flag is raised; the kernel tables stop too, and once they pass
+    /// `allowance` bytes (what the budget leaves after the LDI's `fragments`). In the pool: the
+    /// distance penumbra builds its levels' tables in parallel.
     fn plan(
         &self,
         scene: &Scene,
         geometry: &SceneGeometry,
         cancel: Option<&AtomicBool>,
+        allowance: u64,
+        fragments: u64,
     ) -> Result<RenderPlan, RenderError> {
-        self.pool
-            .install(|| convshadow_io::build_plan_cancellable(scene, geometry, cancel))
+        let backend = self.choice.opened();
+        let (per_tap, per_word) = budget::table_entry_bytes(backend);
+        let guard = TableGuard::new(cancel, per_tap, per_word, allowance);
+        let plan = self
+            .pool
+            .install(|| convshadow_io::build_plan_guarded(scene, geometry, &guard))
             .map_err(|e| match e.source {
                 convshadow_common::pixel::texture3d::TextureError::Interrupted { .. } => {
                     RenderError::Interrupted
                 }
                 _ => RenderError::BadPlan(e.to_string()),
-            })
+            })?;
+        match plan {
+            Some(plan) => Ok(plan),
+            None if guard.cancelled() => Err(RenderError::Interrupted),
+            None => {
+                let levels = match scene.sweep.penumbra {
+                    Penumbra::Distance => distance_levels(geometry.slabs).len() as u32,
+                    Penumbra::Iterated => 1,
+                };
+                let used = guard.used();
+                Err(budget::tables_over_budget(
+                    scene, levels, used, "more than ", backend, allowance, fragments,
+                ))
+            }
+        }
     }
 
     /// Refuses kernel tables that do not fit in what the budget left after the LDI's

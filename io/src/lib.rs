@@ -15,4 +15,4 @@ pub mod pattern;
 pub mod raw;
 pub mod read;
 
-pub use read::{build_geometry, build_plan, build_plan_cancellable, load_scene};
+pub use read::{build_geometry, build_plan, build_plan_guarded, load_scene};

@@ -10,6 +10,7 @@ use std::sync::atomic::AtomicBool;
 use convshadow_common::contract::files::{GeometryFiles, PlanFiles, TextureFile, VolumeGrid};
 use convshadow_common::model::scene::{Scene, SceneError, ShapeSpec, SlabSpec, TextureFormat};
 use convshadow_common::pixel::texture3d::TextureError;
+use convshadow_common::plan::kernel::TableGuard;
 use convshadow_common::plan::{PlanError, RenderPlan};
 use convshadow_common::prepare::error::GeometryError;
 use convshadow_common::prepare::geometry::SceneGeometry;
@@ -151,14 +152,17 @@ pub fn build_geometry(scene: &Scene) -> Result<SceneGeometry, GeometryError> {
 
 /// The scene's plan with its files read: [`read_plan_files`], then [`RenderPlan::new`].
 pub fn build_plan(scene: &Scene, geometry: &SceneGeometry) -> Result<RenderPlan, PlanError> {
-    build_plan_cancellable(scene, geometry, None)
+    RenderPlan::new(scene, geometry, &read_plan_files(scene, None)?)
 }
 
-/// [`build_plan`], with file loading stopped once `cancel` is raised.
-pub fn build_plan_cancellable(
+/// [`build_plan`] under `guard`: file loading stops once its cancel flag is raised, and the
+/// kernel tables once it is raised or their bytes pass its limit (`Ok(None)`; the guard says
+/// which).
+pub fn build_plan_guarded(
     scene: &Scene,
     geometry: &SceneGeometry,
-    cancel: Option<&AtomicBool>,
-) -> Result<RenderPlan, PlanError> {
-    RenderPlan::new(scene, geometry, &read_plan_files(scene, cancel)?)
+    guard: &TableGuard<'_>,
+) -> Result<Option<RenderPlan>, PlanError> {
+    let files = read_plan_files(scene, guard.cancel)?;
+    RenderPlan::new_guarded(scene, geometry, &files, guard)
 }

@@ -243,15 +243,28 @@ pub fn kernel_table_bytes(plan: &RenderPlan, backend: Backend) -> u64 {
         taps += t.taps.len() as u64;
         words += (t.level_of.len() + t.slab_phase.len()) as u64;
     }
-    let host = 24 * taps + 4 * words;
+    let (per_tap, per_word) = table_entry_bytes(backend);
+    per_tap * taps + per_word * words
+}
+
+/// Bytes a tap and a table word take on `backend` ([`kernel_table_bytes`]): on the host 24 a tap
+/// and 4 a word, the CPU sweep's tap columns 24 a tap more, the GPU a device copy of both.
+pub fn table_entry_bytes(backend: Backend) -> (u64, u64) {
     match backend {
-        Backend::Gpu => 2 * host,
-        _ => host + 24 * taps,
+        Backend::Gpu => (2 * 24, 2 * 4),
+        _ => (24 + 24, 4),
     }
+}
+
+/// What the memory budget leaves for the kernel tables after the LDI's `fragments` (`left`:
+/// the fragment budget [`MemoryNeed::check`] gave).
+pub(super) fn table_allowance(left: u64, fragments: u64) -> u64 {
+    left.saturating_sub(fragments.saturating_mul(BYTES_PER_FRAGMENT))
 }
 
 /// Refuses, after the plan is built, kernel tables that do not fit in what the memory budget
 /// leaves after the LDI's fragments (`left`: the fragment budget [`MemoryNeed::check`] gave).
+/// The build itself stops once its levels pass that allowance ([`tables_over_budget`]).
 pub(super) fn check_tables(
     scene: &Scene,
     plan: &RenderPlan,
@@ -260,25 +273,39 @@ pub(super) fn check_tables(
     fragments: u64,
 ) -> Result<(), RenderError> {
     let tables = kernel_table_bytes(plan, backend);
-    let free = left.saturating_sub(fragments.saturating_mul(BYTES_PER_FRAGMENT));
+    let free = table_allowance(left, fragments);
     if tables <= free {
         return Ok(());
     }
     let levels = plan.lights.first().map_or(1, |l| l.table.levels);
-    Err(RenderError::OutOfMemory(format!(
-        "{}: the kernel tables need {} MiB ({} lights, {levels} kernel levels, {}), more than the \
-         {} MiB the memory budget leaves after the LDI's {fragments} fragments; lower \
+    Err(tables_over_budget(scene, levels, tables, "", backend, free, fragments))
+}
+
+/// The refusal of kernel tables that need `tables` bytes (`at_least`: "more than " when the
+/// build stopped part way) where the budget leaves `free` after the LDI's `fragments`.
+pub(super) fn tables_over_budget(
+    scene: &Scene,
+    levels: u32,
+    tables: u64,
+    at_least: &str,
+    backend: Backend,
+    free: u64,
+    fragments: u64,
+) -> RenderError {
+    RenderError::OutOfMemory(format!(
+        "{}: the kernel tables need {at_least}{} MiB ({} lights, {levels} kernel levels, {}), more \
+         than the {} MiB the memory budget leaves after the LDI's {fragments} fragments; lower \
          sweep.slabs or use a smaller kernel (sweep.kernel), or raise --max-memory",
         scene.source,
         tables.div_ceil(1 << 20),
-        plan.lights.len(),
+        scene.lights.len(),
         if backend == Backend::Gpu {
             "on the host and the device"
         } else {
             "with the sweep's tap columns"
         },
         free >> 20,
-    )))
+    ))
 }
 
 /// Opens `backend` and checks the memory need (with `sweep = false`: of the LDI alone) on the

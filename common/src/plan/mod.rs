@@ -22,7 +22,9 @@ use crate::model::scene::{
 use crate::pixel::hash::{JITTER_STREAM, slab_hash};
 use crate::pixel::noise::Detail;
 use crate::pixel::texture3d::{Texture3d, TextureError};
-use crate::plan::kernel::{KernelMoments, KernelTable, build_distance_table, build_table};
+use crate::plan::kernel::{
+    KernelMoments, KernelTable, TableGuard, build_distance_table, build_table,
+};
 use crate::prepare::geometry::SceneGeometry;
 use crate::prepare::guard::GuardBand;
 
@@ -277,6 +279,18 @@ impl RenderPlan {
         geometry: &SceneGeometry,
         files: &PlanFiles,
     ) -> Result<RenderPlan, PlanError> {
+        let plan = RenderPlan::new_guarded(scene, geometry, files, &TableGuard::unlimited())?;
+        Ok(plan.expect("an unlimited guard never stops the tables"))
+    }
+
+    /// [`RenderPlan::new`], with the kernel tables built under `guard`: `Ok(None)` when it
+    /// stopped them (cancelled, or past its byte limit; the guard says which).
+    pub fn new_guarded(
+        scene: &Scene,
+        geometry: &SceneGeometry,
+        files: &PlanFiles,
+        guard: &TableGuard<'_>,
+    ) -> Result<Option<RenderPlan>, PlanError> {
         let slabs = geometry.slabs;
         let e = geometry.slab_distance;
         let px = geometry.camera.pixel_size;
@@ -304,19 +318,25 @@ impl RenderPlan {
                     Penumbra::Iterated => {
                         // Scene validation requires d1 with the iterated penumbra.
                         let moments = moments_for(scene.sweep.optimal_distance.unwrap_or(e));
-                        (moments, build_table(kernel, &moments, slabs, compensate))
+                        if guard.stopped() {
+                            return None;
+                        }
+                        let table = build_table(kernel, &moments, slabs, compensate);
+                        let words = table.slab_phase.len() + 2 * table.slab_shift.len();
+                        guard.charge(table.taps.len(), words);
+                        (moments, table)
                     }
                     Penumbra::Distance => {
                         // A covariance step of f·e²·Σl is d1 = f·e in the iterated formula.
                         let per_e2 = |f: f64| moments_for(f * e);
-                        let table = build_distance_table(kernel, &per_e2, slabs, compensate);
+                        let table = build_distance_table(kernel, &per_e2, slabs, compensate, guard)?;
                         (per_e2(1.0), table)
                     }
                 };
                 let mu = spec.tilt_deg.map(|t| t.to_radians().tan());
                 let to_light = DVec3::new(mu[0], mu[1], -1.0).normalize();
                 let h = (to_light + DVec3::new(0.0, 0.0, -1.0)).normalize();
-                LightPlan {
+                Some(LightPlan {
                     color: spec.color.map(flush_tiny),
                     moments,
                     table,
@@ -324,9 +344,12 @@ impl RenderPlan {
                     half_vector: [h.x as f32, h.y as f32, h.z as f32],
                     to_light: [to_light.x as f32, to_light.y as f32, to_light.z as f32],
                     fresnel: fresnel_terms(h, to_light),
-                }
+                })
             })
-            .collect();
+            .collect::<Option<Vec<LightPlan>>>();
+        let Some(lights) = lights.filter(|_| !guard.stopped()) else {
+            return Ok(None);
+        };
         let materials = scene
             .materials
             .iter()
@@ -422,6 +445,7 @@ impl RenderPlan {
         }
         .with_surface_hold(scene, geometry)
         .with_patterns(scene, files)
+        .map(Some)
     }
 
     /// Sets every triangle's surface hold ([`RenderPlan::surface_hold`]) from its depth slopes

@@ -1,8 +1,75 @@
 //! Tap tables: the bilinear taps every path reads, built once on the host and summed to exactly 1.
 
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
 use rayon::prelude::*;
 
 use super::*;
+
+/// Limits on building the kernel tables, the one long host step whose size grows with the
+/// scene (lights × levels × slabs): a cancel flag looked at before each level, and the bytes the
+/// memory budget leaves for the tables, which the built levels count against, so that a scene
+/// whose tables cannot fit stops after at most one level per thread past the budget.
+#[derive(Debug)]
+pub struct TableGuard<'a> {
+    /// Raised by a signal: stop before the next level.
+    pub cancel: Option<&'a AtomicBool>,
+    /// Bytes a tap and a table word (a schedule or level entry, `u32`) take as the backend
+    /// holds them (see `pipeline::budget::kernel_table_bytes`).
+    pub bytes_per_tap: u64,
+    /// See `bytes_per_tap`.
+    pub bytes_per_word: u64,
+    /// Bytes the tables may take.
+    pub limit: u64,
+    used: AtomicU64,
+}
+
+impl<'a> TableGuard<'a> {
+    /// A guard that stops on `cancel` or past `limit` bytes.
+    pub fn new(
+        cancel: Option<&'a AtomicBool>,
+        bytes_per_tap: u64,
+        bytes_per_word: u64,
+        limit: u64,
+    ) -> TableGuard<'a> {
+        TableGuard {
+            cancel,
+            bytes_per_tap,
+            bytes_per_word,
+            limit,
+            used: AtomicU64::new(0),
+        }
+    }
+
+    /// A guard that never stops.
+    pub fn unlimited() -> TableGuard<'static> {
+        TableGuard::new(None, 0, 0, u64::MAX)
+    }
+
+    /// Whether the build must stop: cancelled, or past the limit.
+    pub fn stopped(&self) -> bool {
+        self.cancelled() || self.used() > self.limit
+    }
+
+    /// Whether the cancel flag is raised.
+    pub fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+
+    /// Bytes counted so far.
+    pub fn used(&self) -> u64 {
+        self.used.load(Ordering::Relaxed)
+    }
+
+    /// Counts `taps` taps and `words` table words; false once past the limit.
+    pub fn charge(&self, taps: usize, words: usize) -> bool {
+        let bytes = (taps as u64)
+            .saturating_mul(self.bytes_per_tap)
+            .saturating_add((words as u64).saturating_mul(self.bytes_per_word));
+        let used = self.used.fetch_add(bytes, Ordering::Relaxed).saturating_add(bytes);
+        used <= self.limit
+    }
+}
 
 /// Number of random phases per light for randomized kernels (a power of two: the phase is the
 /// top `PHASE_BITS` bits of a hash).
@@ -169,8 +236,16 @@ fn build_table_with_carry(
     compensate: bool,
     carry: bool,
 ) -> KernelTable {
+    let (pattern_mean, slab_shift) = mean_carry(moments, slabs, carry);
+    build_table_around(spec, moments, slabs, compensate, carry, pattern_mean, slab_shift)
+}
+
+/// The mean a pattern is read around and the whole-pixel shift of each slab: with `carry`, the
+/// mean is carried in whole pixels (round(k·μ) − round((k−1)·μ) in slab k) and the pattern read
+/// around 0; else the pattern is read around the mean and no slab shifts.
+fn mean_carry(moments: &KernelMoments, slabs: u32, carry: bool) -> ([f64; 2], Vec<[i32; 2]>) {
     let slabs_us = slabs as usize;
-    let (pattern_mean, slab_shift) = if carry {
+    if carry {
         let step = |i: usize| {
             [
                 (moments.mean[0] * i as f64).round() as i64,
@@ -187,8 +262,20 @@ fn build_table_with_carry(
         ([0.0, 0.0], shifts)
     } else {
         (moments.mean, vec![[0, 0]; slabs_us])
-    };
+    }
+}
 
+/// [`build_table_with_carry`] with the mean and the slabs' shifts given ([`mean_carry`]).
+fn build_table_around(
+    spec: KernelSpec,
+    moments: &KernelMoments,
+    slabs: u32,
+    compensate: bool,
+    carry: bool,
+    pattern_mean: [f64; 2],
+    slab_shift: Vec<[i32; 2]>,
+) -> KernelTable {
+    let slabs_us = slabs as usize;
     if let KernelKind::Box = spec.kind {
         let (l1, l2, e1) = eigen2(moments.cov);
         let (pat, sched) = box_schedule(l1, l2, e1, slabs, compensate && !carry, pattern_mean);
@@ -369,17 +456,30 @@ pub fn build_distance_table(
     per_e2: &(dyn Fn(f64) -> KernelMoments + Sync),
     slabs: u32,
     compensate: bool,
-) -> KernelTable {
+    guard: &TableGuard<'_>,
+) -> Option<KernelTable> {
     let ranges = distance_levels(slabs);
     let carry = compensate && carry_mean(&per_e2(1.0));
-    // Levels are independent (their bits do not depend on the thread count): built in parallel.
+    // One schedule of whole-pixel shifts for all levels (the first level's), not one per level.
+    let (_, slab_shift) = mean_carry(&per_e2(1.0), slabs, carry);
+    if !guard.charge(0, 2 * slab_shift.len() + ranges.len() + slabs as usize + 1) {
+        return None;
+    }
+    // Levels are independent (their bits do not depend on the thread count): built in parallel,
+    // each counted against the guard, none started once it stops.
     let tables: Vec<KernelTable> = ranges
         .par_iter()
         .map(|&[a, b]| {
+            if guard.stopped() {
+                return None;
+            }
             let m = per_e2(f64::from(a + b - 1));
-            build_table_with_carry(spec, &m, slabs, compensate, carry)
+            // Each level reads around its own mean, or around 0 where the mean is carried.
+            let mean = if carry { [0.0; 2] } else { m.mean };
+            let t = build_table_around(spec, &m, slabs, compensate, carry, mean, Vec::new());
+            guard.charge(t.taps.len(), t.slab_phase.len()).then_some(t)
         })
-        .collect();
+        .collect::<Option<_>>()?;
     let phase_count = tables.iter().map(|t| t.phase_count).max().unwrap_or(1);
     let taps_per_phase = tables.iter().map(|t| t.taps_per_phase).max().unwrap_or(1);
     let zero = Tap {
@@ -409,14 +509,14 @@ pub fn build_distance_table(
             level_of[h as usize] = level as u32;
         }
     }
-    KernelTable {
+    Some(KernelTable {
         phase_count,
         levels: tables.len() as u32,
         taps_per_phase,
         taps,
         phase_mode: tables[0].phase_mode,
         slab_phase,
-        slab_shift: tables[0].slab_shift.clone(),
+        slab_shift,
         level_of,
-    }
+    })
 }

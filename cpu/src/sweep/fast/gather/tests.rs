@@ -1,6 +1,8 @@
 use convshadow_common::model::kernel::KernelSpec;
 use convshadow_common::pixel::lane::Lane;
-use convshadow_common::plan::kernel::{KernelMoments, KernelTable, build_distance_table};
+use convshadow_common::plan::kernel::{
+    KernelMoments, KernelTable, TableGuard, build_distance_table,
+};
 use convshadow_testkit::TestRng;
 use wide::{f32x8, u32x8};
 
@@ -15,7 +17,7 @@ fn distance_table(kernel: &str) -> KernelTable {
         mean: [0.3 * f.sqrt(), -0.2],
         cov: [[0.35 * f, 0.1 * f], [0.1 * f, 0.2 * f]],
     };
-    build_distance_table(spec, &per_e2, 40, true)
+    build_distance_table(spec, &per_e2, 40, true, &TableGuard::unlimited()).expect("unlimited")
 }
 
 /// A `w` × `h` light buffer of three channels and a depth plane per row (`4 · w` apart).
