@@ -31,7 +31,9 @@ pub fn check_regular(path: &Path) -> io::Result<u64> {
 }
 
 /// The bytes of the regular file `path`, refused when it has more than `limit` bytes (checked
-/// before reading, and again while reading, so a file that grows cannot exhaust memory).
+/// before reading), and never more than the size it had then: the memory budget counted that
+/// size, so a file that grows while read, or one of `/proc`'s, whose size reads 0 whatever they
+/// hold, is refused instead of read without bound.
 pub fn read_limited(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
     let len = check_regular(path)?;
     let too_big = |n: u64| {
@@ -48,9 +50,15 @@ pub fn read_limited(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
     bytes
         .try_reserve_exact(len as usize)
         .map_err(|e| io::Error::new(io::ErrorKind::OutOfMemory, e.to_string()))?;
-    file.take(limit + 1).read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > limit {
-        return Err(too_big(bytes.len() as u64));
+    file.take(len + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > len {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!(
+                "the file holds more than the {len} bytes its size said when checked (it grew \
+                 while read, or is a /proc-like file whose size is not its length)"
+            ),
+        ));
     }
     Ok(bytes)
 }
@@ -79,6 +87,9 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let f = dir.join("big.txt");
         std::fs::write(&f, [b'x'; 100]).unwrap();
+        // /proc files say 0 bytes and hold more: never read past the size checked.
+        let e = read_limited(Path::new("/proc/self/status"), 1 << 20).unwrap_err();
+        assert!(e.to_string().contains("more than the 0 bytes"), "{e}");
         assert!(read_limited(&f, 99).is_err());
         assert_eq!(read_limited(&f, 100).unwrap().len(), 100);
         std::fs::remove_dir_all(&dir).unwrap();

@@ -49,3 +49,40 @@ pub fn load_pattern(path: &Path) -> Result<Pattern, TextureError> {
         texels,
     })
 }
+
+/// Bytes loading the pattern at `path` holds at its peak, from its header: the decoded image as
+/// stored and its linear f32 RGB texels. `None` when the header cannot be read (the load then
+/// reports why).
+pub fn memory_need(path: &Path) -> Option<u64> {
+    use image::ImageDecoder;
+    crate::input::check_regular(path).ok()?;
+    let decoder = image::ImageReader::open(path)
+        .ok()?
+        .with_guessed_format()
+        .ok()?
+        .into_decoder()
+        .ok()?;
+    let (w, h) = decoder.dimensions();
+    let texels = u64::from(w) * u64::from(h);
+    Some(decoder.total_bytes().saturating_add(texels.saturating_mul(12)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_memory_need_counts_the_decoded_image_and_its_f32_texels() {
+        let dir = std::env::temp_dir().join(format!("cs-pattern-need-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("p.png");
+        image::RgbImage::new(300, 200).save(&path).unwrap();
+        // 300 × 200 RGB8 decoded (3 bytes a texel) and as f32 RGB (12 bytes a texel).
+        assert_eq!(memory_need(&path), Some(300 * 200 * (3 + 12)));
+        let gray = dir.join("g.png");
+        image::GrayImage::new(10, 10).save(&gray).unwrap();
+        assert_eq!(memory_need(&gray), Some(10 * 10 * (1 + 12)));
+        assert_eq!(memory_need(&dir.join("missing.png")), None);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

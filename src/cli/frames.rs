@@ -14,6 +14,10 @@ use crate::cli::exit::{self, Failure};
 /// Default `--time-step`: detail time advanced per frame.
 pub const DEFAULT_TIME_STEP: f64 = 0.05;
 
+/// Most frames one `--frames` run renders: every frame's output paths are checked before the
+/// first is rendered, so the list is held in memory (4 bytes a frame, and its paths).
+pub const MAX_FRAMES: u32 = 1_000_000;
+
 /// The frames to render: a half-open range of frame numbers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FrameRange {
@@ -43,6 +47,13 @@ impl FrameRange {
         };
         if end <= start {
             return Err(bad());
+        }
+        if end - start > MAX_FRAMES {
+            return Err(format!(
+                "`{text}` asks for {} frames, at most {MAX_FRAMES} in one run (split a longer \
+                 sequence into several runs, as docs/scale-out.md does)",
+                end - start
+            ));
         }
         Ok(FrameRange { start, end })
     }
@@ -184,6 +195,16 @@ pub fn apply_size(scene: &mut Scene, w: u32, h: u32) -> Result<Option<String>, F
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_range_longer_than_max_frames_is_refused_before_any_list() {
+        let ok = format!("7..{}", 7 + MAX_FRAMES);
+        assert_eq!(FrameRange::parse(&ok).map(|r| r.end - r.start), Ok(MAX_FRAMES));
+        let e = FrameRange::parse("0..4000000000").unwrap_err();
+        assert!(e.contains("4000000000 frames") && e.contains("at most 1000000"), "{e}");
+        let e = FrameRange::parse("0..=4294967294").unwrap_err();
+        assert!(e.contains("4294967295 frames"), "{e}");
+    }
 
     #[test]
     fn ranges_patterns_and_sizes_parse() {

@@ -48,7 +48,9 @@ pub struct MemoryNeed {
     /// The output image as floats, its 8-bit encoding and the encoded file (estimate).
     pub output: u64,
     /// Input data held while rendering, from the files' sizes: 3D textures (the file and its
-    /// f32 voxels while loading; rendering only) and OBJ files (twice the text: the parsed mesh).
+    /// f32 voxels while loading; rendering only), light patterns (the decoded image and its f32
+    /// texels, from the header; rendering only) and OBJ files (counted from their lines,
+    /// `convshadow_io::obj::memory_need`).
     pub inputs: u64,
     /// Device buffers of the GPU backend before any fragment (0 on the CPU, see
     /// [`MemoryNeed::on_gpu`]): its two light buffers per light and plane, layer cursors,
@@ -68,7 +70,9 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
         .meshes
         .iter()
         .filter_map(|m| match &m.shape {
-            ShapeSpec::Obj { path } => Some(2 * size(path)),
+            ShapeSpec::Obj { path } => Some(
+                convshadow_io::obj::memory_need(path).unwrap_or_else(|| 2 * size(path)),
+            ),
             _ => None,
         })
         .sum();
@@ -92,7 +96,20 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
             }
         })
         .fold(0u64, u64::saturating_add);
-    meshes.saturating_add(texture_bytes)
+    // Light patterns: the decoded image and its f32 texels, from the header (the file's size
+    // says nothing of a PNG's decoded size); from 16 f32 bytes per stored byte when unreadable.
+    let pattern_bytes: u64 = scene
+        .lights
+        .iter()
+        .filter_map(|l| l.pattern.as_ref())
+        .map(|p| {
+            convshadow_io::pattern::memory_need(&p.path)
+                .unwrap_or_else(|| size(&p.path).saturating_mul(16))
+        })
+        .fold(0u64, u64::saturating_add);
+    meshes
+        .saturating_add(texture_bytes)
+        .saturating_add(pattern_bytes)
 }
 
 impl MemoryNeed {

@@ -77,7 +77,7 @@ pub struct RenderArgs {
     pub tonemap: Option<String>,
     /// Render frames A..B (B excluded; A..=B includes it) of the 4D detail: frame k sets every
     /// detail material's time to its detail.time (or 0) + k·--time-step. Outputs need a frame
-    /// pattern such as out_%04d.png.
+    /// pattern such as out_%04d.png. At most 1000000 frames a run.
     #[arg(long, value_name = "A..B", conflicts_with = "frame")]
     pub frames: Option<String>,
     /// Render frame K alone: the same bits as frame K of --frames.
