@@ -396,6 +396,84 @@ fn a_scene_over_the_memory_budget_is_refused_before_allocating() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Issue 43, class 1: allocations sized by a scene value, each once not seen by the budget.
+/// Every case runs under a small `--max-memory` and must end (rendered or refused with exit code
+/// 4, or a usage error) with a peak RSS within that budget plus the binary's own footprint.
+/// Before the fixes: a far mesh aborted on a 48 GiB allocation, 16 lights × 65536 slabs peaked
+/// at 198 MB under 8 MiB, a 6-million-index face (12 MB of text, counted 24 MB) took ~200 MB under 32 MiB, a 4096² pattern
+/// ~230 MB under 64 MiB, and `--frames 0..4000000000` aborted on a 16 GB list.
+#[test]
+fn allocations_sized_by_a_scene_value_stay_within_the_budget() {
+    let dir = support::temp_dir("rel-class1");
+    let (code, _, base_kib) = run_measured(&["render", "missing.toml", "-o", "x.png"], &dir);
+    assert_eq!(code, BAD_INPUT);
+    let head = "[image]\nwidth = 32\nheight = 32\n[camera]\nview_width = 2.0\n";
+    let boxed = "[[mesh]]\nshape = \"box\"\nsize = [1.0, 1.0, 1.0]\nmaterial = \"m\"\n\
+                 [material.m]\nopacity = 0.5\n";
+    // 1. The quiet chunks' row windows, sized by the kernel's vertical reach: a wide light
+    //    over slabs at the documented maximum thickness.
+    let far = format!(
+        "{head}[sweep]\nslab_distance = 1e9\n[[light]]\nvariance = [1.0, 1.0]\n{boxed}"
+    );
+    // 2. Kernel tables: 16 lights × 65536 slabs, about 20 MiB of tables.
+    let mut lights = format!("{head}[sweep]\nslabs = 65536\n");
+    for i in 0..16 {
+        lights += &format!("[[light]]\ntilt_deg = [{i}.0, 0.0]\nvariance = [0.02, 0.01]\n");
+    }
+    lights += boxed;
+    // 3. An OBJ face of 6 million indices (12 MB of text; a fan of as many triangles).
+    let mut obj = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\nf");
+    for _ in 0..2_000_000 {
+        obj += " 1 2 3";
+    }
+    obj.push('\n');
+    std::fs::write(dir.join("wide_face.obj"), obj).unwrap();
+    let face = format!(
+        "{head}[sweep]\nslabs = 4\n[[light]]\n[[mesh]]\nshape = \"obj\"\npath = \"wide_face.obj\"\n\
+         material = \"m\"\n[material.m]\nopacity = 0.5\n"
+    );
+    // 4. A light pattern: a 4096² grey PNG of a few kB decodes to 16 MiB and 201 MiB of f32
+    //    texels.
+    image::GrayImage::new(4096, 4096)
+        .save(dir.join("gobo.png"))
+        .unwrap();
+    let pattern = format!(
+        "{head}[sweep]\nslabs = 4\n[[light]]\npattern = {{ path = \"gobo.png\", size = [2.0, 2.0] }}\n\
+         {boxed}"
+    );
+    for (name, text, budget, refused) in [
+        ("far", far, 64, None),
+        ("lights", lights, 8, Some(&["kernel tables", "MiB"][..])),
+        ("face", face, 32, Some(&["needs", "MiB", "textures and meshes"][..])),
+        ("pattern", pattern, 64, Some(&["needs", "MiB", "textures and meshes"][..])),
+    ] {
+        let file = format!("{name}.toml");
+        std::fs::write(dir.join(&file), text).unwrap();
+        let out = format!("{name}.png");
+        let mib = budget.to_string();
+        let args = ["render", &file, "-o", &out, "--max-memory", &mib];
+        let (code, err, kib) = run_measured(&args, &dir);
+        match refused {
+            None => assert_eq!(code, 0, "{name}: {err}"),
+            Some(what) => assert_refused(name, code, RESOURCE_LIMIT, &err, what),
+        }
+        let over = kib.saturating_sub(base_kib) / 1024;
+        assert!(
+            over <= budget + 4,
+            "{name}: peak RSS {} MiB, {over} MiB over the binary's own {} MiB, under \
+             --max-memory {budget}",
+            kib / 1024,
+            base_kib / 1024
+        );
+    }
+    // 5. A frame range is refused before any list of its frames exists.
+    let args = ["render", "far.toml", "-o", "f_%010d.png", "--frames", "0..4000000000"];
+    let (code, err, kib) = run_measured(&args, &dir);
+    assert_refused("frames", code, 2, &err, &["--frames", "at most 1000000"]);
+    assert!(kib.saturating_sub(base_kib) < 64 << 10, "frames: peak RSS {kib} KiB");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A slow scene: 1024² px, 16 coloured lights (3 channels), 2048 slabs. Its first light buffer
 /// alone is 16·3·1024²·4 B = 192 MiB, the second as much once the first slab has written it.
 const SLOW_SCENE: &str = r#"
