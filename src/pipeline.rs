@@ -319,7 +319,13 @@ impl Engine {
                 };
                 let used = guard.used();
                 Err(budget::tables_over_budget(
-                    scene, levels, used, "more than ", backend, allowance, fragments,
+                    scene,
+                    levels,
+                    used,
+                    "more than ",
+                    backend,
+                    allowance,
+                    fragments,
                 ))
             }
         }

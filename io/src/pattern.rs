@@ -64,7 +64,11 @@ pub fn memory_need(path: &Path) -> Option<u64> {
         .ok()?;
     let (w, h) = decoder.dimensions();
     let texels = u64::from(w) * u64::from(h);
-    Some(decoder.total_bytes().saturating_add(texels.saturating_mul(12)))
+    Some(
+        decoder
+            .total_bytes()
+            .saturating_add(texels.saturating_mul(12)),
+    )
 }
 
 #[cfg(test)]

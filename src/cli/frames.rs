@@ -199,9 +199,15 @@ mod tests {
     #[test]
     fn a_range_longer_than_max_frames_is_refused_before_any_list() {
         let ok = format!("7..{}", 7 + MAX_FRAMES);
-        assert_eq!(FrameRange::parse(&ok).map(|r| r.end - r.start), Ok(MAX_FRAMES));
+        assert_eq!(
+            FrameRange::parse(&ok).map(|r| r.end - r.start),
+            Ok(MAX_FRAMES)
+        );
         let e = FrameRange::parse("0..4000000000").unwrap_err();
-        assert!(e.contains("4000000000 frames") && e.contains("at most 1000000"), "{e}");
+        assert!(
+            e.contains("4000000000 frames") && e.contains("at most 1000000"),
+            "{e}"
+        );
         let e = FrameRange::parse("0..=4294967294").unwrap_err();
         assert!(e.contains("4294967295 frames"), "{e}");
     }

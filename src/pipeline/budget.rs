@@ -70,9 +70,9 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
         .meshes
         .iter()
         .filter_map(|m| match &m.shape {
-            ShapeSpec::Obj { path } => Some(
-                convshadow_io::obj::memory_need(path).unwrap_or_else(|| 2 * size(path)),
-            ),
+            ShapeSpec::Obj { path } => {
+                Some(convshadow_io::obj::memory_need(path).unwrap_or_else(|| 2 * size(path)))
+            }
             _ => None,
         })
         .sum();
@@ -295,7 +295,9 @@ pub(super) fn check_tables(
         return Ok(());
     }
     let levels = plan.lights.first().map_or(1, |l| l.table.levels);
-    Err(tables_over_budget(scene, levels, tables, "", backend, free, fragments))
+    Err(tables_over_budget(
+        scene, levels, tables, "", backend, free, fragments,
+    ))
 }
 
 /// The refusal of kernel tables that need `tables` bytes (`at_least`: "more than " when the

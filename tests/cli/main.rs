@@ -8,6 +8,7 @@
 #[path = "../support/mod.rs"]
 mod support;
 
+mod budget_props;
 mod closed_output;
 mod diff_selftest;
 mod display_volumes;

@@ -287,7 +287,7 @@ fn spawn_cli(args: &[&str], cwd: &Path) -> std::process::Child {
 /// Runs the binary and reaps it with `wait4`: (exit code, stderr, peak RSS in KiB of that child
 /// alone; `getrusage(RUSAGE_CHILDREN)` would mix in the children of tests running in parallel).
 #[allow(clippy::zombie_processes)] // reaped by `wait4`, which `Child::wait` cannot replace
-fn run_measured(args: &[&str], cwd: &Path) -> (i32, String, u64) {
+pub(crate) fn run_measured(args: &[&str], cwd: &Path) -> (i32, String, u64) {
     let mut child = spawn_cli(args, cwd);
     let mut err = String::new();
     child
@@ -412,9 +412,8 @@ fn allocations_sized_by_a_scene_value_stay_within_the_budget() {
                  [material.m]\nopacity = 0.5\n";
     // 1. The quiet chunks' row windows, sized by the kernel's vertical reach: a wide light
     //    over slabs at the documented maximum thickness.
-    let far = format!(
-        "{head}[sweep]\nslab_distance = 1e9\n[[light]]\nvariance = [1.0, 1.0]\n{boxed}"
-    );
+    let far =
+        format!("{head}[sweep]\nslab_distance = 1e9\n[[light]]\nvariance = [1.0, 1.0]\n{boxed}");
     // 2. Kernel tables: 16 lights × 65536 slabs, about 20 MiB of tables.
     let mut lights = format!("{head}[sweep]\nslabs = 65536\n");
     for i in 0..16 {
@@ -444,8 +443,18 @@ fn allocations_sized_by_a_scene_value_stay_within_the_budget() {
     for (name, text, budget, refused) in [
         ("far", far, 64, None),
         ("lights", lights, 8, Some(&["kernel tables", "MiB"][..])),
-        ("face", face, 32, Some(&["needs", "MiB", "textures and meshes"][..])),
-        ("pattern", pattern, 64, Some(&["needs", "MiB", "textures and meshes"][..])),
+        (
+            "face",
+            face,
+            32,
+            Some(&["needs", "MiB", "textures and meshes"][..]),
+        ),
+        (
+            "pattern",
+            pattern,
+            64,
+            Some(&["needs", "MiB", "textures and meshes"][..]),
+        ),
     ] {
         let file = format!("{name}.toml");
         std::fs::write(dir.join(&file), text).unwrap();
@@ -467,10 +476,20 @@ fn allocations_sized_by_a_scene_value_stay_within_the_budget() {
         );
     }
     // 5. A frame range is refused before any list of its frames exists.
-    let args = ["render", "far.toml", "-o", "f_%010d.png", "--frames", "0..4000000000"];
+    let args = [
+        "render",
+        "far.toml",
+        "-o",
+        "f_%010d.png",
+        "--frames",
+        "0..4000000000",
+    ];
     let (code, err, kib) = run_measured(&args, &dir);
     assert_refused("frames", code, 2, &err, &["--frames", "at most 1000000"]);
-    assert!(kib.saturating_sub(base_kib) < 64 << 10, "frames: peak RSS {kib} KiB");
+    assert!(
+        kib.saturating_sub(base_kib) < 64 << 10,
+        "frames: peak RSS {kib} KiB"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

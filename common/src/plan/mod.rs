@@ -329,7 +329,8 @@ impl RenderPlan {
                     Penumbra::Distance => {
                         // A covariance step of f·e²·Σl is d1 = f·e in the iterated formula.
                         let per_e2 = |f: f64| moments_for(f * e);
-                        let table = build_distance_table(kernel, &per_e2, slabs, compensate, guard)?;
+                        let table =
+                            build_distance_table(kernel, &per_e2, slabs, compensate, guard)?;
                         (per_e2(1.0), table)
                     }
                 };

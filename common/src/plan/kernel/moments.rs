@@ -9,8 +9,17 @@ pub struct KernelMoments {
     pub cov: [[f64; 2]; 2],
 }
 
+/// Largest per-slab mean shift and standard deviation of a kernel (pixels): 2^26. The grid is at
+/// most 16384 + 2·4096 px a side, so a kernel that moves or spreads further in one slab reads
+/// (all but a part in 10^4 of) its light from beyond the grid, where the light is unoccluded,
+/// whatever its exact size; clamped there (the variances scaled together, keeping the shape),
+/// its taps' offsets, slab shifts and reaches stay within `i32` (in-range scenes with slabs a
+/// billion units thick and grazing lights asked for 10^11 px).
+pub const MAX_KERNEL_PX: f64 = 67_108_864.0;
+
 impl KernelMoments {
-    /// μκ = −e·μl, Σκ = d1·e·R(α)·diag(σx², σy²)·R(α)ᵀ, divided by px and px².
+    /// μκ = −e·μl, Σκ = d1·e·R(α)·diag(σx², σy²)·R(α)ᵀ, divided by px and px², each clamped to
+    /// [`MAX_KERNEL_PX`] (the mean per axis, the covariance by its larger principal variance).
     pub fn for_light(
         tilt_deg: [f64; 2],
         variance: [f64; 2],
@@ -27,9 +36,15 @@ impl KernelMoments {
             -slab_distance * mu_l[0] / pixel_size,
             -slab_distance * mu_l[1] / pixel_size,
         ];
+        let mean = mean.map(|m| m.clamp(-MAX_KERNEL_PX, MAX_KERNEL_PX));
         let (s, c) = rotation_deg.to_radians().sin_cos();
         let k = optimal_distance * slab_distance / (pixel_size * pixel_size);
-        let (vx, vy) = (variance[0] * k, variance[1] * k);
+        let (mut vx, mut vy) = (variance[0] * k, variance[1] * k);
+        let widest = vx.max(vy);
+        if widest > MAX_KERNEL_PX * MAX_KERNEL_PX {
+            let shrink = MAX_KERNEL_PX * MAX_KERNEL_PX / widest;
+            (vx, vy) = (vx * shrink, vy * shrink);
+        }
         let cov = [
             [c * c * vx + s * s * vy, c * s * (vx - vy)],
             [c * s * (vx - vy), s * s * vx + c * c * vy],
@@ -53,4 +68,23 @@ pub fn eigen2(cov: [[f64; 2]; 2]) -> (f64, f64, [f64; 2]) {
 pub(crate) fn principal_to_pixels(e1: [f64; 2]) -> impl Fn(f64, f64) -> [f64; 2] {
     let e2 = [-e1[1], e1[0]];
     move |u, v| [u * e1[0] + v * e2[0], u * e1[1] + v * e2[1]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_kernel_beyond_any_grid_is_clamped_keeping_its_shape() {
+        // Slabs 6e8 thick, a grazing light, 0.04-unit pixels: 1.2e11 px per slab unclamped.
+        let m = KernelMoments::for_light([83.0, -60.0], [6000.0, 60.0], 0.0, 6e8, 6e8, 0.04);
+        assert_eq!(m.mean, [-MAX_KERNEL_PX, MAX_KERNEL_PX]);
+        let max_var = MAX_KERNEL_PX * MAX_KERNEL_PX;
+        assert!((m.cov[0][0] - max_var).abs() <= 1e-9 * max_var, "{m:?}");
+        assert!((m.cov[1][1] / m.cov[0][0] - 0.01).abs() < 1e-12, "{m:?}");
+        // Within the limits nothing changes.
+        let n = KernelMoments::for_light([30.0, 0.0], [0.02, 0.01], 10.0, 0.01, 0.5, 0.01);
+        assert!((n.mean[0] + 0.01 * 30f64.to_radians().tan() / 0.01).abs() < 1e-12);
+        assert!((n.cov[0][0] + n.cov[1][1] - 0.03 * 0.5 * 0.01 / 1e-4).abs() < 1e-9);
+    }
 }

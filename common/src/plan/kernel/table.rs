@@ -66,7 +66,10 @@ impl<'a> TableGuard<'a> {
         let bytes = (taps as u64)
             .saturating_mul(self.bytes_per_tap)
             .saturating_add((words as u64).saturating_mul(self.bytes_per_word));
-        let used = self.used.fetch_add(bytes, Ordering::Relaxed).saturating_add(bytes);
+        let used = self
+            .used
+            .fetch_add(bytes, Ordering::Relaxed)
+            .saturating_add(bytes);
         used <= self.limit
     }
 }
@@ -237,7 +240,15 @@ fn build_table_with_carry(
     carry: bool,
 ) -> KernelTable {
     let (pattern_mean, slab_shift) = mean_carry(moments, slabs, carry);
-    build_table_around(spec, moments, slabs, compensate, carry, pattern_mean, slab_shift)
+    build_table_around(
+        spec,
+        moments,
+        slabs,
+        compensate,
+        carry,
+        pattern_mean,
+        slab_shift,
+    )
 }
 
 /// The mean a pattern is read around and the whole-pixel shift of each slab: with `carry`, the
@@ -482,12 +493,17 @@ pub fn build_distance_table(
         .collect::<Option<_>>()?;
     let phase_count = tables.iter().map(|t| t.phase_count).max().unwrap_or(1);
     let taps_per_phase = tables.iter().map(|t| t.taps_per_phase).max().unwrap_or(1);
+    // The merged table pads every level to the widest (held beside the levels while merged).
+    let merged = tables.len() * (phase_count * taps_per_phase) as usize;
+    if !guard.charge(merged, 0) {
+        return None;
+    }
     let zero = Tap {
         dx: 0,
         dy: 0,
         w: [0.0; 4],
     };
-    let mut taps = Vec::with_capacity(tables.len() * (phase_count * taps_per_phase) as usize);
+    let mut taps = Vec::with_capacity(merged);
     let mut slab_phase = Vec::new();
     for t in &tables {
         for p in 0..phase_count {

@@ -649,12 +649,20 @@ mod tests {
             let spans: Vec<RowSpans> = (0..h).map(|_| random_spans(&mut rng)).collect();
             window_hulls(&spans, y0, y1, &mut out, &mut scratch);
             assert_eq!(out.len(), h);
-            assert!(scratch[0].len() <= 3 * h, "scratch of {} rows", scratch[0].len());
+            assert!(
+                scratch[0].len() <= 3 * h,
+                "scratch of {} rows",
+                scratch[0].len()
+            );
             for (y, got) in out.iter().enumerate() {
                 let lo = (y as i64 + i64::from(y0)).max(0);
                 let hi = (y as i64 + i64::from(y1)).min(h as i64 - 1);
                 let mut want = kinds(&RowSpans::EMPTY);
-                let rows = if lo <= hi { &spans[lo as usize..=hi as usize] } else { &[][..] };
+                let rows = if lo <= hi {
+                    &spans[lo as usize..=hi as usize]
+                } else {
+                    &[][..]
+                };
                 for row in rows {
                     for (w, r) in want.iter_mut().zip(kinds(row)) {
                         *w = (w.0.min(r.0), w.1.max(r.1));
