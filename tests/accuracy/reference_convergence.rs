@@ -671,3 +671,33 @@ fn the_reference_converges_on_a_plate_at_60_degrees_without_shadowing_itself() {
     let (rmse, n) = rmse_per_m(&images, &expected);
     assert_converges("plate at 60° under a half-plane", &rmse, n, 1500);
 }
+
+#[test]
+fn the_reference_gives_the_same_bits_on_any_thread_count() {
+    // Hashes for every random number and a fixed summation order per pixel: the image of a
+    // scene with crossings (the icosphere over its receiver) does not depend on the threads.
+    let scene = sphere_scene();
+    let g = convshadow_io::build_geometry(&scene).unwrap_or_else(|e| panic!("{e}"));
+    let ldi = Ldi::build(&g.raster, 1 << 30).unwrap_or_else(|e| panic!("{e}"));
+    let plan = convshadow_io::build_plan(&scene, &g).unwrap_or_else(|e| panic!("{e}"));
+    let reference = Reference::new(&scene, &g, &plan, 0.0);
+    let options = ReferenceOptions {
+        samples: 16,
+        ..ReferenceOptions::default()
+    };
+    let render = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let image = pool.install(|| reference.render(&ldi, &options));
+        image.iter().map(|v| v.to_bits()).collect::<Vec<u32>>()
+    };
+    let one = render(1);
+    assert!(
+        one.iter()
+            .any(|&b| f32::from_bits(b) > 0.0 && f32::from_bits(b) < 1.0)
+    );
+    assert_eq!(one, render(3));
+    assert_eq!(one, render(8));
+}
