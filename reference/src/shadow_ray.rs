@@ -7,9 +7,14 @@
 //!   point, else the slab centre plus the same hashed jitter), the same material, detail value,
 //!   transfer function, specular term and front-to-back compositing. Only the light term `Iin`
 //!   differs, so the image difference is the shadow error and nothing else.
-//! - **Light directions**: per shading point and light, `M = k²` directions, one per cell of a
-//!   k×k stratification of the unit square, jittered by the integer hash (no `rand`), mapped
-//!   through the inverse normal CDF to the light's Gaussian `N(μl, R diag(σ²) Rᵀ)` per unit depth.
+//! - **Light directions**: per shading point and light, `M = k²` multi-jittered directions
+//!   (Chiu, Shirley and Wang 1994): one per cell of a k×k stratification of the unit square and
+//!   at the same time one per each of the M fine strata of either axis, the fine strata assigned
+//!   by hashed permutations ([`permute`], Kensler 2013) and jittered by the integer hash (no
+//!   `rand`), mapped through the inverse normal CDF to the light's Gaussian
+//!   `N(μl, R diag(σ²) Rᵀ)` per unit depth. The fine strata make a shadow edge along a principal
+//!   axis of the light converge like 1/M instead of the plain k×k grid's M^-3/4; any other edge
+//!   converges like M^-3/4 (docs/accuracy.md, "The ground-truth reference").
 //! - **Inside test**: exact. Each shadow ray is intersected (Möller–Trumbore, f64) with the
 //!   world triangles whose screen bounding box it passes (a 2D bin grid), and the crossings are
 //!   counted even-odd from the light side, where every point is outside. The LDI's fragments are
@@ -24,9 +29,17 @@
 //!   between the model and physically based transport. Detail media are marched with a step
 //!   given to [`Reference::new`] (by default an eighth of the slab thickness),
 //!   constant media are integrated in closed form. Opacity 1 is an infinite extinction: any
-//!   positive length blocks the light. Crossings closer than 2^-16 (relative) to the
-//!   shading point are ignored, so a ray does not hit the surface it starts on (a crossing's
-//!   shading point has the LDI's f32 depth, a few ulps off the surface).
+//!   positive length blocks the light.
+//! - **Surface crossings**: the model reads the light *arriving at* a crossed surface, which the
+//!   surface itself does not occlude. A crossing's shadow rays start on the exact surface under
+//!   the pixel centre (the mesh's triangle there, intersected in f64: the LDI's f32 depth is off
+//!   the surface by rounding and by the vertices' fixed-point snapping, by up to ~1e-4 of depth
+//!   on a surface at 60° to the view, which made whole rows of such a plate shadow themselves)
+//!   and do not count that triangle as crossed; a ray heading into the mesh then meets its far
+//!   side and is attenuated by the inside (an opaque sphere's surface point is lit by the
+//!   directions of its tangent half-space), a ray heading out meets nothing of it. Crossings
+//!   within 2^-30 (relative) of the start are the start met again through rounding (a
+//!   neighbouring triangle at a shared edge, a coincident face) and are ignored. See [`Start`].
 //!
 //! - **Patterned lights**: a ray's transmittance is multiplied by the light's initial light
 //!   (its pattern, as the plan sampled it at pixel centres; bilinear between them, 1 outside the
@@ -283,19 +296,27 @@ impl<'a> Reference<'a> {
     /// Transmittance per channel from point `p` (grid px x, y; relative depth z) towards the
     /// light along direction offset `dir` (grid px per unit depth): the product over the media
     /// the ray crosses before reaching `p`.
-    fn transmittance(&self, p: [f64; 3], dir: [f64; 2], scratch: &mut Scratch) -> [f64; 3] {
+    fn transmittance(
+        &self,
+        p: [f64; 3],
+        dir: [f64; 2],
+        start: Start,
+        scratch: &mut Scratch,
+    ) -> [f64; 3] {
         // The ray towards the light: q(u) = p + u·(dir, −1), u ∈ (0, p.z]; q(p.z) is at depth 0,
         // in front of every vertex, so it is outside every mesh.
         let end = [p[0] + p[2] * dir[0], p[1] + p[2] * dir[1]];
         self.candidates([p[0], p[1]], end, &mut scratch.tris);
         let d = [dir[0], dir[1], -1.0];
         scratch.hits.clear();
-        // A crossing's shading point has the LDI's f32 depth (a plane equation evaluated in f32:
-        // a few ulps off its surface, more along a ray that leaves a sloped surface at a shallow
-        // angle): a surface that close is the one the point lies on, else an opaque receiver
-        // whose depth rounded inwards would shadow itself completely.
-        let tol = (1.0 + p[2].abs()) / 65_536.0;
+        // The surface the ray starts on is not crossed (`start.skip`), and crossings closer than
+        // `start.tol` are the same surface met again through rounding (a neighbouring triangle
+        // at a shared edge, a coincident face): see [`Start`].
+        let tol = start.tol;
         for &i in &scratch.tris {
+            if i == start.skip {
+                continue;
+            }
             let t = &self.tris[i as usize];
             if let Some(u) = intersect(p, d, t)
                 && u > tol
@@ -373,16 +394,20 @@ impl<'a> Reference<'a> {
     }
 
     /// The light arriving at `p` (grid px, relative depth) from light `l`, per channel: the mean
-    /// transmittance over `k²` stratified directions; `stream` decorrelates the jitter.
+    /// transmittance over `k²` multi-jittered directions (see [`Reference::render`]); `stream`
+    /// decorrelates the jitter. `p` is taken as exact: crossings within 2^-30 (relative) of it
+    /// are ignored, so a point given on a surface is lit through that surface.
     pub fn light_at(&self, l: usize, p: [f64; 3], k: u32, seed: u32, stream: u32) -> [f64; 3] {
         let mut scratch = Scratch::default();
-        self.light_at_with(l, p, k, seed, stream, &mut scratch)
+        self.light_at_with(l, p, Start::free(p), k, seed, stream, &mut scratch)
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn light_at_with(
         &self,
         l: usize,
         p: [f64; 3],
+        start: Start,
         k: u32,
         seed: u32,
         stream: u32,
@@ -390,19 +415,22 @@ impl<'a> Reference<'a> {
     ) -> [f64; 3] {
         let (mu, f) = self.lights[l];
         let base = mix32(mix32(mix32(seed ^ k.wrapping_mul(0x2c1b_3c6d)) ^ stream) ^ l as u32);
+        let m = k * k;
+        let inv_m = 1.0 / f64::from(m);
         let mut acc = [0.0f64; 3];
         for a in 0..k {
             for b in 0..k {
                 let h = mix32(base ^ (a * k + b).wrapping_mul(0x9e37_79b9));
                 let j1 = (f64::from(h >> 8) + 0.5) / 16_777_216.0;
                 let j2 = (f64::from(mix32(h) >> 8) + 0.5) / 16_777_216.0;
-                let z1 = inverse_normal_cdf((f64::from(a) + j1) / f64::from(k));
-                let z2 = inverse_normal_cdf((f64::from(b) + j2) / f64::from(k));
+                let (fx, fy) = fine_strata(base, k, a, b);
+                let z1 = inverse_normal_cdf((f64::from(fx) + j1) * inv_m);
+                let z2 = inverse_normal_cdf((f64::from(fy) + j2) * inv_m);
                 let dir = [
                     mu[0] + f[0][0] * z1 + f[0][1] * z2,
                     mu[1] + f[1][0] * z1 + f[1][1] * z2,
                 ];
-                let mut t = self.transmittance(p, dir, scratch);
+                let mut t = self.transmittance(p, dir, start, scratch);
                 if self.plan.initial_light.is_some() {
                     // A patterned light: the ray leaves the scene through the first slab plane
                     // (depth 0) at p + p.z·dir, where the pattern gives the light's value.
@@ -416,8 +444,44 @@ impl<'a> Reference<'a> {
                 }
             }
         }
-        let m = f64::from(k * k);
-        acc.map(|v| v / m)
+        acc.map(|v| v / f64::from(m))
+    }
+
+    /// The exact surface point under the pixel centre (x, y) that the LDI's fragment of mesh
+    /// `mesh` at f32 depth `z` stands for: among the mesh's triangles whose projection holds
+    /// (x, y) (within 1e-9 in barycentric terms, so that a centre on a shared edge finds both),
+    /// the one whose plane at (x, y) is nearest `z`, if within a slab thickness. Returns that
+    /// depth, computed in f64 on the unsnapped triangle, and the triangle's index.
+    fn surface_point(&self, mesh: u32, x: f64, y: f64, z: f64) -> Option<(f64, u32)> {
+        let cell = |v: f64, a: usize| {
+            (((v - self.bin_origin[a]) / BIN).floor().max(0.0) as usize).min(self.bin_dims[a] - 1)
+        };
+        let bin = &self.bins[cell(y, 1) * self.bin_dims[0] + cell(x, 0)];
+        let mut best: Option<(f64, f64, u32)> = None;
+        for &i in bin {
+            let t = &self.tris[i as usize];
+            if t.mesh != mesh {
+                continue;
+            }
+            let det = t.e1[0] * t.e2[1] - t.e1[1] * t.e2[0];
+            if det == 0.0 {
+                continue; // edge-on to the view: no pixel centre's fragment
+            }
+            let (dx, dy) = (x - t.v0[0], y - t.v0[1]);
+            let a = (dx * t.e2[1] - dy * t.e2[0]) / det;
+            let b = (t.e1[0] * dy - t.e1[1] * dx) / det;
+            const EPS: f64 = 1e-9;
+            if a < -EPS || b < -EPS || a + b > 1.0 + EPS {
+                continue;
+            }
+            let depth = t.v0[2] + a * t.e1[2] + b * t.e2[2];
+            let off = (depth - z).abs();
+            if best.is_none_or(|(o, _, _)| off < o) {
+                best = Some((off, depth, i));
+            }
+        }
+        best.filter(|&(off, _, _)| off <= self.geometry.slab_distance)
+            .map(|(_, depth, i)| (depth, i))
     }
 
     /// Light `l`'s initial light (its pattern) at image position (x, y) in pixels (the ray
@@ -503,11 +567,35 @@ impl<'a> Reference<'a> {
                         let z = shading_depth(plan, ldi, crossed, front, jitter_row, x);
                         let tf = material_at(plan, mesh, ix as f32, iy as f32, z);
                         let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
-                        let pos = [ix as f64 + 0.5, iy as f64 + 0.5, f64::from(z)];
+                        let (cx, cy) = (ix as f64 + 0.5, iy as f64 + 0.5);
+                        // A crossing's shadow rays start on the exact surface and do not cross
+                        // it (see `Start`); a point inside a medium starts where it is.
+                        let (pos, start) = if crossed == NO_CROSSING {
+                            let pos = [cx, cy, f64::from(z)];
+                            (pos, Start::free(pos))
+                        } else {
+                            match self.surface_point(mesh, cx, cy, f64::from(z)) {
+                                Some((depth, tri)) => {
+                                    let pos = [cx, cy, depth];
+                                    (pos, Start::on(pos, tri))
+                                }
+                                None => {
+                                    let pos = [cx, cy, f64::from(z)];
+                                    (pos, Start::near(pos))
+                                }
+                            }
+                        };
                         let stream = mix32(mix32(p as u32) ^ slab);
                         for l in 0..lights {
-                            let t =
-                                self.light_at_with(l, pos, k, options.seed, stream, &mut scratch);
+                            let t = self.light_at_with(
+                                l,
+                                pos,
+                                start,
+                                k,
+                                options.seed,
+                                stream,
+                                &mut scratch,
+                            );
                             for (dst, v) in iin[l * ch..(l + 1) * ch].iter_mut().zip(t) {
                                 *dst = v as f32;
                             }
@@ -531,6 +619,103 @@ impl<'a> Reference<'a> {
                 }
             });
         image
+    }
+}
+
+/// Where a shadow ray starts, and what it does not count as crossed there.
+///
+/// The renderer's model at a surface crossing reads the light *arriving at* the surface point:
+/// the surface itself does not occlude it (its inside does, where a ray heads into it). So a
+/// crossing's rays start on the exact f64 surface under the pixel centre (not at the LDI's f32
+/// depth, which is off the surface by its rounding and the vertices' fixed-point snapping, up to
+/// ~1e-4 of depth on a surface at 60° to the view) and skip the triangle they start on; a ray
+/// heading into the mesh then crosses its far side and is attenuated by the inside, a ray
+/// heading out crosses nothing of it. Crossings closer than `tol` are the start met again
+/// through f64 rounding (a neighbouring triangle at a shared edge or vertex, a coincident face
+/// of a touching mesh) and are ignored too.
+#[derive(Clone, Copy, Debug)]
+struct Start {
+    /// Index of the triangle the ray starts on (`u32::MAX`: none).
+    skip: u32,
+    /// Crossings at ray parameters (depth) up to this are not counted.
+    tol: f64,
+}
+
+impl Start {
+    /// f64 rounding of a crossing at the start: 2^-30 relative to the depth.
+    fn rounding(p: [f64; 3]) -> f64 {
+        (1.0 + p[2].abs()) * (1.0 / 1_073_741_824.0)
+    }
+
+    /// A point off any surface (inside a medium or given exactly).
+    fn free(p: [f64; 3]) -> Start {
+        Start {
+            skip: u32::MAX,
+            tol: Start::rounding(p),
+        }
+    }
+
+    /// A point on triangle `tri`, exactly.
+    fn on(p: [f64; 3], tri: u32) -> Start {
+        Start {
+            skip: tri,
+            tol: Start::rounding(p),
+        }
+    }
+
+    /// A crossing whose triangle was not found (never seen in the tests; kept for safety): the
+    /// LDI's depth, with crossings within 2^-16 (relative) taken for its own surface.
+    fn near(p: [f64; 3]) -> Start {
+        Start {
+            skip: u32::MAX,
+            tol: (1.0 + p[2].abs()) / 65_536.0,
+        }
+    }
+}
+
+/// The multi-jittered sample of coarse cell (a, b) of a k×k grid (Chiu, Shirley and Wang 1994):
+/// its fine stratum (1/k² wide) on each axis, x from column a's permutation at row b, y from row
+/// b's permutation at column a, the permutations hashed from `base`. Every fine stratum of
+/// either axis holds exactly one of the k² samples (N-rooks) and every coarse cell one.
+fn fine_strata(base: u32, k: u32, a: u32, b: u32) -> (u32, u32) {
+    let col = mix32(base ^ a.wrapping_mul(0x68bc_21eb) ^ 0x0a11_ce55);
+    let row = mix32(base ^ b.wrapping_mul(0x02e5_be93) ^ 0x0b0b_cafe);
+    (a * k + permute(b, k, col), b * k + permute(a, k, row))
+}
+
+/// Kensler's hashed permutation of `0..l` (A. Kensler, "Correlated Multi-Jittered Sampling",
+/// Pixar technical memo 13-01, 2013): a bijection of the next power of two, cycle-walked into
+/// `0..l`; `p` selects the permutation. Integer-only, so the samples are the same everywhere.
+fn permute(i: u32, l: u32, p: u32) -> u32 {
+    let mut w = l - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    let mut i = i;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < l {
+            return (i + p % l) % l;
+        }
     }
 }
 
@@ -679,6 +864,35 @@ mod tests {
         for p in [1e-9, 0.001, 0.02, 0.3, 0.5, 0.77, 0.999] {
             let x = inverse_normal_cdf(p);
             assert!((normal_cdf(x) - p).abs() < 1e-13 * p.max(1e-3), "{p}");
+        }
+    }
+
+    #[test]
+    fn permute_is_a_permutation_and_the_samples_are_multi_jittered() {
+        for l in [1u32, 2, 3, 7, 16, 31, 32, 64] {
+            for p in [0u32, 1, 0xdead_beef, 0xffff_ffff, 12345] {
+                let mut seen = vec![false; l as usize];
+                for i in 0..l {
+                    let j = permute(i, l, p);
+                    assert!(j < l && !seen[j as usize], "l {l}, p {p}: {i} → {j}");
+                    seen[j as usize] = true;
+                }
+            }
+        }
+        // The fine strata of both axes are each hit once, the coarse cells once (k = 8, a few
+        // seeds).
+        let k = 8u32;
+        for base in [0u32, 7, 0x1234_5678] {
+            let (mut fx_seen, mut fy_seen) = (vec![0; 64], vec![0; 64]);
+            for a in 0..k {
+                for b in 0..k {
+                    let (fx, fy) = fine_strata(base, k, a, b);
+                    assert_eq!((fx / k, fy / k), (a, b));
+                    fx_seen[fx as usize] += 1;
+                    fy_seen[fy as usize] += 1;
+                }
+            }
+            assert!(fx_seen.iter().chain(&fy_seen).all(|&c| c == 1));
         }
     }
 

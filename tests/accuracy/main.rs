@@ -16,6 +16,7 @@ mod oblique_receiver;
 mod patterned_light;
 mod phase_function;
 mod preintegration;
+mod reference_convergence;
 mod slab_convergence;
 mod surface_shading;
 mod sweep_accuracy;
