@@ -48,7 +48,8 @@ pub struct MemoryNeed {
     /// The output image as floats, its 8-bit encoding and the encoded file (estimate).
     pub output: u64,
     /// Input data held while rendering, from the files' sizes: 3D textures (the file and its
-    /// f32 voxels while loading; rendering only) and OBJ files (twice the text: the parsed mesh).
+    /// f32 voxels while loading; rendering only) and mesh files (`convshadow_io::mesh::memory_need`:
+    /// twice a text file, four times binary data).
     pub inputs: u64,
     /// Device buffers of the GPU backend before any fragment (0 on the CPU, see
     /// [`MemoryNeed::on_gpu`]): its two light buffers per light and plane, layer cursors,
@@ -68,7 +69,7 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
         .meshes
         .iter()
         .filter_map(|m| match &m.shape {
-            ShapeSpec::Obj { path } => Some(2 * size(path)),
+            ShapeSpec::Obj { path } => Some(convshadow_io::mesh::memory_need(path)),
             _ => None,
         })
         .sum();
