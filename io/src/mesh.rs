@@ -158,6 +158,25 @@ mod tests {
     }
 
     #[test]
+    fn memory_need_counts_binary_files_four_times_and_text_twice() {
+        let dir = std::env::temp_dir().join(format!("cs-mesh-need-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (name, factor) in [("a.obj", 2), ("a.ply", 4), ("a.stl", 4), ("a.glb", 4)] {
+            std::fs::write(dir.join(name), [0u8; 100]).unwrap();
+            assert_eq!(memory_need(&dir.join(name)), factor * 100, "{name}");
+        }
+        // A .gltf counts its JSON twice and its buffers' byteLength four times.
+        let json = r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"b.bin","byteLength":1000}]}"#;
+        std::fs::write(dir.join("a.gltf"), json).unwrap();
+        assert_eq!(
+            memory_need(&dir.join("a.gltf")),
+            2 * json.len() as u64 + 4000
+        );
+        assert_eq!(memory_need(&dir.join("missing.ply")), 0);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn welding_merges_equal_positions_and_signed_zeros_and_drops_unused_vertices() {
         let mut w = Welder::new();
         let positions = [
