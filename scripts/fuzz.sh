@@ -9,12 +9,13 @@
 # Needs cargo-fuzz (`cargo install cargo-fuzz`) and a nightly toolchain (`rustup toolchain
 # install nightly`); without nightly it falls back to the stable compiler with RUSTC_BOOTSTRAP=1,
 # which accepts the -Z flags cargo-fuzz passes. The fuzz crate has its own [workspace], so the
-# project's `cargo build --workspace` never builds it. Seeds come from scenes/ and ../shared/models.
+# project's `cargo build --workspace` never builds it. Seeds come from scenes/, ../shared/models
+# and, for PLY, STL and glTF, a tetrahedron in each encoding written below.
 set -euo pipefail
 
 SECONDS_PER_TARGET="${1:-60}"
 JOBS="${JOBS:-1}"
-TARGETS="${TARGETS:-scene_parse obj_load ldi_build shapes}"
+TARGETS="${TARGETS:-scene_parse obj_load ply_load stl_load gltf_load ldi_build shapes}"
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$ROOT/fuzz"
 
@@ -31,7 +32,8 @@ else
 fi
 
 # Seed corpora (kept out of git; see fuzz/.gitignore).
-mkdir -p corpus/scene_parse corpus/obj_load corpus/ldi_build corpus/shapes
+mkdir -p corpus/scene_parse corpus/obj_load corpus/ply_load corpus/stl_load corpus/gltf_load \
+    corpus/ldi_build corpus/shapes
 cp -n "$ROOT"/scenes/*.toml corpus/scene_parse/ 2>/dev/null || true
 cp -n "$ROOT"/tests/data/bad/*.toml corpus/scene_parse/ 2>/dev/null || true
 MODELS="$ROOT/../shared/models"
@@ -39,6 +41,58 @@ if [ -d "$MODELS" ]; then
     for f in "$MODELS"/bad/*.obj "$MODELS"/cube*.obj "$MODELS"/sphere.obj "$MODELS"/torus.obj; do
         [ -f "$f" ] && cp -n "$f" corpus/obj_load/ 2>/dev/null || true
     done
+fi
+# PLY, STL and glTF seeds: a tetrahedron in each encoding (text here, binary through python3
+# when it is there); the fuzzer mutates from them.
+[ -f corpus/ply_load/tetra_ascii.ply ] || printf '%s\n' ply 'format ascii 1.0' \
+    'element vertex 4' 'property float x' 'property float y' 'property float z' \
+    'element face 4' 'property list uchar int vertex_indices' end_header \
+    '0 0 0' '1 0 0' '0 1 0' '0 0 1' '3 0 2 1' '3 0 1 3' '3 0 3 2' '3 1 2 3' \
+    >corpus/ply_load/tetra_ascii.ply
+if [ ! -f corpus/stl_load/tetra_ascii.stl ]; then
+    {
+        echo "solid t"
+        for f in "0 0 0;0 1 0;1 0 0" "0 0 0;1 0 0;0 0 1" "0 0 0;0 0 1;0 1 0" "1 0 0;0 1 0;0 0 1"; do
+            echo "facet normal 0 0 0"; echo "outer loop"
+            IFS=';' read -r a b c <<<"$f"; echo "vertex $a"; echo "vertex $b"; echo "vertex $c"
+            echo "endloop"; echo "endfacet"
+        done
+        echo "endsolid t"
+    } >corpus/stl_load/tetra_ascii.stl
+fi
+if command -v python3 >/dev/null && [ ! -f corpus/gltf_load/tetra.glb ]; then
+    python3 - "$ROOT/fuzz/corpus" <<'PY'
+import base64, json, struct, sys
+out = sys.argv[1]
+P = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+T = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n"
+ply += b"".join(struct.pack("<3f", *p) for p in P) + b"".join(struct.pack("<B3i", 3, *t) for t in T)
+open(f"{out}/ply_load/tetra_le.ply", "wb").write(ply)
+stl = b"solid binary".ljust(80, b" ") + struct.pack("<I", 4)
+stl += b"".join(struct.pack("<12fH", 0, 0, 0, *P[a], *P[b], *P[c], 0) for a, b, c in T)
+open(f"{out}/stl_load/tetra_bin.stl", "wb").write(stl)
+b = b"".join(struct.pack("<3f", *p) for p in P) + b"".join(struct.pack("<3I", *t) for t in T)
+def doc(uri):
+    buf = {"byteLength": len(b)}
+    if uri: buf["uri"] = uri
+    return {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0, "matrix": [2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 1, 2, 3, 1]}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                           "min": [0, 0, 0], "max": [1, 1, 1]},
+                          {"bufferView": 1, "componentType": 5125, "count": 12, "type": "SCALAR"}],
+            "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                            {"buffer": 0, "byteOffset": 48, "byteLength": 48}],
+            "buffers": [buf]}
+open(f"{out}/gltf_load/tetra_embedded.gltf", "w").write(json.dumps(
+    doc("data:application/octet-stream;base64," + base64.b64encode(b).decode())))
+j = json.dumps(doc(None)).encode()
+j += b" " * (-len(j) % 4)
+glb = b"glTF" + struct.pack("<II", 2, 12 + 8 + len(j) + 8 + len(b))
+glb += struct.pack("<I", len(j)) + b"JSON" + j + struct.pack("<I", len(b)) + b"BIN\0" + b
+open(f"{out}/gltf_load/tetra.glb", "wb").write(glb)
+PY
 fi
 
 mkdir -p logs

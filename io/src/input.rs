@@ -7,9 +7,13 @@ use std::path::Path;
 /// Largest scene file read (a scene is a few kilobytes of TOML).
 pub const MAX_SCENE_BYTES: u64 = 16 << 20;
 
-/// Largest OBJ file read (about 40 million triangles; the LDI of such a mesh needs more memory
-/// than the default budget of most machines anyway).
-pub const MAX_OBJ_BYTES: u64 = 4 << 30;
+/// Largest mesh file read, in any format (an OBJ of about 40 million triangles; the LDI of such a
+/// mesh needs more memory than the default budget of most machines anyway). A glTF file's
+/// buffers in other files are each read up to this size too.
+pub const MAX_MESH_BYTES: u64 = 4 << 30;
+
+/// Largest OBJ file read: [`MAX_MESH_BYTES`].
+pub const MAX_OBJ_BYTES: u64 = MAX_MESH_BYTES;
 
 /// Refuses anything but a regular file (after following links), before opening it: opening a
 /// FIFO for reading blocks until a writer appears.

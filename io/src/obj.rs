@@ -1,14 +1,13 @@
-//! OBJ reading: a validating scan that names the line, then tobj, then welding.
+//! OBJ reading: a validating scan that names the line, then tobj, then the shared welding
+//! ([`crate::mesh::Welder`]).
 
-use std::collections::HashMap;
-use std::collections::hash_map::Entry;
 use std::ops::Div;
 use std::path::Path;
 use std::str::FromStr;
 
-use glam::DVec3;
+use convshadow_common::prepare::mesh::{MeshError, MeshFormat, TriMesh};
 
-use convshadow_common::prepare::mesh::{MeshError, TriMesh};
+use crate::mesh::{Welder, read_file, too_many_vertices};
 
 /// Longest line excerpt quoted in an error message.
 pub(crate) const MAX_QUOTE: usize = 120;
@@ -283,13 +282,7 @@ pub(crate) fn without_polylines(bytes: &[u8]) -> Vec<u8> {
 /// Polylines (`l`) are ignored; materials are not read. Degenerate triangles are kept here and
 /// dropped by [`TriMesh::analyze`]. Polygons are triangulated by tobj as fans.
 pub fn load_obj(path: &Path) -> Result<TriMesh, MeshError> {
-    let bytes =
-        crate::input::read_limited(path, crate::input::MAX_OBJ_BYTES).map_err(|source| {
-            MeshError::Io {
-                path: path.to_path_buf(),
-                source,
-            }
-        })?;
+    let bytes = read_file(path, MeshFormat::Obj)?;
     // The empty Vec only tells the scan which float type tobj parses into.
     let summary = scan_obj(path, &bytes, &tobj::Mesh::default().positions)?;
     if summary.faces == 0 {
@@ -322,12 +315,7 @@ pub fn load_obj(path: &Path) -> Result<TriMesh, MeshError> {
             reason: source.to_string(),
         })?;
 
-    let invalid = |message: String| MeshError::Invalid {
-        path: path.to_path_buf(),
-        message,
-    };
-    let mut mesh = TriMesh::default();
-    let mut weld: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut welder = Welder::new();
     let mut local: Vec<u32> = Vec::new();
     for model in &models {
         let m = &model.mesh;
@@ -335,47 +323,35 @@ pub fn load_obj(path: &Path) -> Result<TriMesh, MeshError> {
         for p in m.positions.chunks_exact(3) {
             let q: [f64; 3] = [p[0].into(), p[1].into(), p[2].into()];
             if q.iter().any(|c| !c.is_finite()) {
-                return Err(invalid(format!(
-                    "a vertex of object \"{}\" has a non-finite coordinate {q:?} (expected finite numbers)",
-                    model.name
-                )));
+                return Err(MeshError::Invalid {
+                    path: path.to_path_buf(),
+                    message: format!(
+                        "a vertex of object \"{}\" has a non-finite coordinate {q:?} (expected finite numbers)",
+                        model.name
+                    ),
+                });
             }
-            // +0.0 normalises -0.0 to 0.0.
-            let key = q.map(|c| (c + 0.0).to_bits());
-            let id = match weld.entry(key) {
-                Entry::Occupied(e) => *e.get(),
-                Entry::Vacant(e) => {
-                    let Ok(next) = u32::try_from(mesh.positions.len()) else {
-                        return Err(invalid(format!(
-                            "more than {} distinct vertex positions (expected a mesh addressable with u32 indices)",
-                            u32::MAX
-                        )));
-                    };
-                    mesh.positions.push(DVec3::from_array(q));
-                    *e.insert(next)
-                }
-            };
-            local.push(id);
+            local.push(welder.vertex(q).ok_or_else(|| too_many_vertices(path))?);
         }
         for t in m.indices.chunks_exact(3) {
             let map = |i: u32| local.get(i as usize).copied();
             match (map(t[0]), map(t[1]), map(t[2])) {
-                (Some(a), Some(b), Some(c)) => mesh.triangles.push([a, b, c]),
+                (Some(a), Some(b), Some(c)) => welder.triangle([a, b, c]),
                 _ => {
-                    return Err(invalid(format!(
-                        "tobj produced a vertex index out of range in object \"{}\" (expected valid face indices)",
-                        model.name
-                    )));
+                    return Err(MeshError::Invalid {
+                        path: path.to_path_buf(),
+                        message: format!(
+                            "tobj produced a vertex index out of range in object \"{}\" (expected valid face indices)",
+                            model.name
+                        ),
+                    });
                 }
             }
         }
     }
-    if mesh.triangles.is_empty() {
-        return Err(MeshError::NoTriangles {
-            path: path.to_path_buf(),
-        });
-    }
-    Ok(mesh)
+    welder.finish().ok_or_else(|| MeshError::NoTriangles {
+        path: path.to_path_buf(),
+    })
 }
 
 /// Bytes loading and placing the OBJ file at `path` holds at its peak, counted from its lines

@@ -42,7 +42,7 @@ pub fn read_geometry_files(scene: &Scene) -> Result<GeometryFiles, GeometryError
         .enumerate()
         .map(|(index, spec)| match &spec.shape {
             ShapeSpec::Obj { path } => {
-                crate::obj::load_obj(path)
+                crate::mesh::load_mesh(path)
                     .map(Some)
                     .map_err(|source| GeometryError::Mesh {
                         scene: scene.source.clone(),

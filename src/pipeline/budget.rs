@@ -49,8 +49,8 @@ pub struct MemoryNeed {
     pub output: u64,
     /// Input data held while rendering, from the files' sizes: 3D textures (the file and its
     /// f32 voxels while loading; rendering only), light patterns (the decoded image and its f32
-    /// texels, from the header; rendering only) and OBJ files (counted from their lines,
-    /// `convshadow_io::obj::memory_need`).
+    /// texels, from the header; rendering only) and mesh files (`convshadow_io::mesh::memory_need`:
+    /// OBJ counted from its lines, binary data from its size).
     pub inputs: u64,
     /// Device buffers of the GPU backend before any fragment (0 on the CPU, see
     /// [`MemoryNeed::on_gpu`]): its two light buffers per light and plane, layer cursors,
@@ -70,9 +70,7 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
         .meshes
         .iter()
         .filter_map(|m| match &m.shape {
-            ShapeSpec::Obj { path } => {
-                Some(convshadow_io::obj::memory_need(path).unwrap_or_else(|| 2 * size(path)))
-            }
+            ShapeSpec::Obj { path } => Some(convshadow_io::mesh::memory_need(path)),
             _ => None,
         })
         .sum();

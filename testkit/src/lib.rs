@@ -1,5 +1,9 @@
 //! Test support shared by every crate's tests, benches and fuzz targets: [`TestRng`], a
-//! deterministic random sequence. Kept out of the production crates (a dev-dependency only).
+//! deterministic random sequence, and [`mesh_files`], mesh files in every format the renderer
+//! reads, written independently of its loaders. Kept out of the production crates (a
+//! dev-dependency only).
+
+pub mod mesh_files;
 
 use convshadow_common::pixel::hash::mix32;
 

@@ -13,6 +13,7 @@ mod closed_output;
 mod diff_selftest;
 mod display_volumes;
 mod ldi;
+mod mesh_formats;
 mod reliability;
 mod render;
 mod report_quick;

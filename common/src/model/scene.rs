@@ -282,7 +282,8 @@ pub enum ShapeSpec {
         /// Segments around.
         segments: u32,
     },
-    /// A Wavefront OBJ file.
+    /// A mesh file (`shape = "obj"` or `"file"`): Wavefront OBJ, PLY, glTF 2.0 or STL, the
+    /// format chosen by the path's extension (`MeshFormat::from_path`).
     Obj {
         /// Resolved path.
         path: PathBuf,

@@ -456,8 +456,11 @@ impl Validator<'_> {
             }
             Ok(v as u32)
         };
-        if raw.path.is_some() && raw.shape != "obj" {
-            return Err(self.err(key("path"), "`path` is only for shape = \"obj\""));
+        if raw.path.is_some() && raw.shape != "obj" && raw.shape != "file" {
+            return Err(self.err(
+                key("path"),
+                "`path` is only for shape = \"obj\" or \"file\"",
+            ));
         }
         Ok(match raw.shape.as_str() {
             "box" => {
@@ -508,14 +511,17 @@ impl Validator<'_> {
                     segments,
                 }
             }
-            "obj" => {
+            "obj" | "file" => {
                 if raw.size.is_some() {
-                    return Err(self.err(key("size"), "an obj mesh takes `path`, not `size`"));
+                    return Err(self.err(
+                        key("size"),
+                        format!("a {:?} mesh takes `path`, not `size`", raw.shape),
+                    ));
                 }
                 let p = raw.path.as_ref().ok_or_else(|| {
                     self.err(
                         key("path"),
-                        "expected `path` = the OBJ file, relative to the scene",
+                        "expected `path` = the mesh file (.obj, .ply, .gltf, .glb or .stl), relative to the scene",
                     )
                 })?;
                 ShapeSpec::Obj {
@@ -525,7 +531,9 @@ impl Validator<'_> {
             other => {
                 return Err(self.err(
                     key("shape"),
-                    format!("expected one of box, sphere, torus, cylinder, obj; got {other:?}"),
+                    format!(
+                        "expected one of box, sphere, torus, cylinder, obj, file; got {other:?}"
+                    ),
                 ));
             }
         })

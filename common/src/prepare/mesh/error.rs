@@ -1,8 +1,71 @@
-//! Why an OBJ file was refused: every message names the file, the line and what was expected.
+//! Why a mesh file was refused: every message names the file, the line or element, and what
+//! was expected.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-/// Errors of reading a mesh file (`convshadow_io::obj`); every message names the file, the line where known, and what was expected.
+/// The mesh file formats a scene's `path` may name, chosen by the file's extension
+/// ([`MeshFormat::from_path`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MeshFormat {
+    /// Wavefront OBJ (`.obj`, and any extension not listed below).
+    Obj,
+    /// PLY, the Stanford polygon format (`.ply`): ASCII or binary, either byte order.
+    Ply,
+    /// glTF 2.0 as JSON (`.gltf`, buffers embedded as data URIs or in files beside it).
+    Gltf,
+    /// glTF 2.0 binary (`.glb`).
+    Glb,
+    /// STL (`.stl`): ASCII or binary.
+    Stl,
+}
+
+impl MeshFormat {
+    /// The format a path names by its extension (case-insensitive); an unknown or missing
+    /// extension is OBJ, as every mesh file was before the other formats were read.
+    pub fn from_path(path: &Path) -> MeshFormat {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("ply") => MeshFormat::Ply,
+            Some("gltf") => MeshFormat::Gltf,
+            Some("glb") => MeshFormat::Glb,
+            Some("stl") => MeshFormat::Stl,
+            _ => MeshFormat::Obj,
+        }
+    }
+
+    /// The format's short name in messages ("OBJ", "PLY", "glTF", "STL").
+    pub fn name(self) -> &'static str {
+        match self {
+            MeshFormat::Obj => "OBJ",
+            MeshFormat::Ply => "PLY",
+            MeshFormat::Gltf | MeshFormat::Glb => "glTF",
+            MeshFormat::Stl => "STL",
+        }
+    }
+
+    /// What a readable file of the format is, in messages ("a readable Wavefront OBJ file").
+    pub fn expected(self) -> &'static str {
+        match self {
+            MeshFormat::Obj => "a readable Wavefront OBJ file",
+            MeshFormat::Ply => "a readable PLY file",
+            MeshFormat::Gltf => "a readable glTF 2.0 file",
+            MeshFormat::Glb => "a readable binary glTF 2.0 file",
+            MeshFormat::Stl => "a readable STL file",
+        }
+    }
+}
+
+impl std::fmt::Display for MeshFormat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Errors of reading a mesh file (`convshadow_io::mesh`); every message names the file, the
+/// line or element where known, and what was expected.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
     /// The scene names the file but the host did not read it before the geometry was built (a
@@ -12,11 +75,13 @@ pub enum MeshError {
         /// File path.
         path: PathBuf,
     },
-    /// The file could not be opened or read.
-    #[error("{}: cannot read OBJ file (expected a readable Wavefront OBJ file): {source}", .path.display())]
+    /// The file (or a file it names, such as a glTF buffer) could not be opened or read.
+    #[error("{}: cannot read {format} file (expected {}): {source}", .path.display(), .format.expected())]
     Io {
         /// File path.
         path: PathBuf,
+        /// The format the file was read as.
+        format: MeshFormat,
         /// Underlying I/O error.
         source: std::io::Error,
     },
@@ -92,6 +157,29 @@ pub enum MeshError {
     NoTriangles {
         /// File path.
         path: PathBuf,
+    },
+    /// A PLY, glTF or STL file that its format's parser refused, or whose header or structure
+    /// is wrong, where no single element is to blame (a bad header, a truncated file).
+    #[error("{}: not a valid {format} file: {message}", .path.display())]
+    Format {
+        /// File path.
+        path: PathBuf,
+        /// The format the file was read as.
+        format: MeshFormat,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// One element of a PLY, glTF or STL file is wrong: `element` names it the way the format
+    /// counts (`face 12`, `mesh 0 primitive 1`, `facet 7`; numbers from 0, as the formats' own
+    /// indices are).
+    #[error("{}: {element}: {message}", .path.display())]
+    Element {
+        /// File path.
+        path: PathBuf,
+        /// The element, e.g. `face 12` or `vertex 3`.
+        element: String,
+        /// What is wrong and what was expected.
+        message: String,
     },
     /// A whole-file inconsistency that has no single line (e.g. too many vertices for u32 indices).
     #[error("{}: {message}", .path.display())]

@@ -1,5 +1,5 @@
 //! Triangle meshes: procedural shapes and closure analysis (mesh files are read by
-//! `convshadow_io::obj`).
+//! `convshadow_io::mesh`: OBJ, PLY, glTF 2.0 and STL).
 //!
 //! Host geometry is `f64`; the rasterizer snaps vertices to fixed point later. Closure is judged
 //! by **position index** after welding vertices with bit-identical positions, because the parity
