@@ -43,7 +43,8 @@ pub struct MemoryNeed {
     /// and, with the distance penumbra, the occluder-depth plane; then (distance penumbra) the
     /// two level planes per light, u32.
     pub light_buffers: u64,
-    /// The sweep's per-pixel state: layer cursor, inside bits, colour and alpha.
+    /// The sweep's per-pixel state: layer cursor, inside bits, colour and alpha; the light in
+    /// planar order before and after the sweep; the level planes' block minima.
     pub sweep_state: u64,
     /// The output image as floats, its 8-bit encoding and the encoded file (estimate).
     pub output: u64,
@@ -127,7 +128,12 @@ impl MemoryNeed {
             (
                 2 * lights * (channels + 2 * depth_planes) * 4 * grid_pixels,
                 // Cursor, inside bits, colour, alpha; with pre-integration the kept front value.
-                (4 + 4 + 12 + 4 + if scene.sweep.preintegration { 4 } else { 0 }) * grid_pixels,
+                // Then the light in planar order before and after the sweep (the initial buffer
+                // it starts from and the final one it returns, beside its own pixel-interleaved
+                // pair), and the level planes' 2×2 block minima.
+                (4 + 4 + 12 + 4 + if scene.sweep.preintegration { 4 } else { 0 }) * grid_pixels
+                    + 2 * lights * (channels + depth_planes) * 4 * grid_pixels
+                    + lights * depth_planes * 4 * grid_pixels,
                 (12 + 3 + 3) * image_pixels,
             )
         } else {
