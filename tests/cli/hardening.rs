@@ -1,0 +1,303 @@
+//! Issue 43, classes 4–7 (docs/errors.md, "Hardening"): outputs checked before the work and
+//! never written in place or over an input, gates that can fail, bad input refused, and messages
+//! that name the right culprit. Each test failed on the code before its fix.
+
+use crate::support;
+
+use std::path::Path;
+
+use convshadow::io::image::RgbImage;
+
+/// Exit codes (docs/errors.md).
+const BAD_ARGUMENTS: i32 = 2;
+const OUTPUT_FAILED: i32 = 7;
+
+/// A 4×4 EXR whose every value is 0.25 but pixel (1, 2) channel 0, which is `at`.
+fn exr_with(dir: &Path, name: &str, at: f32) {
+    let mut data = vec![0.25f32; 4 * 4 * 3];
+    data[(2 * 4 + 1) * 3] = at;
+    RgbImage {
+        width: 4,
+        height: 4,
+        data,
+    }
+    .save(&dir.join(name))
+    .unwrap();
+}
+
+/// Runs `convshadow ARGS` in `dir`.
+fn cli(dir: &Path, args: &[&str]) -> (i32, String, String) {
+    support::run_cli(args, dir)
+}
+
+/// Asserts a refusal: the code, one error line, no panic, and the words.
+fn refused(what: &str, (code, _, err): &(i32, String, String), expected: i32, words: &[&str]) {
+    assert!(!err.contains("panicked"), "{what}: panicked:\n{err}");
+    assert_eq!(*code, expected, "{what}: exit code; stderr:\n{err}");
+    for w in words {
+        assert!(err.contains(w), "{what}: message must name {w:?}: {err}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Class 5: gates that cannot fail, or fail wrongly.
+
+#[test]
+fn diff_limits_that_no_gate_can_use_are_bad_arguments() {
+    let dir = support::temp_dir("h43-diff-limits");
+    exr_with(&dir, "a.exr", 0.25);
+    exr_with(&dir, "b.exr", 9.0);
+    // NaN made `value > limit` false for every image: the gate always passed (exit 0).
+    for (flag, value) in [
+        ("--max-abs", "NaN"),
+        ("--max-rmse", "nan"),
+        ("--max-flip", "NaN"),
+        ("--max-abs", "-1"),
+        ("--max-rmse", "-0.5"),
+        ("--max-abs", "inf"),
+    ] {
+        let arg = format!("{flag}={value}");
+        let r = cli(&dir, &["diff", "a.exr", "b.exr", &arg]);
+        refused(&arg, &r, BAD_ARGUMENTS, &[flag, "finite", ">= 0"]);
+    }
+    // Valid limits still gate: 0 passes identical images, fails different ones.
+    assert_eq!(
+        cli(&dir, &["diff", "a.exr", "a.exr", "--max-abs", "0"]).0,
+        0
+    );
+    assert_eq!(
+        cli(&dir, &["diff", "a.exr", "b.exr", "--max-abs", "0"]).0,
+        1
+    );
+}
+
+#[test]
+fn identical_images_holding_infinities_differ_by_nothing() {
+    let dir = support::temp_dir("h43-diff-inf");
+    exr_with(&dir, "a.exr", f32::INFINITY);
+    exr_with(&dir, "b.exr", f32::INFINITY);
+    exr_with(&dir, "m.exr", f32::NEG_INFINITY);
+    // inf − inf is NaN: bit-identical images failed `--max-rmse 0`.
+    let r = cli(
+        &dir,
+        &[
+            "diff",
+            "a.exr",
+            "b.exr",
+            "--max-rmse",
+            "0",
+            "--max-abs",
+            "0",
+            "--json",
+            "d.json",
+        ],
+    );
+    assert_eq!(r.0, 0, "{}{}", r.1, r.2);
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("d.json")).unwrap()).unwrap();
+    assert_eq!(j["rmse"], 0.0, "{j}");
+    assert_eq!(j["max_abs_error"], 0.0, "{j}");
+    assert_eq!(j["bit_identical"], true, "{j}");
+    // Different infinities still differ, infinitely.
+    let r = cli(&dir, &["diff", "a.exr", "m.exr", "--max-abs", "1e30"]);
+    assert_eq!(r.0, 1, "{}{}", r.1, r.2);
+    // Counts are printed as integers.
+    let r = cli(
+        &dir,
+        &["diff", "a.exr", "m.exr", "--max-differing-pixels", "0"],
+    );
+    assert!(
+        r.2.contains("8-bit differing pixels 1 (limit 0)"),
+        "{}",
+        r.2
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Class 4: outputs checked after the work, or written in place.
+
+#[test]
+fn diff_writes_its_heatmap_by_rename_not_in_place() {
+    let dir = support::temp_dir("h43-heatmap");
+    exr_with(&dir, "a.exr", 0.25);
+    exr_with(&dir, "b.exr", 0.5);
+    // heat.png is a second name of keep.png: writing in place changed keep.png too.
+    std::fs::write(dir.join("keep.png"), b"keep").unwrap();
+    std::fs::hard_link(dir.join("keep.png"), dir.join("heat.png")).unwrap();
+    let r = cli(&dir, &["diff", "a.exr", "b.exr", "--heatmap", "heat.png"]);
+    assert_eq!(r.0, 0, "{}{}", r.1, r.2);
+    assert_eq!(std::fs::read(dir.join("keep.png")).unwrap(), b"keep");
+    assert!(image::open(dir.join("heat.png")).is_ok());
+    // An output naming an input (here through a symbolic link) is refused before any work.
+    std::os::unix::fs::symlink("a.exr", dir.join("link.png")).unwrap();
+    let before = std::fs::read(dir.join("a.exr")).unwrap();
+    let r = cli(&dir, &["diff", "a.exr", "b.exr", "--heatmap", "link.png"]);
+    refused("heatmap over A", &r, BAD_ARGUMENTS, &["link.png", "a.exr"]);
+    let r = cli(&dir, &["diff", "a.exr", "b.exr", "--json", "b.exr"]);
+    refused("json over B", &r, BAD_ARGUMENTS, &["b.exr", "input"]);
+    assert_eq!(std::fs::read(dir.join("a.exr")).unwrap(), before);
+}
+
+/// The names in `dir`, sorted.
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn render_refuses_outputs_over_its_inputs_and_checks_every_frame_before_rendering() {
+    let dir = support::temp_dir("h43-render-outputs");
+    let scene = support::lone_box_scene(16, 8).replace(
+        "[[light]]",
+        "[[light]]\npattern = { path = \"gobo.png\", size = [4.0, 4.0] }",
+    );
+    std::fs::write(dir.join("s.toml"), &scene).unwrap();
+    exr_with(&dir, "gobo.exr", 0.5);
+    RgbImage::load(&dir.join("gobo.exr"))
+        .unwrap()
+        .save(&dir.join("gobo.png"))
+        .unwrap();
+    std::fs::remove_file(dir.join("gobo.exr")).unwrap();
+    let gobo = std::fs::read(dir.join("gobo.png")).unwrap();
+    let before = files_in(&dir);
+    // `--stats-json s.toml` replaced the scene with JSON (exit 0).
+    let r = cli(
+        &dir,
+        &["render", "s.toml", "-o", "a.png", "--stats-json", "s.toml"],
+    );
+    refused(
+        "stats over scene",
+        &r,
+        BAD_ARGUMENTS,
+        &["s.toml", "the scene"],
+    );
+    assert_eq!(std::fs::read_to_string(dir.join("s.toml")).unwrap(), scene);
+    // An output over the light's pattern, spelled another way.
+    let r = cli(&dir, &["render", "s.toml", "-o", "./gobo.png", "-q"]);
+    refused(
+        "png over pattern",
+        &r,
+        BAD_ARGUMENTS,
+        &["light[0].pattern.path"],
+    );
+    assert_eq!(std::fs::read(dir.join("gobo.png")).unwrap(), gobo);
+    // A later frame's missing folder failed after frame 0 was written.
+    std::fs::create_dir(dir.join("o0")).unwrap();
+    let r = cli(
+        &dir,
+        &[
+            "render",
+            "s.toml",
+            "-o",
+            "o%d/a.png",
+            "--frames",
+            "0..2",
+            "-q",
+        ],
+    );
+    refused(
+        "frame 1's folder",
+        &r,
+        OUTPUT_FAILED,
+        &["o1", "does not exist"],
+    );
+    assert!(files_in(&dir.join("o0")).is_empty(), "frame 0 was written");
+    std::fs::remove_dir(dir.join("o0")).unwrap();
+    // Two patterns that meet on frame 10 overwrote each other silently.
+    let r = cli(
+        &dir,
+        &[
+            "render",
+            "s.toml",
+            "-o",
+            "a_%d.png",
+            "-o",
+            "a_%02d.png",
+            "--frames",
+            "9..11",
+            "-q",
+        ],
+    );
+    refused(
+        "colliding patterns",
+        &r,
+        BAD_ARGUMENTS,
+        &["same file", "frame 10"],
+    );
+    // A name too long for the file system failed after the render.
+    let long = format!("{}.png", "x".repeat(300));
+    let r = cli(&dir, &["render", "s.toml", "-o", &long, "-q"]);
+    refused("long name", &r, OUTPUT_FAILED, &["at most 255"]);
+    let r = cli(&dir, &["render", "s.toml", "-o", "a.png/", "-q"]);
+    refused("trailing slash", &r, OUTPUT_FAILED, &["names a folder"]);
+    assert_eq!(files_in(&dir), before, "nothing was written");
+    // A frame range too long to check (and to render) is a bad argument, before the outputs
+    // (`0..4000000000` collected 16 GB of frame numbers).
+    let r = cli(
+        &dir,
+        &[
+            "render",
+            "s.toml",
+            "-o",
+            "no/f_%d.png",
+            "--frames",
+            "0..2000000",
+        ],
+    );
+    refused(
+        "huge range",
+        &r,
+        BAD_ARGUMENTS,
+        &["--frames", "at most 1000000"],
+    );
+}
+
+#[test]
+fn report_checks_its_outputs_before_any_case_and_writes_by_rename() {
+    let dir = support::temp_dir("h43-report");
+    // `--case` past the grid left an empty folder behind.
+    let r = cli(
+        &dir,
+        &["report", "--quick", "--case", "99999", "--out", "new"],
+    );
+    refused("case out of range", &r, BAD_ARGUMENTS, &["--case 99999"]);
+    assert!(!dir.join("new").exists(), "a folder was created");
+    // report.csv as a folder: refused before the case runs (`-v` prints a line per case run).
+    std::fs::create_dir_all(dir.join("r/report.csv")).unwrap();
+    let r = cli(
+        &dir,
+        &["report", "--quick", "--case", "0", "--out", "r", "-v"],
+    );
+    refused(
+        "report.csv a folder",
+        &r,
+        OUTPUT_FAILED,
+        &["report.csv", "is a folder"],
+    );
+    assert!(
+        !r.2.contains(" n="),
+        "a case ran before the check:\n{}",
+        r.2
+    );
+    // report.csv is a second name of keep.csv: writing in place changed keep.csv too.
+    std::fs::create_dir(dir.join("s")).unwrap();
+    std::fs::write(dir.join("keep.csv"), "keep").unwrap();
+    std::fs::hard_link(dir.join("keep.csv"), dir.join("s/report.csv")).unwrap();
+    let r = cli(&dir, &["report", "--quick", "--case", "0", "--out", "s"]);
+    assert_eq!(r.0, 0, "{}{}", r.1, r.2);
+    assert_eq!(
+        std::fs::read_to_string(dir.join("keep.csv")).unwrap(),
+        "keep"
+    );
+    let csv = std::fs::read_to_string(dir.join("s/report.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 2, "{csv}");
+    assert_eq!(
+        files_in(&dir.join("s")),
+        ["report.csv"],
+        "no temporary file left"
+    );
+}
