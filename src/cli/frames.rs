@@ -139,6 +139,37 @@ pub fn frame_time(scene: &Scene, frame: u32, dt: f64) -> Option<f64> {
         .map(|d| d.time.unwrap_or(0.0) + f64::from(frame) * dt)
 }
 
+/// Refuses frames whose detail time leaves the scene format's range (`|detail.time| <= 1e9`,
+/// `scene::MAX_WORLD`): `--time-step` could push it there (the noise then went flat, exit 0).
+/// Times grow or fall with the frame number, so the first and last frame are the extremes.
+pub fn check_times(scene: &Scene, list: &[u32], dt: f64) -> Result<(), Failure> {
+    let max = convshadow_common::model::scene::MAX_WORLD;
+    for &k in [list.first(), list.last()].into_iter().flatten() {
+        for m in &scene.materials {
+            let Some(d) = &m.detail else { continue };
+            let t = d.time.unwrap_or(0.0) + f64::from(k) * dt;
+            if t.is_nan() || t.abs() > max {
+                return Err(Failure::new(
+                    exit::BAD_ARGUMENTS,
+                    format!(
+                        "--time-step {dt}: frame {k} sets material.{}.detail.time to {t:e}, \
+                         beyond the range |time| <= {max:e}; use a smaller step or fewer frames",
+                        m.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A frame's detail time as printed: 12 significant digits, shortest form (`0.3`, not the
+/// `0.30000000000000004` that 6 × 0.05 is in binary; the render uses the exact value).
+pub fn display_time(t: f64) -> String {
+    let rounded: f64 = format!("{t:.11e}").parse().unwrap_or(t);
+    format!("{rounded}")
+}
+
 /// Parses `WxH` (also `W×H`, `W,H`).
 pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let bad = || format!("expected WxH in pixels, like 800x600, got `{text}`");

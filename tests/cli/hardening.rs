@@ -10,6 +10,7 @@ use convshadow::io::image::RgbImage;
 
 /// Exit codes (docs/errors.md).
 const BAD_ARGUMENTS: i32 = 2;
+const BAD_INPUT: i32 = 3;
 const OUTPUT_FAILED: i32 = 7;
 
 /// A 4×4 EXR whose every value is 0.25 but pixel (1, 2) channel 0, which is `at`.
@@ -300,4 +301,107 @@ fn report_checks_its_outputs_before_any_case_and_writes_by_rename() {
         ["report.csv"],
         "no temporary file left"
     );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Class 6: bad input accepted.
+
+#[test]
+fn table_keys_refuse_arrays_read_in_field_order() {
+    let dir = support::temp_dir("h43-tables");
+    let base = support::lone_box_scene(16, 8);
+    // Each was read positionally into the table's fields (exit 0, or a message about a field
+    // the file never names).
+    for (name, from, to) in [
+        (
+            "specular",
+            "[material.m]",
+            "[material.m]\nspecular = [\"blinn-phong\", 0.5, 8, 0.04]",
+        ),
+        ("phase", "[material.m]", "[material.m]\nphase = [0.3]"),
+        (
+            "image",
+            "[image]\nwidth = 16\nheight = 16",
+            "image = [16, 16]",
+        ),
+        (
+            "pattern",
+            "[[light]]",
+            "[[light]]\npattern = [\"gobo.png\", [1.0, 1.0], [0.0, 0.0]]",
+        ),
+        (
+            "detail",
+            "[material.m]",
+            "[material.m]\ndetail = [\"fbm\", 2.0]\ngradient = [[0, 1, 1, 1, 1], [1, 1, 1, 1, 1]]",
+        ),
+    ] {
+        let text = base.replacen(from, to, 1);
+        assert_ne!(text, base, "{name}: the edit applies");
+        std::fs::write(dir.join("t.toml"), text).unwrap();
+        let r = cli(&dir, &["render", "t.toml", "-o", "a.png", "-q"]);
+        refused(
+            name,
+            &r,
+            BAD_INPUT,
+            &["t.toml", name, "expected a table", "line "],
+        );
+    }
+    // Tables still read, and their own errors keep naming the key inside them.
+    let text = base.replacen(
+        "[material.m]",
+        "[material.m]\nspecular = { exponent = 8 }",
+        1,
+    );
+    std::fs::write(dir.join("t.toml"), text).unwrap();
+    assert_eq!(cli(&dir, &["render", "t.toml", "-o", "a.png", "-q"]).0, 0);
+    assert!(!dir.join("t.toml").with_file_name(".a.png.partial").exists());
+}
+
+/// The lone box with a 4D-able fBm detail.
+fn detail_scene() -> String {
+    support::lone_box_scene(16, 8).replacen(
+        "[material.m]",
+        "[material.m]\ndetail = { kind = \"fbm\", frequency = 2.0 }\n\
+         gradient = [[0, 1, 1, 1, 0.5], [1, 1, 1, 1, 0.5]]",
+        1,
+    )
+}
+
+#[test]
+fn time_steps_that_push_the_detail_time_past_its_limit_are_refused_before_rendering() {
+    let dir = support::temp_dir("h43-time-step");
+    std::fs::write(dir.join("d.toml"), detail_scene()).unwrap();
+    // Frame 2 at 2e9: past |detail.time| <= 1e9 (rendered flat, exit 0).
+    for args in [
+        &["--frames", "0..3", "--time-step", "1e9"][..],
+        &["--frame", "2", "--time-step", "6e8"],
+        &["--frames", "0..3", "--time-step", "-6e8"],
+    ] {
+        let mut argv = vec!["render", "d.toml", "-o", "f_%d.png", "-q"];
+        argv.extend(args);
+        let r = cli(&dir, &argv);
+        refused(
+            &format!("{args:?}"),
+            &r,
+            BAD_ARGUMENTS,
+            &["--time-step", "frame 2", "material.m.detail.time", "1e9"],
+        );
+    }
+    assert_eq!(files_in(&dir), ["d.toml"]);
+    // Within the limit: rendered, and times print as decimals (3 × 0.1 is not 0.3 in binary).
+    let r = cli(
+        &dir,
+        &[
+            "render",
+            "d.toml",
+            "-o",
+            "f_%d.png",
+            "--frames",
+            "0..4",
+            "--time-step",
+            "0.1",
+        ],
+    );
+    assert_eq!(r.0, 0, "{}{}", r.1, r.2);
+    assert!(r.1.contains("frame 3 (time 0.3)"), "{}", r.1);
 }

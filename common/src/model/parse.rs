@@ -2,6 +2,7 @@
 //! strictly typed; [`validate`] turns it into a [`Scene`], naming the file, the key and what was
 //! expected for every unknown key, wrong type, missing key or invalid value.
 
+mod tables;
 mod validate;
 
 use std::collections::BTreeMap;
@@ -24,7 +25,10 @@ impl Scene {
 
     /// Parses and validates scene text; `source` names it in messages, `base_dir` resolves paths.
     pub fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, SceneError> {
-        let raw: RawScene = toml::from_str(text).map_err(|e| toml_error(source, text, &e))?;
+        // Through `Tables`: a table-typed key given an array is an error, not read in order.
+        let raw = toml::Deserializer::parse(text)
+            .and_then(|d| RawScene::deserialize(tables::Tables(d)))
+            .map_err(|e| toml_error(source, text, &e))?;
         Validator { file: source }.scene(raw, base_dir)
     }
 }

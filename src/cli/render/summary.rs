@@ -136,7 +136,8 @@ pub(super) fn finish_frames(
             convshadow::outln!(
                 "frame {} (time {}): image_hash {:016x}, {:.2} s → {}",
                 f.frame,
-                f.time.map_or_else(|| "-".to_string(), |t| format!("{t}")),
+                f.time
+                    .map_or_else(|| "-".to_string(), crate::cli::frames::display_time),
                 f.image_hash,
                 f.seconds_total,
                 f.outputs
