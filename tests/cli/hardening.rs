@@ -405,3 +405,81 @@ fn time_steps_that_push_the_detail_time_past_its_limit_are_refused_before_render
     assert_eq!(r.0, 0, "{}{}", r.1, r.2);
     assert!(r.1.contains("frame 3 (time 0.3)"), "{}", r.1);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Class 7: messages that name the wrong culprit.
+
+#[test]
+fn raw_texture_dims_beyond_the_limits_are_bad_dims_not_memory() {
+    let dir = support::temp_dir("h43-raw-dims");
+    for dims in [
+        "[4294967295, 1, 1]",
+        "[16777217, 1, 1]",
+        "[65536, 65536, 1]",
+    ] {
+        let text = support::lone_box_scene(16, 8).replacen(
+            "[material.m]",
+            &format!(
+                "[material.m]\ntexture = {{ path = \"t.raw\", dims = {dims}, type = \"u8\" }}\n\
+                 gradient = [[0, 1, 1, 1, 0.5], [1, 1, 1, 1, 0.5]]"
+            ),
+            1,
+        );
+        std::fs::write(dir.join("t.toml"), text).unwrap();
+        let r = cli(&dir, &["render", "t.toml", "-o", "a.png", "-q"]);
+        refused(
+            dims,
+            &r,
+            BAD_INPUT,
+            &["texture.dims", "16777216", "268435456"],
+        );
+        assert!(!r.2.contains("MiB"), "{dims}: {}", r.2);
+    }
+}
+
+#[test]
+fn an_obj_with_a_byte_order_mark_keeps_its_first_vertex() {
+    let dir = support::temp_dir("h43-bom");
+    let mut obj = String::from("\u{feff}");
+    for z in [-0.5, 0.5] {
+        for y in [-0.5, 0.5] {
+            for x in [-0.5, 0.5] {
+                obj.push_str(&format!("v {x} {y} {z}\n"));
+            }
+        }
+    }
+    // The 12 outward triangles of the cube (vertex i = x + 2y + 4z, 1-based).
+    for f in [
+        [1, 3, 4],
+        [1, 4, 2],
+        [5, 6, 8],
+        [5, 8, 7],
+        [1, 2, 6],
+        [1, 6, 5],
+        [3, 7, 8],
+        [3, 8, 4],
+        [1, 5, 7],
+        [1, 7, 3],
+        [2, 4, 8],
+        [2, 8, 6],
+    ] {
+        obj.push_str(&format!("f {} {} {}\n", f[0], f[1], f[2]));
+    }
+    std::fs::write(dir.join("cube.obj"), &obj).unwrap();
+    std::fs::write(dir.join("plain.obj"), &obj[3..]).unwrap();
+    let scene = |name: &str| support::obj_scene(&dir.join(name), 16, 3.0);
+    std::fs::write(dir.join("bom.toml"), scene("cube.obj")).unwrap();
+    std::fs::write(dir.join("plain.toml"), scene("plain.obj")).unwrap();
+    let r = cli(&dir, &["ldi", "plain.toml"]);
+    assert_eq!(r.0, 0, "control: {}{}", r.1, r.2);
+    // With the mark, the first `v` was an unknown keyword and a face named a missing vertex.
+    let b = cli(&dir, &["ldi", "bom.toml"]);
+    assert_eq!(b.0, 0, "{}{}", b.1, b.2);
+    let hash = |out: &str| {
+        out.lines()
+            .find(|l| l.contains("ldi_hash"))
+            .map(str::to_string)
+    };
+    assert!(hash(&r.1).is_some(), "{}", r.1);
+    assert_eq!(hash(&b.1), hash(&r.1), "the same LDI as without the mark");
+}
