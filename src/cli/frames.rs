@@ -204,6 +204,14 @@ pub fn apply_size(scene: &mut Scene, w: u32, h: u32) -> Result<Option<String>, F
             format!("--size {w}x{h}: expected both sides >= 1"),
         ));
     }
+    // The same aspect, compared exactly in integers: the view stays as it is (in floats,
+    // view_width·(h/w)·(W/H) could come back one ulp off and "change" view_width).
+    let (old_w, old_h) = (u64::from(scene.image.width), u64::from(scene.image.height));
+    if u64::from(w) * old_h == u64::from(h) * old_w {
+        scene.image.width = w;
+        scene.image.height = h;
+        return Ok(None);
+    }
     let old_w = f64::from(scene.image.width);
     let old_h = f64::from(scene.image.height);
     let view_w = scene.camera.view_width;
@@ -286,5 +294,12 @@ mod tests {
         assert_eq!(s.camera.view_width, 2.0 * v);
         // Taller: the width already holds the old view (which is now 2v × v).
         assert_eq!(apply_size(&mut s, 512, 512).unwrap(), None);
+        // The same aspect where floats round: 1×7 px, 1.1 wide, to 5×35 (was 1.1000000000000003).
+        s.image.width = 1;
+        s.image.height = 7;
+        s.camera.view_width = 1.1;
+        assert_eq!(apply_size(&mut s, 5, 35).unwrap(), None);
+        assert_eq!(s.camera.view_width, 1.1);
+        assert_eq!((s.image.width, s.image.height), (5, 35));
     }
 }

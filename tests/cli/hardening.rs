@@ -483,3 +483,20 @@ fn an_obj_with_a_byte_order_mark_keeps_its_first_vertex() {
     assert!(hash(&r.1).is_some(), "{}", r.1);
     assert_eq!(hash(&b.1), hash(&r.1), "the same LDI as without the mark");
 }
+
+// ---------------------------------------------------------------------------------------------
+// Also: `--size` with the scene's own aspect keeps view_width.
+
+#[test]
+fn size_with_the_same_aspect_keeps_the_view_width_exactly() {
+    let dir = support::temp_dir("h43-size");
+    // 1×7 px, 1.1 wide: 1.1 · 7/1 · 5/35 is 1.1000000000000003 in floats.
+    let scene = support::lone_box_scene(16, 8)
+        .replace("width = 16\nheight = 16", "width = 1\nheight = 7")
+        .replace("view_width = 4.0", "view_width = 1.1");
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let r = cli(&dir, &["render", "s.toml", "--size", "5x35", "-o", "a.png"]);
+    assert_eq!(r.0, 0, "{}{}", r.1, r.2);
+    assert!(!r.2.contains("view_width"), "view_width changed: {}", r.2);
+    assert!(r.1.contains("rendered 5x35 px"), "{}", r.1);
+}
