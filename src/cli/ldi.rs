@@ -192,6 +192,7 @@ fn write_stats(path: &std::path::Path, built: &BuiltLdi, hash: u64) -> Result<()
     } = built;
     let (boundary, nonmanifold, flipped, degenerate) = defect_counts(built);
     let value = json!({
+        "version": env!("CARGO_PKG_VERSION"),
         "width": geometry.camera.width,
         "height": geometry.camera.height,
         "grid_width": ldi.width,

@@ -500,3 +500,30 @@ fn size_with_the_same_aspect_keeps_the_view_width_exactly() {
     assert!(!r.2.contains("view_width"), "view_width changed: {}", r.2);
     assert!(r.1.contains("rendered 5x35 px"), "{}", r.1);
 }
+
+#[test]
+fn stats_carry_the_version_that_wrote_them() {
+    let dir = support::temp_dir("h43-version");
+    std::fs::write(dir.join("s.toml"), support::lone_box_scene(16, 8)).unwrap();
+    let read = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join(name)).unwrap()).unwrap()
+    };
+    let r = cli(
+        &dir,
+        &[
+            "render",
+            "s.toml",
+            "-o",
+            "a.png",
+            "-q",
+            "--stats-json",
+            "r.json",
+        ],
+    );
+    assert_eq!(r.0, 0, "{}", r.2);
+    let r = cli(&dir, &["ldi", "s.toml", "--stats-json", "l.json"]);
+    assert_eq!(r.0, 0, "{}", r.2);
+    for name in ["r.json", "l.json"] {
+        assert_eq!(read(name)["version"], env!("CARGO_PKG_VERSION"), "{name}");
+    }
+}

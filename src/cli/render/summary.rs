@@ -230,6 +230,7 @@ fn stats_value(
 ) -> serde_json::Value {
     let throughput = throughput(r);
     json!({
+            "version": env!("CARGO_PKG_VERSION"),
             "width": scene.image.width,
             "height": scene.image.height,
             "slabs": r.plan.slabs,
