@@ -203,3 +203,20 @@ fn table_keys_refuse_arrays_at_every_depth() {
     let e = parse(&format!("{MINIMAL}phase = {{ h = 0.3 }}\n")).unwrap_err();
     assert!(e.message.contains("unknown field `h`"), "{e}");
 }
+
+/// An unknown key is named with its table (`light[1].colr`, `material.m.opacty`) and the
+/// closest known key.
+#[test]
+fn unknown_keys_name_their_table_and_the_nearest_key() {
+    let two_lights =
+        format!("{MINIMAL}[[light]]\ncolor = [1, 1, 1]\n[[light]]\ncolr = [1, 1, 1]\n");
+    let e = parse(&two_lights).unwrap_err();
+    assert_eq!(e.key, "light[1].colr", "{e}");
+    assert!(e.message.contains("did you mean `color`?"), "{e}");
+    let e = parse(&format!("{MINIMAL}opacty = 0.5\n")).unwrap_err();
+    assert_eq!(e.key, "material.m.opacty", "{e}");
+    assert!(e.message.contains("did you mean `opacity`?"), "{e}");
+    // Nothing near: no suggestion.
+    let e = parse(&format!("{MINIMAL}zzzzzz = 1\n")).unwrap_err();
+    assert!(!e.message.contains("did you mean"), "{e}");
+}
