@@ -46,36 +46,40 @@ pub fn override_size(
 pub fn refuse_collisions<'a>(
     paths: impl IntoIterator<Item = &'a std::path::PathBuf>,
 ) -> Result<(), Failure> {
-    refuse_named_collisions(
-        paths
-            .into_iter()
-            .map(|p| (p.display().to_string(), p.as_path())),
-    )
+    refuse_named_collisions(paths.into_iter().map(|p| (p, p.as_path())), |p| {
+        p.display().to_string()
+    })
 }
 
-/// [`refuse_collisions`] over (how the message names it, path) pairs, in linear time (a frame
-/// sequence checks every frame's names): `x.png` and `./x.png` are the same file, as their
-/// folders are compared resolved where they exist.
-pub fn refuse_named_collisions<'a>(
-    items: impl IntoIterator<Item = (String, &'a Path)>,
+/// [`refuse_collisions`] over (tag, path) pairs, in linear time (a frame sequence checks every
+/// frame's names), `name` saying how the message names a tag's file: `x.png` and `./x.png`
+/// are the same file, as their folders are compared resolved where they exist. Tags, not
+/// names, are kept per file, so a million frames hold no message text.
+pub fn refuse_named_collisions<'a, T: Copy>(
+    items: impl IntoIterator<Item = (T, &'a Path)>,
+    name: impl Fn(T) -> String,
 ) -> Result<(), Failure> {
     use std::collections::HashMap;
     use std::path::PathBuf;
     let mut folders: HashMap<PathBuf, PathBuf> = HashMap::new();
-    let mut seen: HashMap<PathBuf, String> = HashMap::new();
-    for (name, p) in items {
+    let mut seen: HashMap<PathBuf, T> = HashMap::new();
+    for (tag, p) in items {
         let dir = convshadow_io::image::folder_of(p).to_path_buf();
         let resolved = folders
             .entry(dir.clone())
             .or_insert_with(|| std::fs::canonicalize(&dir).unwrap_or(dir));
         let key = resolved.join(p.file_name().unwrap_or_default());
-        if let Some(first) = seen.get(&key) {
+        if let Some(&first) = seen.get(&key) {
             return Err(Failure::new(
                 crate::cli::exit::BAD_ARGUMENTS,
-                format!("{first} and {name} are the same file: give each output its own path"),
+                format!(
+                    "{} and {} are the same file: give each output its own path",
+                    name(first),
+                    name(tag)
+                ),
             ));
         }
-        seen.insert(key, name);
+        seen.insert(key, tag);
     }
     Ok(())
 }

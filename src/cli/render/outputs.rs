@@ -49,29 +49,41 @@ pub(super) fn output_paths(
             "--frames/--frame do not apply to --backend reference",
         ));
     }
-    // Every file the run writes: each output at each frame, then the stats.
-    let frames: Option<&[u32]> = frame_list;
-    let mut files: Vec<(String, PathBuf)> = Vec::new();
-    match frames {
+    // Every file the run writes, tagged (output index, frame): each output at each frame, then
+    // the stats (index `outputs.len()`).
+    let mut files: Vec<((usize, u32), PathBuf)> = Vec::new();
+    match frame_list {
         Some(list) => {
             for &k in list {
-                for p in &outputs {
-                    let f = frames::frame_path(p, k);
-                    let name = if frames::has_frame_pattern(p) {
-                        format!("{} at frame {k} ({})", p.display(), f.display())
-                    } else {
-                        f.display().to_string()
-                    };
-                    files.push((name, f));
+                for (i, p) in outputs.iter().enumerate() {
+                    files.push(((i, k), frames::frame_path(p, k)));
                 }
             }
         }
-        None => files.extend(outputs.iter().map(|p| (p.display().to_string(), p.clone()))),
+        None => files.extend(
+            outputs
+                .iter()
+                .cloned()
+                .enumerate()
+                .map(|(i, p)| ((i, 0), p)),
+        ),
     }
     if let Some(p) = &args.stats_json {
-        files.push((p.display().to_string(), p.clone()));
+        files.push(((outputs.len(), 0), p.clone()));
     }
-    crate::cli::refuse_named_collisions(files.iter().map(|(n, p)| (n.clone(), p.as_path())))?;
+    let name = |(i, k): (usize, u32)| match outputs.get(i) {
+        Some(p) if frame_list.is_some() && frames::has_frame_pattern(p) => format!(
+            "{} at frame {k} ({})",
+            p.display(),
+            frames::frame_path(p, k).display()
+        ),
+        Some(p) => p.display().to_string(),
+        None => args
+            .stats_json
+            .as_ref()
+            .map_or_else(String::new, |p| p.display().to_string()),
+    };
+    crate::cli::refuse_named_collisions(files.iter().map(|(t, p)| (*t, p.as_path())), name)?;
     crate::cli::refuse_outputs_over_inputs(
         files.iter().map(|(_, p)| p),
         &crate::cli::scene_inputs(args.scene.as_deref(), scene),
