@@ -41,12 +41,50 @@ pub fn temp_path_for(path: &Path) -> PathBuf {
     path.with_file_name(format!(".cs-{hash:016x}.{pid}.partial"))
 }
 
-/// Checks that `path` can be written: not a folder, its folder exists and is a folder, and a
-/// file can be created there (probed by creating and removing the temporary file, so a render is
-/// refused before it starts, not after).
+/// The longest file name (one path component) Linux file systems take, in bytes (`NAME_MAX`).
+pub const MAX_NAME_BYTES: usize = 255;
+
+/// Checks that `path` can be written: [`check_target`] (the name and what is there now) and
+/// [`check_folder`] (its folder exists and takes a new file), so a render is refused before it
+/// starts, not after.
 pub fn check_writable(path: &Path) -> Result<(), OutputError> {
+    check_target(path)?;
+    check_folder(path)
+}
+
+/// The folder `path` is written in (`.` for a bare name).
+pub fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// Checks `path` itself, without touching its folder: a file name (not ending in `/`, `.` or
+/// `..`) of at most [`MAX_NAME_BYTES`] bytes, not an existing folder, device, FIFO or socket
+/// (never replaced by a regular file). The checks a rename into place would otherwise fail only
+/// after the work.
+pub fn check_target(path: &Path) -> Result<(), OutputError> {
+    use std::os::unix::ffi::OsStrExt;
+    let bytes = path.as_os_str().as_bytes();
+    let last = bytes.rsplit(|&b| b == b'/').next().unwrap_or_default();
     if path.is_dir() {
         return Err(out_err(path, "is a folder; expected a file path"));
+    }
+    if matches!(last, b"" | b"." | b"..") {
+        return Err(out_err(
+            path,
+            "names a folder (it ends in `/`, `.` or `..`); expected a file path",
+        ));
+    }
+    if last.len() > MAX_NAME_BYTES {
+        return Err(out_err(
+            path,
+            format!(
+                "the file name is {} bytes long; file systems take at most {MAX_NAME_BYTES}",
+                last.len()
+            ),
+        ));
     }
     // A device, FIFO or socket is never replaced by a regular file.
     if let Ok(meta) = std::fs::metadata(path)
@@ -57,10 +95,13 @@ pub fn check_writable(path: &Path) -> Result<(), OutputError> {
             "exists and is not a regular file (a device, FIFO or socket); refusing to replace it",
         ));
     }
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    Ok(())
+}
+
+/// Checks that `path`'s folder exists, is a folder, and takes a new file (probed by creating
+/// and removing `path`'s temporary file).
+pub fn check_folder(path: &Path) -> Result<(), OutputError> {
+    let dir = folder_of(path);
     if !dir.is_dir() {
         let why = if dir.exists() {
             "is not a folder"
@@ -206,6 +247,22 @@ pub fn save_gray_png(
     encode(
         path,
         image::DynamicImage::ImageLuma8(buf),
+        image::ImageFormat::Png,
+    )
+}
+
+/// Writes an 8-bit RGB image as PNG (atomically, like every output).
+pub fn save_rgb8_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    data: Vec<u8>,
+) -> Result<(), OutputError> {
+    let buf = image::RgbImage::from_raw(width, height, data)
+        .ok_or_else(|| out_err(path, "image buffer has the wrong size"))?;
+    encode(
+        path,
+        image::DynamicImage::ImageRgb8(buf),
         image::ImageFormat::Png,
     )
 }

@@ -93,6 +93,17 @@ pub fn ulp_bucket(d: u32) -> usize {
     }
 }
 
+/// The absolute difference of two values, in f64: 0 for equal values, equal infinities included
+/// (`inf − inf` is NaN, which would make bit-identical images fail `--max-rmse 0`); infinite
+/// when they differ and either is NaN or infinite.
+pub fn value_error(a: f32, b: f32) -> f64 {
+    if a == b {
+        return 0.0;
+    }
+    let d = (f64::from(a) - f64::from(b)).abs();
+    if d.is_nan() { f64::INFINITY } else { d }
+}
+
 /// Compares two linear float RGB images (A is the reference).
 pub fn compare(a: &RgbImage, b: &RgbImage) -> Result<DiffMetrics, MetricsError> {
     if a.width != b.width || a.height != b.height {
@@ -112,8 +123,7 @@ pub fn compare(a: &RgbImage, b: &RgbImage) -> Result<DiffMetrics, MetricsError> 
     let mut values_differ = 0u64;
     let mut ulp_histogram = [0u64; ULP_BUCKETS];
     for (i, (&x, &y)) in a.data.iter().zip(&b.data).enumerate() {
-        let d = (f64::from(x) - f64::from(y)).abs();
-        let d = if d.is_nan() { f64::INFINITY } else { d };
+        let d = value_error(x, y);
         if d > max_abs {
             max_abs = d;
             max_at = i;
@@ -185,8 +195,7 @@ pub fn heatmap(a: &RgbImage, b: &RgbImage, max_abs: f64) -> Vec<u8> {
         let mut differs = false;
         for c in 0..3 {
             differs |= pa[c].to_bits() != pb[c].to_bits();
-            let d = (f64::from(pa[c]) - f64::from(pb[c])).abs();
-            e = e.max(if d.is_nan() { f64::INFINITY } else { d });
+            e = e.max(value_error(pa[c], pb[c]));
         }
         if !differs {
             out.extend([0, 0, 0]);

@@ -93,12 +93,49 @@ fn check_header(path: &Path) -> Result<(), TextureError> {
             "not a NIfTI-1 file: expected sizeof_hdr 348 and magic \"n+1\" or \"ni1\"",
         ));
     }
+    check_dims(path, &head, size_le == 348)
+}
+
+/// Checks the header's `dim` field (eight i16 at byte 40) in the byte order `sizeof_hdr` gives,
+/// before the `nifti` crate reads it: the crate guesses the byte order from `dim[0]` alone (so
+/// a `dim[0]` above 7 had every value printed byte-swapped) and names the field before the one
+/// that is 0. `dim[0]` is the number of dimensions, 1 to 7; `dim[1..=dim[0]]` are the sizes.
+fn check_dims(path: &Path, head: &[u8], little_endian: bool) -> Result<(), TextureError> {
+    let dim: [i16; 8] = std::array::from_fn(|i| {
+        let b = [head[40 + 2 * i], head[41 + 2 * i]];
+        if little_endian {
+            i16::from_le_bytes(b)
+        } else {
+            i16::from_be_bytes(b)
+        }
+    });
+    if !(1..=7).contains(&dim[0]) {
+        return Err(nifti_err(
+            path,
+            format!(
+                "NIfTI header field dim[0] (the number of dimensions) is {}, expected 1 to 7",
+                dim[0]
+            ),
+        ));
+    }
+    let rank = dim[0] as usize;
+    if let Some(i) = (1..=rank).find(|&i| dim[i] < 1) {
+        return Err(nifti_err(
+            path,
+            format!(
+                "NIfTI header field dim[{i}] is {}, expected a size from 1 to 32767 (dim = {:?}, \
+                 {rank} dimensions)",
+                dim[i],
+                &dim[..=rank]
+            ),
+        ));
+    }
     Ok(())
 }
 
 /// Reads up to 348 decompressed bytes of a gzip stream.
 fn flate_prefix(file: std::fs::File, out: &mut Vec<u8>) -> std::io::Result<()> {
-    let mut dec = flate2::read::GzDecoder::new(std::io::BufReader::new(file));
+    let mut dec = flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file));
     let mut buf = [0u8; 348];
     let mut n = 0;
     while n < buf.len() {
@@ -147,7 +184,9 @@ fn open_stream(path: &Path) -> Result<Box<dyn Read>, TextureError> {
     })?;
     let file = std::io::BufReader::new(file);
     Ok(if is_gz(path) {
-        Box::new(flate2::read::GzDecoder::new(file))
+        // Every member of the stream: gzip files may be concatenated (`cat a.gz b.gz`, bgzip,
+        // pigz), and GzDecoder stops after the first, which made a valid file "truncated".
+        Box::new(flate2::read::MultiGzDecoder::new(file))
     } else {
         Box::new(file)
     })
@@ -444,6 +483,23 @@ pub fn load_nifti_cancellable(
                             format!("voxel [{x}, {y}, {z}] is {v}, expected a finite value"),
                         ));
                     }
+                    // Texture values are f32: beyond its range a value is not finite once
+                    // converted (and the min–max window's width overflowed to NaN voxels).
+                    if v.abs() > f64::from(f32::MAX) {
+                        return Err(nifti_err(
+                            path,
+                            format!(
+                                "voxel [{x}, {y}, {z}] is {v:e}{}, out of the f32 range of a \
+                                 texture (|v| <= {:e}): not finite after conversion",
+                                if header.scl_slope != 0.0 {
+                                    " after scl_slope/scl_inter scaling"
+                                } else {
+                                    ""
+                                },
+                                f32::MAX
+                            ),
+                        ));
+                    }
                     f(v);
                 }
             }
@@ -603,6 +659,70 @@ mod tests {
         let e = load_nifti(&p, None).unwrap_err();
         assert!(matches!(e, TextureError::Dims { .. }), "{e}");
         assert_eq!(memory_need(&p), None);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Issue 43, class 7: a valid gzip of two members is read whole (it was "truncated").
+    #[test]
+    fn a_multi_member_gzip_volume_is_read_whole() {
+        let dir = temp("multigz");
+        let mut f = header(&[2, 2, 2], 2, 8);
+        f.extend_from_slice(&[0, 1, 2, 3, 4, 5, 6, 255]);
+        let p = dir.join("two.nii.gz");
+        let mut bytes = Vec::new();
+        for part in [&f[..300], &f[300..]] {
+            let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+            gz.write_all(part).unwrap();
+            bytes.extend(gz.finish().unwrap());
+        }
+        std::fs::write(&p, &bytes).unwrap();
+        let t = load_nifti(&p, None).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(t.texture.dims, [2, 2, 2]);
+        assert_eq!((t.min, t.max), (0.0, 255.0));
+        assert_eq!(memory_need(&p), Some(8 * 5));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Issue 43, class 7: a bad `dim` is named as its own field with its value in the file's
+    /// byte order (a zero dim[3] was called dim[2] with dim[2]'s value; dim[0] = 9 was printed
+    /// byte-swapped).
+    #[test]
+    fn bad_dims_name_their_own_field_and_value() {
+        let dir = temp("dims");
+        let p = dir.join("d.nii");
+        let mut f = header(&[3, 4, 0], 2, 8);
+        std::fs::write(&p, &f).unwrap();
+        let e = load_nifti(&p, None).unwrap_err().to_string();
+        assert!(e.contains("d.nii") && e.contains("dim[3] is 0"), "{e}");
+        f[40..42].copy_from_slice(&9i16.to_le_bytes());
+        std::fs::write(&p, &f).unwrap();
+        let e = load_nifti(&p, None).unwrap_err().to_string();
+        assert!(e.contains("dim[0]") && e.contains("is 9,"), "{e}");
+        f[40..42].copy_from_slice(&3i16.to_le_bytes());
+        f[44..46].copy_from_slice(&(-2i16).to_le_bytes());
+        std::fs::write(&p, &f).unwrap();
+        let e = load_nifti(&p, None).unwrap_err().to_string();
+        assert!(e.contains("dim[2] is -2"), "{e}");
+        assert!(header_grid(&p).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Issue 43, class 7: values beyond f32 are named with their value (they were "NaN").
+    #[test]
+    fn values_beyond_f32_are_out_of_range_with_their_value() {
+        let dir = temp("huge");
+        let p = dir.join("h.nii");
+        let mut f = header(&[4], 64, 64);
+        for v in [0.0f64, 1.7e308, -1.7e308, 1.0] {
+            f.extend_from_slice(&v.to_le_bytes());
+        }
+        std::fs::write(&p, &f).unwrap();
+        let e = load_nifti(&p, None).unwrap_err().to_string();
+        assert!(
+            e.contains("voxel [1, 0, 0] is 1.7e308") && e.contains("f32 range"),
+            "{e}"
+        );
+        assert!(!e.contains("NaN"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -282,7 +282,12 @@ pub(crate) fn without_polylines(bytes: &[u8]) -> Vec<u8> {
 /// Polylines (`l`) are ignored; materials are not read. Degenerate triangles are kept here and
 /// dropped by [`TriMesh::analyze`]. Polygons are triangulated by tobj as fans.
 pub fn load_obj(path: &Path) -> Result<TriMesh, MeshError> {
-    let bytes = read_file(path, MeshFormat::Obj)?;
+    let mut bytes = read_file(path, MeshFormat::Obj)?;
+    // A UTF-8 byte-order mark (editors on Windows write one) is not part of the first line:
+    // left in, the first `v` was an unknown keyword and its vertex was lost.
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
+    }
     // The empty Vec only tells the scan which float type tobj parses into.
     let summary = scan_obj(path, &bytes, &tobj::Mesh::default().positions)?;
     if summary.faces == 0 {

@@ -24,17 +24,28 @@ pub struct DiffArgs {
     #[arg(long)]
     pub heatmap: Option<PathBuf>,
     /// Fail (exit code 1) when the RMSE exceeds this.
-    #[arg(long, value_name = "X")]
+    #[arg(long, value_name = "X", value_parser = parse_limit)]
     pub max_rmse: Option<f64>,
     /// Fail (exit code 1) when the largest absolute error exceeds this.
-    #[arg(long, value_name = "X")]
+    #[arg(long, value_name = "X", value_parser = parse_limit)]
     pub max_abs: Option<f64>,
     /// Fail (exit code 1) when the mean FLIP exceeds this.
-    #[arg(long, value_name = "X")]
+    #[arg(long, value_name = "X", value_parser = parse_limit)]
     pub max_flip: Option<f64>,
     /// Fail (exit code 1) when more than N pixels differ in their 8-bit sRGB encoding.
     #[arg(long, value_name = "N")]
     pub max_differing_pixels: Option<u64>,
+}
+
+/// Parses a `--max-*` limit: a finite number >= 0. NaN would make the gate pass whatever the
+/// images (no comparison with NaN is true), a negative limit would fail identical images, and
+/// `inf` is no limit; each is a bad argument (exit code 2) rather than a gate that cannot work.
+pub fn parse_limit(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        Ok(x) => Err(format!("expected a finite limit >= 0, got {x}")),
+        Err(_) => Err(format!("expected a finite number >= 0, got {s:?}")),
+    }
 }
 
 /// Exit code of `diff` when a threshold is exceeded (or a NaN meets any threshold).
@@ -117,6 +128,13 @@ pub fn metrics_json(m: &DiffMetrics, flip: f64) -> serde_json::Value {
 pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
     super::require_png("--heatmap", args.heatmap.as_ref())?;
     super::refuse_collisions(args.json.iter().chain(&args.heatmap))?;
+    super::refuse_outputs_over_inputs(
+        args.json.iter().chain(&args.heatmap),
+        &[
+            ("A".to_string(), args.a.as_path()),
+            ("B".to_string(), args.b.as_path()),
+        ],
+    )?;
     for p in args.json.iter().chain(&args.heatmap) {
         convshadow_io::image::check_writable(p)?;
     }
@@ -177,27 +195,19 @@ pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
     check("RMSE", m.rmse, args.max_rmse);
     check("max abs error", m.max_abs, args.max_abs);
     check("mean FLIP", flip, args.max_flip);
-    check(
-        "8-bit differing pixels",
-        m.srgb8_pixels_differ as f64,
-        args.max_differing_pixels.map(|n| n as f64),
-    );
+    // A count is compared and printed as an integer (not `1.6050e4`).
+    if let Some(limit) = args.max_differing_pixels
+        && (any_nan || m.srgb8_pixels_differ > limit)
+    {
+        failed.push(format!(
+            "8-bit differing pixels {} (limit {limit})",
+            m.srgb8_pixels_differ
+        ));
+    }
     if let Some(p) = &args.heatmap {
         let data = heatmap(&a, &b, m.max_abs);
-        image::save_buffer_with_format(
-            p,
-            &data,
-            a.width,
-            a.height,
-            image::ExtendedColorType::Rgb8,
-            image::ImageFormat::Png,
-        )
-        .map_err(|e| {
-            Failure::new(
-                exit::OUTPUT_FAILED,
-                format!("{}: cannot write: {e}", p.display()),
-            )
-        })?;
+        // Written to a temporary file and renamed: a failed write leaves no partial heat-map.
+        convshadow_io::image::save_rgb8_png(p, a.width, a.height, data)?;
     }
     if let Some(p) = &args.json {
         let mut v = metrics_json(&m, flip);

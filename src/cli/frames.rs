@@ -139,6 +139,37 @@ pub fn frame_time(scene: &Scene, frame: u32, dt: f64) -> Option<f64> {
         .map(|d| d.time.unwrap_or(0.0) + f64::from(frame) * dt)
 }
 
+/// Refuses frames whose detail time leaves the scene format's range (`|detail.time| <= 1e9`,
+/// `scene::MAX_WORLD`): `--time-step` could push it there (the noise then went flat, exit 0).
+/// Times grow or fall with the frame number, so the first and last frame are the extremes.
+pub fn check_times(scene: &Scene, list: &[u32], dt: f64) -> Result<(), Failure> {
+    let max = convshadow_common::model::scene::MAX_WORLD;
+    for &k in [list.first(), list.last()].into_iter().flatten() {
+        for m in &scene.materials {
+            let Some(d) = &m.detail else { continue };
+            let t = d.time.unwrap_or(0.0) + f64::from(k) * dt;
+            if t.is_nan() || t.abs() > max {
+                return Err(Failure::new(
+                    exit::BAD_ARGUMENTS,
+                    format!(
+                        "--time-step {dt}: frame {k} sets material.{}.detail.time to {t:e}, \
+                         beyond the range |time| <= {max:e}; use a smaller step or fewer frames",
+                        m.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A frame's detail time as printed: 12 significant digits, shortest form (`0.3`, not the
+/// `0.30000000000000004` that 6 × 0.05 is in binary; the render uses the exact value).
+pub fn display_time(t: f64) -> String {
+    let rounded: f64 = format!("{t:.11e}").parse().unwrap_or(t);
+    format!("{rounded}")
+}
+
 /// Parses `WxH` (also `W×H`, `W,H`).
 pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let bad = || format!("expected WxH in pixels, like 800x600, got `{text}`");
@@ -172,6 +203,14 @@ pub fn apply_size(scene: &mut Scene, w: u32, h: u32) -> Result<Option<String>, F
             exit::BAD_ARGUMENTS,
             format!("--size {w}x{h}: expected both sides >= 1"),
         ));
+    }
+    // The same aspect, compared exactly in integers: the view stays as it is (in floats,
+    // view_width·(h/w)·(W/H) could come back one ulp off and "change" view_width).
+    let (old_w, old_h) = (u64::from(scene.image.width), u64::from(scene.image.height));
+    if u64::from(w) * old_h == u64::from(h) * old_w {
+        scene.image.width = w;
+        scene.image.height = h;
+        return Ok(None);
     }
     let old_w = f64::from(scene.image.width);
     let old_h = f64::from(scene.image.height);
@@ -255,5 +294,12 @@ mod tests {
         assert_eq!(s.camera.view_width, 2.0 * v);
         // Taller: the width already holds the old view (which is now 2v × v).
         assert_eq!(apply_size(&mut s, 512, 512).unwrap(), None);
+        // The same aspect where floats round: 1×7 px, 1.1 wide, to 5×35 (was 1.1000000000000003).
+        s.image.width = 1;
+        s.image.height = 7;
+        s.camera.view_width = 1.1;
+        assert_eq!(apply_size(&mut s, 5, 35).unwrap(), None);
+        assert_eq!(s.camera.view_width, 1.1);
+        assert_eq!((s.image.width, s.image.height), (5, 35));
     }
 }

@@ -45,6 +45,10 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
     super::override_size(&mut scene, args.width, args.height)?;
     super::require_png("--layers-png", args.layers_png.as_ref())?;
     super::refuse_collisions(args.stats_json.iter().chain(&args.layers_png))?;
+    super::refuse_outputs_over_inputs(
+        args.stats_json.iter().chain(&args.layers_png),
+        &super::scene_inputs(args.scene.as_deref(), &scene),
+    )?;
     for p in args.stats_json.iter().chain(&args.layers_png) {
         convshadow_io::image::check_writable(p)?;
     }
@@ -188,6 +192,7 @@ fn write_stats(path: &std::path::Path, built: &BuiltLdi, hash: u64) -> Result<()
     } = built;
     let (boundary, nonmanifold, flipped, degenerate) = defect_counts(built);
     let value = json!({
+        "version": env!("CARGO_PKG_VERSION"),
         "width": geometry.camera.width,
         "height": geometry.camera.height,
         "grid_width": ldi.width,

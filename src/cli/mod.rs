@@ -46,29 +46,89 @@ pub fn override_size(
 pub fn refuse_collisions<'a>(
     paths: impl IntoIterator<Item = &'a std::path::PathBuf>,
 ) -> Result<(), Failure> {
-    // The folder resolved where it exists, so `x.png` and `./x.png` are the same file.
-    let key = |p: &Path| {
-        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
-        let dir = dir.map_or_else(|| Path::new(".").to_path_buf(), Path::to_path_buf);
-        let dir = std::fs::canonicalize(&dir).unwrap_or(dir);
-        dir.join(p.file_name().unwrap_or_default())
-    };
-    let mut seen: Vec<(std::path::PathBuf, &Path)> = Vec::new();
-    for p in paths {
-        let k = key(p);
-        if let Some((_, first)) = seen.iter().find(|(s, _)| *s == k) {
+    refuse_named_collisions(paths.into_iter().map(|p| (p, p.as_path())), |p| {
+        p.display().to_string()
+    })
+}
+
+/// [`refuse_collisions`] over (tag, path) pairs, in linear time (a frame sequence checks every
+/// frame's names), `name` saying how the message names a tag's file: `x.png` and `./x.png`
+/// are the same file, as their folders are compared resolved where they exist. Tags, not
+/// names, are kept per file, so a million frames hold no message text.
+pub fn refuse_named_collisions<'a, T: Copy>(
+    items: impl IntoIterator<Item = (T, &'a Path)>,
+    name: impl Fn(T) -> String,
+) -> Result<(), Failure> {
+    use std::collections::HashMap;
+    use std::path::PathBuf;
+    let mut folders: HashMap<PathBuf, PathBuf> = HashMap::new();
+    let mut seen: HashMap<PathBuf, T> = HashMap::new();
+    for (tag, p) in items {
+        let dir = convshadow_io::image::folder_of(p).to_path_buf();
+        let resolved = folders
+            .entry(dir.clone())
+            .or_insert_with(|| std::fs::canonicalize(&dir).unwrap_or(dir));
+        let key = resolved.join(p.file_name().unwrap_or_default());
+        if let Some(&first) = seen.get(&key) {
             return Err(Failure::new(
                 crate::cli::exit::BAD_ARGUMENTS,
                 format!(
                     "{} and {} are the same file: give each output its own path",
-                    first.display(),
+                    name(first),
+                    name(tag)
+                ),
+            ));
+        }
+        seen.insert(key, tag);
+    }
+    Ok(())
+}
+
+/// The identity of an existing file (device and inode, through symbolic links), or `None`.
+fn file_identity(p: &Path) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata(p).ok().map(|m| (m.dev(), m.ino()))
+}
+
+/// Refuses an output that is one of the run's inputs (`--stats-json scene.toml`, `diff a.png
+/// b.png --heatmap a.png`, also through another spelling, a symbolic or a hard link): the same
+/// file by identity (device and inode). `inputs` are (what names it, path).
+pub fn refuse_outputs_over_inputs<'a>(
+    outputs: impl IntoIterator<Item = &'a std::path::PathBuf>,
+    inputs: &[(String, &Path)],
+) -> Result<(), Failure> {
+    let inputs: Vec<(&String, &Path, (u64, u64))> = inputs
+        .iter()
+        .filter_map(|(what, p)| file_identity(p).map(|id| (what, *p, id)))
+        .collect();
+    for out in outputs {
+        let Some(id) = file_identity(out) else {
+            continue;
+        };
+        if let Some((what, p, _)) = inputs.iter().find(|(_, _, i)| *i == id) {
+            return Err(Failure::new(
+                crate::cli::exit::BAD_ARGUMENTS,
+                format!(
+                    "{} is the same file as the input {} ({what}): writing it would replace the \
+                     input; give the output its own path",
+                    out.display(),
                     p.display()
                 ),
             ));
         }
-        seen.push((k, p));
     }
     Ok(())
+}
+
+/// The files a render or LDI run reads: the scene file (when one is given) and the files it
+/// names (meshes, textures, patterns), each with what names it.
+pub fn scene_inputs<'a>(scene_file: Option<&'a Path>, scene: &'a Scene) -> Vec<(String, &'a Path)> {
+    let mut inputs: Vec<(String, &Path)> = scene_file
+        .map(|p| ("the scene".to_string(), p))
+        .into_iter()
+        .collect();
+    inputs.extend(scene.input_files());
+    inputs
 }
 
 /// Refuses a PNG-only output (`flag`) whose name ends in another extension: the file would hold

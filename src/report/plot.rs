@@ -75,8 +75,8 @@ pub fn draw(path: &Path, panels: &[Panel]) -> Result<bool, String> {
         }
         root.present().map_err(|e| e.to_string())?;
     }
-    image::save_buffer(path, &buf, w, h, image::ColorType::Rgb8)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+    // Written to a temporary file and renamed, like every output.
+    convshadow_io::image::save_rgb8_png(path, w, h, buf).map_err(|e| e.to_string())?;
     Ok(text)
 }
 

@@ -508,9 +508,12 @@ fn check_case(options: &ReportOptions, count: usize) -> Result<(), String> {
 
 /// Writes `report.csv` and, for the whole report, the plot and `report.md`.
 fn write_files(options: &ReportOptions, rows: Vec<Row>, start: Instant) -> Result<Report, String> {
+    // Each file goes to a temporary file in the folder and is renamed into place: a failed
+    // write leaves the previous file (or none), never an empty or partial one.
     let write = |name: &str, text: &str| {
         let p = options.out.join(name);
-        std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))
+        convshadow_io::image::write_atomically(&p, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| e.to_string())
     };
     write("report.csv", &csv::csv(&rows))?;
     if options.case.is_some() {
@@ -532,11 +535,56 @@ fn write_files(options: &ReportOptions, rows: Vec<Row>, start: Instant) -> Resul
     Ok(report)
 }
 
-/// Runs the report and writes its files.
-pub fn run(options: &ReportOptions) -> Result<Report, String> {
-    let start = Instant::now();
+/// The number of cases of the report `options` asks for (the quick or full grid, one or both
+/// penumbra models), counted without running any.
+pub fn case_count(options: &ReportOptions) -> usize {
+    // No case is wanted: every family only counts (`Cases::want` is false for all).
+    let counting = ReportOptions {
+        case: Some(usize::MAX),
+        verbose: false,
+        ..options.clone()
+    };
+    let mut cases = Cases {
+        options: &counting,
+        next: 0,
+        rows: Vec::new(),
+    };
+    edge_cases(&mut cases);
+    // Without a wanted case the disk family computes no reference, so it cannot fail.
+    let _ = disk_cases(&mut cases);
+    scene_cases(&mut cases);
+    narrowband_cases(&mut cases);
+    cases.next
+}
+
+/// The files a run of `options` writes in `options.out`: `report.csv`, and for the whole
+/// report also `speed_vs_error.png` and `report.md`.
+pub fn output_files(options: &ReportOptions) -> Vec<std::path::PathBuf> {
+    let names: &[&str] = if options.case.is_some() {
+        &["report.csv"]
+    } else {
+        &["report.csv", "speed_vs_error.png", "report.md"]
+    };
+    names.iter().map(|n| options.out.join(n)).collect()
+}
+
+/// Checks before any case runs what would otherwise fail after them: `--case` within the
+/// grid (before anything is created), then the folder (created if missing) and each file it
+/// will write ([`convshadow_io::image::check_writable`]).
+pub fn check_outputs(options: &ReportOptions) -> Result<(), String> {
+    check_case(options, case_count(options))?;
     std::fs::create_dir_all(&options.out)
         .map_err(|e| format!("{}: cannot create: {e}", options.out.display()))?;
+    for p in output_files(options) {
+        convshadow_io::image::check_writable(&p).map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// Runs the report and writes its files (after [`check_outputs`]).
+pub fn run(options: &ReportOptions) -> Result<Report, String> {
+    let start = Instant::now();
+    check_outputs(options)?;
     let mut cases = Cases {
         options,
         next: 0,

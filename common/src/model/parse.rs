@@ -2,6 +2,7 @@
 //! strictly typed; [`validate`] turns it into a [`Scene`], naming the file, the key and what was
 //! expected for every unknown key, wrong type, missing key or invalid value.
 
+mod tables;
 mod validate;
 
 use std::collections::BTreeMap;
@@ -24,7 +25,10 @@ impl Scene {
 
     /// Parses and validates scene text; `source` names it in messages, `base_dir` resolves paths.
     pub fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, SceneError> {
-        let raw: RawScene = toml::from_str(text).map_err(|e| toml_error(source, text, &e))?;
+        // Through `Tables`: a table-typed key given an array is an error, not read in order.
+        let raw = toml::Deserializer::parse(text)
+            .and_then(|d| RawScene::deserialize(tables::Tables(d)))
+            .map_err(|e| toml_error(source, text, &e))?;
         Validator { file: source }.scene(raw, base_dir)
     }
 }
@@ -242,13 +246,21 @@ fn toml_error(source: &str, text: &str, e: &toml::de::Error) -> SceneError {
         .nth(line.saturating_sub(1))
         .unwrap_or("")
         .trim();
-    let key = line_text
-        .split('=')
-        .next()
-        .filter(|_| line_text.contains('='))
-        .map(|k| k.trim().to_string())
-        .unwrap_or_default();
+    let key = if line_text.starts_with('[') {
+        // A section header: its own name.
+        line_text.trim_matches(['[', ']', ' ']).to_string()
+    } else {
+        line_text
+            .split('=')
+            .next()
+            .filter(|_| line_text.contains('='))
+            .map(|k| format!("{}{}", table_prefix(text, line), k.trim()))
+            .unwrap_or_default()
+    };
     let mut message = e.message().to_string();
+    if let Some(near) = did_you_mean(&message) {
+        message = format!("{message}; did you mean `{near}`?");
+    }
     if line > 0 {
         message = format!("line {line}, column {col}: {message} (in `{line_text}`)");
     }
@@ -257,6 +269,57 @@ fn toml_error(source: &str, text: &str, e: &toml::de::Error) -> SceneError {
         key,
         message,
     }
+}
+
+/// The table that line `line` (1-based) of `text` is in, as a key prefix: `light[1].` in the
+/// second `[[light]]`, `material.m.` under `[material.m]`, nothing before the first header.
+fn table_prefix(text: &str, line: usize) -> String {
+    let mut prefix = String::new();
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    for l in text.lines().take(line.saturating_sub(1)) {
+        let l = l.split('#').next().unwrap_or("").trim();
+        if let Some(name) = l.strip_prefix("[[").and_then(|r| r.strip_suffix("]]")) {
+            let name = name.trim().to_string();
+            let n = counts.entry(name.clone()).or_insert(0);
+            prefix = format!("{name}[{n}].");
+            *n += 1;
+        } else if let Some(name) = l.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
+            prefix = format!("{}.", name.trim());
+        }
+    }
+    prefix
+}
+
+/// For serde's `unknown field `X`, expected one of `a`, `b`, …` (or `expected `a` or `b``):
+/// the expected name closest to `X`, when at most two edits away (`colr` → `color`).
+fn did_you_mean(message: &str) -> Option<String> {
+    let rest = message.strip_prefix("unknown field `")?;
+    let (unknown, rest) = rest.split_once('`')?;
+    let (_, expected) = rest.split_once("expected")?;
+    let candidates = expected.split('`').skip(1).step_by(2);
+    candidates
+        .map(|c| (edit_distance(unknown, c), c))
+        .filter(|&(d, c)| d > 0 && d <= 2 && d < c.chars().count())
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, c)| c.to_string())
+}
+
+/// Levenshtein distance between `a` and `b`, in characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let above = row[j + 1];
+            row[j + 1] = (above + 1)
+                .min(row[j] + 1)
+                .min(diagonal + usize::from(ca != cb));
+            diagonal = above;
+        }
+    }
+    row[b.len()]
 }
 
 fn line_col(text: &str, offset: usize) -> (usize, usize) {

@@ -537,6 +537,29 @@ impl Scene {
                 .iter()
                 .all(|m| m.transport[0] == m.transport[1] && m.transport[1] == m.transport[2])
     }
+
+    /// Every file the scene reads, with the key that names it (`mesh[0].path`,
+    /// `material.NAME.texture.path`, `light[0].pattern.path`), in scene order: an output of the
+    /// run must not replace one of them.
+    pub fn input_files(&self) -> Vec<(String, &Path)> {
+        let mut files: Vec<(String, &Path)> = Vec::new();
+        for (i, m) in self.meshes.iter().enumerate() {
+            if let ShapeSpec::Obj { path } = &m.shape {
+                files.push((format!("mesh[{i}].path"), path));
+            }
+        }
+        for m in &self.materials {
+            if let Some(t) = &m.texture {
+                files.push((format!("material.{}.texture.path", m.name), &t.path));
+            }
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            if let Some(p) = &l.pattern {
+                files.push((format!("light[{i}].pattern.path"), &p.path));
+            }
+        }
+        files
+    }
 }
 
 #[cfg(test)]

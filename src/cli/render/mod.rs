@@ -35,7 +35,10 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     apply_view_overrides(&mut scene, args)?;
     let (frame_list, time_step) = frame_list(args)?;
     apply_sweep_overrides(&mut scene, args)?;
-    let outputs = output_paths(args, frame_list.as_deref())?;
+    if let Some(list) = &frame_list {
+        frames::check_times(&scene, list, time_step)?;
+    }
+    let outputs = output_paths(args, frame_list.as_deref(), &scene)?;
     let bar = progress_bar(args);
     // One bar over all frames: frame i's slab s is at i·slabs + s + 1.
     let frame_index = std::sync::atomic::AtomicU64::new(0);

@@ -4,15 +4,19 @@
 
 use std::path::PathBuf;
 
+use convshadow_common::model::scene::Scene;
+
 use super::args::{RenderArgs, RenderBackend};
 use crate::cli::exit::{self, Failure};
 use crate::cli::frames;
 
-/// The output files (defaults, frame patterns), checked before any work: writable, not colliding,
-/// with an image extension.
+/// The output files (defaults, frame patterns), checked before any work for every frame of
+/// `frame_list`: writable (each name, and each folder once), not colliding with one another on
+/// any frame, with an image extension, and not one of the scene's input files.
 pub(super) fn output_paths(
     args: &RenderArgs,
     frame_list: Option<&[u32]>,
+    scene: &Scene,
 ) -> Result<Vec<PathBuf>, Failure> {
     let outputs = if args.outputs.is_empty() {
         match frame_list {
@@ -45,20 +49,55 @@ pub(super) fn output_paths(
             "--frames/--frame do not apply to --backend reference",
         ));
     }
-    let first_outputs: Vec<PathBuf> = match frame_list {
-        Some(list) => outputs
-            .iter()
-            .map(|p| frames::frame_path(p, list[0]))
-            .collect(),
-        None => outputs.clone(),
+    // Every file the run writes, tagged (output index, frame): each output at each frame, then
+    // the stats (index `outputs.len()`).
+    let mut files: Vec<((usize, u32), PathBuf)> = Vec::new();
+    match frame_list {
+        Some(list) => {
+            for &k in list {
+                for (i, p) in outputs.iter().enumerate() {
+                    files.push(((i, k), frames::frame_path(p, k)));
+                }
+            }
+        }
+        None => files.extend(
+            outputs
+                .iter()
+                .cloned()
+                .enumerate()
+                .map(|(i, p)| ((i, 0), p)),
+        ),
+    }
+    if let Some(p) = &args.stats_json {
+        files.push(((outputs.len(), 0), p.clone()));
+    }
+    let name = |(i, k): (usize, u32)| match outputs.get(i) {
+        Some(p) if frame_list.is_some() && frames::has_frame_pattern(p) => format!(
+            "{} at frame {k} ({})",
+            p.display(),
+            frames::frame_path(p, k).display()
+        ),
+        Some(p) => p.display().to_string(),
+        None => args
+            .stats_json
+            .as_ref()
+            .map_or_else(String::new, |p| p.display().to_string()),
     };
-    crate::cli::refuse_collisions(first_outputs.iter().chain(&args.stats_json))?;
-    for p in first_outputs.iter().chain(&args.stats_json) {
-        convshadow_io::image::check_writable(p)?;
+    crate::cli::refuse_named_collisions(files.iter().map(|(t, p)| (*t, p.as_path())), name)?;
+    crate::cli::refuse_outputs_over_inputs(
+        files.iter().map(|(_, p)| p),
+        &crate::cli::scene_inputs(args.scene.as_deref(), scene),
+    )?;
+    // Each name, then each folder once (a pattern may put frames in different folders).
+    let mut folders = std::collections::HashSet::new();
+    for (_, p) in &files {
+        convshadow_io::image::check_target(p)?;
+    }
+    for p in &outputs {
         let ext = p
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        if args.stats_json.as_ref() != Some(p) && !matches!(ext.as_deref(), Some("png" | "exr")) {
+        if !matches!(ext.as_deref(), Some("png" | "exr")) {
             return Err(Failure::new(
                 exit::BAD_ARGUMENTS,
                 format!(
@@ -68,7 +107,11 @@ pub(super) fn output_paths(
             ));
         }
     }
-
+    for (_, p) in &files {
+        if folders.insert(convshadow_io::image::folder_of(p).to_path_buf()) {
+            convshadow_io::image::check_folder(p)?;
+        }
+    }
     Ok(outputs)
 }
 
@@ -103,7 +146,7 @@ mod tests {
 
     fn outputs(argv: &[&str], frames: Option<&[u32]>) -> Result<Vec<PathBuf>, Failure> {
         let args = parse(argv).unwrap_or_else(|e| panic!("{argv:?}: {e}"));
-        output_paths(&args, frames)
+        output_paths(&args, frames, &Scene::default_scene())
     }
 
     fn refused(argv: &[&str], frames: Option<&[u32]>, code: i32, words: &str) {
@@ -164,12 +207,18 @@ mod tests {
             exit::BAD_ARGUMENTS,
             "same file",
         );
-        // A sequence checks its first frame's names: f_%02d.png is f_03.png for frame 3.
+        // A sequence checks every frame's names: f_%02d.png is f_03.png for frame 3.
         let pattern = d.arg("f_%02d.png");
         let first = d.arg("f_03.png");
         let argv = ["-o", pattern.as_str(), "--stats-json", first.as_str()];
         refused(&argv, Some(&[3, 4]), exit::BAD_ARGUMENTS, "same file");
+        refused(&argv, Some(&[2, 3]), exit::BAD_ARGUMENTS, "at frame 3");
         assert!(outputs(&argv, Some(&[4, 5])).is_ok());
+        // Two patterns that differ on frame 0 (f_0, f_00) but meet on frame 10 (f_10).
+        let (a, b) = (d.arg("f_%d.png"), d.arg("f_%02d.png"));
+        let argv = ["-o", a.as_str(), "-o", b.as_str()];
+        assert!(outputs(&argv, Some(&[0, 1])).is_ok());
+        refused(&argv, Some(&[9, 10]), exit::BAD_ARGUMENTS, "at frame 10");
     }
 
     #[test]
@@ -207,5 +256,15 @@ mod tests {
         );
         let folder = d.0.display().to_string();
         refused(&["-o", &folder], None, exit::OUTPUT_FAILED, "is a folder");
+        // A later frame's folder is checked too: o0 exists, o1 does not.
+        std::fs::create_dir(d.0.join("o0")).unwrap();
+        let pattern = d.arg("o%d/a.png");
+        refused(&["-o", &pattern], Some(&[0, 1]), exit::OUTPUT_FAILED, "o1");
+        assert!(outputs(&["-o", &pattern], Some(&[0])).is_ok());
+        // Names a rename into place would refuse only after the render.
+        let long = d.arg(&format!("{}.png", "x".repeat(252)));
+        refused(&["-o", &long], None, exit::OUTPUT_FAILED, "at most 255");
+        let slash = format!("{}/", d.arg("a.png"));
+        refused(&["-o", &slash], None, exit::OUTPUT_FAILED, "names a folder");
     }
 }

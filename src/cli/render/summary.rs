@@ -136,7 +136,8 @@ pub(super) fn finish_frames(
             convshadow::outln!(
                 "frame {} (time {}): image_hash {:016x}, {:.2} s → {}",
                 f.frame,
-                f.time.map_or_else(|| "-".to_string(), |t| format!("{t}")),
+                f.time
+                    .map_or_else(|| "-".to_string(), crate::cli::frames::display_time),
                 f.image_hash,
                 f.seconds_total,
                 f.outputs
@@ -229,6 +230,7 @@ fn stats_value(
 ) -> serde_json::Value {
     let throughput = throughput(r);
     json!({
+            "version": env!("CARGO_PKG_VERSION"),
             "width": scene.image.width,
             "height": scene.image.height,
             "slabs": r.plan.slabs,

@@ -773,8 +773,18 @@ impl Validator<'_> {
                      NIfTI files end in .nii or .nii.gz",
                 ));
             };
-            if dims.contains(&0) {
-                return Err(self.err(key("texture.dims"), "expected three dimensions >= 1"));
+            // The loader's limits, checked here so that dims beyond them are named as the
+            // dims (exit code 3), not as a memory need of 2^32 voxels (exit code 4).
+            if crate::pixel::texture3d::voxel_count(dims).is_none() {
+                use crate::pixel::texture3d::{MAX_DIM, MAX_VOXELS};
+                return Err(self.err(
+                    key("texture.dims"),
+                    format!(
+                        "expected three dimensions from 1 to {MAX_DIM} with at most \
+                         {MAX_VOXELS} voxels in all, got [{}, {}, {}]",
+                        dims[0], dims[1], dims[2]
+                    ),
+                ));
             }
             if t.window.is_some() {
                 return Err(self.err(

@@ -147,3 +147,76 @@ fn syntax_unknown_keys_and_wrong_types_are_errors() {
     let e = parse(&MINIMAL.replace("[camera]\nview_width = 2.0\n", "")).unwrap_err();
     assert!(e.to_string().contains("missing field `camera`"), "{e}");
 }
+
+/// Issue 43, class 6: every table-typed key, at any depth (a section, an array of tables, a
+/// map of tables, an inline table), refuses an array instead of reading it in field order.
+#[test]
+fn table_keys_refuse_arrays_at_every_depth() {
+    let tail = MINIMAL.split_once("[[mesh]]").unwrap().1;
+    // Top-level keys go before the first section; the others inside their table.
+    let top = |key: &str, section: &str, value: &str| {
+        format!("{key} = {value}\n{}", MINIMAL.replace(section, ""))
+    };
+    for (what, text) in [
+        (
+            "camera",
+            top(
+                "camera",
+                "[camera]\nview_width = 2.0",
+                "[[0, 0, 1], [0, 1, 0], [0, 0, 0], 2.0]",
+            ),
+        ),
+        (
+            "sweep",
+            top(
+                "sweep",
+                "[sweep]\nslabs = 16\noptimal_distance = 0.5",
+                "[16]",
+            ),
+        ),
+        (
+            "light",
+            top("light", "", "[[[1, 1, 1], [10, 10], [0.01, 0.01]]]"),
+        ),
+        (
+            "mesh",
+            top("mesh", &format!("[[mesh]]{tail}"), "[[\"box\", [1, 1, 1]]]") + "[material.m]\n",
+        ),
+        (
+            "material",
+            MINIMAL.replace("[material.m]\n", "[material]\nm = [[1, 1, 1], 0.5]\n"),
+        ),
+        (
+            "texture",
+            format!("{MINIMAL}texture = [\"t.raw\", [2, 2, 2], \"u8\"]\n"),
+        ),
+    ] {
+        let e = parse(&text)
+            .err()
+            .unwrap_or_else(|| panic!("{what}: accepted"));
+        assert!(e.message.contains("expected a table"), "{what}: {e}");
+        assert!(e.message.contains("line "), "{what}: {e}");
+    }
+    // The same keys as tables still parse; a wrong field inside one is still named.
+    let ok = format!("{MINIMAL}specular = {{ exponent = 8 }}\nphase = {{ g = 0.3 }}\n");
+    assert!(parse(&ok).is_ok());
+    let e = parse(&format!("{MINIMAL}phase = {{ h = 0.3 }}\n")).unwrap_err();
+    assert!(e.message.contains("unknown field `h`"), "{e}");
+}
+
+/// An unknown key is named with its table (`light[1].colr`, `material.m.opacty`) and the
+/// closest known key.
+#[test]
+fn unknown_keys_name_their_table_and_the_nearest_key() {
+    let two_lights =
+        format!("{MINIMAL}[[light]]\ncolor = [1, 1, 1]\n[[light]]\ncolr = [1, 1, 1]\n");
+    let e = parse(&two_lights).unwrap_err();
+    assert_eq!(e.key, "light[1].colr", "{e}");
+    assert!(e.message.contains("did you mean `color`?"), "{e}");
+    let e = parse(&format!("{MINIMAL}opacty = 0.5\n")).unwrap_err();
+    assert_eq!(e.key, "material.m.opacty", "{e}");
+    assert!(e.message.contains("did you mean `opacity`?"), "{e}");
+    // Nothing near: no suggestion.
+    let e = parse(&format!("{MINIMAL}zzzzzz = 1\n")).unwrap_err();
+    assert!(!e.message.contains("did you mean"), "{e}");
+}
