@@ -6,8 +6,6 @@
 use std::path::Path;
 
 use convshadow_common::model::scene::GuardBandSpec;
-use convshadow_common::prepare::geometry::SceneGeometry;
-use convshadow_common::plan::RenderPlan;
 use convshadow_common::model::scene::{Scene, ShapeSpec, SlabSpec};
 use libfuzzer_sys::fuzz_target;
 
