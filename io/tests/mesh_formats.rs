@@ -10,23 +10,9 @@ use convshadow_io::mesh::load_mesh;
 use convshadow_io::obj::load_obj;
 use convshadow_testkit::mesh_files::{self as mf, GltfNode, PlyEncoding, SoupMesh};
 
-/// The models folder, or `None` (after a loud message) when it is absent outside CI.
+/// The models folder beside the repository (see `convshadow_testkit::models_dir`).
 fn models_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/models");
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    if std::env::var_os("CI").is_some() {
-        panic!(
-            "../shared/models not found at {} (required when CI is set)",
-            dir.display()
-        );
-    }
-    eprintln!(
-        "SKIP: ../shared/models not found (looked in {})",
-        dir.display()
-    );
-    None
+    convshadow_testkit::models_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
 }
 
 /// A fresh temporary folder for one test.

@@ -6,23 +6,9 @@ use std::path::{Path, PathBuf};
 use convshadow_common::prepare::mesh::{MeshError, MeshReport, TriMesh};
 use convshadow_io::obj::load_obj;
 
-/// The models folder, or `None` (after a loud message) when it is absent outside CI.
+/// The models folder beside the repository (see `convshadow_testkit::models_dir`).
 fn models_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/models");
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    if std::env::var_os("CI").is_some() {
-        panic!(
-            "../shared/models not found at {} (required when CI is set)",
-            dir.display()
-        );
-    }
-    eprintln!(
-        "SKIP: ../shared/models not found (looked in {})",
-        dir.display()
-    );
-    None
+    convshadow_testkit::models_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
 }
 
 /// Loads `name` from the models folder and analyses it; panics with the loader's message.

@@ -5,7 +5,30 @@
 
 pub mod mesh_files;
 
+use std::path::{Path, PathBuf};
+
 use convshadow_common::pixel::hash::mix32;
+
+/// `shared/models` beside the repository (`repo_root`: the repository's root folder), or `None`
+/// with a loud message when it is missing. Under CI (env `CI` set) a missing folder is a
+/// failure, not a skip.
+pub fn models_dir(repo_root: &Path) -> Option<PathBuf> {
+    let dir = repo_root.join("../shared/models");
+    if dir.is_dir() {
+        Some(dir)
+    } else if std::env::var_os("CI").is_some() {
+        panic!(
+            "../shared/models not found at {} (required when CI is set)",
+            dir.display()
+        );
+    } else {
+        eprintln!(
+            "SKIP: ../shared/models not found (looked in {}); model tests skipped",
+            dir.display()
+        );
+        None
+    }
+}
 
 /// A deterministic random sequence for tests, benches and fuzzing: a counter hashed by [`mix32`].
 /// The renderer never draws from it (its randomness is keyed hashes of seed, light, slab and pixel).

@@ -31,18 +31,10 @@ pub fn kernels() -> Vec<&'static str> {
 #[allow(unused_imports)] // not every test binary draws random numbers
 pub use convshadow_testkit::TestRng;
 
-/// `../shared/models` beside the repository, or `None` (with a loud message) when it is missing.
-/// Under CI (env `CI` set) a missing folder is a failure, not a skip.
+/// `../shared/models` beside the repository, or `None` (with a loud message) when it is missing;
+/// a failure under CI (`convshadow_testkit::models_dir`).
 pub fn models_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models");
-    if dir.is_dir() {
-        Some(dir)
-    } else if std::env::var_os("CI").is_some() {
-        panic!("../shared/models not found next to the repository (required in CI)");
-    } else {
-        eprintln!("SKIP: ../shared/models not found next to the repository; model tests skipped");
-        None
-    }
+    convshadow_testkit::models_dir(Path::new(env!("CARGO_MANIFEST_DIR")))
 }
 
 /// A scene from TOML text (paths resolve against `base`).
