@@ -451,7 +451,17 @@ mod tests {
             .to_string();
         assert!(err.contains("the kernel tables need"), "{err}");
         assert!(err.contains("40 kernel levels"), "{err}");
-        let fits = render(&scene, &req(exact)).unwrap_or_else(|e| panic!("{e}"));
+        // While it merges them the build holds its levels beside the merged table (at most as
+        // many taps), and one slab-shift schedule: the guard counts that peak, up to twice the
+        // tables and a few words per slab.
+        let peak = 2 * tables + 4 * (2 * 48 + 40) * r.plan.lights.len() as u64;
+        let err = render(&scene, &req(exact + tables / 2))
+            .err()
+            .expect("the tables alone fit, not the build's peak")
+            .to_string();
+        assert!(err.contains("the kernel tables need more than"), "{err}");
+        let fits = render(&scene, &req(need + r.ldi.fragments * BYTES_PER_FRAGMENT + peak))
+            .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(fits.image_hash, r.image_hash);
         // The GPU holds the taps and level tables twice (host and device), without the CPU's
         // tap columns.
