@@ -113,7 +113,8 @@ pub struct Rendered {
     pub seconds_ldi: f64,
     /// Seconds building the render plan: its tables and the 3D textures it loads.
     pub seconds_plan: f64,
-    /// Seconds in the sweep.
+    /// Seconds in the sweep (the image's; the light layers' sweeps count in
+    /// [`Rendered::seconds_total`] only).
     pub seconds_sweep: f64,
     /// Seconds in all.
     pub seconds_total: f64,
@@ -226,6 +227,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     let t_sweep = Instant::now();
     let chunk_counts = ChunkCounts::default();
     let out = engine.sweep(&plan, &geometry, &ldi, req, &chunk_counts)?;
+    let seconds_sweep = t_sweep.elapsed().as_secs_f64();
     // 6. The extra layers: one more sweep per light layer, on the plan with the other lights
     // and the background black (`pipeline/aov.rs`).
     let mut plan = plan;
@@ -244,7 +246,6 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
         .aovs
         .contains(&Aov::Depth)
         .then(|| first_hit_depth(&plan, &ldi, geometry.z_origin));
-    let seconds_sweep = t_sweep.elapsed().as_secs_f64();
     // 7. The image and its numbers.
     Ok(Rendered {
         mesh_warnings: geometry.mesh_warnings(),

@@ -64,6 +64,7 @@ pub(super) fn render_reference(
         let reference = Reference::new(scene, &geometry, &plan, 0.0);
         pool.install(|| reference.render_with_alpha(&ldi, &options))
     };
+    let seconds_sweep = t_render.elapsed().as_secs_f64();
     let mut plan = plan;
     let colors = LightColors::of(&plan);
     let mut light_layers = Vec::new();
@@ -78,7 +79,6 @@ pub(super) fn render_reference(
     let depth = aovs
         .contains(&Aov::Depth)
         .then(|| first_hit_depth(&plan, &ldi, geometry.z_origin));
-    let seconds_sweep = t_render.elapsed().as_secs_f64();
     Ok(Rendered {
         mesh_warnings: geometry.mesh_warnings(),
         image_hash: image_fingerprint(&data),
