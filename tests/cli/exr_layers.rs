@@ -364,3 +364,32 @@ fn the_reference_backend_writes_its_own_alpha_and_the_layers() {
         }
     }
 }
+
+#[test]
+fn every_frame_of_a_sequence_carries_the_alpha_and_the_layers() {
+    let dir = support::temp_dir("exr-frames");
+    let argv = [
+        "render",
+        "--size",
+        "16x16",
+        "--slabs",
+        "8",
+        "--quiet",
+        "--frames",
+        "0..2",
+        "-o",
+        "f_%d.exr",
+        "--aov",
+        "depth,light0",
+    ];
+    let (code, out, err) = support::run_cli(&argv, &dir);
+    assert_eq!(code, 0, "{out}{err}");
+    for f in ["f_0.exr", "f_1.exr"] {
+        let all = channels(&dir.join(f));
+        assert_eq!(
+            names(&all),
+            ["A", "B", "G", "R", "Z", "light0.B", "light0.G", "light0.R"],
+            "{f}"
+        );
+    }
+}
