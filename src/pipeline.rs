@@ -8,11 +8,12 @@
 //! plan, sweep, image. Around them: the open-mesh refusal after the LDI, a cancel point between
 //! stages, and the budget's checks, each where its size becomes known (`pipeline/budget.rs`).
 //!
-//! Files: this one (the request, the result, the stages in order); `pipeline/backend.rs`
-//! (where it runs: backend, CPU path, threads); `pipeline/budget.rs` (the memory budget);
-//! `pipeline/error.rs` ([`RenderError`]). Imports go one way: this file → budget → backend →
-//! error.
+//! Files: this one (the request, the result, the stages in order); `pipeline/aov.rs` (the
+//! extra output layers: depth, one light's contribution); `pipeline/backend.rs` (where it runs:
+//! backend, CPU path, threads); `pipeline/budget.rs` (the memory budget); `pipeline/error.rs`
+//! ([`RenderError`]). Imports go one way: this file → aov, budget → backend → error.
 
+mod aov;
 mod backend;
 mod budget;
 mod error;
@@ -31,6 +32,7 @@ use convshadow_cpu::sweep::{
 };
 use convshadow_io::image::RgbImage;
 
+pub use aov::{Aov, LightColors, first_hit_depth};
 pub use backend::{Backend, BackendChoice, CpuPath, MAX_THREADS, thread_pool};
 pub use budget::{LDI_BYTES_PER_PIXEL, MemoryNeed, kernel_table_bytes, open_within_budget};
 pub use error::RenderError;
@@ -57,6 +59,9 @@ pub struct RenderRequest<'a> {
     /// after the plan's last slab (`SweepOptions::every_slab`). Off by default: the image is
     /// the same bits either way.
     pub every_slab: bool,
+    /// Extra layers to produce ([`Rendered::depth`], [`Rendered::light_layers`]); each light
+    /// layer is one more sweep. None by default.
+    pub aovs: Vec<Aov>,
 }
 
 impl Default for RenderRequest<'_> {
@@ -71,6 +76,7 @@ impl Default for RenderRequest<'_> {
             progress: &|_| {},
             cancel: None,
             every_slab: false,
+            aovs: Vec::new(),
         }
     }
 }
@@ -79,6 +85,15 @@ impl Default for RenderRequest<'_> {
 pub struct Rendered {
     /// The linear float image.
     pub image: RgbImage,
+    /// The composited opacity `A` of each image pixel, `width·height`: the front-to-back
+    /// `A += (1 − A)·α_slab` before the background is added (`image = C + (1 − A)·background`).
+    pub alpha: Vec<f32>,
+    /// With [`Aov::Depth`] requested: the first-hit depth per image pixel
+    /// ([`first_hit_depth`]).
+    pub depth: Option<Vec<f32>>,
+    /// Per [`Aov::Light`] requested, in request order: the light's index and its contribution
+    /// to the image (linear RGB, `width·height·3`, the background excluded).
+    pub light_layers: Vec<(usize, Vec<f32>)>,
     /// 64-bit fingerprint of the image's float bits (`image_hash`).
     pub image_hash: u64,
     /// LDI numbers.
@@ -98,7 +113,8 @@ pub struct Rendered {
     pub seconds_ldi: f64,
     /// Seconds building the render plan: its tables and the 3D textures it loads.
     pub seconds_plan: f64,
-    /// Seconds in the sweep.
+    /// Seconds in the sweep (the image's; the light layers' sweeps count in
+    /// [`Rendered::seconds_total`] only).
     pub seconds_sweep: f64,
     /// Seconds in all.
     pub seconds_total: f64,
@@ -180,9 +196,15 @@ pub fn build_ldi(
 }
 
 /// Renders a scene on the CPU or, with `req.backend`, on the GPU: the stages in order, each
-/// timed, with a cancel point between them.
+/// timed, with a cancel point between them; then the extra layers of `req.aovs` (a light the
+/// scene lacks is refused first, [`RenderError::BadRequest`]).
 pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, RenderError> {
     let start = Instant::now();
+    for aov in &req.aovs {
+        if let Aov::Light(l) = *aov {
+            check_light_index(scene, l)?;
+        }
+    }
     // 1. The backend and the threads, once the scene's per-pixel need fits the budget.
     let engine = Engine::open(scene, true, req.backend, req.threads, req.memory_budget)?;
     // 2. Geometry, and with its guard band what the budget leaves for the LDI's fragments.
@@ -206,7 +228,25 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     let chunk_counts = ChunkCounts::default();
     let out = engine.sweep(&plan, &geometry, &ldi, req, &chunk_counts)?;
     let seconds_sweep = t_sweep.elapsed().as_secs_f64();
-    // 6. The image and its numbers.
+    // 6. The extra layers: one more sweep per light layer, on the plan with the other lights
+    // and the background black (`pipeline/aov.rs`).
+    let mut plan = plan;
+    let mut light_layers = Vec::new();
+    let colors = LightColors::of(&plan);
+    for aov in &req.aovs {
+        if let Aov::Light(l) = *aov {
+            check_cancel(req.cancel)?;
+            colors.isolate(&mut plan, l);
+            let layer = engine.sweep(&plan, &geometry, &ldi, req, &ChunkCounts::default());
+            colors.restore(&mut plan);
+            light_layers.push((l, layer?.image));
+        }
+    }
+    let depth = req
+        .aovs
+        .contains(&Aov::Depth)
+        .then(|| first_hit_depth(&plan, &ldi, geometry.z_origin));
+    // 7. The image and its numbers.
     Ok(Rendered {
         mesh_warnings: geometry.mesh_warnings(),
         image_hash: image_fingerprint(&out.image),
@@ -215,6 +255,9 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
             height: scene.image.height,
             data: out.image,
         },
+        alpha: out.alpha,
+        depth,
+        light_layers,
         ldi: stats,
         ldi_hash: ldi.fingerprint(),
         plan,
@@ -376,6 +419,19 @@ impl Engine {
                 })?,
         })
     }
+}
+
+/// Refuses a light layer ([`Aov::Light`]) for a light the scene does not have.
+pub fn check_light_index(scene: &Scene, light: usize) -> Result<(), RenderError> {
+    let n = scene.lights.len();
+    if light >= n {
+        return Err(RenderError::BadRequest(format!(
+            "--aov light{light}: the scene has {n} light{} (light0 … light{})",
+            if n == 1 { "" } else { "s" },
+            n.saturating_sub(1)
+        )));
+    }
+    Ok(())
 }
 
 /// Refuses (unless `allow_open`) meshes that are not closed, or an LDI with a pixel of odd

@@ -438,7 +438,8 @@ fn upload_buffers(
         &[0]
     };
     let surface_hold = upload(ctx, "triangle surface hold", per_triangle, false)?;
-    let image_words = u64::from(plan.width) * u64::from(plan.height) * 3;
+    // RGBA per image pixel: the RGB image and the composited alpha (`SweepOutput::alpha`).
+    let image_words = u64::from(plan.width) * u64::from(plan.height) * 4;
     let image = zeroed(ctx, "image", image_words)?;
     let globals = uniform(ctx, "globals", &tables.globals);
     let slab_param = uniform(ctx, "slab", &SlabParams::default());
@@ -628,14 +629,19 @@ fn dispatch_finish(
     ctx.queue.submit([encoder.finish()]);
 }
 
-/// Reads back the image and the last slab's light buffer as floats.
+/// Reads back the image, its alpha and the last slab's light buffer as floats.
 fn read_output(
     ctx: &GpuContext,
     plan: &RenderPlan,
     b: &SweepBuffers,
     light_words: u64,
 ) -> Result<SweepOutput, GpuError> {
-    let image = read_back(ctx, &b.image, b.image_words)?;
+    let rgba = read_back(ctx, &b.image, b.image_words)?;
+    let image = rgba
+        .chunks_exact(4)
+        .flat_map(|p| p[..3].iter().map(|&v| f32::from_bits(v)))
+        .collect();
+    let alpha = rgba.chunks_exact(4).map(|p| f32::from_bits(p[3])).collect();
     let last = if plan.slabs % 2 == 1 {
         &b.light_b
     } else {
@@ -643,7 +649,8 @@ fn read_output(
     };
     let light = read_back(ctx, last, light_words)?;
     Ok(SweepOutput {
-        image: image.into_iter().map(f32::from_bits).collect(),
+        image,
+        alpha,
         light: light.into_iter().map(f32::from_bits).collect(),
         // The GPU sweeps every slab (`SweepOptions::every_slab` permits, never asks, an early
         // finish): its image is the CPU's either way.

@@ -153,6 +153,15 @@ pub fn write_atomically(
     Ok(())
 }
 
+/// One channel of an EXR output beside `R`, `G`, `B` ([`RgbImage::save_exr`]).
+#[derive(Clone, Copy, Debug)]
+pub struct ExrChannel<'a> {
+    /// The channel's name, as OpenEXR tools show it: `A`, `Z`, `light0.R`, …
+    pub name: &'a str,
+    /// `width·height` values, row-major.
+    pub data: &'a [f32],
+}
+
 /// A linear RGB float image, row-major.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RgbImage {
@@ -193,20 +202,77 @@ impl RgbImage {
                     image::ImageFormat::Png,
                 )
             }
-            "exr" => {
-                let buf = image::Rgb32FImage::from_raw(self.width, self.height, self.data.clone())
-                    .ok_or_else(|| out_err(path, "image buffer has the wrong size"))?;
-                encode(
-                    path,
-                    image::DynamicImage::ImageRgb32F(buf),
-                    image::ImageFormat::OpenExr,
-                )
-            }
+            "exr" => self.save_exr(path, &[]),
             _ => Err(out_err(
                 path,
                 "unknown image extension; expected .png or .exr",
             )),
         }
+    }
+
+    /// Writes the image as an EXR file: the channels `R`, `G`, `B` (f32, the image's values bit
+    /// for bit) and `extra` (f32, each `width·height` values, row-major), in one part, scan
+    /// lines ZIP-compressed (lossless), channels sorted by name as the format asks. Channel
+    /// names follow OpenEXR's conventions: `A` (alpha), `Z` (depth), `layer.R` for a layer's
+    /// red. A name that is empty, repeated or one of `R`, `G`, `B`, or data of the wrong length,
+    /// is an error; nothing is written then.
+    pub fn save_exr(&self, path: &Path, extra: &[ExrChannel<'_>]) -> Result<(), OutputError> {
+        use exr::prelude::{
+            AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes,
+            WritableImage,
+        };
+        let (w, h) = (self.width as usize, self.height as usize);
+        if self.data.len() != w * h * 3 {
+            return Err(out_err(path, "image buffer has the wrong size"));
+        }
+        let mut names: Vec<&str> = vec!["R", "G", "B"];
+        for c in extra {
+            if c.name.is_empty() || names.contains(&c.name) {
+                return Err(out_err(
+                    path,
+                    format!("EXR channel name {:?} is empty or repeated", c.name),
+                ));
+            }
+            if c.data.len() != w * h {
+                return Err(out_err(
+                    path,
+                    format!(
+                        "EXR channel {} has {} values, expected {}",
+                        c.name,
+                        c.data.len(),
+                        w * h
+                    ),
+                ));
+            }
+            names.push(c.name);
+        }
+        let plane =
+            |k: usize| -> Vec<f32> { self.data.iter().skip(k).step_by(3).copied().collect() };
+        let mut channels: Vec<AnyChannel<FlatSamples>> = ["R", "G", "B"]
+            .iter()
+            .enumerate()
+            .map(|(k, name)| AnyChannel::new(*name, FlatSamples::F32(plane(k))))
+            .collect();
+        channels.extend(extra.iter().map(|c| {
+            let mut channel = AnyChannel::new(c.name, FlatSamples::F32(c.data.to_vec()));
+            // `pLinear` (a hint to lossy compressions only): the `exr` crate guesses it from
+            // the whole name, so `light0.R` would get it; a layer's channel gets its base
+            // name's (`R`: not linear), as alpha keeps its own.
+            channel.quantize_linearly = c.name.rsplit('.').next() == Some("A");
+            channel
+        }));
+        let layer = Layer::new(
+            (w, h),
+            LayerAttributes::default(),
+            Encoding::SMALL_LOSSLESS,
+            AnyChannels::sort(channels.into()),
+        );
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        Image::from_layer(layer)
+            .write()
+            .to_buffered(&mut bytes)
+            .map_err(|e| out_err(path, format!("cannot encode: {e}")))?;
+        write_atomically(path, |out| out.write_all(bytes.get_ref()))
     }
 
     /// Reads a PNG (decoded from sRGB to linear) or an EXR (linear).
@@ -289,6 +355,110 @@ mod tests {
         }
         assert_eq!(linear_to_srgb8(-1.0), 0);
         assert_eq!(linear_to_srgb8(2.0), 255);
+    }
+
+    #[test]
+    fn exr_extra_channels_are_written_bit_for_bit_and_rgb_reads_back_unchanged() {
+        use exr::prelude::{FlatSamples, read_all_flat_layers_from_file};
+        let dir = std::env::temp_dir().join(format!("convshadow-io-exr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // Awkward values: a subnormal, −0, a large value, and +inf in Z (no hit).
+        let data: Vec<f32> = (0..18)
+            .map(|i| match i {
+                4 => f32::from_bits(1),
+                7 => -0.0,
+                11 => 3.0e38,
+                _ => i as f32 / 17.0,
+            })
+            .collect();
+        let img = RgbImage {
+            width: 3,
+            height: 2,
+            data,
+        };
+        let alpha = [0.0, 0.25, 1.0, 0.5, 0.75, 1.0];
+        let z = [1.5, f32::INFINITY, -2.0, 0.0, 7.25, f32::INFINITY];
+        let red = [0.125; 6];
+        let extra = [
+            ExrChannel {
+                name: "A",
+                data: &alpha,
+            },
+            ExrChannel {
+                name: "Z",
+                data: &z,
+            },
+            ExrChannel {
+                name: "light0.R",
+                data: &red,
+            },
+        ];
+        let path = dir.join("layers.exr");
+        img.save_exr(&path, &extra).unwrap();
+        let read = read_all_flat_layers_from_file(&path).unwrap();
+        assert_eq!(read.layer_data.len(), 1, "one part");
+        let channels = &read.layer_data[0].channel_data.list;
+        let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
+        assert_eq!(names, ["A", "B", "G", "R", "Z", "light0.R"]);
+        let bits = |name: &str| -> Vec<u32> {
+            let c = channels
+                .iter()
+                .find(|c| c.name.to_string() == name)
+                .unwrap();
+            match &c.sample_data {
+                FlatSamples::F32(v) => v.iter().map(|v| v.to_bits()).collect(),
+                other => panic!("{name}: not f32: {other:?}"),
+            }
+        };
+        for (k, name) in ["R", "G", "B"].iter().enumerate() {
+            let want: Vec<u32> = img
+                .data
+                .iter()
+                .skip(k)
+                .step_by(3)
+                .map(|v| v.to_bits())
+                .collect();
+            assert_eq!(bits(name), want, "{name}");
+        }
+        for c in &extra {
+            let want: Vec<u32> = c.data.iter().map(|v| v.to_bits()).collect();
+            assert_eq!(bits(c.name), want, "{}", c.name);
+        }
+        // The `image` crate (`RgbImage::load`, `convshadow diff`) reads the RGB bits back.
+        let back = RgbImage::load(&path).unwrap();
+        let back_bits: Vec<u32> = back.data.iter().map(|v| v.to_bits()).collect();
+        let want: Vec<u32> = img.data.iter().map(|v| v.to_bits()).collect();
+        assert_eq!(back_bits, want);
+        // Bad channels: errors naming the channel, and no file.
+        let bad = dir.join("bad.exr");
+        for (extra, words) in [
+            (
+                vec![ExrChannel {
+                    name: "G",
+                    data: &alpha,
+                }],
+                "repeated",
+            ),
+            (
+                vec![ExrChannel {
+                    name: "",
+                    data: &alpha,
+                }],
+                "empty",
+            ),
+            (
+                vec![ExrChannel {
+                    name: "A",
+                    data: &alpha[..5],
+                }],
+                "A has 5 values",
+            ),
+        ] {
+            let e = img.save_exr(&bad, &extra).unwrap_err().to_string();
+            assert!(e.contains(words), "{e}");
+            assert!(!bad.exists());
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -526,6 +526,14 @@ impl<'a> Reference<'a> {
     /// Renders the image (linear RGB, `width·height·3`) with the sweep's view samples and
     /// reference light (see the module documentation).
     pub fn render(&self, ldi: &Ldi, options: &ReferenceOptions) -> Vec<f32> {
+        self.render_with_alpha(ldi, options).0
+    }
+
+    /// [`Reference::render`]'s image and its composited alpha per pixel (`width·height`): the
+    /// reference's own front-to-back `A += (1 − A)·α_slab` before the background is added (its
+    /// view samples stop once `1 − A` is below its transparency cutoff, so a pixel that is opaque
+    /// on the sweep may keep an alpha a little under 1 here).
+    pub fn render_with_alpha(&self, ldi: &Ldi, options: &ReferenceOptions) -> (Vec<f32>, Vec<f32>) {
         let plan = self.plan;
         let k = samples_side(options.samples);
         let (iw, ih) = (plan.width as usize, plan.height as usize);
@@ -534,10 +542,12 @@ impl<'a> Reference<'a> {
         let ch = plan.channels as usize;
         let lights = plan.lights.len();
         let mut image = vec![0.0f32; iw * ih * 3];
+        let mut image_alpha = vec![0.0f32; iw * ih];
         image
             .par_chunks_mut(iw * 3)
+            .zip(image_alpha.par_chunks_mut(iw))
             .enumerate()
-            .for_each(|(iy, row)| {
+            .for_each(|(iy, (row, row_alpha))| {
                 let mut scratch = Scratch::default();
                 let y = iy + top;
                 for ix in 0..iw {
@@ -616,9 +626,10 @@ impl<'a> Reference<'a> {
                     }
                     finish(&mut color, alpha, plan.background);
                     row[3 * ix..3 * ix + 3].copy_from_slice(&color);
+                    row_alpha[ix] = alpha;
                 }
             });
-        image
+        (image, image_alpha)
     }
 }
 

@@ -140,6 +140,7 @@ impl From<convshadow::pipeline::RenderError> for Failure {
             R::MeshDefect(_) => MESH_DEFECT,
             R::Interrupted => INTERRUPTED,
             R::Threads(_) => INTERNAL,
+            R::BadRequest(_) => BAD_ARGUMENTS,
         };
         Failure::new(code, e.to_string())
     }

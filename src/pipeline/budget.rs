@@ -46,7 +46,8 @@ pub struct MemoryNeed {
     /// The sweep's per-pixel state: layer cursor, inside bits, colour and alpha; the light in
     /// planar order before and after the sweep; the level planes' block minima.
     pub sweep_state: u64,
-    /// The output image as floats, its 8-bit encoding and the encoded file (estimate).
+    /// The output image as floats, its alpha, its 8-bit encoding and the encoded file
+    /// (estimate; `--aov` layers are not counted).
     pub output: u64,
     /// Input data held while rendering, from the files' sizes: 3D textures (the file and its
     /// f32 voxels while loading; rendering only), light patterns (the decoded image and its f32
@@ -134,7 +135,8 @@ impl MemoryNeed {
                 (4 + 4 + 12 + 4 + if scene.sweep.preintegration { 4 } else { 0 }) * grid_pixels
                     + 2 * lights * (channels + depth_planes) * 4 * grid_pixels
                     + lights * depth_planes * 4 * grid_pixels,
-                (12 + 3 + 3) * image_pixels,
+                // RGB and alpha floats, 8-bit RGB, the encoded file.
+                (12 + 4 + 3 + 3) * image_pixels,
             )
         } else {
             (0, 0, image_pixels)
@@ -172,7 +174,7 @@ impl MemoryNeed {
     /// Adds the GPU backend's device buffers, estimated from the sizes `convshadow-gpu`
     /// allocates (gpu/src/sweep.rs `upload_buffers`, gpu/src/ldi.rs): for a render, the light
     /// ping-pong pair (as on the CPU), 8-byte layer cursors, 16-byte per-pixel colour, 4-byte LDI
-    /// offsets (with pre-integration 4-byte kept front values), the image (12 bytes per pixel)
+    /// offsets (with pre-integration 4-byte kept front values), the RGBA image (16 bytes per pixel)
     /// and its read-back copy, and the 3D textures' f32
     /// voxels; for an LDI alone, its per-pixel counts and offsets. Fragments are then held on
     /// the host and on the device.
@@ -182,7 +184,7 @@ impl MemoryNeed {
             let textures = input_bytes(scene, true).saturating_sub(input_bytes(scene, false));
             // With pre-integration, 4 more bytes per pixel: the kept front value.
             let pre = if scene.sweep.preintegration { 4 } else { 0 };
-            (self.light_buffers + (8 + 16 + 4 + pre) * self.grid_pixels + 2 * 12 * image_pixels)
+            (self.light_buffers + (8 + 16 + 4 + pre) * self.grid_pixels + 2 * 16 * image_pixels)
                 .saturating_add(textures / 2)
         } else {
             (4 + 4) * self.grid_pixels
@@ -407,7 +409,7 @@ mod tests {
         assert_eq!(cpu.gpu_buffers, 0);
         // At least the light pair, cursors, colour and offsets, and the image twice.
         let image = u64::from(scene.image.width) * u64::from(scene.image.height);
-        assert!(gpu.gpu_buffers >= cpu.light_buffers + 28 * cpu.grid_pixels + 24 * image);
+        assert!(gpu.gpu_buffers >= cpu.light_buffers + 28 * cpu.grid_pixels + 32 * image);
         assert_eq!(gpu.total(), cpu.total() + gpu.gpu_buffers);
         // The LDI alone on the GPU holds its per-pixel arrays on the device too.
         assert!(MemoryNeed::for_backend(&scene, g, false, Backend::Gpu).gpu_buffers > 0);

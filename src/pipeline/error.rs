@@ -34,6 +34,9 @@ pub enum RenderError {
     /// The cancel flag was raised; nothing was written.
     #[error("interrupted; no output written")]
     Interrupted,
+    /// The request does not fit the scene (an `--aov` light layer for a light it lacks).
+    #[error("{0}")]
+    BadRequest(String),
     /// The worker threads could not start.
     #[error("cannot start threads: {0}")]
     Threads(String),

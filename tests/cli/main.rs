@@ -12,6 +12,7 @@ mod budget_props;
 mod closed_output;
 mod diff_selftest;
 mod display_volumes;
+mod exr_layers;
 mod hardening;
 mod ldi;
 mod mesh_formats;

@@ -1,5 +1,5 @@
-//! On lavapipe the GPU image is bit-identical to the CPU image (same `image_hash`, same final
-//! light buffers) for every example scene, every kernel, and scenes that reach every shader path
+//! On lavapipe the GPU image is bit-identical to the CPU image (same `image_hash`, same alpha,
+//! same final light buffers) for every example scene, every kernel, and scenes that reach every shader path
 //! (3D and 4D noise of every kind, 3D textures, specular, jitter off, monochrome light, a fixed
 //! guard band and an automatic one, different on each side, pre-integrated compositing), with the
 //! iterated and the distance penumbra (every kernel family, volumes, a patterned light; the
@@ -60,7 +60,17 @@ fn check(ctx: &GpuContext, scene: &Scene, what: &str) -> Rendered {
             .count();
         assert_eq!(light_differ, 0, "{what}: final light buffers differ");
         assert_eq!(cpu.light.len(), gpu.light.len());
+        // The alpha (the EXR's `A`) too.
+        let bits = |a: &[f32]| a.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&cpu.alpha), bits(&gpu.alpha), "{what}: alpha differs");
     } else {
+        let alpha_abs = cpu
+            .alpha
+            .iter()
+            .zip(&gpu.alpha)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(alpha_abs <= 1e-3, "{what}: alpha max abs {alpha_abs}");
         assert!(m.rmse <= 1e-4, "{what}: RMSE {}", m.rmse);
         assert!(m.max_abs <= 1e-3, "{what}: max abs {}", m.max_abs);
         assert!(

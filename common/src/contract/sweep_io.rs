@@ -22,6 +22,10 @@ pub enum SweepError {
 pub struct SweepOutput {
     /// Linear RGB, `width·height·3`, the guard band cropped away.
     pub image: Vec<f32>,
+    /// The composited opacity `A` of each image pixel (`width·height`, the guard band cropped
+    /// away): the front-to-back `A += (1 − A)·α_slab` before the background is added. The image
+    /// is `C + (1 − A)·background`, `C` the composited colour.
+    pub alpha: Vec<f32>,
     /// The light buffers after the last slab swept (grid-sized, row-major
     /// `[row][light][channel][x]`): the plan's last slab unless the sweep finished early (see
     /// [`SweepOptions::every_slab`]).

@@ -321,26 +321,31 @@ fn sweep_slab(
     }
 }
 
-/// The image: each pixel inside the guard band composited over the background by [`finish`].
-fn finish_image(plan: &RenderPlan, color: &[f32], alpha: &[f32]) -> Vec<f32> {
+/// The image: each pixel inside the guard band composited over the background by [`finish`];
+/// and the image pixels' alpha (the guard band cropped away).
+fn finish_image(plan: &RenderPlan, color: &[f32], alpha: &[f32]) -> (Vec<f32>, Vec<f32>) {
     let w = plan.grid_width as usize;
     let (left, top) = (plan.guard.left as usize, plan.guard.top as usize);
     let (iw, ih) = (plan.width as usize, plan.height as usize);
     let mut image = vec![0.0f32; iw * ih * 3];
+    let mut image_alpha = vec![0.0f32; iw * ih];
     image
         .par_chunks_mut(iw * 3)
+        .zip(image_alpha.par_chunks_mut(iw))
         .enumerate()
-        .for_each(|(y, row)| {
+        .for_each(|(y, (row, row_alpha))| {
             let gy = y + top;
             let colors = &color[gy * w * 3..(gy + 1) * w * 3];
             for x in 0..iw {
                 let gx = x + left;
                 let mut c = [colors[gx], colors[w + gx], colors[2 * w + gx]];
-                finish(&mut c, alpha[gy * w + gx], plan.background);
+                let a = alpha[gy * w + gx];
+                finish(&mut c, a, plan.background);
                 row[3 * x..3 * x + 3].copy_from_slice(&c);
+                row_alpha[x] = a;
             }
         });
-    image
+    (image, image_alpha)
 }
 
 /// Which image pixels are opaque (alpha exactly 1), tracked between slabs: once every one is,
@@ -472,9 +477,10 @@ pub fn sweep_with(
         }
     }
 
-    let image = finish_image(plan, &state.color, &state.alpha);
+    let (image, alpha) = finish_image(plan, &state.color, &state.alpha);
     Ok(SweepOutput {
         image,
+        alpha,
         light: to_plane_rows(plan, &state.prev),
         slabs_swept,
     })

@@ -159,7 +159,8 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
-// After the last slab: C += (1 − A)·background, guard band cropped, RGB f32 out.
+// After the last slab: C += (1 − A)·background, guard band cropped, RGBA f32 out (the RGB
+// image and the composited alpha A, before the background).
 @compute @workgroup_size(8, 8)
 fn finish_image(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = gid.x;
@@ -168,9 +169,11 @@ fn finish_image(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let p = (y + globals.guard_top) * globals.grid_w + x + globals.guard_left;
-    let c = finish(accum[p]);
-    let o = 3u * (y * globals.width + x);
+    let acc = accum[p];
+    let c = finish(acc);
+    let o = 4u * (y * globals.width + x);
     image[o] = c.x;
     image[o + 1u] = c.y;
     image[o + 2u] = c.z;
+    image[o + 3u] = acc.w;
 }

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use convshadow::pipeline::{Backend, CpuPath};
+use convshadow::pipeline::{Aov, Backend, CpuPath};
 use convshadow_common::model::kernel::KERNEL_SYNTAX;
 use convshadow_common::model::scene::GuardBandSpec;
 use convshadow_common::model::scene::{Penumbra, SlabSpec, SurfaceModel};
@@ -49,6 +49,11 @@ pub struct RenderArgs {
     /// Default: render.png in the current folder.
     #[arg(short = 'o', long = "output")]
     pub outputs: Vec<PathBuf>,
+    /// Extra EXR layers, comma-separated (may repeat): `depth` (the first-hit camera depth,
+    /// channel `Z`, +inf where nothing is hit) and `lightN` (light N's contribution to the RGB,
+    /// channels `lightN.R`, `lightN.G`, `lightN.B`; one more sweep each). EXR outputs only.
+    #[arg(long, value_name = "LAYERS", value_delimiter = ',', value_parser = parse_aov)]
+    pub aov: Vec<Aov>,
     /// Override the image width (the height stays, and so does camera.view_width: a wider image
     /// shows the same width of the scene, a taller one more of it; use --size to keep the view).
     #[arg(long, value_parser = crate::cli::parse_side)]
@@ -150,6 +155,11 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
+/// One `--aov` layer name (clap reports a bad value with the option's name, exit code 2).
+fn parse_aov(s: &str) -> Result<Aov, String> {
+    s.parse()
+}
+
 /// `--guard-band auto|N` (clap reports a bad value with the option's name, exit code 2).
 fn parse_guard_band(s: &str) -> Result<GuardBandSpec, String> {
     s.parse()
@@ -191,6 +201,7 @@ mod tests {
         assert_eq!(a.path, CpuPath::Simd);
         assert_eq!(a.backend, RenderBackend::Cpu);
         assert!(!a.no_skip_quiet && !a.quiet && !a.allow_open);
+        assert!(a.aov.is_empty());
     }
 
     #[test]
@@ -224,6 +235,10 @@ mod tests {
             "-1,0,0",
             "--view-width",
             "-2",
+            "--aov",
+            "depth,light1",
+            "--aov",
+            "light0",
         ]);
         assert_eq!(a.scene, Some(PathBuf::from("scene.toml")));
         assert_eq!(a.outputs, [PathBuf::from("a.png"), PathBuf::from("b.exr")]);
@@ -241,6 +256,8 @@ mod tests {
         // Values that start with a minus sign are values, not flags.
         assert_eq!(a.camera_direction.as_deref(), Some("-1,0,0"));
         assert_eq!(a.view_width, Some(-2.0));
+        // Comma-separated and repeated layers, in order.
+        assert_eq!(a.aov, [Aov::Depth, Aov::Light(1), Aov::Light(0)]);
         assert_eq!(
             ok(&["--preintegration", "false"]).preintegration,
             Some(false)
@@ -272,6 +289,9 @@ mod tests {
             &["--penumbra", "soft"],
             &["--guard-band", "-1"],
             &["--path", "gpu"],
+            &["--aov", "normal"],
+            &["--aov", "depth,"],
+            &["--aov", "light"],
         ] {
             let e = parse(argv)
                 .err()

@@ -15,7 +15,7 @@ mod summary;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
-use convshadow::pipeline::{RenderRequest, Rendered, render};
+use convshadow::pipeline::{Aov, RenderRequest, Rendered, check_light_index, render};
 use convshadow_common::model::scene::{Scene, SlabSpec};
 
 pub use args::RenderArgs;
@@ -23,7 +23,7 @@ use args::RenderBackend;
 use outputs::output_paths;
 use overrides::{apply_sweep_overrides, apply_view_overrides, frame_list, reference_samples};
 use reference::render_reference;
-use summary::{FrameStats, finish, finish_frames};
+use summary::{FrameStats, finish, finish_frames, save_output};
 
 use super::frames;
 use crate::cli::exit::{self, Failure};
@@ -37,6 +37,11 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     apply_sweep_overrides(&mut scene, args)?;
     if let Some(list) = &frame_list {
         frames::check_times(&scene, list, time_step)?;
+    }
+    for aov in &args.aov {
+        if let Aov::Light(l) = *aov {
+            check_light_index(&scene, l)?;
+        }
     }
     let outputs = output_paths(args, frame_list.as_deref(), &scene)?;
     let bar = progress_bar(args);
@@ -77,7 +82,14 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
     let Some(backend) = args.backend.device() else {
         // The reference has no cancel point: a signal ends the run at once, before any output.
         exit::install_exit_on_signal(None);
-        let r = render_reference(&scene, args.threads, samples, budget, args.allow_open)?;
+        let r = render_reference(
+            &scene,
+            args.threads,
+            samples,
+            budget,
+            args.allow_open,
+            &args.aov,
+        )?;
         return finish(&scene, args, &outputs, &r, bar.as_ref(), samples);
     };
     let request = RenderRequest {
@@ -91,6 +103,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         // SIGINT/SIGTERM raise it: the sweep stops and nothing is written (exit code 130).
         cancel: Some(exit::install_interrupt_handler()),
         every_slab: false,
+        aovs: args.aov.clone(),
     };
     let Some(list) = frame_list else {
         let r = render(&scene, &request)?;
@@ -176,7 +189,7 @@ impl Sequence<'_> {
             let paths: Vec<PathBuf> = outputs.iter().map(|p| frames::frame_path(p, k)).collect();
             for p in &paths {
                 exit::check_interrupt_after(&written)?;
-                r.image.save_mapped(p, &scene.image.display_map())?;
+                save_output(scene, &r, p)?;
                 written.push(p.clone());
             }
             done.push(FrameStats {

@@ -83,6 +83,7 @@ pub(super) fn output_paths(
             .as_ref()
             .map_or_else(String::new, |p| p.display().to_string()),
     };
+    refuse_aov_misuse(args, &outputs)?;
     crate::cli::refuse_named_collisions(files.iter().map(|(t, p)| (*t, p.as_path())), name)?;
     crate::cli::refuse_outputs_over_inputs(
         files.iter().map(|(_, p)| p),
@@ -113,6 +114,37 @@ pub(super) fn output_paths(
         }
     }
     Ok(outputs)
+}
+
+/// `--aov` layers go into EXR files only: refused (a usage error naming the flag) with a PNG
+/// output, the default `render.png` included, and when a layer is named twice.
+fn refuse_aov_misuse(args: &RenderArgs, outputs: &[PathBuf]) -> Result<(), Failure> {
+    let Some(first) = args.aov.first() else {
+        return Ok(());
+    };
+    if let Some(png) = outputs
+        .iter()
+        .find(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")))
+    {
+        return Err(Failure::new(
+            exit::BAD_ARGUMENTS,
+            format!(
+                "--aov {}: {} is a PNG, which has no room for extra layers; write the layers to \
+                 an .exr output (-o out.exr), and render the PNG without --aov",
+                first.name(),
+                png.display()
+            ),
+        ));
+    }
+    for (i, aov) in args.aov.iter().enumerate() {
+        if args.aov[..i].contains(aov) {
+            return Err(Failure::new(
+                exit::BAD_ARGUMENTS,
+                format!("--aov {}: named twice", aov.name()),
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -242,6 +274,28 @@ mod tests {
             exit::BAD_ARGUMENTS,
             "--backend reference",
         );
+    }
+
+    #[test]
+    fn aov_layers_need_exr_outputs_and_each_layer_once() {
+        let d = Dir::new("outputs-aov");
+        let (png, exr) = (d.arg("a.png"), d.arg("a.exr"));
+        let words = "--aov depth: ";
+        refused(&["--aov", "depth"], None, exit::BAD_ARGUMENTS, words);
+        refused(
+            &["--aov", "depth", "-o", &exr, "-o", &png],
+            None,
+            exit::BAD_ARGUMENTS,
+            "a.png is a PNG",
+        );
+        refused(
+            &["--aov", "light0,depth,light0", "-o", &exr],
+            None,
+            exit::BAD_ARGUMENTS,
+            "--aov light0: named twice",
+        );
+        let ok = outputs(&["--aov", "depth,light1", "-o", &exr], None).unwrap();
+        assert_eq!(ok, [PathBuf::from(&exr)]);
     }
 
     #[test]

@@ -3,7 +3,9 @@
 
 use std::time::Instant;
 
-use convshadow::pipeline::{MemoryNeed, Rendered, image_fingerprint};
+use convshadow::pipeline::{
+    Aov, LightColors, MemoryNeed, Rendered, first_hit_depth, image_fingerprint,
+};
 use convshadow_common::model::scene::Scene;
 use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_io::image::RgbImage;
@@ -12,7 +14,9 @@ use convshadow_reference::{Reference, ReferenceOptions};
 use crate::cli::exit::{self, Failure};
 
 /// Renders with the ground-truth reference (`--backend reference`): the same checks and LDI as
-/// the pipeline, then [`Reference::render`] with `samples` light directions per shading point.
+/// the pipeline, then [`Reference::render_with_alpha`] with `samples` light directions per
+/// shading point; each light layer of `aovs` is one more reference render, on the plan with the
+/// other lights and the background black (as the pipeline's, `pipeline/aov.rs`).
 /// No interrupt handler is installed for it: a signal ends the process at once, before any output
 /// is written (outputs are only ever renamed into place complete).
 pub(super) fn render_reference(
@@ -21,6 +25,7 @@ pub(super) fn render_reference(
     samples: u32,
     budget: u64,
     allow_open: bool,
+    aovs: &[Aov],
 ) -> Result<Rendered, Failure> {
     let start = Instant::now();
     MemoryNeed::of(scene, scene.sweep.guard_band.lower_bound(), true).check(scene, budget)?;
@@ -51,15 +56,29 @@ pub(super) fn render_reference(
     let seconds_plan = t_plan.elapsed().as_secs_f64();
     exit::check_interrupt()?;
     let t_render = Instant::now();
-    let data = {
+    let options = ReferenceOptions {
+        samples,
+        ..ReferenceOptions::default()
+    };
+    let (data, alpha) = {
         let reference = Reference::new(scene, &geometry, &plan, 0.0);
-        let options = ReferenceOptions {
-            samples,
-            ..ReferenceOptions::default()
-        };
-        pool.install(|| reference.render(&ldi, &options))
+        pool.install(|| reference.render_with_alpha(&ldi, &options))
     };
     let seconds_sweep = t_render.elapsed().as_secs_f64();
+    let mut plan = plan;
+    let colors = LightColors::of(&plan);
+    let mut light_layers = Vec::new();
+    for aov in aovs {
+        if let Aov::Light(l) = *aov {
+            colors.isolate(&mut plan, l);
+            let reference = Reference::new(scene, &geometry, &plan, 0.0);
+            light_layers.push((l, pool.install(|| reference.render(&ldi, &options))));
+            colors.restore(&mut plan);
+        }
+    }
+    let depth = aovs
+        .contains(&Aov::Depth)
+        .then(|| first_hit_depth(&plan, &ldi, geometry.z_origin));
     Ok(Rendered {
         mesh_warnings: geometry.mesh_warnings(),
         image_hash: image_fingerprint(&data),
@@ -68,6 +87,9 @@ pub(super) fn render_reference(
             height: scene.image.height,
             data,
         },
+        alpha,
+        depth,
+        light_layers,
         ldi: stats,
         ldi_hash: ldi.fingerprint(),
         plan,

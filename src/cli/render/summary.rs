@@ -1,10 +1,11 @@
 //! What `convshadow render` does once a render is done: writes its outputs (a sequence's frames
 //! are written as they finish) and `--stats-json`, prints the mesh warnings and the summary line.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use convshadow::pipeline::Rendered;
 use convshadow_common::model::scene::Scene;
+use convshadow_io::image::ExrChannel;
 use convshadow_reference::samples_side;
 use serde_json::json;
 
@@ -19,6 +20,38 @@ pub(super) struct FrameStats {
     pub(super) ldi_hash: u64,
     pub(super) seconds_total: f64,
     pub(super) outputs: Vec<PathBuf>,
+}
+
+/// Writes one output of a render: a PNG through the scene's display map; an EXR with the linear
+/// RGB, the alpha `A` and the `--aov` layers the render made (`Z`, `lightN.R/G/B`).
+pub(super) fn save_output(scene: &Scene, r: &Rendered, path: &Path) -> Result<(), Failure> {
+    let is_exr = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !is_exr {
+        r.image.save_mapped(path, &scene.image.display_map())?;
+        return Ok(());
+    }
+    let mut planes: Vec<(String, Vec<f32>)> = Vec::new();
+    for (l, layer) in &r.light_layers {
+        for (k, c) in ["R", "G", "B"].iter().enumerate() {
+            let plane = layer.iter().skip(k).step_by(3).copied().collect();
+            planes.push((format!("light{l}.{c}"), plane));
+        }
+    }
+    let mut channels = vec![ExrChannel {
+        name: "A",
+        data: &r.alpha,
+    }];
+    if let Some(depth) = &r.depth {
+        channels.push(ExrChannel {
+            name: "Z",
+            data: depth,
+        });
+    }
+    channels.extend(planes.iter().map(|(name, data)| ExrChannel { name, data }));
+    r.image.save_exr(path, &channels)?;
+    Ok(())
 }
 
 /// Writes the outputs and the stats of a finished render and prints the summary line.
@@ -37,7 +70,7 @@ pub(super) fn finish(
     let mut written: Vec<PathBuf> = Vec::new();
     for p in outputs {
         exit::check_interrupt_after(&written)?;
-        r.image.save_mapped(p, &scene.image.display_map())?;
+        save_output(scene, r, p)?;
         written.push(p.clone());
     }
     if let Some(p) = &args.stats_json {
