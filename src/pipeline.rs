@@ -516,8 +516,11 @@ mod tests {
             .expect("the tables alone fit, not the build's peak")
             .to_string();
         assert!(err.contains("the kernel tables need more than"), "{err}");
-        let fits = render(&scene, &req(need + r.ldi.fragments * BYTES_PER_FRAGMENT + peak))
-            .unwrap_or_else(|e| panic!("{e}"));
+        let fits = render(
+            &scene,
+            &req(need + r.ldi.fragments * BYTES_PER_FRAGMENT + peak),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(fits.image_hash, r.image_hash);
         // The GPU holds the taps and level tables twice (host and device), without the CPU's
         // tap columns.

@@ -12,6 +12,8 @@
 pub mod disk;
 pub mod edge;
 pub mod impulse;
+pub mod light_samples;
 pub mod shadow_ray;
 
-pub use shadow_ray::{Reference, ReferenceOptions, inverse_normal_cdf, normal_cdf, samples_side};
+pub use light_samples::{inverse_normal_cdf, normal_cdf, samples_side};
+pub use shadow_ray::{Reference, ReferenceOptions};
