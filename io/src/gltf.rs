@@ -1,6 +1,6 @@
 //! glTF 2.0 reading (`.gltf` JSON and `.glb` binary): the `gltf` crate parses and validates the
 //! document; the vertex data is read here with checked bounds, then welded with every other
-//! format's vertices ([`crate::mesh::Welder`]).
+//! format's vertices ([`crate::weld::Welder`]).
 //!
 //! What is read: the scene to show (the file's `scene`, else its first scene; a file with no
 //! scene at all: every mesh once, untransformed), walked from its root nodes with each node's
@@ -28,7 +28,7 @@ use gltf::scene::Transform;
 
 use convshadow_common::prepare::mesh::{MeshError, MeshFormat, TriMesh};
 
-use crate::mesh::{Welder, read_file, weld_indexed};
+use crate::weld::{Welder, read_file, weld_indexed};
 
 /// The file's buffers, each as bytes (the GLB chunk, a decoded data URI, or a file beside it).
 type Buffers = Vec<Vec<u8>>;

@@ -18,5 +18,6 @@ pub mod ply;
 pub mod raw;
 pub mod read;
 pub mod stl;
+pub(crate) mod weld;
 
 pub use read::{build_geometry, build_plan, build_plan_guarded, load_scene};

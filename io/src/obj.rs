@@ -1,5 +1,5 @@
 //! OBJ reading: a validating scan that names the line, then tobj, then the shared welding
-//! ([`crate::mesh::Welder`]).
+//! ([`crate::weld::Welder`]).
 
 use std::ops::Div;
 use std::path::Path;
@@ -7,7 +7,7 @@ use std::str::FromStr;
 
 use convshadow_common::prepare::mesh::{MeshError, MeshFormat, TriMesh};
 
-use crate::mesh::{Welder, read_file, too_many_vertices};
+use crate::weld::{Welder, read_file, too_many_vertices};
 
 /// Longest line excerpt quoted in an error message.
 pub(crate) const MAX_QUOTE: usize = 120;

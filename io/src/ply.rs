@@ -1,5 +1,5 @@
 //! PLY reading (the Stanford polygon format; ASCII, binary little- and big-endian) through the
-//! `ply-rs-bw` crate, then the shared welding ([`crate::mesh::Welder`]).
+//! `ply-rs-bw` crate, then the shared welding ([`crate::weld::Welder`]).
 //!
 //! What is read: the `vertex` element's `x`, `y`, `z` (any scalar type) and the `face`
 //! element's vertex index list (`vertex_indices` or `vertex_index`, any integer type); faces
@@ -17,7 +17,7 @@ use ply_rs_bw::ply::{
 
 use convshadow_common::prepare::mesh::{MeshError, MeshFormat, TriMesh};
 
-use crate::mesh::{Welder, read_file, weld_indexed};
+use crate::weld::{Welder, read_file, weld_indexed};
 
 /// Names the face element's index list may have.
 const FACE_LISTS: [&str; 2] = ["vertex_indices", "vertex_index"];

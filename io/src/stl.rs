@@ -1,5 +1,5 @@
 //! STL reading (ASCII and binary) through the `stl_io` crate's triangle iterator, then the
-//! shared welding ([`crate::mesh::Welder`]): STL stores every triangle's three corners on their
+//! shared welding ([`crate::weld::Welder`]): STL stores every triangle's three corners on their
 //! own, so welding by exact position is what recovers the mesh's topology.
 //!
 //! What is read: the three vertices of every facet, in their order (the stored facet normal and
@@ -12,7 +12,7 @@ use stl_io::TriangleIterator;
 
 use convshadow_common::prepare::mesh::{MeshError, MeshFormat, TriMesh};
 
-use crate::mesh::{Welder, read_file, too_many_vertices};
+use crate::weld::{Welder, read_file, too_many_vertices};
 
 /// Bytes of a binary STL's header (80) and triangle count (4).
 const BINARY_HEADER: usize = 84;

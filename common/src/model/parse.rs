@@ -2,6 +2,7 @@
 //! strictly typed; [`validate`] turns it into a [`Scene`], naming the file, the key and what was
 //! expected for every unknown key, wrong type, missing key or invalid value.
 
+mod overrides;
 mod tables;
 mod validate;
 

@@ -11,7 +11,7 @@ pub(super) struct Validator<'a> {
 }
 
 impl Validator<'_> {
-    fn err(&self, key: impl Into<String>, message: impl Into<String>) -> SceneError {
+    pub(super) fn err(&self, key: impl Into<String>, message: impl Into<String>) -> SceneError {
         SceneError {
             file: self.file.to_string(),
             key: key.into(),
@@ -57,7 +57,12 @@ impl Validator<'_> {
     }
 
     /// Three numbers, each with |v| <= `max`.
-    fn bounded3(&self, key: &str, v: [f64; 3], max: f64) -> Result<[f64; 3], SceneError> {
+    pub(super) fn bounded3(
+        &self,
+        key: &str,
+        v: [f64; 3],
+        max: f64,
+    ) -> Result<[f64; 3], SceneError> {
         for (i, c) in v.iter().enumerate() {
             self.bounded(&format!("{key}[{i}]"), *c, max)?;
         }
@@ -65,7 +70,7 @@ impl Validator<'_> {
     }
 
     /// A positive world-space length in [`MIN_WORLD`, `MAX_WORLD`].
-    fn length(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+    pub(super) fn length(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         self.positive(key, v)?;
         self.in_range(key, v, MIN_WORLD, MAX_WORLD)
     }
@@ -124,7 +129,7 @@ impl Validator<'_> {
         }
     }
 
-    fn unit_vector(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
+    pub(super) fn unit_vector(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
         self.finite3(key, v)?;
         // Divided by the largest component first, so that 1e308 or 1e-300 do not overflow.
         let big = v[0].abs().max(v[1].abs()).max(v[2].abs());
@@ -136,7 +141,7 @@ impl Validator<'_> {
         Ok([v[0] / len, v[1] / len, v[2] / len])
     }
 
-    fn image_size(&self, width: u32, height: u32) -> Result<(), SceneError> {
+    pub(super) fn image_size(&self, width: u32, height: u32) -> Result<(), SceneError> {
         for (key, v) in [("image.width", width), ("image.height", height)] {
             if v == 0 || v > MAX_IMAGE_SIDE {
                 return Err(self.err(
@@ -148,7 +153,7 @@ impl Validator<'_> {
         Ok(())
     }
 
-    fn exposure(&self, stops: f64) -> Result<f64, SceneError> {
+    pub(super) fn exposure(&self, stops: f64) -> Result<f64, SceneError> {
         let stops = self.finite("image.exposure", stops)?;
         if stops.abs() > MAX_EXPOSURE_STOPS {
             return Err(self.err(
@@ -161,7 +166,7 @@ impl Validator<'_> {
         Ok(stops)
     }
 
-    fn slab_count(&self, n: u32) -> Result<(), SceneError> {
+    pub(super) fn slab_count(&self, n: u32) -> Result<(), SceneError> {
         if n == 0 || n > MAX_SLABS {
             return Err(self.err(
                 "sweep.slabs",
@@ -841,63 +846,5 @@ impl Validator<'_> {
             strength: strength as f32,
             exponent: s.exponent,
         })
-    }
-}
-
-impl Scene {
-    /// Overrides camera values (command line): the direction is normalised and checked against
-    /// `up` like the file's, the centre must be finite and the view width positive.
-    pub fn override_camera(
-        &mut self,
-        direction: Option<[f64; 3]>,
-        center: Option<[f64; 3]>,
-        view_width: Option<f64>,
-    ) -> Result<(), SceneError> {
-        let v = Validator { file: &self.source };
-        if let Some(d) = direction {
-            let d = v.unit_vector("--camera-direction", d)?;
-            let u = self.camera.up;
-            let cross = [
-                d[1] * u[2] - d[2] * u[1],
-                d[2] * u[0] - d[0] * u[2],
-                d[0] * u[1] - d[1] * u[0],
-            ];
-            if (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt() < 1e-6 {
-                return Err(v.err(
-                    "--camera-direction",
-                    "expected a direction not parallel to camera.up",
-                ));
-            }
-            self.camera.direction = d;
-        }
-        if let Some(c) = center {
-            self.camera.center = v.bounded3("--camera-center", c, MAX_WORLD)?;
-        }
-        if let Some(w) = view_width {
-            self.camera.view_width = v.length("--view-width", w)?;
-        }
-        Ok(())
-    }
-
-    /// Re-checks the values that command-line overrides may have changed.
-    pub fn revalidate(&self) -> Result<(), SceneError> {
-        let v = Validator { file: &self.source };
-        v.image_size(self.image.width, self.image.height)?;
-        v.exposure(self.image.exposure)?;
-        match self.sweep.slabs {
-            SlabSpec::Count(n) => v.slab_count(n)?,
-            SlabSpec::Distance(d) => {
-                v.length("sweep.slab_distance", d)?;
-            }
-            SlabSpec::Auto => {}
-        }
-        if self.sweep.penumbra == Penumbra::Iterated && self.sweep.optimal_distance.is_none() {
-            return Err(v.err(
-                "sweep.optimal_distance",
-                "missing: the iterated penumbra needs the distance d1 (world units) at which its \
-                 shadows are right (or use the distance penumbra, which needs none)",
-            ));
-        }
-        Ok(())
     }
 }
