@@ -128,19 +128,6 @@ fn random_scene(rng: &mut TestRng) -> String {
     s
 }
 
-/// The number from `"key": N` in a stats JSON text.
-fn json_number(json: &str, key: &str) -> f64 {
-    let at = json
-        .find(&format!("\"{key}\""))
-        .unwrap_or_else(|| panic!("{key} in {json}"));
-    json[at + key.len() + 3..]
-        .trim_start()
-        .split([',', '}', '\n'])
-        .next()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or_else(|| panic!("a number for {key} in {json}"))
-}
-
 #[test]
 fn random_in_range_scenes_stay_within_the_memory_budget_and_a_time_bound() {
     let dir = support::temp_dir("budget-props");
@@ -205,11 +192,14 @@ fn random_in_range_scenes_stay_within_the_memory_budget_and_a_time_bound() {
             base_kib
         );
         let work = if code == 0 {
-            let json = std::fs::read_to_string(dir.join("s.json")).unwrap();
-            json_number(&json, "grid_width")
-                * json_number(&json, "grid_height")
-                * json_number(&json, "slabs_swept")
-                * json_number(&json, "lights")
+            let text = std::fs::read_to_string(dir.join("s.json")).unwrap();
+            let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+            let number = |key: &str| {
+                json[key]
+                    .as_f64()
+                    .unwrap_or_else(|| panic!("a number for {key} in {text}"))
+            };
+            number("grid_width") * number("grid_height") * number("slabs_swept") * number("lights")
         } else {
             0.0
         };

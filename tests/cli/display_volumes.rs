@@ -341,25 +341,12 @@ fn size_and_camera_overrides() {
     assert_eq!(code, 2, "{err}");
 }
 
-/// A 4×4 EXR with value `v` everywhere except pixel (1, 2) channel 0.
-fn exr_with(dir: &Path, name: &str, at: f32) {
-    let mut data = vec![0.25f32; 4 * 4 * 3];
-    data[(2 * 4 + 1) * 3] = at;
-    RgbImage {
-        width: 4,
-        height: 4,
-        data,
-    }
-    .save(&dir.join(name))
-    .unwrap();
-}
-
 #[test]
 fn diff_thresholds_gate_and_nans_fail_every_threshold() {
     let dir = support::temp_dir("diff-gate");
-    exr_with(&dir, "a.exr", 0.25);
-    exr_with(&dir, "b.exr", 0.35);
-    exr_with(&dir, "n.exr", f32::NAN);
+    support::exr_with(&dir, "a.exr", 0.25);
+    support::exr_with(&dir, "b.exr", 0.35);
+    support::exr_with(&dir, "n.exr", f32::NAN);
     let diff = |args: &[&str]| {
         let mut all = vec!["diff"];
         all.extend(args);

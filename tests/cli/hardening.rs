@@ -13,19 +13,6 @@ const BAD_ARGUMENTS: i32 = 2;
 const BAD_INPUT: i32 = 3;
 const OUTPUT_FAILED: i32 = 7;
 
-/// A 4×4 EXR whose every value is 0.25 but pixel (1, 2) channel 0, which is `at`.
-fn exr_with(dir: &Path, name: &str, at: f32) {
-    let mut data = vec![0.25f32; 4 * 4 * 3];
-    data[(2 * 4 + 1) * 3] = at;
-    RgbImage {
-        width: 4,
-        height: 4,
-        data,
-    }
-    .save(&dir.join(name))
-    .unwrap();
-}
-
 /// Runs `convshadow ARGS` in `dir`.
 fn cli(dir: &Path, args: &[&str]) -> (i32, String, String) {
     support::run_cli(args, dir)
@@ -46,8 +33,8 @@ fn refused(what: &str, (code, _, err): &(i32, String, String), expected: i32, wo
 #[test]
 fn diff_limits_that_no_gate_can_use_are_bad_arguments() {
     let dir = support::temp_dir("h43-diff-limits");
-    exr_with(&dir, "a.exr", 0.25);
-    exr_with(&dir, "b.exr", 9.0);
+    support::exr_with(&dir, "a.exr", 0.25);
+    support::exr_with(&dir, "b.exr", 9.0);
     // NaN made `value > limit` false for every image: the gate always passed (exit 0).
     for (flag, value) in [
         ("--max-abs", "NaN"),
@@ -75,9 +62,9 @@ fn diff_limits_that_no_gate_can_use_are_bad_arguments() {
 #[test]
 fn identical_images_holding_infinities_differ_by_nothing() {
     let dir = support::temp_dir("h43-diff-inf");
-    exr_with(&dir, "a.exr", f32::INFINITY);
-    exr_with(&dir, "b.exr", f32::INFINITY);
-    exr_with(&dir, "m.exr", f32::NEG_INFINITY);
+    support::exr_with(&dir, "a.exr", f32::INFINITY);
+    support::exr_with(&dir, "b.exr", f32::INFINITY);
+    support::exr_with(&dir, "m.exr", f32::NEG_INFINITY);
     // inf − inf is NaN: bit-identical images failed `--max-rmse 0`.
     let r = cli(
         &dir,
@@ -120,8 +107,8 @@ fn identical_images_holding_infinities_differ_by_nothing() {
 #[test]
 fn diff_writes_its_heatmap_by_rename_not_in_place() {
     let dir = support::temp_dir("h43-heatmap");
-    exr_with(&dir, "a.exr", 0.25);
-    exr_with(&dir, "b.exr", 0.5);
+    support::exr_with(&dir, "a.exr", 0.25);
+    support::exr_with(&dir, "b.exr", 0.5);
     // heat.png is a second name of keep.png: writing in place changed keep.png too.
     std::fs::write(dir.join("keep.png"), b"keep").unwrap();
     std::fs::hard_link(dir.join("keep.png"), dir.join("heat.png")).unwrap();
@@ -157,7 +144,7 @@ fn render_refuses_outputs_over_its_inputs_and_checks_every_frame_before_renderin
         "[[light]]\npattern = { path = \"gobo.png\", size = [4.0, 4.0] }",
     );
     std::fs::write(dir.join("s.toml"), &scene).unwrap();
-    exr_with(&dir, "gobo.exr", 0.5);
+    support::exr_with(&dir, "gobo.exr", 0.5);
     RgbImage::load(&dir.join("gobo.exr"))
         .unwrap()
         .save(&dir.join("gobo.png"))

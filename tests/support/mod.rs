@@ -160,3 +160,17 @@ pub fn framed_obj_scene(obj: &Path, width: u32, margin: f64) -> String {
         Err(_) => obj_scene(obj, width, 4.0),
     }
 }
+
+/// A 4×4 EXR in `dir` whose every value is 0.25 but pixel (1, 2) channel 0, which is `at`.
+#[allow(dead_code)] // the cli tests' only
+pub fn exr_with(dir: &Path, name: &str, at: f32) {
+    let mut data = vec![0.25f32; 4 * 4 * 3];
+    data[(2 * 4 + 1) * 3] = at;
+    convshadow::io::image::RgbImage {
+        width: 4,
+        height: 4,
+        data,
+    }
+    .save(&dir.join(name))
+    .unwrap();
+}
