@@ -14,14 +14,19 @@ venv="${CONVSHADOW_VENV:-.venv}"
 if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
+# maturin's PEP 517 hooks run the `maturin` of PATH.
+PATH="$(cd "$venv/bin" && pwd):$PATH"
+export PATH
 pip=("$venv/bin/python" -m pip --disable-pip-version-check --quiet)
 # Already satisfied after the first run (nothing downloaded).
 "${pip[@]}" install "maturin>=1.9,<2" "pytest>=7" "numpy>=1.21" "OpenEXR>=3.2"
 # The module: maturin from the environment (no isolated build environment to download), the
 # same release profile and target folder as `cargo test --release`.
 "${pip[@]}" install --no-build-isolation --no-deps --force-reinstall ./python
-# The binary the tests compare with (already built by `cargo test --release --workspace`).
-cargo build --release --bin convshadow --quiet
+# The binary the tests compare with, as `cargo test --release --workspace` builds it (nothing
+# to do after it; a plain `cargo build` would unify features without the dev-dependencies and
+# compile most of the tree again).
+cargo test --release --workspace --no-run --quiet
 target="${CARGO_TARGET_DIR:-target}"
 export CONVSHADOW_BIN
 CONVSHADOW_BIN="$(cd "$target/release" && pwd)/convshadow"
