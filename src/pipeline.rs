@@ -1,7 +1,7 @@
 //! The render pipeline as a library call: scene → geometry → LDI → plan → sweep → image.
 //! The `render` command and the tests both go through [`render`] (and `convshadow ldi` through
 //! [`build_ldi`], the first stages alone). Library code: failures are a typed [`RenderError`];
-//! the exit codes they map to live in the binary's CLI (`src/cli/exit.rs`).
+//! the exit codes they map to are `crate::exit_code` (the binary exits with them).
 //!
 //! [`render`] reads as the frame's stages (docs/ARCHITECTURE.md), one call each: the backend
 //! opened within the memory budget, geometry (meshes, camera, slabs, rasterizer set-up), LDI,
@@ -11,12 +11,15 @@
 //! Files: this one (the request, the result, the stages in order); `pipeline/aov.rs` (the
 //! extra output layers: depth, one light's contribution); `pipeline/backend.rs` (where it runs:
 //! backend, CPU path, threads); `pipeline/budget.rs` (the memory budget); `pipeline/error.rs`
-//! ([`RenderError`]). Imports go one way: this file → aov, budget → backend → error.
+//! ([`RenderError`]); `pipeline/reference.rs` ([`render_reference`], the ground-truth
+//! shadow-ray renderer behind the same checks). Imports go one way: this file → aov, budget →
+//! backend → error, and reference → this file.
 
 mod aov;
 mod backend;
 mod budget;
 mod error;
+mod reference;
 
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
@@ -36,6 +39,7 @@ pub use aov::{Aov, LightColors, first_hit_depth};
 pub use backend::{Backend, BackendChoice, CpuPath, MAX_THREADS, thread_pool};
 pub use budget::{LDI_BYTES_PER_PIXEL, MemoryNeed, kernel_table_bytes, open_within_budget};
 pub use error::RenderError;
+pub use reference::render_reference;
 
 /// How to render.
 pub struct RenderRequest<'a> {

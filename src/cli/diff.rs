@@ -1,11 +1,14 @@
 //! `convshadow diff A B`: compare two images (EXR or PNG; A is the reference) with max absolute
 //! error, RMSE, PSNR, mean FLIP (nv-flip), 8-bit sRGB differences and a ULP histogram, and
-//! optionally write the numbers as JSON and a heat-map PNG.
+//! optionally write the numbers as JSON and a heat-map PNG. The numbers beyond
+//! `convshadow_io::metrics` (FLIP, NaNs, the JSON form) are the library's `convshadow::diff`,
+//! which the Python module's `convshadow.diff` shares.
 
 use std::path::PathBuf;
 
+use convshadow::diff::Comparison;
 use convshadow_io::image::RgbImage;
-use convshadow_io::metrics::{DiffMetrics, ULP_BUCKETS, compare, heatmap};
+use convshadow_io::metrics::heatmap;
 use serde_json::json;
 
 use crate::cli::exit::{self, Failure};
@@ -51,79 +54,6 @@ pub fn parse_limit(s: &str) -> Result<f64, String> {
 /// Exit code of `diff` when a threshold is exceeded (or a NaN meets any threshold).
 pub const THRESHOLD_EXCEEDED: i32 = 1;
 
-/// NaN values of one image: how many, and the first one's (x, y, channel).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct NanReport {
-    /// NaN values (pixel channels).
-    pub count: u64,
-    /// The first NaN in row-major order.
-    pub first: Option<(u32, u32, u32)>,
-}
-
-impl NanReport {
-    /// The NaNs of `img`.
-    pub fn of(img: &RgbImage) -> NanReport {
-        let mut r = NanReport::default();
-        for (i, v) in img.data.iter().enumerate() {
-            if v.is_nan() {
-                if r.first.is_none() {
-                    let p = (i / 3) as u32;
-                    r.first = Some((p % img.width.max(1), p / img.width.max(1), (i % 3) as u32));
-                }
-                r.count += 1;
-            }
-        }
-        r
-    }
-
-    fn describe(&self, name: &str) -> Option<String> {
-        self.first.map(|(x, y, c)| {
-            format!(
-                "{name} has {} NaN value{} (first at ({x}, {y}, channel {c}))",
-                self.count,
-                if self.count == 1 { "" } else { "s" }
-            )
-        })
-    }
-}
-
-/// Mean FLIP (LDR, from the 8-bit sRGB encodings) of B against reference A, via nv-flip.
-pub fn mean_flip(a: &RgbImage, b: &RgbImage) -> f64 {
-    if a.width == 0 || a.height == 0 {
-        return 0.0;
-    }
-    let reference = nv_flip::FlipImageRgb8::with_data(a.width, a.height, &a.to_srgb8());
-    let test = nv_flip::FlipImageRgb8::with_data(b.width, b.height, &b.to_srgb8());
-    let error = nv_flip::flip(reference, test, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
-    f64::from(nv_flip::FlipPool::from_image(&error).mean())
-}
-
-/// The JSON form of a comparison (PSNR of identical images is `null`, i.e. infinite).
-pub fn metrics_json(m: &DiffMetrics, flip: f64) -> serde_json::Value {
-    let edges: Vec<String> = (0..ULP_BUCKETS)
-        .map(|k| match k {
-            0 => "0".to_string(),
-            k if k == ULP_BUCKETS - 1 => format!(">={}", 1u64 << (k - 1)),
-            k => format!("{}-{}", 1u64 << (k - 1), (1u64 << k) - 1),
-        })
-        .collect();
-    json!({
-        "width": m.width,
-        "height": m.height,
-        "max_abs_error": m.max_abs,
-        "max_abs_error_at": [m.max_abs_at.0, m.max_abs_at.1, m.max_abs_at.2],
-        "rmse": m.rmse,
-        "psnr_db": if m.psnr.is_finite() { json!(m.psnr) } else { serde_json::Value::Null },
-        "mean_flip": flip,
-        "srgb8_pixels_differ": m.srgb8_pixels_differ,
-        "srgb8_pixels_differ_fraction": m.srgb8_fraction(),
-        "srgb8_max_diff": m.srgb8_max_diff,
-        "values_differ": m.values_differ,
-        "bit_identical": m.bit_identical(),
-        "ulp_histogram": edges.iter().zip(m.ulp_histogram).map(|(e, c)| json!([e, c])).collect::<Vec<_>>(),
-    })
-}
-
 /// Runs `convshadow diff`.
 pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
     super::require_png("--heatmap", args.heatmap.as_ref())?;
@@ -142,15 +72,14 @@ pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
         |p: &PathBuf| RgbImage::load(p).map_err(|e| Failure::new(exit::BAD_INPUT, e.to_string()));
     let a = load(&args.a)?;
     let b = load(&args.b)?;
-    let m = compare(&a, &b).map_err(|e| {
+    let c = Comparison::of(&a, &b).map_err(|e| {
         Failure::new(
             exit::BAD_INPUT,
             format!("{} vs {}: {e}", args.a.display(), args.b.display()),
         )
     })?;
-    let flip = mean_flip(&a, &b);
-    let nans = [NanReport::of(&a), NanReport::of(&b)];
-    let any_nan = nans.iter().any(|n| n.count > 0);
+    let (m, flip, nans) = (&c.metrics, c.flip, &c.nans);
+    let any_nan = c.any_nan();
     let psnr = if any_nan {
         "n/a (NaN)".to_string()
     } else if m.psnr.is_finite() {
@@ -210,18 +139,8 @@ pub fn run(args: &DiffArgs) -> Result<i32, Failure> {
         convshadow_io::image::save_rgb8_png(p, a.width, a.height, data)?;
     }
     if let Some(p) = &args.json {
-        let mut v = metrics_json(&m, flip);
+        let mut v = c.to_json();
         if let Some(o) = v.as_object_mut() {
-            if any_nan {
-                // PSNR is only infinite for identical finite images.
-                o.insert("psnr_db".into(), serde_json::Value::String("nan".into()));
-            }
-            for (n, key) in nans.iter().zip(["nan_a", "nan_b"]) {
-                o.insert(
-                    key.into(),
-                    json!({"count": n.count, "first": n.first.map(|(x, y, c)| [x, y, c])}),
-                );
-            }
             o.insert("thresholds_failed".into(), json!(failed));
         }
         super::write_json(p, &v)?;

@@ -1,28 +1,13 @@
-//! Exit codes of the `convshadow` binary (documented in docs/errors.md) and the interrupt flag.
+//! Exit codes of the `convshadow` binary (documented in docs/errors.md; defined with the mapping
+//! of each library error in the library's `convshadow::exit_code`, which the Python module shares)
+//! and the interrupt flag.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// Success.
-pub const OK: i32 = 0;
-/// An internal error (a bug): please report it.
-pub const INTERNAL: i32 = 1;
-/// Bad command-line arguments.
-pub const BAD_ARGUMENTS: i32 = 2;
-/// A bad scene or mesh file (parse error, invalid value, unreadable file).
-pub const BAD_INPUT: i32 = 3;
-/// A resource limit: memory budget, image, slab or fragment limits.
-pub const RESOURCE_LIMIT: i32 = 4;
-/// The GPU backend was requested but no adapter is available.
-pub const GPU_UNAVAILABLE: i32 = 5;
-/// The meshes are not closed (open, non-manifold or inconsistently wound; or odd LDI pixels).
-pub const MESH_DEFECT: i32 = 6;
-/// The output could not be written.
-pub const OUTPUT_FAILED: i32 = convshadow::console::OUTPUT_FAILED;
-/// This build uses instructions (x86-64-v3: AVX2, FMA, BMI) the processor lacks; checked
-/// before `main` (`src/cli/cpu_check.rs`).
-pub const UNSUPPORTED_CPU: i32 = 8;
-/// Interrupted by SIGINT or SIGTERM (no output was written).
-pub const INTERRUPTED: i32 = 130;
+pub use convshadow::exit_code::{
+    BAD_ARGUMENTS, BAD_INPUT, INTERNAL, INTERRUPTED, MESH_DEFECT, OK, OUTPUT_FAILED,
+    RESOURCE_LIMIT, UNSUPPORTED_CPU,
+};
 
 /// Raised by SIGINT/SIGTERM/SIGHUP once [`install_interrupt_handler`] has run.
 pub static INTERRUPT: AtomicBool = AtomicBool::new(false);
@@ -61,11 +46,6 @@ pub fn install_exit_on_signal(cleanup: Option<std::path::PathBuf>) {
             std::process::exit(INTERRUPTED);
         });
     });
-}
-
-/// The interrupted failure (exit code 130) if a signal has raised [`INTERRUPT`].
-pub fn check_interrupt() -> Result<(), Failure> {
-    check_interrupt_after(&[])
 }
 
 /// The interrupted failure (exit code 130) if a signal has raised [`INTERRUPT`], naming the
@@ -127,43 +107,11 @@ impl std::fmt::Display for Failure {
     }
 }
 
-/// Every library error reaches the CLI through here: the exit code of each kind (docs/errors.md);
-/// the message is the error's own.
+/// Every library error reaches the CLI through here: the exit code of each kind
+/// ([`convshadow::exit_code::of_render_error`], docs/errors.md); the message is the error's own.
 impl From<convshadow::pipeline::RenderError> for Failure {
     fn from(e: convshadow::pipeline::RenderError) -> Self {
-        use convshadow::pipeline::RenderError as R;
-        let code = match &e {
-            R::Scene(_) | R::BadPlan(_) => BAD_INPUT,
-            R::Geometry(g) => geometry_code(g),
-            R::Ldi(_) | R::OutOfMemory(_) => RESOURCE_LIMIT,
-            R::Gpu(g) => gpu_code(g),
-            R::MeshDefect(_) => MESH_DEFECT,
-            R::Interrupted => INTERRUPTED,
-            R::Threads(_) => INTERNAL,
-            R::BadRequest(_) => BAD_ARGUMENTS,
-        };
-        Failure::new(code, e.to_string())
-    }
-}
-
-/// The exit code of a geometry error: too many slabs is a limit, the rest bad input.
-fn geometry_code(e: &convshadow_common::prepare::error::GeometryError) -> i32 {
-    use convshadow_common::prepare::error::GeometryError as G;
-    match e {
-        G::TooManySlabs { .. } | G::TooManyAutoSlabs { .. } => RESOURCE_LIMIT,
-        _ => BAD_INPUT,
-    }
-}
-
-/// The exit code of a GPU error.
-fn gpu_code(e: &convshadow_gpu::GpuError) -> i32 {
-    use convshadow_gpu::GpuError as G;
-    match e {
-        G::TooLarge { .. } | G::Ldi(_) => RESOURCE_LIMIT,
-        G::Interrupted => INTERRUPTED,
-        G::NoAdapter { .. } | G::Device { .. } | G::Unsupported(_) | G::ReadBack(_) => {
-            GPU_UNAVAILABLE
-        }
+        Failure::new(convshadow::exit_code::of_render_error(&e), e.to_string())
     }
 }
 
@@ -175,7 +123,7 @@ impl From<convshadow_common::model::scene::SceneError> for Failure {
 
 impl From<convshadow_common::prepare::error::GeometryError> for Failure {
     fn from(e: convshadow_common::prepare::error::GeometryError) -> Self {
-        Failure::new(geometry_code(&e), e.to_string())
+        Failure::new(convshadow::exit_code::of_geometry_error(&e), e.to_string())
     }
 }
 
@@ -193,7 +141,7 @@ impl From<convshadow_io::image::OutputError> for Failure {
 
 impl From<convshadow_gpu::GpuError> for Failure {
     fn from(e: convshadow_gpu::GpuError) -> Self {
-        Failure::new(gpu_code(&e), e.to_string())
+        Failure::new(convshadow::exit_code::of_gpu_error(&e), e.to_string())
     }
 }
 

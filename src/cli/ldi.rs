@@ -52,11 +52,7 @@ pub fn run(args: &LdiArgs) -> Result<i32, Failure> {
     for p in args.stats_json.iter().chain(&args.layers_png) {
         convshadow_io::image::check_writable(p)?;
     }
-    let budget = args
-        .max_memory
-        .map_or_else(convshadow_cpu::default_memory_budget, |m| {
-            m.saturating_mul(1 << 20)
-        });
+    let budget = convshadow::overrides::memory_budget(args.max_memory);
     let built = build_ldi(&scene, args.backend, args.threads, budget)?;
     if let Some(note) = &built.backend_note {
         convshadow::errln!("note: {}", crate::cli::exit::escape_line(note));

@@ -1,7 +1,8 @@
-//! The command line, private to the `convshadow` binary: the subcommands, the exit codes
-//! ([`exit`], the only place they exist) and the processor check that runs before `main`. The
-//! library (`convshadow::pipeline`, `convshadow::report`) returns typed errors; this module maps
-//! them to exit codes and messages (docs/errors.md).
+//! The command line, private to the `convshadow` binary: the subcommands, their failures with
+//! exit codes ([`exit`]) and the processor check that runs before `main`. The library
+//! (`convshadow::pipeline`, `convshadow::report`) returns typed errors; this module turns them
+//! into exit codes and messages (docs/errors.md) with the library's `convshadow::exit_code`,
+//! which the Python module shares.
 
 mod cpu_check;
 pub mod diff;
@@ -17,6 +18,9 @@ use convshadow_common::model::scene::Scene;
 
 use crate::cli::exit::Failure;
 
+/// The value parsers of the scene flags (shared with the Python module).
+pub use convshadow::overrides::{parse_side, parse_slabs, parse_surface, parse_threads};
+
 /// Loads the scene file, or the embedded default scene when none is given.
 pub fn load_scene(path: Option<&Path>) -> Result<Scene, Failure> {
     Ok(match path {
@@ -25,20 +29,14 @@ pub fn load_scene(path: Option<&Path>) -> Result<Scene, Failure> {
     })
 }
 
-/// Applies `--width`/`--height` overrides and re-validates.
+/// Applies `--width`/`--height` overrides and re-validates
+/// ([`convshadow::overrides::override_size`]).
 pub fn override_size(
     scene: &mut Scene,
     width: Option<u32>,
     height: Option<u32>,
 ) -> Result<(), Failure> {
-    if let Some(w) = width {
-        scene.image.width = w;
-    }
-    if let Some(h) = height {
-        scene.image.height = h;
-    }
-    scene.revalidate()?;
-    Ok(())
+    Ok(convshadow::overrides::override_size(scene, width, height)?)
 }
 
 /// Refuses two outputs of one run that name the same file (the later write would silently
@@ -148,50 +146,9 @@ pub fn require_png(flag: &str, path: Option<&std::path::PathBuf>) -> Result<(), 
     Ok(())
 }
 
-/// Parses `--threads`: 0 (one per core) to [`convshadow::pipeline::MAX_THREADS`].
-pub fn parse_threads(s: &str) -> Result<usize, String> {
-    let max = convshadow::pipeline::MAX_THREADS;
-    match s.parse::<usize>() {
-        Ok(n) if n <= max => Ok(n),
-        _ => Err(format!(
-            "expected 0 (one per core) to {max} worker threads, got {s:?}"
-        )),
-    }
-}
-
-/// Parses `--width` / `--height`: 1 to the scene format's largest image side.
-pub fn parse_side(s: &str) -> Result<u32, String> {
-    let max = convshadow_common::model::scene::MAX_IMAGE_SIDE;
-    match s.parse::<u32>() {
-        Ok(n) if (1..=max).contains(&n) => Ok(n),
-        _ => Err(format!("expected an integer from 1 to {max}, got {s:?}")),
-    }
-}
-
 /// `--penumbra iterated|distance` (clap reports a bad value with the option's name).
 pub fn parse_penumbra(s: &str) -> Result<convshadow_common::model::scene::Penumbra, String> {
     s.parse()
-}
-
-/// `--surface`: `flat` or `lambert` (every material's `surface`).
-pub fn parse_surface(s: &str) -> Result<convshadow_common::model::scene::SurfaceModel, String> {
-    use convshadow_common::model::scene::SurfaceModel;
-    match s {
-        "flat" => Ok(SurfaceModel::Flat),
-        "lambert" => Ok(SurfaceModel::Lambert),
-        _ => Err(format!("expected `flat` or `lambert`, got {s:?}")),
-    }
-}
-
-/// `--slabs`: a slab count (its range is checked with the scene) or `auto`.
-pub fn parse_slabs(s: &str) -> Result<convshadow_common::model::scene::SlabSpec, String> {
-    use convshadow_common::model::scene::{MAX_SLABS, SlabSpec};
-    if s == "auto" {
-        return Ok(SlabSpec::Auto);
-    }
-    s.parse::<u32>()
-        .map(SlabSpec::Count)
-        .map_err(|_| format!("expected an integer from 1 to {MAX_SLABS} or `auto`, got {s:?}"))
 }
 
 /// The pipeline's thread pool with `threads` workers (0 = one per core), its error as a failure.

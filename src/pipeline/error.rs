@@ -1,5 +1,6 @@
 //! [`RenderError`]: every way a render or an LDI build can fail, typed. The library never exits
-//! or prints; the binary maps each variant to an exit code (`src/cli/exit.rs`, docs/errors.md).
+//! or prints; each variant maps to an exit code (`crate::exit_code`, docs/errors.md) that the
+//! binary exits with and the Python module raises.
 
 use convshadow_common::model::scene::SceneError;
 use convshadow_common::prepare::error::GeometryError;

@@ -3,42 +3,12 @@
 
 use std::path::PathBuf;
 
-use convshadow::pipeline::{Aov, Backend, CpuPath};
+use convshadow::pipeline::{Aov, CpuPath};
 use convshadow_common::model::kernel::KERNEL_SYNTAX;
 use convshadow_common::model::scene::GuardBandSpec;
 use convshadow_common::model::scene::{Penumbra, SlabSpec, SurfaceModel};
 
-/// Most light directions `--reference-samples` takes (256²: seconds per pixel at most, so even
-/// a 1×1 image cannot run for minutes).
-pub const MAX_REFERENCE_SAMPLES: u32 = 65536;
-
-/// `--backend` of `convshadow render`: the pipeline's devices, or the ground-truth reference.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum RenderBackend {
-    /// The CPU oracle.
-    #[default]
-    Cpu,
-    /// The wgpu port (Vulkan: a hardware adapter, else Mesa lavapipe); exit code 5 without one.
-    Gpu,
-    /// The GPU when an adapter exists, else the CPU (and says so).
-    Auto,
-    /// The ground-truth reference: the sweep's view samples, with the light
-    /// integrated over `--reference-samples` stratified directions of the Gaussian light and
-    /// marched through the continuous scene. Slow (quadratic in depth): for small images.
-    Reference,
-}
-
-impl RenderBackend {
-    /// The pipeline's backend, or `None` for the reference.
-    pub fn device(self) -> Option<Backend> {
-        match self {
-            RenderBackend::Cpu => Some(Backend::Cpu),
-            RenderBackend::Gpu => Some(Backend::Gpu),
-            RenderBackend::Auto => Some(Backend::Auto),
-            RenderBackend::Reference => None,
-        }
-    }
-}
+pub use convshadow::overrides::RenderBackend;
 
 /// Arguments of `convshadow render`.
 #[derive(clap::Args, Debug)]
@@ -179,6 +149,8 @@ pub(super) fn parse(argv: &[&str]) -> Result<RenderArgs, clap::Error> {
 
 #[cfg(test)]
 mod tests {
+    use convshadow::pipeline::Backend;
+
     use super::*;
 
     fn ok(argv: &[&str]) -> RenderArgs {

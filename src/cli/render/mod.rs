@@ -74,11 +74,7 @@ pub fn run(args: &RenderArgs) -> Result<i32, Failure> {
         }
     }
     let samples = reference_samples(args)?;
-    let budget = args
-        .max_memory
-        .map_or_else(convshadow_cpu::default_memory_budget, |m| {
-            m.saturating_mul(1 << 20)
-        });
+    let budget = convshadow::overrides::memory_budget(args.max_memory);
     let Some(backend) = args.backend.device() else {
         // The reference has no cancel point: a signal ends the run at once, before any output.
         exit::install_exit_on_signal(None);

@@ -1,14 +1,14 @@
 //! What the arguments of `convshadow render` do to the scene: the view (`--size`, the camera,
 //! `--exposure`, `--tonemap`), the sweep's keys (`--slabs`, `--kernel`, …), the frames of a
 //! sequence and the reference's sample count. A bad value is refused with exit code 2, naming
-//! its flag; an override the scene's validation refuses too.
+//! its flag; an override the scene's validation refuses too. What the sweep's flags and the
+//! sample count do is the library's (`convshadow::overrides`, shared with the Python module).
 
+use convshadow::overrides::{OverrideError, SweepOverrides};
 use convshadow_common::model::display::Tonemap;
-use convshadow_common::model::kernel::KernelSpec;
 use convshadow_common::model::scene::Scene;
-use convshadow_reference::ReferenceOptions;
 
-use super::args::{MAX_REFERENCE_SAMPLES, RenderArgs, RenderBackend};
+use super::args::RenderArgs;
 use crate::cli::exit::{self, Failure};
 use crate::cli::frames;
 
@@ -80,68 +80,34 @@ pub(super) fn frame_list(args: &RenderArgs) -> Result<(Option<Vec<u32>>, f64), F
 }
 
 /// `--slabs`, `--kernel`, `--seed`, `--penumbra`, `--surface`, `--guard-band`,
-/// `--variance-compensation` and `--preintegration`, then the scene re-validated.
+/// `--variance-compensation` and `--preintegration`, then the scene re-validated
+/// ([`SweepOverrides::apply`], shared with the Python module).
 pub(super) fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Failure> {
-    if let Some(n) = args.slabs {
-        scene.sweep.slabs = n;
-    }
-    if let Some(k) = &args.kernel {
-        scene.sweep.kernel = k
-            .parse::<KernelSpec>()
-            .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, format!("--kernel: {e}")))?;
-    }
-    if let Some(s) = args.seed {
-        scene.sweep.seed = s;
-    }
-    if let Some(p) = args.penumbra {
-        scene.sweep.penumbra = p;
-    }
-    if let Some(s) = args.surface {
-        for m in &mut scene.materials {
-            m.surface = s;
+    let overrides = SweepOverrides {
+        slabs: args.slabs,
+        kernel: args.kernel.clone(),
+        seed: args.seed,
+        penumbra: args.penumbra,
+        surface: args.surface,
+        guard_band: args.guard_band,
+        variance_compensation: args.variance_compensation,
+        preintegration: args.preintegration,
+    };
+    overrides.apply(scene).map_err(|e| match e {
+        OverrideError::Kernel(e) => Failure::new(exit::BAD_ARGUMENTS, format!("--kernel: {e}")),
+        OverrideError::Invalid(e) => {
+            Failure::new(exit::BAD_ARGUMENTS, format!("command-line override: {e}"))
         }
-    }
-    if let Some(g) = args.guard_band {
-        scene.sweep.guard_band = g;
-    }
-    if let Some(v) = args.variance_compensation {
-        scene.sweep.variance_compensation = v;
-    }
-    if let Some(v) = args.preintegration {
-        scene.sweep.preintegration = v;
-    }
-    scene
-        .revalidate()
-        .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, format!("command-line override: {e}")))?;
-    Ok(())
+    })
 }
 
 /// `--reference-samples`: the light directions of the reference (0 for the other backends).
 pub(super) fn reference_samples(args: &RenderArgs) -> Result<u32, Failure> {
-    Ok(match (args.backend, args.reference_samples) {
-        (RenderBackend::Reference, None) => ReferenceOptions::default().samples,
-        (RenderBackend::Reference, Some(0)) => {
-            return Err(Failure::new(
-                exit::BAD_ARGUMENTS,
-                "--reference-samples: expected at least 1 light direction, got 0",
-            ));
-        }
-        (RenderBackend::Reference, Some(m)) if m > MAX_REFERENCE_SAMPLES => {
-            return Err(Failure::new(
-                exit::BAD_ARGUMENTS,
-                format!(
-                    "--reference-samples: expected 1 to {MAX_REFERENCE_SAMPLES} light directions, got {m}"
-                ),
-            ));
-        }
-        (RenderBackend::Reference, Some(m)) => m,
-        (_, Some(_)) => {
-            return Err(Failure::new(
-                exit::BAD_ARGUMENTS,
-                "--reference-samples only applies to --backend reference",
-            ));
-        }
-        (_, None) => 0,
+    convshadow::overrides::reference_samples(args.backend, args.reference_samples).map_err(|e| {
+        Failure::new(
+            exit::BAD_ARGUMENTS,
+            e.message("--reference-samples", "--backend"),
+        )
     })
 }
 

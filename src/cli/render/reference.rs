@@ -1,24 +1,14 @@
-//! `convshadow render --backend reference`: the ground-truth shadow-ray renderer behind the same
-//! checks and LDI as the pipeline.
+//! `convshadow render --backend reference`: the library's ground-truth shadow-ray renderer
+//! ([`convshadow::pipeline::render_reference`]).
 
-use std::time::Instant;
-
-use convshadow::pipeline::{
-    Aov, LightColors, MemoryNeed, Rendered, first_hit_depth, image_fingerprint,
-};
+use convshadow::pipeline::{Aov, Rendered};
 use convshadow_common::model::scene::Scene;
-use convshadow_cpu::ldi::{BuildLdi, Ldi};
-use convshadow_io::image::RgbImage;
-use convshadow_reference::{Reference, ReferenceOptions};
 
 use crate::cli::exit::{self, Failure};
 
-/// Renders with the ground-truth reference (`--backend reference`): the same checks and LDI as
-/// the pipeline, then [`Reference::render_with_alpha`] with `samples` light directions per
-/// shading point; each light layer of `aovs` is one more reference render, on the plan with the
-/// other lights and the background black (as the pipeline's, `pipeline/aov.rs`).
-/// No interrupt handler is installed for it: a signal ends the process at once, before any output
-/// is written (outputs are only ever renamed into place complete).
+/// Renders with the ground-truth reference (`--backend reference`). No interrupt handler is
+/// installed for it: a signal ends the process at once, before any output is written (outputs
+/// are only ever renamed into place complete).
 pub(super) fn render_reference(
     scene: &Scene,
     threads: usize,
@@ -27,83 +17,8 @@ pub(super) fn render_reference(
     allow_open: bool,
     aovs: &[Aov],
 ) -> Result<Rendered, Failure> {
-    let start = Instant::now();
-    MemoryNeed::of(scene, scene.sweep.guard_band.lower_bound(), true).check(scene, budget)?;
-    let pool = crate::cli::thread_pool(threads)?;
-    let geometry = convshadow_io::build_geometry(scene)?;
-    let fragment_budget =
-        MemoryNeed::of(scene, geometry.raster.guard, true).check(scene, budget)?;
-    exit::check_interrupt()?;
-    let ldi = pool.install(|| Ldi::build(&geometry.raster, fragment_budget))?;
-    let stats = pool.install(|| ldi.stats());
-    if !allow_open && (geometry.defect_edges() > 0 || stats.odd_pixels > 0) {
-        return Err(Failure::new(
-            exit::MESH_DEFECT,
-            format!(
-                "{}: refusing to render: the inside/outside test needs closed, consistently wound \
-                 meshes, but {} mesh edges are open, non-manifold or flipped and {} pixels have \
-                 an odd fragment count. Pass --allow-open to render anyway.",
-                scene.source,
-                geometry.defect_edges(),
-                stats.odd_pixels
-            ),
-        ));
-    }
-    let seconds_ldi = start.elapsed().as_secs_f64();
-    let t_plan = Instant::now();
-    let plan = convshadow_io::build_plan(scene, &geometry)
-        .map_err(|e| Failure::new(exit::BAD_INPUT, e.to_string()))?;
-    let seconds_plan = t_plan.elapsed().as_secs_f64();
-    exit::check_interrupt()?;
-    let t_render = Instant::now();
-    let options = ReferenceOptions {
-        samples,
-        ..ReferenceOptions::default()
-    };
-    let (data, alpha) = {
-        let reference = Reference::new(scene, &geometry, &plan, 0.0);
-        pool.install(|| reference.render_with_alpha(&ldi, &options))
-    };
-    let seconds_sweep = t_render.elapsed().as_secs_f64();
-    let mut plan = plan;
-    let colors = LightColors::of(&plan);
-    let mut light_layers = Vec::new();
-    for aov in aovs {
-        if let Aov::Light(l) = *aov {
-            colors.isolate(&mut plan, l);
-            let reference = Reference::new(scene, &geometry, &plan, 0.0);
-            light_layers.push((l, pool.install(|| reference.render(&ldi, &options))));
-            colors.restore(&mut plan);
-        }
-    }
-    let depth = aovs
-        .contains(&Aov::Depth)
-        .then(|| first_hit_depth(&plan, &ldi, geometry.z_origin));
-    Ok(Rendered {
-        mesh_warnings: geometry.mesh_warnings(),
-        image_hash: image_fingerprint(&data),
-        image: RgbImage {
-            width: scene.image.width,
-            height: scene.image.height,
-            data,
-        },
-        alpha,
-        depth,
-        light_layers,
-        ldi: stats,
-        ldi_hash: ldi.fingerprint(),
-        plan,
-        light: Vec::new(),
-        // The reference traces shadow rays: it sweeps no slab.
-        slabs_swept: 0,
-        threads: pool.current_num_threads(),
-        seconds_ldi,
-        seconds_plan,
-        seconds_sweep,
-        chunks: [0; 3],
-        seconds_total: start.elapsed().as_secs_f64(),
-        backend: "reference",
-        adapter: None,
-        backend_note: None,
-    })
+    let cancel = Some(&exit::INTERRUPT);
+    Ok(convshadow::pipeline::render_reference(
+        scene, threads, samples, budget, allow_open, aovs, cancel,
+    )?)
 }

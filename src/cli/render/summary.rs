@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use convshadow::pipeline::Rendered;
+use convshadow::stats::{render_stats, throughput};
 use convshadow_common::model::scene::Scene;
 use convshadow_io::image::ExrChannel;
 use convshadow_reference::samples_side;
@@ -75,7 +76,7 @@ pub(super) fn finish(
     }
     if let Some(p) = &args.stats_json {
         exit::check_interrupt_after(&written)?;
-        crate::cli::write_json(p, &stats_value(scene, args, r, samples, outputs))?;
+        crate::cli::write_json(p, &render_stats(scene, r, args.path, samples, outputs))?;
         written.push(p.clone());
     }
     exit::check_interrupt_after(&written)?;
@@ -139,7 +140,7 @@ pub(super) fn finish_frames(
     }
     let seconds: f64 = done.iter().map(|f| f.seconds_total).sum();
     if let Some(p) = &args.stats_json {
-        let mut value = stats_value(scene, args, last, 0, &[]);
+        let mut value = render_stats(scene, last, args.path, 0, &[]);
         if let Some(o) = value.as_object_mut() {
             for key in ["image_hash", "outputs", "seconds_ldi", "seconds_sweep"] {
                 o.remove(key);
@@ -241,78 +242,4 @@ fn early_note(r: &Rendered) -> String {
     } else {
         String::new()
     }
-}
-
-/// The plan's pixel·slab·light updates per second of the sweep: the frame's rate, counting the
-/// slabs an early finish left out (there is nothing in them to compute).
-fn throughput(r: &Rendered) -> f64 {
-    let updates = f64::from(r.plan.grid_width)
-        * f64::from(r.plan.grid_height)
-        * f64::from(r.plan.slabs)
-        * r.plan.lights.len() as f64;
-    updates / r.seconds_sweep.max(1e-9)
-}
-
-/// The `--stats-json` object of one render.
-fn stats_value(
-    scene: &Scene,
-    args: &RenderArgs,
-    r: &Rendered,
-    samples: u32,
-    outputs: &[PathBuf],
-) -> serde_json::Value {
-    let throughput = throughput(r);
-    json!({
-            "version": env!("CARGO_PKG_VERSION"),
-            "width": scene.image.width,
-            "height": scene.image.height,
-            "slabs": r.plan.slabs,
-            "slabs_swept": r.slabs_swept,
-            "slabs_auto": r.plan.auto_slabs.as_ref().map(|a| json!({
-                "finest_period": a.finest_period,
-                "limited_by": a.limited_by,
-                "minimum": a.minimum,
-                "thinnest": a.thinnest.map(|t| json!({
-                    "mesh": t.mesh,
-                    "thickness": t.thickness,
-                })),
-                "slab_factor": a.factor,
-            })),
-            "slab_distance": f64::from(r.plan.slab_distance),
-            "kernel": scene.sweep.kernel.to_string(),
-            "penumbra": scene.sweep.penumbra.to_string(),
-            "preintegration": r.plan.preintegration,
-            "guard_band": scene.sweep.guard_band.to_string(),
-            "guard_band_px": {
-                "left": r.plan.guard.left,
-                "right": r.plan.guard.right,
-                "top": r.plan.guard.top,
-                "bottom": r.plan.guard.bottom,
-            },
-            "grid_width": r.plan.grid_width,
-            "grid_height": r.plan.grid_height,
-            "lights": r.plan.lights.len(),
-            "channels": r.plan.channels,
-            "fragments": r.ldi.fragments,
-            "max_layers": r.ldi.max_layers,
-            "odd_pixels": r.ldi.odd_pixels,
-            "threads": r.threads,
-            "path": args.path.name(),
-            "chunks_full": r.chunks[0],
-            "chunks_skipped_unoccluded": r.chunks[1],
-            "chunks_skipped_dark": r.chunks[2],
-            "backend": r.backend,
-            "adapter": r.adapter,
-            "reference_samples": (samples > 0).then_some(samples),
-            "seconds_ldi": r.seconds_ldi,
-            "seconds_plan": r.seconds_plan,
-            "seconds_sweep": r.seconds_sweep,
-            "seconds_total": r.seconds_total,
-            "pixel_slab_lights_per_second": throughput,
-            "ldi_hash": format!("{:016x}", r.ldi_hash),
-            "image_hash": format!("{:016x}", r.image_hash),
-            "outputs": outputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-        "exposure": scene.image.exposure,
-        "tonemap": scene.image.tonemap.name(),
-    })
 }

@@ -1,0 +1,201 @@
+"""convshadow.render against the command line: the same image bits, the same stats, the same
+errors with the same exit codes, and every way of giving a scene."""
+
+import json
+import pathlib
+import sys
+
+import numpy as np
+import OpenEXR
+import pytest
+
+import convshadow
+from conftest import REPO, SMALL, flags
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - the suite runs on 3.11 in CI
+    import tomli as tomllib
+
+DEFAULT = REPO / "scenes" / "default.toml"
+
+
+def read_exr(path):
+    """The RGB float32 values of an EXR, (H, W, 3), read by OpenEXR (not by convshadow)."""
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        channels = f.channels()
+        rgb = [channels[c].pixels for c in "RGB"]
+    for c in rgb:
+        assert c.dtype == np.float32, c.dtype
+    return np.stack(rgb, axis=-1)
+
+
+def bits(a):
+    """The float32 array's bits, to compare bit for bit (NaN equals NaN, -0 differs from 0)."""
+    return np.ascontiguousarray(a, dtype=np.float32).view(np.uint32)
+
+
+@pytest.mark.parametrize(
+    "scene, overrides",
+    [
+        (DEFAULT, SMALL),
+        (DEFAULT, {**SMALL, "kernel": "poisson8", "penumbra": "iterated", "seed": 7}),
+        (REPO / "scenes" / "gobo.toml", {"width": 40, "height": 40, "slabs": 48}),
+    ],
+    ids=["default", "default-overridden", "gobo"],
+)
+def test_image_is_the_cli_exr_bit_for_bit(cli, tmp_path, scene, overrides):
+    exr, stats_json = tmp_path / "out.exr", tmp_path / "stats.json"
+    run = cli("render", scene, *flags(overrides), "-o", exr, "--stats-json", stats_json, "-q")
+    assert run.returncode == 0, run.stderr
+    image, stats = convshadow.render(scene, **overrides)
+    assert image.dtype == np.float32
+    assert image.shape == (overrides["height"], overrides["width"], 3)
+    expected = read_exr(exr)
+    assert expected.shape == image.shape
+    np.testing.assert_array_equal(bits(image), bits(expected))
+    cli_stats = json.loads(stats_json.read_text())
+    for key in ["image_hash", "ldi_hash", "slabs", "slabs_swept", "fragments", "kernel",
+                "penumbra", "guard_band_px", "grid_width", "grid_height", "backend", "path"]:
+        assert stats[key] == cli_stats[key], key
+    # Every key of --stats-json but the files written.
+    assert set(cli_stats) - set(stats) == {"outputs"}
+    assert stats["seconds_total"] > 0
+
+
+def test_stats_are_the_stats_json_numbers():
+    image, stats = convshadow.render(**SMALL, threads=1)
+    assert stats["width"] == 64 and stats["height"] == 48
+    assert stats["slabs"] == 96
+    assert stats["threads"] == 1
+    assert len(stats["image_hash"]) == 16 and int(stats["image_hash"], 16) >= 0
+    assert stats["warnings"] == [] and stats["backend_note"] is None
+    # The image hash is the image's: another seed gives another image and another hash.
+    other, other_stats = convshadow.render(**SMALL, threads=1, seed=2)
+    assert not np.array_equal(image, other)
+    assert other_stats["image_hash"] != stats["image_hash"]
+
+
+def test_threads_and_paths_give_the_same_bits():
+    image, stats = convshadow.render(**SMALL, threads=1)
+    for kwargs in [{"threads": 2}, {"path": "scalar"}]:
+        other, other_stats = convshadow.render(**SMALL, **kwargs)
+        np.testing.assert_array_equal(bits(image), bits(other))
+        assert other_stats["image_hash"] == stats["image_hash"]
+
+
+def test_dict_toml_text_and_path_give_the_same_image():
+    text = DEFAULT.read_text()
+    by_path, stats = convshadow.render(DEFAULT, **SMALL)
+    by_str_path, _ = convshadow.render(str(DEFAULT), **SMALL)
+    by_text, _ = convshadow.render(text, **SMALL)
+    by_dict, dict_stats = convshadow.render(tomllib.loads(text), **SMALL)
+    # The embedded default scene is this file.
+    embedded, _ = convshadow.render(**SMALL)
+    for other in [by_str_path, by_text, by_dict, embedded]:
+        np.testing.assert_array_equal(bits(by_path), bits(other))
+    assert dict_stats["image_hash"] == stats["image_hash"]
+
+
+def test_a_dict_with_relative_paths_resolves_them_against_the_current_folder(monkeypatch):
+    scene = REPO / "scenes" / "gobo.toml"
+    small = {"width": 24, "height": 24, "slabs": 32}
+    expected, _ = convshadow.render(scene, **small)
+    monkeypatch.chdir(scene.parent)
+    image, _ = convshadow.render(tomllib.loads(scene.read_text()), **small)
+    np.testing.assert_array_equal(bits(expected), bits(image))
+
+
+@pytest.mark.parametrize(
+    "scene",
+    [
+        "[image]\nwidth = 0\nheight = 8\n",
+        {"image": {"width": 8, "height": 8}, "sweep": {"kernel": "nope"}},
+        "[image]\nwidht = 8\n",
+        "no-such-scene.toml",
+    ],
+    ids=["zero-width", "bad-kernel-key", "unknown-key", "missing-file"],
+)
+def test_a_bad_scene_raises_error_with_the_cli_message_and_exit_code_3(cli, tmp_path, scene):
+    with pytest.raises(convshadow.Error) as info:
+        convshadow.render(scene)
+    e = info.value
+    assert e.exit_code == 3 == convshadow.EXIT_BAD_INPUT
+    assert str(e) == e.message and e.message
+    # The command line refuses the same scene with the same code and message.
+    if isinstance(scene, str) and "\n" in scene:
+        path = tmp_path / "bad.toml"
+        path.write_text(scene)
+        with pytest.raises(convshadow.Error) as by_path:
+            convshadow.render(path)
+        run = cli("render", path, "-o", tmp_path / "x.exr", "-q")
+        assert run.returncode == 3
+        assert by_path.value.message in run.stderr
+        assert by_path.value.exit_code == 3
+    if scene == "no-such-scene.toml":
+        assert "cannot read scene file" in e.message
+        run = cli("render", scene, "-o", tmp_path / "x.exr", "-q")
+        assert run.returncode == 3 and e.message in run.stderr
+
+
+@pytest.mark.parametrize(
+    "overrides, words",
+    [
+        ({"kernel": "nope"}, "kernel: unknown kernel"),
+        ({"width": 0}, "width: expected an integer from 1"),
+        ({"slabs": "many"}, "slabs: expected an integer"),
+        ({"slabs": 0}, "override: "),
+        ({"penumbra": "sharp"}, "penumbra"),
+        ({"backend": "tpu"}, "backend: expected cpu, gpu, auto or reference"),
+        ({"threads": 100000}, "threads: expected 0 (one per core)"),
+        ({"reference_samples": 4}, "reference_samples only applies to backend reference"),
+    ],
+)
+def test_bad_overrides_raise_error_with_exit_code_2(overrides, words):
+    with pytest.raises(convshadow.Error) as info:
+        convshadow.render(**{**SMALL, **overrides})
+    assert info.value.exit_code == 2 == convshadow.EXIT_BAD_ARGUMENTS
+    assert words in info.value.message
+
+
+def test_a_memory_budget_too_small_is_a_resource_limit(cli, tmp_path):
+    with pytest.raises(convshadow.Error) as info:
+        convshadow.render(**SMALL, max_memory=0)
+    assert info.value.exit_code == 4
+    run = cli("render", *flags(SMALL), "--max-memory", 0, "-o", tmp_path / "x.exr", "-q")
+    assert run.returncode == 4 and info.value.message in run.stderr
+
+
+def test_open_meshes_are_refused_with_exit_code_6_unless_allowed(cli, tmp_path):
+    # A square of two triangles: open, every pixel it covers has one fragment.
+    obj = tmp_path / "square.obj"
+    obj.write_text("v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n")
+    scene = {
+        "image": {"width": 16, "height": 16},
+        "camera": {"direction": [0.3, -0.2, 1.0], "view_width": 4.0},
+        "sweep": {"slabs": 8},
+        "mesh": [{"shape": "obj", "path": str(obj), "material": "m"}],
+        "material": {"m": {}},
+    }
+    with pytest.raises(convshadow.Error) as info:
+        convshadow.render(scene)
+    assert info.value.exit_code == 6 == convshadow.EXIT_MESH_DEFECT, info.value.message
+    assert "boundary" in info.value.message
+    _, stats = convshadow.render(scene, allow_open=True)
+    assert stats["odd_pixels"] > 0
+    assert any("odd fragment count" in w for w in stats["warnings"])
+
+
+def test_the_reference_backend_renders_with_its_sample_count():
+    image, stats = convshadow.render(width=12, height=12, slabs=24, backend="reference",
+                                     reference_samples=4)
+    assert image.shape == (12, 12, 3)
+    assert stats["backend"] == "reference" and stats["reference_samples"] == 4
+    assert np.isfinite(image).all()
+
+
+def test_scene_of_another_type_is_a_type_error():
+    with pytest.raises(TypeError):
+        convshadow.render(42)
+    with pytest.raises(TypeError):
+        convshadow.render({"image": {"width": object()}})
