@@ -49,6 +49,25 @@ fn ensure_runtime_dir() {
     }
 }
 
+/// Ends the process with `code`, first writing its peak resident set (`VmHWM` of
+/// `/proc/self/status`, KiB) to the file `CONVSHADOW_PEAK_RSS_FILE` names, if set: the memory
+/// tests' measure of this process alone (a parent's `wait4` counts the parent's own peak in a
+/// child started by `vfork`, docs/errors.md, "Measuring a run's memory").
+fn finish(code: i32) -> ! {
+    if let Some(path) = std::env::var_os("CONVSHADOW_PEAK_RSS_FILE") {
+        let peak = std::fs::read_to_string("/proc/self/status")
+            .ok()
+            .and_then(|s| {
+                s.lines()
+                    .find_map(|l| l.strip_prefix("VmHWM:"))
+                    .map(|v| v.trim().trim_end_matches("kB").trim().to_string())
+            })
+            .unwrap_or_default();
+        let _ = std::fs::write(path, peak);
+    }
+    std::process::exit(code)
+}
+
 fn main() {
     ensure_runtime_dir();
     let cli = match Cli::try_parse() {
@@ -66,7 +85,7 @@ fn main() {
             } else {
                 convshadow::out!("{text}");
             }
-            std::process::exit(convshadow::console::final_code(code));
+            finish(convshadow::console::final_code(code));
         }
     };
     let result = match &cli.command {
@@ -76,10 +95,10 @@ fn main() {
         Command::Report(a) => cli::report::run(a),
     };
     match result {
-        Ok(code) => std::process::exit(convshadow::console::final_code(code)),
+        Ok(code) => finish(convshadow::console::final_code(code)),
         Err(f) => {
             convshadow::errln!("error: {}", exit::escape_line(&f.message));
-            std::process::exit(f.code);
+            finish(f.code);
         }
     }
 }

@@ -438,40 +438,28 @@ pub fn check_light_index(scene: &Scene, light: usize) -> Result<(), RenderError>
     Ok(())
 }
 
-/// Refuses (unless `allow_open`) meshes that are not closed, or an LDI with a pixel of odd
-/// fragment count: the sweep's inside/outside parity test needs closed, consistently wound
-/// meshes.
+/// Refuses (unless `allow_open`) an LDI where a closed mesh has a pixel of odd fragment count:
+/// the sweep's parity test would smear it. Open meshes are not refused: they are thin shells,
+/// out of the parity test, with a warning ([`SceneGeometry::mesh_warnings`]).
 fn refuse_open_meshes(
     scene: &Scene,
     geometry: &SceneGeometry,
     stats: &LdiStats,
     allow_open: bool,
 ) -> Result<(), RenderError> {
-    if allow_open || (geometry.defect_edges() == 0 && stats.odd_pixels == 0) {
+    if allow_open || stats.odd_pixels == 0 {
         return Ok(());
     }
-    let names: Vec<String> = geometry
-        .meshes
-        .iter()
-        .enumerate()
-        .filter(|(_, m)| !m.report.is_closed())
-        .map(|(i, m)| {
-            format!(
-                "mesh[{i}] has {} boundary, {} non-manifold and {} flipped edges",
-                m.report.boundary_edges, m.report.nonmanifold_edges, m.report.flipped_edges
-            )
-        })
+    let closed: Vec<String> = (0..geometry.meshes.len())
+        .filter(|&i| geometry.raster.parity_meshes & (1u32 << i) != 0)
+        .map(|i| format!("mesh[{i}]"))
         .collect();
     Err(RenderError::MeshDefect(format!(
-        "{}: refusing to render: the inside/outside parity test needs closed, consistently \
-             wound meshes, but {}{} pixels have an odd fragment count. Pass --allow-open to \
-             render anyway.",
+        "{}: refusing to render: the inside/outside parity test needs the closed meshes ({}) to \
+         cross every pixel an even number of times, but {} pixels have an odd fragment count. \
+         Pass --allow-open to render anyway.",
         scene.source,
-        if names.is_empty() {
-            String::new()
-        } else {
-            names.join("; ") + "; "
-        },
+        closed.join(", "),
         stats.odd_pixels
     )))
 }

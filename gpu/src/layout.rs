@@ -123,9 +123,10 @@ pub struct Globals {
     /// 1 when some surface is held (`RenderPlan::has_surface_hold`: `hold` then holds one word
     /// per grid pixel, `surface_hold` one per triangle).
     pub surface_holds: u32,
+    /// The meshes in the parity test (`Ldi::parity_meshes`, bit i: mesh i): the closed ones; an
+    /// open mesh is a thin shell whose crossings toggle nothing.
+    pub parity_meshes: u32,
     /// Uniform structs are a multiple of 16 bytes.
-    pub _pad1: u32,
-    /// See `_pad1`.
     pub _pad2: u32,
 }
 

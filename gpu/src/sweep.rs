@@ -258,6 +258,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             occlusion_eps: OCCLUSION_EPS,
             preintegration: u32::from(plan.preintegration),
             surface_holds: u32::from(plan.has_surface_hold()),
+            parity_meshes: raster.parity_meshes,
             ..Globals::default()
         },
         slabs: (0..slabs)

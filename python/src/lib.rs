@@ -423,7 +423,7 @@ fn stats_dict<'py>(
         let mut warnings = r.mesh_warnings.clone();
         if r.ldi.odd_pixels > 0 {
             warnings.push(format!(
-                "{} pixels have an odd fragment count (open meshes, rendered with allow_open)",
+                "{} pixels have an odd fragment count of a closed mesh (rendered with allow_open)",
                 r.ldi.odd_pixels
             ));
         }

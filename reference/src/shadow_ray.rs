@@ -41,6 +41,10 @@
 //!   within 2^-30 (relative) of the start are the start met again through rounding (a
 //!   neighbouring triangle at a shared edge, a coincident face) and are ignored. See [`Start`].
 //!
+//! - **Open meshes** are thin shells (docs/scene-format.md, "Open meshes"): their crossings
+//!   toggle no inside bit, and a shadow ray crossing one is attenuated there by one reference
+//!   length of its material, `1 − α·(1 − τ)` at the crossing's detail value.
+//!
 //! - **Patterned lights**: a ray's transmittance is multiplied by the light's initial light
 //!   (its pattern, as the plan sampled it at pixel centres; bilinear between them, 1 outside the
 //!   grid like the sweep's reads) where the ray leaves the scene through the first slab plane.
@@ -51,7 +55,7 @@ use convshadow_common::model::scene::{MaterialSpec, Scene};
 use convshadow_common::pixel::hash::{mix32, row_hash};
 
 use crate::light_samples::{fine_strata, inverse_normal_cdf, samples_side};
-use convshadow_common::plan::RenderPlan;
+use convshadow_common::plan::{DEFAULT_REFERENCE_LENGTH, RenderPlan};
 use convshadow_common::prepare::geometry::SceneGeometry;
 use rayon::prelude::*;
 
@@ -119,11 +123,11 @@ fn extinction(alpha: f64, reference_length: f64) -> f64 {
 }
 
 impl Medium {
-    fn new(m: &MaterialSpec, slab_distance: f64) -> Medium {
+    fn new(m: &MaterialSpec) -> Medium {
         Medium {
             opacity: m.opacity,
             stops: m.gradient.iter().map(|s| (s.value, s.opacity)).collect(),
-            reference_length: m.reference_length.unwrap_or(slab_distance),
+            reference_length: m.reference_length.unwrap_or(DEFAULT_REFERENCE_LENGTH),
             transport: m.transport,
         }
     }
@@ -237,7 +241,7 @@ impl<'a> Reference<'a> {
             }
         }
         let e = geometry.slab_distance;
-        let media = scene.materials.iter().map(|m| Medium::new(m, e)).collect();
+        let media = scene.materials.iter().map(Medium::new).collect();
         let px = cam.pixel_size;
         let lights = scene
             .lights
@@ -339,7 +343,12 @@ impl<'a> Reference<'a> {
                 return [0.0; 3];
             }
             let (u_far, mesh) = scratch.hits[k];
-            inside ^= 1 << mesh;
+            if self.geometry.raster.parity_meshes & (1 << mesh) == 0 {
+                // An open mesh is a thin shell: one slab of its material at the crossing.
+                self.cross_shell(&mut optical, p, dir, mesh as usize, u_far);
+            } else {
+                inside ^= 1 << mesh;
+            }
             let u_near = if k + 1 < scratch.hits.len() {
                 scratch.hits[k + 1].0
             } else {
@@ -360,6 +369,32 @@ impl<'a> Reference<'a> {
             }
         }
         optical.map(|o| (-o).exp())
+    }
+
+    /// Adds to `optical` (per channel) the crossing at `u` of the ray from `p` through the thin
+    /// shell `mesh` (an open mesh, docs/scene-format.md "Open meshes"): one reference length of
+    /// its material at the crossing's detail value, `1 − α·(1 − τ)` with `α = 1 − e^(−κ·e_ref)`,
+    /// the material's opacity there.
+    fn cross_shell(&self, optical: &mut [f64; 3], p: [f64; 3], dir: [f64; 2], mesh: usize, u: f64) {
+        let m = self.mesh_material[mesh];
+        let material = &self.plan.materials[self.plan.mesh_material[mesh] as usize];
+        let medium = &self.media[m];
+        let kappa = if medium.stops.is_empty()
+            || (material.detail.is_none() && material.texture.is_none())
+        {
+            medium.kappa(0.0)
+        } else {
+            let q = [p[0] + u * dir[0], p[1] + u * dir[1], p[2] - u];
+            let v = detail_value(material, to_detail_f64(&self.plan.mesh_to_detail[mesh], q));
+            medium.kappa(f64::from(v))
+        };
+        let alpha = -(-kappa * medium.reference_length).exp_m1();
+        for (o, t) in optical.iter_mut().zip(medium.transport) {
+            if t < 1.0 {
+                // −ln(1 − α(1 − τ)): infinite where the shell takes out all of the channel.
+                *o -= (-alpha * (1.0 - t)).ln_1p();
+            }
+        }
     }
 
     /// ∫κ over u ∈ [u0, u1] of the ray from `p` in mesh `mesh` of material `m`.

@@ -13,6 +13,7 @@ mod distance_penumbra;
 mod guard_band;
 mod hard_cases;
 mod oblique_receiver;
+mod open_meshes;
 mod patterned_light;
 mod phase_function;
 mod preintegration;

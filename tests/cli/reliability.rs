@@ -12,7 +12,6 @@ use std::process::{Command, Stdio};
 /// Exit codes (docs/errors.md).
 const BAD_INPUT: i32 = 3;
 const RESOURCE_LIMIT: i32 = 4;
-const MESH_DEFECT: i32 = 6;
 const OUTPUT_FAILED: i32 = 7;
 const INTERRUPTED: i32 = 130;
 
@@ -156,13 +155,13 @@ fn obj_scene_file(dir: &Path, obj: &Path) -> PathBuf {
 }
 
 #[test]
-fn render_refuses_every_bad_model_and_an_open_mesh_and_writes_nothing() {
+fn render_refuses_every_unreadable_model_writing_nothing_and_renders_open_ones_as_shells() {
     let Some(models) = support::models_dir() else {
         return;
     };
     let scenes = support::temp_dir("rel-bad-models-scenes");
     let out_dir = support::temp_dir("rel-bad-models-out");
-    let mut refused = 0;
+    let (mut refused, mut shells) = (0, 0);
     let mut files: Vec<PathBuf> = std::fs::read_dir(models.join("bad"))
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -182,39 +181,43 @@ fn render_refuses_every_bad_model_and_an_open_mesh_and_writes_nothing() {
             ],
             &out_dir,
         );
-        if name == "tetra_ok.obj" {
-            // The control of models/bad renders.
-            assert_eq!(code, 0, "{name}: {err}");
-            assert!(out.is_file());
-            std::fs::remove_file(&out).unwrap();
-            continue;
-        }
         assert!(!err.contains("panicked"), "{name}: {err}");
         match code {
-            // A parse error names the OBJ file and its line (`file.obj:LINE:`).
-            BAD_INPUT => assert!(err.contains(&format!("{name}:")), "{name}: {err}"),
-            // An open or defective mesh names the mesh and its edges.
-            MESH_DEFECT => assert!(
-                err.contains("mesh[0] has") && err.contains("edges"),
-                "{name}: {err}"
-            ),
-            _ => panic!("{name}: exit code {code}, expected {BAD_INPUT} or {MESH_DEFECT}: {err}"),
+            // The control of models/bad renders, and so does a mesh that is not closed: a thin
+            // shell, with a warning naming the mesh and its edges.
+            0 => {
+                assert!(out.is_file(), "{name}");
+                std::fs::remove_file(&out).unwrap();
+                if name != "tetra_ok.obj" {
+                    assert!(
+                        err.contains("mesh[0] is not closed")
+                            && err.contains("edges")
+                            && err.contains("thin shell"),
+                        "{name}: {err}"
+                    );
+                    shells += 1;
+                }
+            }
+            // A parse error names the OBJ file and its line (`file.obj:LINE:`), and nothing is
+            // written.
+            BAD_INPUT => {
+                assert!(err.contains(&format!("{name}:")), "{name}: {err}");
+                assert!(
+                    files_in(&out_dir).is_empty(),
+                    "{name}: left {:?}",
+                    files_in(&out_dir)
+                );
+                refused += 1;
+            }
+            _ => panic!("{name}: exit code {code}, expected 0 or {BAD_INPUT}: {err}"),
         }
         if name == "cube_no_bottom.obj" {
-            assert_eq!(code, MESH_DEFECT, "{err}");
+            assert_eq!(code, 0, "{err}");
             assert!(err.contains("boundary"), "{err}");
         }
-        assert!(
-            files_in(&out_dir).is_empty(),
-            "{name}: left {:?}",
-            files_in(&out_dir)
-        );
-        refused += 1;
     }
-    assert!(
-        refused >= 9,
-        "eight bad models and the open cube: {refused}"
-    );
+    // Six unreadable files; the flipped face, the non-manifold edge and the open cube are shells.
+    assert_eq!((refused, shells), (6, 3), "refused, shells");
 }
 
 #[test]
@@ -284,26 +287,41 @@ fn spawn_cli(args: &[&str], cwd: &Path) -> std::process::Child {
         .unwrap()
 }
 
-/// Runs the binary and reaps it with `wait4`: (exit code, stderr, peak RSS in KiB of that child
-/// alone; `getrusage(RUSAGE_CHILDREN)` would mix in the children of tests running in parallel).
-#[allow(clippy::zombie_processes)] // reaped by `wait4`, which `Child::wait` cannot replace
+/// Runs the binary in `cwd` (stdout discarded): (exit code, stderr, peak RSS in KiB of that
+/// process alone), the peak as the binary writes it at exit to `CONVSHADOW_PEAK_RSS_FILE` (its
+/// `VmHWM`, which starts afresh at `exec`). Not the child's `ru_maxrss` from `wait4`: std
+/// starts children by `vfork`, and Linux then counts this test process's own peak RSS ever (any
+/// test's, in any thread) in the child's (measured: a 300 MiB peak of a parent showed as a
+/// 314 MiB `/bin/true`).
 pub(crate) fn run_measured(args: &[&str], cwd: &Path) -> (i32, String, u64) {
-    let mut child = spawn_cli(args, cwd);
-    let mut err = String::new();
-    child
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut err)
+    static RUNS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let n = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let peak_file = std::env::temp_dir().join(format!(
+        "convshadow-peak-rss-{}-{n}.txt",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_file(&peak_file);
+    let out = Command::new(env!("CARGO_BIN_EXE_convshadow"))
+        .args(args)
+        .current_dir(cwd)
+        .env("CONVSHADOW_PEAK_RSS_FILE", &peak_file)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .output()
         .unwrap();
-    let mut status = 0;
-    // SAFETY: an all-zero rusage is a valid value to be overwritten.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    // SAFETY: the pid is our own unreaped child; both pointers are valid for the call.
-    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
-    assert_eq!(pid, child.id() as libc::pid_t, "wait4");
-    assert!(libc::WIFEXITED(status), "the child was killed: {status}");
-    (libc::WEXITSTATUS(status), err, usage.ru_maxrss as u64)
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    let code = out
+        .status
+        .code()
+        .unwrap_or_else(|| panic!("the child was killed: {:?}: {err}", out.status));
+    let peak = std::fs::read_to_string(&peak_file)
+        .unwrap_or_else(|e| panic!("no peak RSS from the child ({e}): {err}"));
+    let _ = std::fs::remove_file(&peak_file);
+    let kib = peak
+        .trim()
+        .parse()
+        .unwrap_or_else(|e| panic!("peak RSS {peak:?}: {e}"));
+    (code, err, kib)
 }
 
 /// The first number after `word` in `text`.
@@ -806,7 +824,7 @@ fn cubes_obj(offsets: &[[f64; 3]], flip: bool) -> String {
 }
 
 #[test]
-fn two_cubes_sharing_one_edge_are_closed_with_a_warning_and_broken_pairs_are_refused() {
+fn two_cubes_sharing_one_edge_are_closed_with_a_warning_and_broken_pairs_are_shells() {
     let dir = support::temp_dir("rel-two-cubes");
     let scene = BASE_SCENE.replace(
         "shape = \"box\"\nsize = [1.0, 1.0, 1.0]",
@@ -831,22 +849,25 @@ fn two_cubes_sharing_one_edge_are_closed_with_a_warning_and_broken_pairs_are_ref
     let (code, _, err) = support::run_cli(&["render", "s.toml", "-o", "o.png"], &dir);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("1 non-manifold edges"), "{err}");
-    // One triangle of the second cube flipped: inconsistent winding, refused.
+    // One triangle of the second cube flipped: inconsistent winding, not closed: a thin shell.
     std::fs::write(
         dir.join("m.obj"),
         cubes_obj(&[[0.0; 3], [1.0, 1.0, 0.0]], true),
     )
     .unwrap();
+    let shell = "warning: mesh[0] is not closed";
     let (code, _, err) = support::run_cli(&["ldi", "s.toml"], &dir);
-    assert_eq!(code, MESH_DEFECT, "{err}");
+    assert!(code == 0 && err.contains(shell), "{code}: {err}");
+    assert!(err.contains("flipped edges"), "{err}");
     let (code, _, err) = support::run_cli(&["render", "s.toml", "-o", "o2.png"], &dir);
-    assert_refused("flipped pair", code, MESH_DEFECT, &err, &["mesh[0]"]);
-    // A lone extra triangle on the shared edge: odd incidence (5), refused.
+    assert!(code == 0 && err.contains(shell), "{code}: {err}");
+    // A lone extra triangle on the shared edge: odd incidence (5), not closed: a thin shell.
     let mut text = cubes_obj(&[[0.0; 3], [1.0, 1.0, 0.0]], false);
     text += "v 0.5 0.5 -0.5\nv 0.5 0.5 0.5\nv 3 3 0\nf 17 18 19\n";
     std::fs::write(dir.join("m.obj"), text).unwrap();
     let (code, _, err) = support::run_cli(&["ldi", "s.toml"], &dir);
-    assert_eq!(code, MESH_DEFECT, "{err}");
+    assert!(code == 0 && err.contains(shell), "{code}: {err}");
+    assert!(err.contains("1 non-manifold"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

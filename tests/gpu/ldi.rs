@@ -245,6 +245,7 @@ fn gpu_ldi_equals_cpu_on_hard_triangles() {
         guard: GuardBand::default(),
         triangles,
         zero_area: 0,
+        parity_meshes: u32::MAX,
     };
     let (fragments, _) = assert_same_ldi(&ctx, &setup, "hard triangles");
     assert!(fragments > 10_000, "only {fragments} fragments");

@@ -96,6 +96,9 @@ pub struct Ldi {
     pub triangle: Vec<u32>,
     /// Fragment mesh index (scene order).
     pub mesh: Vec<u8>,
+    /// The meshes whose fragments toggle inside bits (`RasterSetup::parity_meshes`: the closed
+    /// ones); an open mesh's fragments are thin-shell crossings.
+    pub parity_meshes: u32,
 }
 
 /// Summary numbers of an LDI.
@@ -105,7 +108,8 @@ pub struct LdiStats {
     pub fragments: u64,
     /// Largest fragment count of a pixel.
     pub max_layers: u32,
-    /// Pixels where some mesh has an odd fragment count (open or defective meshes).
+    /// Pixels where some closed mesh has an odd fragment count (a defect: the parity test would
+    /// smear; open meshes are thin shells and not counted).
     pub odd_pixels: u64,
 }
 
@@ -150,6 +154,7 @@ impl Ldi {
             depth,
             triangle,
             mesh,
+            parity_meshes: setup.parity_meshes,
         }
     }
 
@@ -159,14 +164,16 @@ impl Ldi {
         self.offsets[p] as usize..self.offsets[p + 1] as usize
     }
 
-    /// Fragments, max layers and odd pixels.
+    /// Fragments, max layers and odd pixels (of the closed meshes).
     pub fn stats(&self) -> LdiStats {
         let n = (self.width * self.height) as usize;
         let (max_layers, odd_pixels) = (0..n)
             .into_par_iter()
             .map(|p| {
                 let (a, b) = (self.offsets[p] as usize, self.offsets[p + 1] as usize);
-                let parity = self.mesh[a..b].iter().fold(0u32, |m, &id| m ^ (1 << id));
+                let parity = self.mesh[a..b]
+                    .iter()
+                    .fold(0u32, |m, &id| m ^ ((1 << id) & self.parity_meshes));
                 ((b - a) as u32, u64::from(parity != 0))
             })
             .reduce(|| (0, 0), |x, y| (x.0.max(y.0), x.1 + y.1));

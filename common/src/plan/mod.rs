@@ -7,45 +7,29 @@
 
 pub mod kernel;
 pub mod levels;
+pub mod material;
 pub mod pattern;
 pub mod surface_hold;
-
-use std::sync::Arc;
 
 use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
 
-use crate::contract::files::{PlanFiles, TextureFile};
-use crate::model::scene::{
-    MaterialSpec, Penumbra, Scene, SpecularModel, SpecularSpec, SurfaceModel,
-};
+use crate::contract::files::PlanFiles;
+use crate::model::scene::{Penumbra, Scene};
 use crate::pixel::hash::{JITTER_STREAM, slab_hash};
-use crate::pixel::noise::Detail;
-use crate::pixel::texture3d::{Texture3d, TextureError};
+use crate::pixel::texture3d::TextureError;
 use crate::plan::kernel::{
     KernelMoments, KernelTable, TableGuard, build_distance_table, build_table,
 };
 use crate::prepare::geometry::SceneGeometry;
 use crate::prepare::guard::GuardBand;
 
-/// Entries of a material's transfer-function table over detail values [0, 1].
-pub const TF_SIZE: usize = 256;
-/// Entries per axis of a pre-integration table: detail values [0, 1] at a slab's front face
-/// × at its back face (see [`MaterialPlan::pre`]).
-pub const PI_SIZE: usize = 128;
-/// Sub-steps per unit of detail value when a pre-integration entry is integrated on the host:
-/// a segment from front value `f` to back value `b` is cut into ⌈|b − f| · 512⌉ (at least
-/// [`PI_MIN_STEPS`]) thin slabs of constant value, so a gradient feature 0.05 wide gets at least
-/// 25.
-pub const PI_STEPS_PER_UNIT: f64 = 512.0;
-/// The fewest thin slabs a pre-integration entry is integrated over, also for a constant value
-/// (`front == back`): the slab's self-shadowing is integrated alike everywhere in the table.
-pub const PI_MIN_STEPS: f64 = 16.0;
-/// The length a material's opacity is given for when it sets no `reference_length`: one world
-/// unit, so that opacity is per unit length (as extinction is in Mitsuba or pbrt) and a material
-/// looks the same at any slab count. (It was the slab distance, which made the same material
-/// more opaque the fewer the slabs.)
-pub const DEFAULT_REFERENCE_LENGTH: f64 = 1.0;
+pub use material::{
+    DEFAULT_REFERENCE_LENGTH, MaterialPlan, PI_MIN_STEPS, PI_SIZE, PI_STEPS_PER_UNIT, SpecularPlan,
+    TF_SIZE, TfEntry, preintegrated_entry,
+};
+use material::{flush_tiny, material_plan};
+
 /// Light values below this are flushed to zero after attenuation (no subnormals, same zeros on
 /// CPU and GPU); products with tap weights (≥ 2^-24) then stay far above f32's normal range.
 pub const FLUSH_BELOW: f32 = 1.0e-20;
@@ -58,91 +42,6 @@ pub const OCCLUSION_EPS: f32 = 1.0 / 65536.0;
 /// Distance penumbra: the level plane's value at a pixel with no occluder (every level is
 /// smaller, so a minimum over a footprint ignores it).
 pub const LIT_LEVEL: u32 = u32::MAX;
-
-/// One transfer-function entry: colour, slab opacity, and per-channel attenuation.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TfEntry {
-    /// Linear RGB colour.
-    pub color: [f32; 3],
-    /// Opacity of one slab, `1 − (1 − α)^(e/e_ref)`.
-    pub alpha: f32,
-    /// Light attenuation per channel, `1 − α_slab·(1 − τ)`.
-    pub attenuation: [f32; 3],
-}
-
-/// A material's per-render tables.
-#[derive(Clone, Debug)]
-pub struct MaterialPlan {
-    /// Transfer function: `TF_SIZE` entries for detail materials, 1 for constant ones.
-    pub tf: Vec<TfEntry>,
-    /// With `sweep.preintegration`, for detail materials: the pre-integrated table, `PI_SIZE ×
-    /// PI_SIZE` entries at `front · PI_SIZE + back` (front and back the detail values at the
-    /// slab's faces, `i / (PI_SIZE − 1)`): the colour, opacity and attenuation of one slab whose
-    /// detail varies linearly from front to back ([`preintegrated_entry`]). `None`: one sample.
-    pub pre: Option<Vec<TfEntry>>,
-    /// Procedural detail, if any.
-    pub detail: Option<Detail>,
-    /// 3D texture, if any (sampled at normalised object coordinates).
-    pub texture: Option<Arc<Texture3d>>,
-    /// The texture's physical extent (NIfTI: dims · spacing), whose aspect its mapping keeps;
-    /// `None` (raw textures): stretched to the mesh's bounds.
-    pub texture_extent: Option<[f64; 3]>,
-    /// The specular highlight at crossed surfaces, if any.
-    pub specular: Option<SpecularPlan>,
-    /// Whether crossed opaque surfaces are shaded with the Lambert cosine (`surface =
-    /// "lambert"`); false: flat (the medium's model everywhere).
-    pub lambert: bool,
-    /// Per light: the light's colour times this material's phase function at the light's
-    /// scattering angle ([`phase_factor`]); exactly the light's colour for an isotropic medium
-    /// (g = 0). Shading sums `Iin ⊙ light_color`; the specular term uses the bare colour.
-    pub light_color: Vec<[f32; 3]>,
-}
-
-impl MaterialPlan {
-    /// Whether every slab of this material takes out all light: attenuation exactly 0 in every
-    /// channel of every transfer-function entry (and pre-integrated entry). Such a material's
-    /// surfaces are held ([`RenderPlan::surface_hold`]).
-    pub fn blocks_light(&self) -> bool {
-        let blocks = |t: &TfEntry| t.attenuation == [0.0; 3];
-        self.tf.iter().all(blocks) && self.pre.iter().flatten().all(blocks)
-    }
-}
-
-/// A material's specular highlight, as the shading stage evaluates it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpecularPlan {
-    /// Which model.
-    pub model: SpecularModel,
-    /// The factor in front of the lobe: Blinn–Phong's strength; for Ashikmin–Shirley the
-    /// strength times the normalisation (e + 1)/(8π), computed in f64.
-    pub scale: f32,
-    /// The lobe's exponent (repeated squaring).
-    pub exponent: u32,
-    /// Ashikmin–Shirley: reflectance at normal incidence (Schlick's Fresnel term); 0 for
-    /// Blinn–Phong.
-    pub f0: f32,
-}
-
-impl SpecularPlan {
-    /// The plan of a material's `specular` table.
-    pub fn new(s: &SpecularSpec) -> SpecularPlan {
-        match s.model {
-            SpecularModel::BlinnPhong => SpecularPlan {
-                model: s.model,
-                scale: s.strength,
-                exponent: s.exponent,
-                f0: 0.0,
-            },
-            SpecularModel::AshikminShirley { f0 } => SpecularPlan {
-                model: s.model,
-                scale: (f64::from(s.strength) * (f64::from(s.exponent) + 1.0)
-                    / (8.0 * std::f64::consts::PI)) as f32,
-                exponent: s.exponent,
-                f0,
-            },
-        }
-    }
-}
 
 /// The Ashikmin–Shirley constants of a light whose half vector `h` and direction towards the
 /// light `to_light` are given (camera space, unit length): with k = l (h·l = h·v), Schlick's
@@ -382,6 +281,7 @@ impl RenderPlan {
                 })
                 .collect();
         }
+        let mesh_material = shell_materials(scene, geometry, files, &mut materials)?;
         let mesh_to_detail = scene
             .meshes
             .iter()
@@ -432,7 +332,7 @@ impl RenderPlan {
             penumbra: scene.sweep.penumbra,
             lights,
             materials,
-            mesh_material: scene.meshes.iter().map(|m| m.material as u32).collect(),
+            mesh_material,
             mesh_to_detail,
             jitter: scene.sweep.jitter,
             jitter_slab_hash: (0..slabs)
@@ -625,276 +525,41 @@ impl RenderPlan {
     }
 }
 
-/// Colours below 2^-24 become 0, so products in shading never approach the subnormal range.
-fn flush_tiny(c: f32) -> f32 {
-    if c < 1.0 / 16_777_216.0 { 0.0 } else { c }
-}
-
-/// The transfer-function entry for colour `c`, opacity `a`, transport `tau`, thickness ratio.
-fn tf_entry(c: [f64; 3], a: f64, tau: [f64; 3], ratio: f64) -> TfEntry {
-    let alpha = 1.0 - (1.0 - a).powf(ratio);
-    let alpha = if alpha < 1.0 / 16_777_216.0 {
-        0.0
-    } else {
-        alpha.min(1.0)
-    };
-    TfEntry {
-        color: c.map(|v| flush_tiny(v as f32)),
-        alpha: alpha as f32,
-        attenuation: tau.map(|t| (1.0 - alpha * (1.0 - t)) as f32),
-    }
-}
-
-/// The pre-integrated entry of a slab of thickness ratio `ratio` (= e / reference length) whose
-/// detail value runs linearly from `front` to `back` (Engel, Kraus & Ertl 2001; Patel et al.
-/// 2013 §7). The slab is cut into `n` = max(16, ⌈|back − front| · [`PI_STEPS_PER_UNIT`]⌉) thin
-/// slabs of constant value (their midpoints' gradient colour `c_i` and opacity), each of
-/// opacity `a_i = 1 − (1 − α)^(ratio / n)` and light attenuation `1 − a_i·(1 − τ)`, and
-/// composited front to back as the sweep would composite `n` slabs: opacity `A = 1 − Π(1 − a_i)`,
-/// colour `Σ T_i·a_i·c_i·L_i` with `T_i` the view's and `L_i` the light's transmittance through
-/// the thin slabs before i (the light entering the slab at its front, attenuated in the pixel's
-/// column: the slab shadows itself as thin slabs would), attenuation `Π(1 − a_i·(1 − τ))`. The
-/// entry keeps the sweep's single-sample form: colour = that sum / A (the sweep composites
-/// `A·colour` times the entering light).
-pub fn preintegrated_entry(m: &MaterialSpec, ratio: f64, front: f64, back: f64) -> TfEntry {
-    let n = ((back - front).abs() * PI_STEPS_PER_UNIT)
-        .ceil()
-        .max(PI_MIN_STEPS) as usize;
-    let mut view = 1.0f64;
-    let mut light = [1.0f64; 3];
-    let mut sum = [0.0f64; 3];
-    let mut mean = [0.0f64; 3];
-    for i in 0..n {
-        let v = front + (back - front) * ((i as f64 + 0.5) / n as f64);
-        let (c, a) = gradient_at(m, v);
-        let a_i = if a >= 1.0 {
-            1.0
-        } else {
-            1.0 - (1.0 - a).powf(ratio / n as f64)
-        };
-        for k in 0..3 {
-            sum[k] += view * a_i * c[k] * light[k];
-            mean[k] += c[k] / n as f64;
-            light[k] *= 1.0 - a_i * (1.0 - m.transport[k]);
+/// The material of each mesh; an open mesh (a thin shell, out of the parity test) gets its
+/// material's shell variant, appended to `materials` once per material: the same material with
+/// its tables built for one reference length instead of one slab, so a crossing of the shell
+/// takes out the material's own opacity (`opacity` per `reference_length`, the transfer
+/// function's at the crossing's detail value), whatever the slab count, and no pre-integration
+/// (a shell has no slab of medium behind its crossing). Closed meshes keep their materials.
+fn shell_materials(
+    scene: &Scene,
+    geometry: &SceneGeometry,
+    files: &PlanFiles,
+    materials: &mut Vec<MaterialPlan>,
+) -> Result<Vec<u32>, PlanError> {
+    let mut shell_of: Vec<Option<u32>> = vec![None; scene.materials.len()];
+    let mut mesh_material = Vec::with_capacity(scene.meshes.len());
+    for (i, mesh) in scene.meshes.iter().enumerate() {
+        let m = mesh.material;
+        if geometry.raster.parity_meshes & (1u32 << i) != 0 {
+            mesh_material.push(m as u32);
+            continue;
         }
-        view *= 1.0 - a_i;
-    }
-    let alpha = 1.0 - view;
-    let alpha = if alpha < 1.0 / 16_777_216.0 {
-        0.0
-    } else {
-        alpha.min(1.0)
-    };
-    let color = if alpha > 0.0 {
-        sum.map(|p| p / alpha)
-    } else {
-        mean
-    };
-    TfEntry {
-        color: color.map(|v| flush_tiny(v as f32)),
-        alpha: alpha as f32,
-        attenuation: light.map(|t| t as f32),
-    }
-}
-
-/// The pre-integration table of a detail material ([`MaterialPlan::pre`]).
-fn preintegration_table(m: &MaterialSpec, ratio: f64) -> Vec<TfEntry> {
-    let step = 1.0 / (PI_SIZE - 1) as f64;
-    let mut table = Vec::with_capacity(PI_SIZE * PI_SIZE);
-    for f in 0..PI_SIZE {
-        for b in 0..PI_SIZE {
-            table.push(preintegrated_entry(
-                m,
-                ratio,
-                f as f64 * step,
-                b as f64 * step,
-            ));
+        if shell_of[m].is_none() {
+            let spec = &scene.materials[m];
+            let texture = files.textures.get(m).cloned().flatten();
+            let length = spec.reference_length.unwrap_or(DEFAULT_REFERENCE_LENGTH);
+            let mut shell =
+                material_plan(spec, length, false, texture).map_err(|source| PlanError {
+                    scene: scene.source.clone(),
+                    what: format!("material `{}`", spec.name),
+                    source,
+                })?;
+            shell.light_color = materials[m].light_color.clone();
+            shell_of[m] = Some(materials.len() as u32);
+            materials.push(shell);
         }
+        mesh_material.push(shell_of[m].unwrap_or(m as u32));
     }
-    table
-}
-
-/// Builds a material's tables for slab thickness `e` (with the pre-integration table when
-/// `preintegration` is on and the material has detail).
-fn material_plan(
-    m: &MaterialSpec,
-    e: f64,
-    preintegration: bool,
-    texture: Option<TextureFile>,
-) -> Result<MaterialPlan, TextureError> {
-    let ratio = e / m.reference_length.unwrap_or(DEFAULT_REFERENCE_LENGTH);
-    let tf = if m.gradient.is_empty() {
-        vec![tf_entry(m.color, m.opacity, m.transport, ratio)]
-    } else {
-        (0..TF_SIZE)
-            .map(|i| {
-                let v = i as f64 / (TF_SIZE - 1) as f64;
-                let (c, a) = gradient_at(m, v);
-                tf_entry(c, a, m.transport, ratio)
-            })
-            .collect()
-    };
-    let detail = m.detail.as_ref().map(|d| {
-        Detail::new(
-            d.kind,
-            d.frequency as f32,
-            d.octaves,
-            d.lacunarity as f32,
-            d.gain as f32,
-            d.time.map(|t| t as f32),
-        )
-    });
-    let (texture, texture_extent) = match (&m.texture, texture) {
-        (Some(_), Some(t)) => (Some(t.texture), t.extent),
-        (Some(t), None) => {
-            return Err(TextureError::NotRead {
-                path: t.path.clone(),
-            });
-        }
-        (None, _) => (None, None),
-    };
-    let pre = (preintegration && !m.gradient.is_empty()).then(|| preintegration_table(m, ratio));
-    Ok(MaterialPlan {
-        tf,
-        pre,
-        detail,
-        texture,
-        texture_extent,
-        specular: m.specular.as_ref().map(SpecularPlan::new),
-        lambert: m.surface == SurfaceModel::Lambert,
-        light_color: Vec::new(),
-    })
-}
-
-/// The gradient's colour and opacity at value `v` (piecewise linear, constant beyond the ends).
-fn gradient_at(m: &MaterialSpec, v: f64) -> ([f64; 3], f64) {
-    let g = &m.gradient;
-    if v <= g[0].value {
-        return (g[0].color, g[0].opacity);
-    }
-    for w in g.windows(2) {
-        if v <= w[1].value {
-            let span = w[1].value - w[0].value;
-            let t = if span > 0.0 {
-                (v - w[0].value) / span
-            } else {
-                1.0
-            };
-            let lerp = |a: f64, b: f64| a + t * (b - a);
-            return (
-                [
-                    lerp(w[0].color[0], w[1].color[0]),
-                    lerp(w[0].color[1], w[1].color[1]),
-                    lerp(w[0].color[2], w[1].color[2]),
-                ],
-                lerp(w[0].opacity, w[1].opacity),
-            );
-        }
-    }
-    let last = g[g.len() - 1];
-    (last.color, last.opacity)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn slab_opacity_correction_composes() {
-        // Two slabs of half the reference length let through what one reference slab does.
-        let half = tf_entry([1.0; 3], 0.6, [0.0; 3], 0.5);
-        let full = tf_entry([1.0; 3], 0.6, [0.0; 3], 1.0);
-        let through_two = (1.0 - f64::from(half.alpha)).powi(2);
-        assert!((through_two - (1.0 - f64::from(full.alpha))).abs() < 1e-6);
-        // Transport 1 lets the light through untouched.
-        let clear = tf_entry([1.0; 3], 0.9, [1.0, 0.0, 0.5], 1.0);
-        assert_eq!(clear.attenuation[0], 1.0);
-        assert!((clear.attenuation[1] - 0.1).abs() < 1e-6);
-        assert!((clear.attenuation[2] - 0.55).abs() < 1e-6);
-    }
-
-    /// A detail material whose gradient is the given stops (value, grey colour, opacity).
-    fn graded(stops: &[(f64, f64, f64)], transport: [f64; 3]) -> MaterialSpec {
-        MaterialSpec {
-            name: "m".into(),
-            color: [1.0; 3],
-            opacity: 1.0,
-            transport,
-            reference_length: None,
-            detail: None,
-            texture: None,
-            gradient: stops
-                .iter()
-                .map(|&(value, c, opacity)| crate::model::scene::GradientStop {
-                    value,
-                    color: [c; 3],
-                    opacity,
-                })
-                .collect(),
-            specular: None,
-            surface: crate::model::scene::SurfaceModel::Lambert,
-            phase_g: 0.0,
-        }
-    }
-
-    #[test]
-    fn a_constant_preintegrated_slab_matches_the_closed_form_of_its_thin_slabs() {
-        // Constant value: 16 thin slabs of opacity a = 1 − (1 − α)^(r/16); the slab passes
-        // T = (1 − α)^r of the view. With τ = 0 the light passes the same, so thin slab i is
-        // seen through (1 − a)^i and lit through (1 − a)^i: Σ a·(1 − a)^{2i}·c
-        // = c·a·(1 − T²)/(1 − (1 − a)²), i.e. colour = c·(1 + T)/(2 − a) after dividing by
-        // A = 1 − T. With τ = 1 the light is not attenuated and the colour is c itself.
-        let (alpha, r, c) = (0.6, 0.5, 0.8);
-        let m = graded(&[(0.0, c, alpha), (1.0, c, alpha)], [0.0; 3]);
-        let e = preintegrated_entry(&m, r, 0.3, 0.3);
-        let t = (1.0f64 - alpha).powf(r);
-        let a = 1.0 - (1.0f64 - alpha).powf(r / 16.0);
-        assert!((f64::from(e.alpha) - (1.0 - t)).abs() < 1e-6, "{e:?}");
-        assert!((f64::from(e.color[0]) - c * (1.0 + t) / (2.0 - a)).abs() < 1e-6);
-        assert!((f64::from(e.attenuation[1]) - t).abs() < 1e-6);
-        let clear = preintegrated_entry(&graded(&[(0.0, c, alpha)], [1.0; 3]), r, 0.3, 0.3);
-        assert!((f64::from(clear.color[2]) - c).abs() < 1e-6);
-        assert_eq!(clear.attenuation, [1.0; 3]);
-        assert!((f64::from(clear.alpha) - (1.0 - t)).abs() < 1e-6);
-    }
-
-    #[test]
-    fn a_preintegrated_slab_is_its_two_halves_composited() {
-        // Front 0.2 → back 0.8 over a gradient with a narrow band: 308 thin slabs; each half
-        // (0.2 → 0.5, 0.5 → 0.8, half the thickness) is 154 of the same thin slabs. Compositing
-        // the halves as the sweep composites slabs — the second seen through the first's opacity
-        // and lit through its attenuation — must give the whole slab.
-        let m = graded(
-            &[
-                (0.0, 0.2, 0.0),
-                (0.45, 0.9, 0.0),
-                (0.5, 0.5, 0.9),
-                (0.55, 0.1, 0.0),
-            ],
-            [0.3, 0.6, 0.9],
-        );
-        let r = 2.0;
-        let whole = preintegrated_entry(&m, r, 0.2, 0.8);
-        let (h1, h2) = (
-            preintegrated_entry(&m, r / 2.0, 0.2, 0.5),
-            preintegrated_entry(&m, r / 2.0, 0.5, 0.8),
-        );
-        let (a1, a2) = (f64::from(h1.alpha), f64::from(h2.alpha));
-        let alpha = 1.0 - (1.0 - a1) * (1.0 - a2);
-        assert!(whole.alpha > 0.2, "the band is crossed: {whole:?}");
-        assert!((f64::from(whole.alpha) - alpha).abs() < 1e-6);
-        for k in 0..3 {
-            let l1 = f64::from(h1.attenuation[k]);
-            let color = a1 * f64::from(h1.color[k]) + (1.0 - a1) * l1 * a2 * f64::from(h2.color[k]);
-            assert!(
-                (f64::from(whole.color[k]) * alpha - color).abs() < 1e-6,
-                "channel {k}: {whole:?} vs {h1:?} + {h2:?}"
-            );
-            let att = l1 * f64::from(h2.attenuation[k]);
-            assert!((f64::from(whole.attenuation[k]) - att).abs() < 1e-6);
-        }
-        // The band is inside the slab, not at its faces: one sample at either face misses it.
-        assert_eq!(gradient_at(&m, 0.2).1, 0.0);
-        assert_eq!(gradient_at(&m, 0.8).1, 0.0);
-    }
+    Ok(mesh_material)
 }

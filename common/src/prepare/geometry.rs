@@ -145,12 +145,18 @@ impl SceneGeometry {
                 variance_compensation: scene.sweep.variance_compensation,
             },
         );
-        let raster = RasterSetup::new(&camera, guard, &refs, z_min).map_err(|source| {
+        let mut raster = RasterSetup::new(&camera, guard, &refs, z_min).map_err(|source| {
             GeometryError::Raster {
                 scene: scene.source.clone(),
                 source,
             }
         })?;
+        // Open meshes are thin shells: out of the parity test.
+        for (i, m) in meshes.iter().enumerate() {
+            if !m.report.is_closed() {
+                raster.parity_meshes &= !(1u32 << i);
+            }
+        }
         Ok(SceneGeometry {
             camera,
             meshes,
@@ -170,20 +176,36 @@ impl SceneGeometry {
             .collect()
     }
 
-    /// One warning per mesh with closed non-manifold edges (used as often in each direction:
-    /// accepted, since the parity test holds, but worth knowing).
+    /// One warning per open mesh (rendered as a thin shell) and per closed mesh with closed
+    /// non-manifold edges (used as often in each direction: accepted, since the parity test
+    /// holds, but worth knowing).
     pub fn mesh_warnings(&self) -> Vec<String> {
-        self.meshes
-            .iter()
-            .enumerate()
-            .filter(|(_, m)| m.report.paired_nonmanifold_edges > 0)
-            .map(|(i, m)| {
-                format!(
+        let mut warnings = Vec::new();
+        for (i, m) in self.meshes.iter().enumerate() {
+            let r = &m.report;
+            if !r.is_closed() {
+                warnings.push(format!(
+                    "mesh[{i}] is not closed ({} boundary, {} non-manifold and {} flipped \
+                     edges): rendered as a thin shell, each crossing of its surface one \
+                     reference length of its material, with no inside (docs/scene-format.md, \
+                     \"Open meshes\")",
+                    r.boundary_edges, r.nonmanifold_edges, r.flipped_edges
+                ));
+            } else if r.paired_nonmanifold_edges > 0 {
+                warnings.push(format!(
                     "mesh[{i}] has {} non-manifold edges, each used as often in each direction \
                      (closed for the parity test; accepted)",
-                    m.report.paired_nonmanifold_edges
-                )
-            })
+                    r.paired_nonmanifold_edges
+                ));
+            }
+        }
+        warnings
+    }
+
+    /// The meshes rendered as thin shells (not closed), by index.
+    pub fn shell_meshes(&self) -> Vec<usize> {
+        (0..self.meshes.len())
+            .filter(|&i| self.raster.parity_meshes & (1u32 << i) == 0)
             .collect()
     }
 

@@ -125,6 +125,11 @@ pub struct RasterSetup {
     pub triangles: Vec<TriangleSetup>,
     /// Triangles whose snapped area is zero (they cover nothing).
     pub zero_area: usize,
+    /// The meshes that take part in the parity test (bit i: mesh i): the closed ones. A clear
+    /// bit is an open mesh, rendered as a thin shell: its fragments are surface crossings that
+    /// toggle no inside bit (docs/scene-format.md, "Open meshes"). All set by [`RasterSetup::new`];
+    /// the scene's geometry clears the open meshes' bits.
+    pub parity_meshes: u32,
 }
 
 impl RasterSetup {
@@ -213,6 +218,7 @@ impl RasterSetup {
             guard,
             triangles,
             zero_area,
+            parity_meshes: u32::MAX,
         })
     }
 }

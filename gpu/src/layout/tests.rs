@@ -64,7 +64,7 @@ fn rust_layouts() -> Vec<Layout> {
             depth_planes,
             occlusion_eps,
             surface_holds,
-            _pad1,
+            parity_meshes,
             _pad2,
         }),
         layout!(Slab {

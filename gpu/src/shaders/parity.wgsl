@@ -1,6 +1,7 @@
 // Stage 2, intersection: mirrors cpu/src/parity.rs. The pixel's cursor advances past every
 // fragment in front of the slab's back face, toggling the mesh's inside bit, and remembers the
-// first fragment crossed. Fragment meta is `mesh | triangle << MESH_BITS`.
+// first fragment crossed. Fragment meta is `mesh | triangle << MESH_BITS`. Open meshes are thin
+// shells: their bits are clear in `globals.parity_meshes`, so their crossings toggle nothing.
 
 #import shared/constants
 #import shared/bindings
@@ -25,7 +26,7 @@ fn advance(next0: u32, end: u32, inside0: u32, back_face: f32) -> Advance {
         if r.first == NO_CROSSING {
             r.first = r.next;
         }
-        r.inside = r.inside ^ (1u << (frag_meta[r.next] & MESH_MASK));
+        r.inside = r.inside ^ ((1u << (frag_meta[r.next] & MESH_MASK)) & globals.parity_meshes);
         r.next = r.next + 1u;
     }
     return r;

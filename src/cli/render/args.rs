@@ -110,7 +110,8 @@ pub struct RenderArgs {
     /// `--preintegration true` turns it on, `--preintegration false` off.
     #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
     pub preintegration: Option<bool>,
-    /// Render even if meshes are open (reports the pixels with odd fragment counts).
+    /// Render even if a closed mesh leaves pixels with odd fragment counts (reported). Open
+    /// meshes need no flag: they render as thin shells, with a warning.
     #[arg(long)]
     pub allow_open: bool,
     /// Memory budget in MiB for the LDI and the sweep's buffers (default: half the machine's

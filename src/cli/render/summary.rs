@@ -85,7 +85,8 @@ pub(super) fn finish(
     }
     if r.ldi.odd_pixels > 0 {
         convshadow::errln!(
-            "warning: {} pixels have an odd fragment count (open meshes, rendered with --allow-open)",
+            "warning: {} pixels have an odd fragment count of a closed mesh (rendered with \
+             --allow-open)",
             r.ldi.odd_pixels
         );
     }

@@ -48,7 +48,8 @@ pub fn sample_stride(width: u32, height: u32) -> u32 {
     width.max(height).div_ceil(THICKNESS_SAMPLES).max(1)
 }
 
-/// The thinnest feature of any mesh along the camera's view (see the module documentation), over
+/// The thinnest feature of any closed mesh (open meshes are thin shells, without an inside)
+/// along the camera's view (see the module documentation), over
 /// the image's pixels (no guard band); depths relative to `z_origin`, `depth` the scene's depth
 /// range. `None` when no sampled pixel crosses a sheet.
 pub fn thinnest_feature(
@@ -72,6 +73,10 @@ pub fn thinnest_feature(
     // (sample, mesh, depth, triangle): one fragment at a sampled pixel.
     let mut fragments: Vec<(u32, u32, f32, u32)> = Vec::new();
     for (t, tri) in setup.triangles.iter().enumerate() {
+        if !meshes[tri.mesh as usize].report.is_closed() {
+            // An open mesh is a thin shell: no inside, no thickness to resolve.
+            continue;
+        }
         let [x0, y0, x1, y1] = tri.bbox;
         for b in first(y0)..=last(y1) {
             let j = b * stride + offset;

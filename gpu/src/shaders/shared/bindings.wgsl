@@ -77,7 +77,7 @@ struct Globals {
     depth_planes: u32, // 1 with the distance penumbra, else 0
     occlusion_eps: f32, // OCCLUSION_EPS (its f32 bits from Rust)
     surface_holds: u32, // 1: some surface is held (`hold` per grid pixel, `surface_hold` per triangle)
-    _pad1: u32,
+    parity_meshes: u32, // the closed meshes (bit i: mesh i); open ones are thin shells
     _pad2: u32,
 }
 
