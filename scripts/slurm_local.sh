@@ -63,12 +63,23 @@ cleanup() {
   # Cancel whatever still runs (a failed or timed-out run) before the daemons go, so no task
   # outlives them; this controller is private, so every job on it is ours (SLURM_CONF names it
   # only once it is written, never a cluster the caller's environment pointed at).
+  # The controller and munged must outlive the cancelled tasks: a batch step whose completion
+  # cannot reach slurmctld retries for ever, and slurmd waits for it.
   if [ "${SLURM_CONF:-}" = "$T/slurm.conf" ]; then
     scancel --quiet --user=root 2>/dev/null || true
+    for _ in $(seq 60); do
+      [ -z "$(squeue -h -o %i 2>/dev/null)" ] && break
+      sleep 0.5
+    done
   fi
   for pid in "${WAITERS[@]}"; do kill "$pid" 2>/dev/null || true; done
-  for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do kill "${PIDS[i]}" 2>/dev/null || true; done
-  for pid in "${PIDS[@]}"; do wait "$pid" 2>/dev/null || true; done
+  # slurmd, slurmctld, munged in that order, each given 10 s to stop before SIGKILL.
+  for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do
+    kill "${PIDS[i]}" 2>/dev/null || true
+    for _ in $(seq 100); do kill -0 "${PIDS[i]}" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "${PIDS[i]}" 2>/dev/null || true
+    wait "${PIDS[i]}" 2>/dev/null || true
+  done
   if [ "$rc" != 0 ]; then
     for f in slurmctld.log slurmd.log munged.log; do
       [ -f "$T/$f" ] && { echo "--- last lines of $T/$f"; tail -n 20 "$T/$f"; }
@@ -232,16 +243,15 @@ else
   fail "the Slurm frames' image_hash differ from the local run's"
 fi
 
-# The report rows, gathered in index order as docs/scale-out.md says, against the local rows;
-# every column but time_ms.
-{
-  head -n1 "$(ls -d report/case_* | head -n1)/report.csv"
-  for d in report/case_*; do tail -n +2 "$d/report.csv"; done
-} >report.csv
-{
-  head -n1 "$(ls -d "$T"/local/case_* | head -n1)/report.csv"
-  for d in "$T"/local/case_*; do tail -n +2 "$d/report.csv"; done
-} >expected_report.csv
+# The report rows, gathered in index order as docs/scale-out.md says (the header from the first
+# case's folder: here that is not case_0000), against the local rows; every column but time_ms.
+gather() {
+  local dirs=("$1"/case_*)
+  head -n1 "${dirs[0]}/report.csv"
+  for d in "${dirs[@]}"; do tail -n +2 "$d/report.csv"; done
+}
+gather report >report.csv
+gather "$T/local" >expected_report.csv
 if python3 - report.csv expected_report.csv "$CASE_ARRAY" "$CASE_FAMILIES" <<'EOF'
 import csv, sys
 got_path, want_path, cases, families = sys.argv[1:5]
