@@ -4,11 +4,11 @@
 #   - scripts/slurm/render_frames.sbatch for frames 0-3: each task's image_hash must equal the
 #     same frame's image_hash from one local `render --frames 0..4` run;
 #   - scripts/slurm/report_cases.sbatch for 4 cases of the quick report, one of each family (an
-#     edge, the disk, the scene and the narrow-band case; their errors are not zero, unlike
+#     edge, a disk, a scene and a narrow-band case; their errors are not zero, unlike
 #     the first cases'): the gathered report.csv must equal the local `report --quick --case K`
 #     rows, every column but time_ms (a measurement).
 #
-# Needs root (it installs slurm-wlm and munge with apt-get when missing and runs the daemons as
+# Needs root (it installs slurm-wlm, munge and jq with apt-get when missing and runs the daemons as
 # root). Everything it starts (munged, slurmctld, slurmd) uses a private temporary directory, a
 # private munge socket and free ports, so it touches no system Slurm/munge and two runs on one
 # machine do not collide; the daemons are stopped on exit, also on failure.
