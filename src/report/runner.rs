@@ -301,7 +301,7 @@ fn narrowband_rows(size: u32, slab_counts: &[u32], verbose: bool) -> Vec<Row> {
                 rmse_reference: Some(rmse_f32(&image, &reference)),
                 reference_self_err: Some(self_err),
                 note: format!(
-                    "scenes/narrowband.toml against its {n_ref}-slab sweep without                      pre-integration (self-error: against {} slabs); no closed form",
+                    "scenes/narrowband.toml against its {n_ref}-slab sweep without pre-integration (self-error: against {} slabs); no closed form",
                     2 * n_ref
                 ),
                 ..Row::default()
