@@ -3,7 +3,7 @@
 //! ([`BrickedTexture3d`]), so memory follows the active voxels, not the bounding box.
 //!
 //! What is read: file versions 222 to 224 (OpenVDB 3 to 12 write 224), uncompressed, zip or
-//! blosc data, float grids (`Tree_float_5_4_3`, also saved as half floats) with a scale or
+//! blosc data, float grids (`Tree_float_5_4_3`; not saved as half floats) with a scale or
 //! scale-and-translate transform. The texture covers the grid's active voxel bounding box in
 //! index space; its physical extent (box × voxel size) is fitted into the mesh's object-space
 //! box like a NIfTI volume's. Active voxels and active tiles carry their values; everything
@@ -34,7 +34,8 @@ use convshadow_common::pixel::volume::{
 pub const MIN_FILE_VERSION: u32 = 222;
 /// The newest file version read (the one OpenVDB 10 to 12 write).
 pub const MAX_FILE_VERSION: u32 = 224;
-/// The grid type read: a float tree of the standard 5-4-3 configuration.
+/// The grid type read: a float tree of the standard 5-4-3 configuration (saved with full floats:
+/// vdb-rs 0.6 fails on `Tree_float_5_4_3_HalfFloat`).
 pub const FLOAT_GRID: &str = "Tree_float_5_4_3";
 
 /// An OpenVDB grid loaded as a bricked texture, with what the file said of it.
@@ -173,6 +174,14 @@ fn open(
             ),
         ));
     };
+    if d.grid_type == format!("{FLOAT_GRID}_HalfFloat") {
+        return Err(vdb_err(
+            path,
+            grid,
+            "a float grid saved as half floats, which vdb-rs 0.6 does not read; save it with \
+             full floats (OpenVDB: saveFloatAsHalf off)",
+        ));
+    }
     if d.grid_type != FLOAT_GRID {
         return Err(vdb_err(
             path,
