@@ -20,9 +20,7 @@ use crate::model::scene::{
     MaterialSpec, Penumbra, Scene, SpecularModel, SpecularSpec, SurfaceModel,
 };
 use crate::pixel::hash::{JITTER_STREAM, slab_hash};
-use crate::pixel::noise::Detail;
-use crate::pixel::texture3d::TextureError;
-use crate::pixel::volume::Volume;
+use crate::pixel::{noise::Detail, texture3d::TextureError, volume::Volume};
 use crate::plan::kernel::{
     KernelMoments, KernelTable, TableGuard, build_distance_table, build_table,
 };
@@ -83,12 +81,10 @@ pub struct MaterialPlan {
     pub pre: Option<Vec<TfEntry>>,
     /// Procedural detail, if any.
     pub detail: Option<Detail>,
-    /// 3D texture, if any (sampled at normalised object coordinates): dense, or bricked for an
-    /// OpenVDB grid.
+    /// 3D texture, if any (dense, or bricked: OpenVDB; sampled at normalised object coordinates).
     pub texture: Option<Arc<Volume>>,
-    /// The texture's physical extent (NIfTI: dims · spacing; OpenVDB: dims · voxel size),
-    /// whose aspect its mapping keeps;
-    /// `None` (raw textures): stretched to the mesh's bounds.
+    /// The texture's physical extent (NIfTI: dims · spacing, OpenVDB: dims · voxel size), whose
+    /// aspect its mapping keeps; `None` (raw textures): stretched to the mesh's bounds.
     pub texture_extent: Option<[f64; 3]>,
     /// The specular highlight at crossed surfaces, if any.
     pub specular: Option<SpecularPlan>,
