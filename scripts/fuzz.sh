@@ -10,12 +10,13 @@
 # install nightly`); without nightly it falls back to the stable compiler with RUSTC_BOOTSTRAP=1,
 # which accepts the -Z flags cargo-fuzz passes. The fuzz crate has its own [workspace], so the
 # project's `cargo build --workspace` never builds it. Seeds come from scenes/, ../shared/models
-# and, for PLY, STL and glTF, a tetrahedron in each encoding written below.
+# and, for PLY, STL and glTF, a tetrahedron in each encoding written below; for OpenVDB,
+# scenes/cloud.vdb.
 set -euo pipefail
 
 SECONDS_PER_TARGET="${1:-60}"
 JOBS="${JOBS:-1}"
-TARGETS="${TARGETS:-scene_parse obj_load ply_load stl_load gltf_load ldi_build shapes}"
+TARGETS="${TARGETS:-scene_parse obj_load ply_load stl_load gltf_load ldi_build shapes vdb_load}"
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$ROOT/fuzz"
 
@@ -33,7 +34,9 @@ fi
 
 # Seed corpora (kept out of git; see fuzz/.gitignore).
 mkdir -p corpus/scene_parse corpus/obj_load corpus/ply_load corpus/stl_load corpus/gltf_load \
-    corpus/ldi_build corpus/shapes
+    corpus/ldi_build corpus/shapes corpus/vdb_load
+# OpenVDB: the gallery's cloud, written by OpenVDB itself (scripts/cloud_vdb.py).
+cp -n "$ROOT"/scenes/*.vdb corpus/vdb_load/ 2>/dev/null || true
 cp -n "$ROOT"/scenes/*.toml corpus/scene_parse/ 2>/dev/null || true
 cp -n "$ROOT"/tests/data/bad/*.toml corpus/scene_parse/ 2>/dev/null || true
 MODELS="$ROOT/../shared/models"

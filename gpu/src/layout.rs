@@ -223,7 +223,8 @@ pub struct MaterialHeader {
     pub texture: u32,
     /// Texture dimensions (1 without a texture).
     pub dims: [u32; 3],
-    /// 1 when the material has a 3D texture.
+    /// [`TEXTURE_NONE`], [`TEXTURE_DENSE`] or [`TEXTURE_BRICKED`]: whether the material has a
+    /// 3D texture, and its layout.
     pub has_texture: u32,
     /// The specular model: [`SPEC_NONE`], [`SPEC_BLINN_PHONG`] or [`SPEC_ASHIKMIN_SHIRLEY`].
     pub has_specular: u32,
@@ -239,7 +240,19 @@ pub struct MaterialHeader {
     pub spec_f0: f32,
     /// 1 when crossed opaque surfaces get the Lambert cosine (`surface = "lambert"`).
     pub lambert: u32,
+    /// A bricked texture's bricks along x, y, z (`texture` is then its index table, one exact
+    /// f32 integer per brick: the brick's slot); 0 otherwise.
+    pub bricks: [u32; 3],
+    /// A bricked texture's first pool voxel (slot `s`'s voxels start at `pool + 512·s`).
+    pub pool: u32,
 }
+
+/// [`MaterialHeader::has_texture`] of a material without a 3D texture.
+pub const TEXTURE_NONE: u32 = 0;
+/// [`MaterialHeader::has_texture`] of a dense texture: `dims` voxels from `texture`, x fastest.
+pub const TEXTURE_DENSE: u32 = 1;
+/// [`MaterialHeader::has_texture`] of a bricked texture (`convshadow_common::pixel::volume`).
+pub const TEXTURE_BRICKED: u32 = 2;
 
 /// [`MaterialHeader::pre`] of a material without a pre-integration table.
 pub const NO_PRE: u32 = u32::MAX;

@@ -14,6 +14,7 @@ use convshadow_common::contract::sweep_io::{MAX_LIGHT_CHANNELS, SweepOptions, Sw
 use convshadow_common::model::scene::MAX_MESHES;
 use convshadow_common::model::scene::{DetailKind, SpecularModel};
 use convshadow_common::pixel::noise::PERLIN4_SCALE;
+use convshadow_common::pixel::volume::Volume;
 use convshadow_common::plan::kernel::PhaseMode;
 use convshadow_common::plan::levels::initial_levels;
 use convshadow_common::plan::{
@@ -27,7 +28,7 @@ use crate::layout::{
     Cursor, DETAIL_FBM, DETAIL_NONE, DETAIL_PERLIN, DETAIL_RIDGED, DETAIL_TURBULENCE, Globals,
     LightHeader, LightSlab, MESH_BITS, MaterialHeader, MeshHeader, NO_PRE, Octave, PHASE_PER_PIXEL,
     PHASE_PER_SLAB, PHASE_SCHEDULE, PRE_NONE, SPEC_ASHIKMIN_SHIRLEY, SPEC_BLINN_PHONG, Slab,
-    SlabParams, Tap, TransferEntry, slot,
+    SlabParams, TEXTURE_BRICKED, TEXTURE_DENSE, Tap, TransferEntry, slot,
 };
 use crate::shader::sweep_wgsl;
 
@@ -212,10 +213,22 @@ fn material_tables(m: &MaterialPlan, t: &mut Tables) -> MaterialHeader {
         header.animated = u32::from(d.time.is_some());
         header.time = d.time.unwrap_or(0.0);
     }
-    if let Some(tex) = &m.texture {
-        t.voxels.extend_from_slice(&tex.voxels);
-        header.dims = tex.dims;
-        header.has_texture = 1;
+    match m.texture.as_deref() {
+        Some(Volume::Dense(tex)) => {
+            t.voxels.extend_from_slice(&tex.voxels);
+            header.dims = tex.dims;
+            header.has_texture = TEXTURE_DENSE;
+        }
+        Some(Volume::Bricked(b)) => {
+            // The index table as exact f32 integers (slots < 2^23), then the pool.
+            t.voxels.extend(b.table.iter().map(|&s| s as f32));
+            header.pool = t.voxels.len() as u32;
+            t.voxels.extend_from_slice(&b.pool);
+            header.dims = b.dims;
+            header.bricks = b.bricks;
+            header.has_texture = TEXTURE_BRICKED;
+        }
+        None => {}
     }
     if let Some(sp) = m.specular {
         header.has_specular = match sp.model {

@@ -1,5 +1,5 @@
 //! The files of convshadow: what a scene names (the scene TOML, mesh files in OBJ, PLY, glTF 2.0
-//! or STL, raw and NIfTI volumes, pattern images) read into the core's types, and the images a render writes (PNG
+//! or STL, raw, NIfTI and OpenVDB volumes, pattern images) read into the core's types, and the images a render writes (PNG
 //! through the display mapping, linear EXR) and compares (`metrics`). Host code only: every
 //! reader is bounded (sizes checked before allocating) and names the file in its errors.
 //!
@@ -18,6 +18,7 @@ pub mod ply;
 pub mod raw;
 pub mod read;
 pub mod stl;
+pub mod vdb;
 pub(crate) mod weld;
 
 pub use read::{build_geometry, build_plan, build_plan_guarded, load_scene};

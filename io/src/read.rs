@@ -10,6 +10,7 @@ use std::sync::atomic::AtomicBool;
 use convshadow_common::contract::files::{GeometryFiles, PlanFiles, TextureFile, VolumeGrid};
 use convshadow_common::model::scene::{Scene, SceneError, ShapeSpec, SlabSpec, TextureFormat};
 use convshadow_common::pixel::texture3d::TextureError;
+use convshadow_common::pixel::volume::Volume;
 use convshadow_common::plan::kernel::TableGuard;
 use convshadow_common::plan::{PlanError, RenderPlan};
 use convshadow_common::prepare::error::GeometryError;
@@ -34,7 +35,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
 }
 
 /// Reads what the geometry stage needs: every mesh file, and with `slabs = "auto"` the header of
-/// every NIfTI texture (its grid sets the slab count).
+/// every NIfTI texture and the grid of every OpenVDB texture (its voxels set the slab count).
 pub fn read_geometry_files(scene: &Scene) -> Result<GeometryFiles, GeometryError> {
     let meshes = scene
         .meshes
@@ -58,14 +59,23 @@ pub fn read_geometry_files(scene: &Scene) -> Result<GeometryFiles, GeometryError
         .materials
         .iter()
         .map(|m| match &m.texture {
-            Some(t) if auto && matches!(t.format, TextureFormat::Nifti { .. }) => {
-                crate::nifti::header_grid(&t.path)
-                    .map(|(dims, spacing)| Some(VolumeGrid { dims, spacing }))
-                    .map_err(|source| GeometryError::Texture {
-                        scene: scene.source.clone(),
-                        material: m.name.clone(),
-                        source,
-                    })
+            Some(t)
+                if auto
+                    && matches!(
+                        t.format,
+                        TextureFormat::Nifti { .. } | TextureFormat::Vdb { .. }
+                    ) =>
+            {
+                match &t.format {
+                    TextureFormat::Vdb { grid } => crate::vdb::grid_info(&t.path, grid),
+                    _ => crate::nifti::header_grid(&t.path),
+                }
+                .map(|(dims, spacing)| Some(VolumeGrid { dims, spacing }))
+                .map_err(|source| GeometryError::Texture {
+                    scene: scene.source.clone(),
+                    material: m.name.clone(),
+                    source,
+                })
             }
             _ => Ok(None),
         })
@@ -129,7 +139,7 @@ fn read_texture(
             })?;
             let texture = crate::raw::load_raw_cancellable(path, *dims, *voxel, cancel)?;
             Ok(TextureFile {
-                texture: Arc::new(texture),
+                texture: Arc::new(texture.into()),
                 extent: None,
             })
         }
@@ -137,7 +147,15 @@ fn read_texture(
             let n = crate::nifti::load_nifti_cancellable(path, *window, cancel)?;
             let extent = n.extent();
             Ok(TextureFile {
-                texture: Arc::new(n.texture),
+                texture: Arc::new(n.texture.into()),
+                extent: Some(extent),
+            })
+        }
+        TextureFormat::Vdb { grid } => {
+            let v = crate::vdb::load_vdb_cancellable(path, grid, cancel)?;
+            let extent = v.extent();
+            Ok(TextureFile {
+                texture: Arc::new(Volume::Bricked(v.texture)),
                 extent: Some(extent),
             })
         }

@@ -94,6 +94,11 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
             TextureFormat::Nifti { .. } => {
                 convshadow_io::nifti::memory_need(&t.path).unwrap_or_else(|| 5 * size(&t.path))
             }
+            // OpenVDB: vdb-rs's tree, the brick table and at most one brick per active voxel,
+            // from the grid's metadata ([`convshadow_io::vdb::memory_need`]); 64 bytes per
+            // stored byte when the metadata cannot be read (compressed data, densely filled).
+            TextureFormat::Vdb { ref grid } => convshadow_io::vdb::memory_need(&t.path, grid)
+                .unwrap_or_else(|| size(&t.path).saturating_mul(64)),
         })
         .fold(0u64, u64::saturating_add);
     // Light patterns: the decoded image and its f32 texels, from the header (the file's size

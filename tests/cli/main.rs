@@ -19,3 +19,4 @@ mod mesh_formats;
 mod reliability;
 mod render;
 mod report_quick;
+mod vdb;

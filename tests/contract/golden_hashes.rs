@@ -6,7 +6,7 @@
 //!   and guard-band work, written through the command line by that commit (so they do not come
 //!   from the code they now check), checked with `--guard-band 0 --penumbra iterated` (the
 //!   defaults then). Never re-recorded: the sweep's rewrites for speed must keep these bits.
-//!   Scenes added later (`shaft`, `gobo`, `narrowband`, `floor`) are not in it. The rows of a
+//!   Scenes added later (`shaft`, `gobo`, `narrowband`, `floor`, `cloud_vdb`) are not in it. The rows of a
 //!   scene whose own file changed pin that file, not the code: when issue 40 re-lit `bunny`,
 //!   `armadillo`, `spot` and `mri` for the gallery (a smaller key light, the wall closer), their
 //!   rows here and in the next table were rendered anew with the table's flags. Checked with

@@ -4,11 +4,12 @@
 
 use std::sync::Arc;
 
-use crate::pixel::texture3d::Texture3d;
+use crate::pixel::volume::Volume;
 use crate::plan::pattern::Pattern;
 use crate::prepare::mesh::TriMesh;
 
-/// The voxel grid of a NIfTI volume, from its header: what `slabs = "auto"` needs of it.
+/// The voxel grid of a NIfTI volume (from its header) or of an OpenVDB grid (its active box and
+/// voxel size): what `slabs = "auto"` needs of it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VolumeGrid {
     /// Voxels along x, y, z.
@@ -22,17 +23,17 @@ pub struct VolumeGrid {
 pub struct GeometryFiles {
     /// Per scene mesh: the object-space mesh read from its file (`None`: a built-in shape).
     pub meshes: Vec<Option<TriMesh>>,
-    /// Per material: its NIfTI texture's grid (`None`: no texture, or a raw one).
+    /// Per material: its NIfTI or OpenVDB texture's grid (`None`: no texture, or a raw one).
     pub volume_grids: Vec<Option<VolumeGrid>>,
 }
 
 /// A material's 3D texture, read.
 #[derive(Clone, Debug)]
 pub struct TextureFile {
-    /// The voxels.
-    pub texture: Arc<Texture3d>,
-    /// A NIfTI volume's extent (dims × spacing), fitted into the mesh's box by the plan; `None`
-    /// for a raw texture, which fills the box.
+    /// The voxels, dense or bricked.
+    pub texture: Arc<Volume>,
+    /// A NIfTI volume's or OpenVDB grid's extent (dims × spacing, or × voxel size), fitted into
+    /// the mesh's box by the plan; `None` for a raw texture, which fills the box.
     pub extent: Option<[f64; 3]>,
 }
 

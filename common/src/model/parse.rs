@@ -229,6 +229,7 @@ struct RawTexture {
     voxel: Option<VoxelType>,
     #[serde(default, deserialize_with = "exact")]
     window: Option<[f64; 2]>,
+    grid: Option<String>,
 }
 
 #[derive(Deserialize, Debug)]

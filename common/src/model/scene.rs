@@ -347,6 +347,12 @@ pub enum TextureFormat {
         /// Values mapped to [0, 1]; `None`: the data's min–max.
         window: Option<[f64; 2]>,
     },
+    /// An OpenVDB file (`.vdb`): one float grid by name, its active bounding box in index space
+    /// fitted into the bounds with the aspect of its voxel size; held sparse (8³ bricks).
+    Vdb {
+        /// The grid's name in the file (`grid = "density"`).
+        grid: String,
+    },
 }
 
 /// How a material shades the light at a crossed opaque surface (`surface = "flat" | "lambert"`).
@@ -439,6 +445,12 @@ pub fn is_nifti_path(path: &Path) -> bool {
         .map(|n| n.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     name.ends_with(".nii") || name.ends_with(".nii.gz")
+}
+
+/// Whether `path` names an OpenVDB file (`.vdb`, any case).
+pub fn is_vdb_path(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case("vdb"))
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -7,3 +7,4 @@ pub mod lane;
 pub mod levels;
 pub mod noise;
 pub mod texture3d;
+pub mod volume;

@@ -106,6 +106,15 @@ pub enum TextureError {
         /// What is wrong.
         message: String,
     },
+    /// An OpenVDB file that cannot be read, lacks the grid `texture.grid` names, or holds what
+    /// the texture cannot (not a float grid, values beyond the f32 range, a box too large).
+    #[error("{}: {message}", .path.display())]
+    Vdb {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, starting with the grid's name: "texture.grid `density`: …".
+        message: String,
+    },
 }
 
 /// A 3D texture normalised to f32 in [0, 1] (u8/255, u16/65535; f32 as stored, must be finite).
@@ -163,7 +172,7 @@ fn check_voxels(path: &Path, dims: [u32; 3], voxels: &[f32]) -> Result<(), Textu
 
 /// One axis of the sampler: (lower index, upper index, fraction).
 #[inline(always)]
-fn axis<L: Lane>(u: L, dim: u32) -> (L::U, L::U, L) {
+pub(crate) fn axis<L: Lane>(u: L, dim: u32) -> (L::U, L::U, L) {
     let zero = L::splat(0.0);
     let hi = L::splat(dim.saturating_sub(1) as f32);
     let g = u * L::splat(dim as f32) - L::splat(0.5);

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use crate::contract::files::TextureFile;
 use crate::model::scene::{MaterialSpec, SpecularModel, SpecularSpec, SurfaceModel};
 use crate::pixel::noise::Detail;
-use crate::pixel::texture3d::{Texture3d, TextureError};
+use crate::pixel::{texture3d::TextureError, volume::Volume};
 
 /// Entries of a material's transfer-function table over detail values [0, 1].
 pub const TF_SIZE: usize = 256;
@@ -51,10 +51,10 @@ pub struct MaterialPlan {
     pub pre: Option<Vec<TfEntry>>,
     /// Procedural detail, if any.
     pub detail: Option<Detail>,
-    /// 3D texture, if any (sampled at normalised object coordinates).
-    pub texture: Option<Arc<Texture3d>>,
-    /// The texture's physical extent (NIfTI: dims · spacing), whose aspect its mapping keeps;
-    /// `None` (raw textures): stretched to the mesh's bounds.
+    /// 3D texture, if any (dense, or bricked: OpenVDB; sampled at normalised object coordinates).
+    pub texture: Option<Arc<Volume>>,
+    /// The texture's physical extent (NIfTI: dims · spacing, OpenVDB: dims · voxel size), whose
+    /// aspect its mapping keeps; `None` (raw textures): stretched to the mesh's bounds.
     pub texture_extent: Option<[f64; 3]>,
     /// The specular highlight at crossed surfaces, if any.
     pub specular: Option<SpecularPlan>,

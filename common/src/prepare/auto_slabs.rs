@@ -91,7 +91,7 @@ pub fn finest_period(
             let (mut lo, mut hi) = wm.object_bounds;
             let dims = match &t.format {
                 TextureFormat::Raw { dims, .. } => *dims,
-                TextureFormat::Nifti { .. } => {
+                TextureFormat::Nifti { .. } | TextureFormat::Vdb { .. } => {
                     let grid = files
                         .volume_grids
                         .get(spec.material)

@@ -106,6 +106,8 @@ fn rust_layouts() -> Vec<Layout> {
             pre,
             spec_f0,
             lambert,
+            bricks,
+            pool,
         }),
         layout!(TransferEntry {
             color,

@@ -26,7 +26,7 @@ fn detail_value(m: MaterialHeader, p: vec3<f32>) -> f32 {
     if m.detail_kind != DETAIL_NONE {
         return detail_eval(m, p.x, p.y, p.z);
     }
-    if m.has_texture != 0u {
+    if m.has_texture != TEXTURE_NONE {
         return texture_sample(m, p.x, p.y, p.z);
     }
     return 0.0;

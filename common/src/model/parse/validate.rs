@@ -753,7 +753,29 @@ impl Validator<'_> {
         base_dir: &Path,
     ) -> Result<TextureSpec, SceneError> {
         let path = base_dir.join(&t.path);
-        let format = if is_nifti_path(&path) {
+        if t.grid.is_some() && !is_vdb_path(&path) {
+            return Err(self.err(
+                key("texture.grid"),
+                "`grid` applies to OpenVDB textures (.vdb) only",
+            ));
+        }
+        let format = if is_vdb_path(&path) {
+            if t.dims.is_some() || t.voxel.is_some() || t.window.is_some() {
+                return Err(self.err(
+                    key("texture"),
+                    "an OpenVDB texture (.vdb) takes its dims from the grid's active voxels and \
+                     uses its values as stored; remove `dims`, `type` and `window`",
+                ));
+            }
+            let Some(grid) = t.grid else {
+                return Err(self.err(
+                    key("texture.grid"),
+                    "an OpenVDB texture (.vdb) needs the name of its float grid, e.g. \
+                     `grid = \"density\"`",
+                ));
+            };
+            TextureFormat::Vdb { grid }
+        } else if is_nifti_path(&path) {
             if t.dims.is_some() || t.voxel.is_some() {
                 return Err(self.err(
                     key("texture"),

@@ -130,13 +130,15 @@ struct MaterialHeader {
     time: f32,
     texture: u32,
     dims: array<u32, 3>,
-    has_texture: u32,
+    has_texture: u32,  // TEXTURE_NONE, TEXTURE_DENSE or TEXTURE_BRICKED
     has_specular: u32, // SPEC_*
     spec_strength: f32,
     spec_exponent: u32,
     pre: u32,         // first entry of the PI_SIZE² pre-integration table, or NO_PRE
     spec_f0: f32,     // Ashikmin–Shirley reflectance at normal incidence
     lambert: u32,     // 1: Lambert cosine at crossed opaque surfaces
+    bricks: array<u32, 3>, // TEXTURE_BRICKED: bricks along x, y, z (`texture`: the index table)
+    pool: u32,        // TEXTURE_BRICKED: the first pool voxel
 }
 
 struct TransferEntry {
