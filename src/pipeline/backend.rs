@@ -59,15 +59,22 @@ pub enum Backend {
     Cpu,
     /// The wgpu port (Vulkan: a hardware adapter, else Mesa lavapipe); exit code 5 without one.
     Gpu,
-    /// The GPU when an adapter exists, else the CPU (and says so).
+    /// A hardware GPU when there is one, else the CPU (and says so): a software adapter
+    /// (lavapipe) only when named by `CONVSHADOW_ADAPTER`.
     Auto,
+}
+
+/// Whether the user named an adapter (`CONVSHADOW_ADAPTER`): `auto` then uses it, software or
+/// not.
+fn adapter_named() -> bool {
+    std::env::var(convshadow_gpu::device::ADAPTER_ENV).is_ok_and(|s| !s.is_empty())
 }
 
 /// The device chosen for a request.
 pub struct BackendChoice {
     /// The GPU context, or `None` for the CPU.
     pub gpu: Option<GpuContext>,
-    /// Why `auto` fell back to the CPU, if it did.
+    /// Why `auto` fell back to the CPU, or that `gpu` runs on a software adapter.
     pub note: Option<String>,
 }
 
@@ -88,11 +95,32 @@ impl BackendChoice {
                 gpu: None,
                 note: None,
             }),
-            Backend::Gpu => Ok(BackendChoice {
-                gpu: Some(GpuContext::new()?),
-                note: None,
-            }),
+            Backend::Gpu => {
+                let ctx = GpuContext::new()?;
+                let note = ctx.is_software().then(|| {
+                    format!(
+                        "--backend gpu: {} is a software rasterizer: a correctness reference, \
+                         far slower than --backend cpu",
+                        ctx.adapter_name()
+                    )
+                });
+                Ok(BackendChoice {
+                    gpu: Some(ctx),
+                    note,
+                })
+            }
             Backend::Auto => Ok(match GpuContext::new() {
+                // Software is ranked last: the first adapter is software only when all are. The
+                // CPU oracle is faster than any of them; one asked for by name is used.
+                Ok(ctx) if ctx.is_software() && !adapter_named() => BackendChoice {
+                    note: Some(format!(
+                        "--backend auto: the only Vulkan adapter, {}, is a software rasterizer, \
+                         slower than the CPU; rendering on the CPU ({}=NAME picks it anyway)",
+                        ctx.adapter_name(),
+                        convshadow_gpu::device::ADAPTER_ENV
+                    )),
+                    gpu: None,
+                },
                 Ok(ctx) => BackendChoice {
                     gpu: Some(ctx),
                     note: None,

@@ -417,16 +417,78 @@ fn render_backend_gpu_without_scene_names_the_adapter() {
     assert_eq!(code, 0, "{out}{err}");
     let stats: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("ldi.json")).unwrap()).unwrap();
-    assert_eq!(stats["backend"], "gpu");
+    // `auto` passes over a software adapter unless it is named.
+    let named = std::env::var_os(convshadow_gpu::device::ADAPTER_ENV).is_some();
+    let expected = if ctx.is_software() && !named {
+        "cpu"
+    } else {
+        "gpu"
+    };
+    assert_eq!(stats["backend"], expected, "{err}");
     assert!(stats["ldi_hash"].as_str().is_some_and(|h| h.len() == 16));
+}
+
+#[test]
+fn auto_renders_on_the_cpu_when_the_only_adapter_is_software() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    if !ctx.is_software() || std::env::var_os(convshadow_gpu::device::ADAPTER_ENV).is_some() {
+        eprintln!("SKIP: a hardware adapter (or a named one) is present: auto uses it");
+        return;
+    }
+    let dir = support::temp_dir("gpu-auto-software");
+    let json = dir.join("s.json");
+    let flags = [
+        "--size",
+        "32x32",
+        "--slabs",
+        "8",
+        "-o",
+        "o.png",
+        "--stats-json",
+    ];
+    let run = |backend: &str| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_convshadow"))
+            .args(["render", "--backend", backend])
+            .args(flags)
+            .arg(&json)
+            .current_dir(&dir)
+            .env_remove(convshadow_gpu::device::ADAPTER_ENV)
+            .output()
+            .unwrap();
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+            stats,
+        )
+    };
+    // Only lavapipe: `auto` renders on the CPU and says why.
+    let (code, err, stats) = run("auto");
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(stats["backend"], "cpu", "{stats}");
+    assert!(
+        err.contains("is a software rasterizer") && err.contains("rendering on the CPU"),
+        "{err}"
+    );
+    // `gpu` still runs there, and says that it is software.
+    let (code, err, stats) = run("gpu");
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(stats["backend"], "gpu", "{stats}");
+    assert!(err.contains("is a software rasterizer"), "{err}");
 }
 
 #[test]
 fn auto_counts_the_memory_of_the_backend_it_picks() {
     use convshadow::pipeline::MemoryNeed;
-    let Some(_ctx) = gpu_common::gpu() else {
+    let Some(ctx) = gpu_common::gpu() else {
         return;
     };
+    // `auto` takes a software adapter only when named: name it then, so `auto` opens a GPU.
+    let name = ctx.info.name.clone();
+    let auto_gpu = ctx.is_software().then_some(name.as_str());
     let dir = support::temp_dir("gpu-auto-budget");
     let text = "[image]\nwidth = 512\nheight = 512\n[camera]\nview_width = 3.0\n[sweep]\n\
                 slabs = 8\noptimal_distance = 0.5\n[[mesh]]\nshape = \"box\"\n\
@@ -480,7 +542,7 @@ fn auto_counts_the_memory_of_the_backend_it_picks() {
     assert_eq!(code, Some(4), "{err}");
     assert!(err.contains("GPU buffers"), "{err}");
     // `auto` with an adapter runs on the GPU, so it is counted (and refused) as the GPU.
-    let (code, err) = run("auto", None);
+    let (code, err) = run("auto", auto_gpu);
     assert_eq!(code, Some(4), "auto picked the GPU: {err}");
     assert!(
         err.contains("GPU buffers") && err.contains("--backend auto opened the GPU"),
