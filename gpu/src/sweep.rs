@@ -171,8 +171,13 @@ fn light_tables(light: &LightPlan, slabs: usize, distance: bool, t: &mut Tables)
     header
 }
 
-/// One material's header, appending its transfer function, octaves and texture voxels.
-fn material_tables(m: &MaterialPlan, t: &mut Tables) -> MaterialHeader {
+/// One material's header, appending its transfer function, octaves and texture voxels (unless
+/// `shared`, an earlier material's header with the same texture, has them).
+fn material_tables(
+    m: &MaterialPlan,
+    shared: Option<MaterialHeader>,
+    t: &mut Tables,
+) -> MaterialHeader {
     // Transfer functions are either constant or TF_SIZE entries (the shader assumes so).
     debug_assert!(m.tf.len() == 1 || m.tf.len() == TF_SIZE);
     let mut header = MaterialHeader {
@@ -214,6 +219,11 @@ fn material_tables(m: &MaterialPlan, t: &mut Tables) -> MaterialHeader {
         header.time = d.time.unwrap_or(0.0);
     }
     match m.texture.as_deref() {
+        Some(_) if shared.is_some() => {
+            let s = shared.unwrap_or_default();
+            (header.texture, header.pool, header.dims) = (s.texture, s.pool, s.dims);
+            (header.bricks, header.has_texture) = (s.bricks, s.has_texture);
+        }
         Some(Volume::Dense(tex)) => {
             t.voxels.extend_from_slice(&tex.voxels);
             header.dims = tex.dims;
@@ -313,8 +323,17 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
         let header = light_tables(light, slabs, distance, &mut t);
         t.lights.push(header);
     }
-    for m in &plan.materials {
-        let header = material_tables(m, &mut t);
+    for (i, m) in plan.materials.iter().enumerate() {
+        // A material sharing an earlier one's texture (an open mesh's shell variant) reads the
+        // voxels already uploaded.
+        let shared = m.texture.as_ref().and_then(|tex| {
+            plan.materials[..i].iter().position(|o| {
+                o.texture
+                    .as_ref()
+                    .is_some_and(|ot| std::sync::Arc::ptr_eq(ot, tex))
+            })
+        });
+        let header = material_tables(m, shared.map(|j| t.materials[j]), &mut t);
         t.materials.push(header);
     }
     Ok(t)

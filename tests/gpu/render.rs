@@ -285,6 +285,71 @@ specular = {{ model = "ashikmin-shirley", exponent = 40 }}
 }
 
 #[test]
+fn gpu_image_equals_cpu_with_open_meshes_as_thin_shells() {
+    // An open square (a thin shell) and a closed box share a textured material (the shell's
+    // variant reads the same uploaded voxels) and a detail material, over a wall.
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-shells");
+    let voxels: Vec<u8> = (0..60u32).map(|i| (i * 53 % 256) as u8).collect();
+    std::fs::write(dir.join("tex.raw"), &voxels).unwrap();
+    std::fs::write(
+        dir.join("square.obj"),
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let text = r#"
+[image]
+width = 40
+height = 36
+[camera]
+direction = [0.3, -0.2, 1.0]
+view_width = 5.0
+[sweep]
+slabs = 24
+[[light]]
+tilt_deg = [-25.0, 15.0]
+variance = [0.02, 0.01]
+[[mesh]]
+shape = "obj"
+path = "square.obj"
+translate = [-0.8, 0.0, -0.5]
+rotate_deg = [30.0, 20.0, 0.0]
+material = "tex"
+[[mesh]]
+shape = "box"
+size = [1.0, 1.0, 1.0]
+translate = [1.0, 0.5, 0.0]
+material = "tex"
+[[mesh]]
+shape = "obj"
+path = "square.obj"
+scale = 0.6
+translate = [0.8, -1.0, -1.0]
+material = "cloud"
+[[mesh]]
+shape = "box"
+size = [6.0, 6.0, 0.3]
+translate = [0.0, 0.0, 1.5]
+material = "wall"
+[material.tex]
+texture = { path = "tex.raw", dims = [5, 4, 3], type = "u8" }
+gradient = [[0.0, 1.0, 1.0, 1.0, 0.1], [1.0, 0.9, 0.6, 0.3, 0.9]]
+[material.cloud]
+detail = { kind = "fbm", frequency = 2.0, octaves = 3 }
+gradient = [[0.0, 0.5, 0.7, 1.0, 0.2], [1.0, 1.0, 1.0, 1.0, 0.8]]
+specular = { strength = 0.5, exponent = 8 }
+[material.wall]
+color = [0.8, 0.8, 0.75]
+"#;
+    let scene = support::scene(text, &dir);
+    let g = convshadow_io::build_geometry(&scene).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(g.shell_meshes(), vec![0, 2], "the squares are shells");
+    check(&ctx, &scene, "thin shells");
+}
+
+#[test]
 fn gpu_image_equals_cpu_on_every_shader_path() {
     let Some(ctx) = gpu_common::gpu() else {
         return;
