@@ -299,6 +299,32 @@ fn malformed_openvdb_files_are_refused_naming_the_file_and_grid() {
     assert!(scene("version.vdb").contains("file format version 300"));
     std::fs::write(dir.join("empty.vdb"), b"").unwrap();
     scene("empty.vdb");
+    // Damaged length fields (vdb-rs sized its buffers from them unchecked: the process aborted
+    // on a 64 GiB allocation, found by the vdb_load fuzz target; third_party/vdb-rs/PATCHED.md).
+    // The first leaf's blosc block: a header of version 2, version-lz 1, flags, type size 4 and
+    // 2048 uncompressed bytes (512 floats), after its compressed length (i64).
+    let block = (8..good.len() - 8)
+        .find(|&i| {
+            good[i] == 2
+                && good[i + 1] == 1
+                && good[i + 3] == 4
+                && good[i + 4..i + 8] == [0, 8, 0, 0]
+        })
+        .expect("a blosc block of a full leaf in cloud.vdb");
+    let length = i64::from_le_bytes(good[block - 8..block].try_into().unwrap());
+    assert!(
+        (16..2048 + 16).contains(&length),
+        "the block's length {length}"
+    );
+    let mut bad = good.clone();
+    bad[block - 8..block].copy_from_slice(&(1i64 << 36).to_le_bytes());
+    std::fs::write(dir.join("length.vdb"), &bad).unwrap();
+    assert!(scene("length.vdb").contains("Invalid length 68719476736"));
+    // The block's header claiming 2 GiB of values for the leaf's 512.
+    let mut bad = good.clone();
+    bad[block + 4..block + 8].copy_from_slice(&0x7fff_fff0u32.to_le_bytes());
+    std::fs::write(dir.join("nbytes.vdb"), &bad).unwrap();
+    scene("nbytes.vdb");
     // A grid name the file does not have.
     std::fs::copy(cloud(), dir.join("other.vdb")).unwrap();
     std::fs::write(dir.join("g.toml"), vdb_scene("other.vdb", "smoke", 16, 4)).unwrap();
