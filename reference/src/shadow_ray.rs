@@ -376,17 +376,11 @@ impl<'a> Reference<'a> {
     /// its material at the crossing's detail value, `1 − α·(1 − τ)` with `α = 1 − e^(−κ·e_ref)`,
     /// the material's opacity there.
     fn cross_shell(&self, optical: &mut [f64; 3], p: [f64; 3], dir: [f64; 2], mesh: usize, u: f64) {
-        let m = self.mesh_material[mesh];
-        let material = &self.plan.materials[self.plan.mesh_material[mesh] as usize];
-        let medium = &self.media[m];
-        let kappa = if medium.stops.is_empty()
-            || (material.detail.is_none() && material.texture.is_none())
-        {
+        let medium = &self.media[self.mesh_material[mesh]];
+        let kappa = if self.is_constant(mesh) {
             medium.kappa(0.0)
         } else {
-            let q = [p[0] + u * dir[0], p[1] + u * dir[1], p[2] - u];
-            let v = detail_value(material, to_detail_f64(&self.plan.mesh_to_detail[mesh], q));
-            medium.kappa(f64::from(v))
+            self.kappa_at(mesh, [p[0] + u * dir[0], p[1] + u * dir[1], p[2] - u])
         };
         let alpha = -(-kappa * medium.reference_length).exp_m1();
         for (o, t) in optical.iter_mut().zip(medium.transport) {
@@ -395,6 +389,22 @@ impl<'a> Reference<'a> {
                 *o -= (-alpha * (1.0 - t)).ln_1p();
             }
         }
+    }
+
+    /// Whether mesh `mesh`'s medium is the same everywhere (no gradient, or no detail to read
+    /// it at): its κ is `kappa(0)`.
+    fn is_constant(&self, mesh: usize) -> bool {
+        let material = &self.plan.materials[self.plan.mesh_material[mesh] as usize];
+        self.media[self.mesh_material[mesh]].stops.is_empty()
+            || (material.detail.is_none() && material.texture.is_none())
+    }
+
+    /// κ of mesh `mesh`'s medium at point `q` (grid px x, y; relative depth z): its detail
+    /// value there through the gradient.
+    fn kappa_at(&self, mesh: usize, q: [f64; 3]) -> f64 {
+        let material = &self.plan.materials[self.plan.mesh_material[mesh] as usize];
+        let v = detail_value(material, to_detail_f64(&self.plan.mesh_to_detail[mesh], q));
+        self.media[self.mesh_material[mesh]].kappa(f64::from(v))
     }
 
     /// ∫κ over u ∈ [u0, u1] of the ray from `p` in mesh `mesh` of material `m`.
@@ -408,21 +418,16 @@ impl<'a> Reference<'a> {
         u1: f64,
     ) -> f64 {
         let len = u1 - u0;
-        let material = &self.plan.materials[self.plan.mesh_material[mesh] as usize];
-        let medium = &self.media[m];
-        if medium.stops.is_empty() || (material.detail.is_none() && material.texture.is_none()) {
-            let k = medium.kappa(0.0);
+        if self.is_constant(mesh) {
+            let k = self.media[m].kappa(0.0);
             return if k.is_infinite() { k } else { k * len };
         }
         let n = (len / self.step).ceil().max(1.0) as usize;
         let h = len / n as f64;
-        let xf = &self.plan.mesh_to_detail[mesh];
         let mut sum = 0.0;
         for i in 0..n {
             let u = u0 + (i as f64 + 0.5) * h;
-            let q = [p[0] + u * dir[0], p[1] + u * dir[1], p[2] - u];
-            let v = detail_value(material, to_detail_f64(xf, q));
-            sum += medium.kappa(f64::from(v));
+            sum += self.kappa_at(mesh, [p[0] + u * dir[0], p[1] + u * dir[1], p[2] - u]);
             if sum.is_infinite() {
                 return sum;
             }

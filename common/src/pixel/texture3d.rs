@@ -227,15 +227,26 @@ impl Texture3d {
         let sz = L::u_splat(dx.wrapping_mul(dy));
         let row = |y: L::U, z: L::U| L::u_add(L::u_mul(y, sy), L::u_mul(z, sz));
         let (r00, r10, r01, r11) = (row(y0, z0), row(y1, z0), row(y0, z1), row(y1, z1));
-        let at = |x: L::U, r: L::U| L::gather(&self.voxels, L::u_add(x, r));
-        let c00 = lerp(fx, at(x0, r00), at(x1, r00));
-        let c10 = lerp(fx, at(x0, r10), at(x1, r10));
-        let c01 = lerp(fx, at(x0, r01), at(x1, r01));
-        let c11 = lerp(fx, at(x0, r11), at(x1, r11));
-        let c0 = lerp(fy, c00, c10);
-        let c1 = lerp(fy, c01, c11);
-        lerp(fz, c0, c1)
+        let (xs, rows) = ([x0, x1], [[r00, r01], [r10, r11]]);
+        trilinear([fx, fy, fz], |i, j, k| {
+            L::gather(&self.voxels, L::u_add(xs[i], rows[j][k]))
+        })
     }
+}
+
+/// The trilinear blend of the eight corners `corner(i, j, k)` (i, j, k ∈ {0, 1}: the low or
+/// high voxel along x, y, z) with the fractions `f`: lerps along x, then y, then z. The one
+/// order every sampler shares (dense and bricked), so the same voxels give the same bits.
+#[inline(always)]
+pub(crate) fn trilinear<L: Lane>(f: [L; 3], corner: impl Fn(usize, usize, usize) -> L) -> L {
+    let [fx, fy, fz] = f;
+    let c00 = lerp(fx, corner(0, 0, 0), corner(1, 0, 0));
+    let c10 = lerp(fx, corner(0, 1, 0), corner(1, 1, 0));
+    let c01 = lerp(fx, corner(0, 0, 1), corner(1, 0, 1));
+    let c11 = lerp(fx, corner(0, 1, 1), corner(1, 1, 1));
+    let c0 = lerp(fy, c00, c10);
+    let c1 = lerp(fy, c01, c11);
+    lerp(fz, c0, c1)
 }
 
 #[cfg(test)]

@@ -13,8 +13,7 @@
 use std::sync::Arc;
 
 use crate::pixel::lane::Lane;
-use crate::pixel::noise::lerp;
-use crate::pixel::texture3d::{Texture3d, axis};
+use crate::pixel::texture3d::{Texture3d, axis, trilinear};
 
 /// Voxels along each axis of a brick.
 pub const BRICK: u32 = 8;
@@ -106,34 +105,14 @@ impl BrickedTexture3d {
         let (by1, ly1) = split(y1, sy, 3);
         let (bz0, lz0) = split(z0, sz, 6);
         let (bz1, lz1) = split(z1, sz, 6);
-        let at = |bx: L::U, lx: L::U, by: L::U, ly: L::U, bz: L::U, lz: L::U| {
-            let slot = L::u_gather(&self.table, L::u_add(L::u_add(bx, by), bz));
-            let local = L::u_add(L::u_add(lx, ly), lz);
+        let (bx, lx) = ([bx0, bx1], [lx0, lx1]);
+        let (by, ly) = ([by0, by1], [ly0, ly1]);
+        let (bz, lz) = ([bz0, bz1], [lz0, lz1]);
+        trilinear([fx, fy, fz], |i, j, k| {
+            let slot = L::u_gather(&self.table, L::u_add(L::u_add(bx[i], by[j]), bz[k]));
+            let local = L::u_add(L::u_add(lx[i], ly[j]), lz[k]);
             L::gather(&self.pool, L::u_add(L::u_shl(slot, 9), local))
-        };
-        let c00 = lerp(
-            fx,
-            at(bx0, lx0, by0, ly0, bz0, lz0),
-            at(bx1, lx1, by0, ly0, bz0, lz0),
-        );
-        let c10 = lerp(
-            fx,
-            at(bx0, lx0, by1, ly1, bz0, lz0),
-            at(bx1, lx1, by1, ly1, bz0, lz0),
-        );
-        let c01 = lerp(
-            fx,
-            at(bx0, lx0, by0, ly0, bz1, lz1),
-            at(bx1, lx1, by0, ly0, bz1, lz1),
-        );
-        let c11 = lerp(
-            fx,
-            at(bx0, lx0, by1, ly1, bz1, lz1),
-            at(bx1, lx1, by1, ly1, bz1, lz1),
-        );
-        let c0 = lerp(fy, c00, c10);
-        let c1 = lerp(fy, c01, c11);
-        lerp(fz, c0, c1)
+        })
     }
 }
 

@@ -144,7 +144,8 @@ impl<R: Read + Seek> VdbReader<R> {
             read_string(&mut reader, 36)?
         } else {
             // Older versions stored the UUID as a byte string.
-            todo!("File version {}", file_version);
+            // convshadow patch: an error, not a panic.
+            return Err(ParseError::UnsupportedVersion(file_version));
         };
 
         let meta_data = Self::read_metadata(&mut reader)?;
@@ -615,7 +616,8 @@ impl<R: Read + Seek> VdbReader<R> {
                 descriptor: gd,
             })
         } else {
-            todo!("Old file version not supported {}", header.file_version);
+            // convshadow patch: an error, not a panic.
+            Err(ParseError::UnsupportedVersion(header.file_version))
         }
     }
 
@@ -634,7 +636,8 @@ impl<R: Read + Seek> VdbReader<R> {
             let instance_parent = if header.file_version >= OPENVDB_FILE_VERSION_GRID_INSTANCING {
                 Self::read_name(reader)?
             } else {
-                todo!("instance_parent, file version: {}", header.file_version)
+                // convshadow patch: an error, not a panic.
+                return Err(ParseError::UnsupportedVersion(header.file_version));
             };
 
             let grid_pos = reader.read_u64::<LittleEndian>()?;
