@@ -8,7 +8,8 @@
 
 use convshadow_common::model::kernel::KernelSpec;
 use convshadow_common::model::scene::{
-    GuardBandSpec, MAX_IMAGE_SIDE, MAX_SLABS, Penumbra, Scene, SceneError, SlabSpec, SurfaceModel,
+    GuardBandSpec, MAX_IMAGE_SIDE, MAX_SLABS, Media, Penumbra, Scene, SceneError, SlabSpec,
+    SurfaceModel,
 };
 use convshadow_reference::ReferenceOptions;
 
@@ -163,7 +164,7 @@ impl SamplesError {
 }
 
 /// The sweep's scene keys a render may override (`--slabs`, `--kernel`, `--seed`, `--penumbra`,
-/// `--surface`, `--guard-band`, `--variance-compensation`, `--preintegration`); `None` leaves
+/// `--surface`, `--guard-band`, `--variance-compensation`, `--preintegration`, `--media`); `None` leaves
 /// the scene's value.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SweepOverrides {
@@ -183,6 +184,8 @@ pub struct SweepOverrides {
     pub variance_compensation: Option<bool>,
     /// `sweep.preintegration`.
     pub preintegration: Option<bool>,
+    /// `sweep.media`.
+    pub media: Option<Media>,
 }
 
 /// Why a [`SweepOverrides`] was refused.
@@ -224,6 +227,9 @@ impl SweepOverrides {
         }
         if let Some(v) = self.preintegration {
             scene.sweep.preintegration = v;
+        }
+        if let Some(m) = self.media {
+            scene.sweep.media = m;
         }
         scene.revalidate().map_err(OverrideError::Invalid)
     }

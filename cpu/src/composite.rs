@@ -7,6 +7,8 @@
 use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::FLUSH_BELOW;
 
+use crate::shading::TfLanes;
+
 /// `C += (1 − A)·α·c`, `A += (1 − A)·α`, in that order, applied only in the lanes of `lanes`
 /// (planar colours: one lane value per channel).
 #[inline(always)]
@@ -16,6 +18,40 @@ pub fn composite<L: Lane>(color: &mut [L; 3], alpha: &mut L, c: [L; 3], a: L, la
         *dst = L::select(lanes, *dst + t * src, *dst);
     }
     *alpha = L::select(lanes, *alpha + t, *alpha);
+}
+
+/// What a fraction `f` of a slab takes out where the whole slab takes out `s` (an opacity, or
+/// `1 − attenuation`): `1 − (1 − s)^f` to second order in `s`, `f·s·(1 + (1 − f)·s/2)`, exact at
+/// `f` = 0 and 1 and between those two values for every `s` in 0…1 (powers are not bit-exact
+/// across CPU and GPU, these four products and sums are).
+#[inline(always)]
+pub fn taken_out<L: Lane>(s: L, f: L) -> L {
+    let one = L::splat(1.0);
+    f * s * (one + (one - f) * s * L::splat(0.5))
+}
+
+/// A medium's slab as the part of it the pixel spends inside (`crate::parity::slab_part`):
+/// its opacity and attenuation scaled to the fraction `inside` of the slab ([`taken_out`]), so
+/// that a medium's entry and exit slabs take out only what lies inside it (a strip of thickness
+/// t is t/e slabs thick, not t/e + 1); and returns, per channel, the light's attenuation over
+/// the fraction `lit_from` of the slab, the way the light has come through the slab's medium
+/// where it lights the sample (the middle of the part inside: without it a medium's colour
+/// converged at first order in e). Lanes with opacity 1 (surfaces) keep every bit and get factor
+/// 1; `inside` = 1 keeps the entry's opacity and attenuation, `lit_from` = 0 gives factor 1.
+#[inline(always)]
+pub fn part_of_slab<L: Lane>(tf: &mut TfLanes<L>, inside: L, lit_from: L) -> [L; 3] {
+    let one = L::splat(1.0);
+    let medium = tf.alpha.lt(one);
+    let light = tf
+        .attenuation
+        .map(|a| L::select(medium, one - taken_out(one - a, lit_from), one));
+    let partial = inside.lt(one);
+    let part = |new: L, old: L| L::select(medium, L::select(partial, new, old), old);
+    tf.alpha = part(taken_out(tf.alpha, inside), tf.alpha);
+    for a in tf.attenuation.iter_mut() {
+        *a = part(one - taken_out(one - *a, inside), *a);
+    }
+    light
 }
 
 /// `Iout = Iin · attenuation`, flushed to zero below [`FLUSH_BELOW`].
@@ -87,4 +123,58 @@ pub fn finish(color: &mut [f32; 3], alpha: f32, background: [f32; 3]) {
     color[0] += t * background[0];
     color[1] += t * background[1];
     color[2] += t * background[2];
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_part_of_a_slab_takes_out_the_power_to_second_order() {
+        for s in [0.0f32, 0.01, 0.1, 0.3, 0.7, 1.0] {
+            // Exact at the ends: nothing, and the whole slab.
+            assert_eq!(taken_out(s, 0.0), 0.0);
+            assert_eq!(taken_out(s, 1.0), s);
+            for f in [0.1f32, 0.25, 0.5, 0.9] {
+                let got = f64::from(taken_out(s, f));
+                let exact = 1.0 - (1.0 - f64::from(s)).powf(f64::from(f));
+                // The neglected terms all take out more, each at most s times the one before:
+                // the first, f(1 − f)(2 − f)s³/6, over (1 − s) bounds them (plus f32 rounding).
+                if s < 1.0 {
+                    let first = f64::from(f * (1.0 - f) * (2.0 - f) * s * s * s) / 6.0;
+                    let bound = first / (1.0 - f64::from(s)) + 1e-6;
+                    assert!(got <= exact + 1e-6 && exact - got <= bound, "s {s} f {f}");
+                }
+                // Between the ends' values, for every s.
+                assert!((0.0..=f64::from(s) + 1e-7).contains(&got));
+            }
+        }
+    }
+
+    #[test]
+    fn only_a_translucent_slab_is_scaled() {
+        let entry = |alpha: f32| TfLanes {
+            color: [0.5f32; 3],
+            alpha,
+            attenuation: [0.2, 0.6, 1.0],
+        };
+        // An opaque entry (a surface) keeps its bits and its light.
+        let mut opaque = entry(1.0);
+        assert_eq!(part_of_slab(&mut opaque, 0.3, 0.15), [1.0; 3]);
+        assert_eq!((opaque.alpha, opaque.attenuation), (1.0, [0.2, 0.6, 1.0]));
+        // A whole slab lit at its front is the entry itself.
+        let mut whole = entry(0.4);
+        assert_eq!(part_of_slab(&mut whole, 1.0, 0.0), [1.0; 3]);
+        assert_eq!((whole.alpha, whole.attenuation), (0.4, [0.2, 0.6, 1.0]));
+        // A third of a slab, lit in its middle.
+        let mut part = entry(0.4);
+        let light = part_of_slab(&mut part, 1.0 / 3.0, 1.0 / 6.0);
+        assert_eq!(part.alpha, taken_out(0.4, 1.0 / 3.0));
+        for (c, a) in [0.2f32, 0.6, 1.0].iter().enumerate() {
+            assert_eq!(part.attenuation[c], 1.0 - taken_out(1.0 - a, 1.0 / 3.0));
+            assert_eq!(light[c], 1.0 - taken_out(1.0 - a, 1.0 / 6.0));
+        }
+        assert_eq!(part.color, [0.5; 3]);
+        assert_eq!(light[2], 1.0, "a clear channel loses no light");
+    }
 }

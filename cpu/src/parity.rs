@@ -41,6 +41,54 @@ pub fn advance(ldi: &Ldi, next: &mut u32, end: u32, inside: &mut u32, back_face:
     first
 }
 
+/// Where in its slab `[front, back)` a pixel meets the medium of mesh `mesh`, which it shades
+/// there: `(inside, lit_from)`, in slab thicknesses (`inv_e` = 1/e), clamped to 0…1.
+///
+/// - `inside`: the part of the slab inside the mesh, from the crossings the cursor made in it
+///   (`before`/`after`: the inside masks at the front and back faces; `first`/`last`: the first
+///   and last fragments crossed, [`NO_CROSSING`] if none). 1 without a crossing, and at a thin
+///   shell's (a filter, not a slab of medium). Entering: back − z₁; leaving: z₁ − front;
+///   entering and leaving: z_last − z₁; leaving and entering again: the two ends.
+/// - `lit_from`: how far the light has travelled in the slab's medium where it lights the
+///   sample: the middle of the part inside, `inside / 2` (the midpoint rule over that part, second
+///   order; the jittered shading point would add its noise); 0 at a shell's crossing.
+///
+/// The sweep scales a medium's slab by them (`crate::composite::part_of_slab`). With
+/// `sweep.media = "first-order"` (`second_order` false) they are (1, 0): the whole slab, lit at
+/// its front, which leaves the slab's bits as they were.
+#[inline(always)]
+pub fn slab_part(
+    ldi: &Ldi,
+    (mesh, second_order): (u32, bool),
+    (before, after): (u32, u32),
+    (first, last): (u32, u32),
+    (front, back): (f32, f32),
+    inv_e: f32,
+) -> (f32, f32) {
+    let bit = 1u32 << mesh;
+    if !second_order || ldi.parity_meshes & bit == 0 {
+        return (1.0, 0.0);
+    }
+    if first == NO_CROSSING {
+        return (1.0, 0.5);
+    }
+    let (z1, z2) = (ldi.depth[first as usize], ldi.depth[last as usize]);
+    let length = match (before & bit != 0, after & bit != 0) {
+        (true, false) => z1 - front,
+        (false, true) => back - z1,
+        (false, false) => z2 - z1,
+        (true, true) => (z1 - front) + (back - z2),
+    };
+    let inside = unit(length * inv_e);
+    (inside, inside * 0.5)
+}
+
+/// `v` clamped to 0…1 (finite v: parity.wgsl's `min(max(v, 0), 1)` has the same bits).
+#[inline(always)]
+fn unit(v: f32) -> f32 {
+    v.clamp(0.0, 1.0)
+}
+
 /// The lowest set bit's mesh (scene order resolves overlapping materials), if any.
 #[inline(always)]
 pub fn first_mesh(inside: u32) -> Option<u32> {
@@ -66,6 +114,34 @@ mod tests {
             mesh: vec![0, 1, 0],
             parity_meshes,
         }
+    }
+
+    #[test]
+    fn a_slab_counts_the_part_inside_the_medium_it_shades() {
+        // Mesh 0 closed from depth 1 to 3, mesh 1 at 2 (a shell when its bit is clear).
+        let ldi = one_pixel(0b01);
+        let e = 0.5f32;
+        let part = |before, after, crossed: (u32, u32), slab: (f32, f32), second| {
+            slab_part(&ldi, (0, second), (before, after), crossed, slab, 1.0 / e)
+        };
+        // Entering at 1 in [0.75, 1.25): half inside, lit in the middle of that half.
+        assert_eq!(part(0, 1, (0, 0), (0.75, 1.25), true), (0.5, 0.25));
+        // Leaving at 3 in [2.875, 3.375): a quarter inside.
+        assert_eq!(part(1, 0, (2, 2), (2.875, 3.375), true), (0.25, 0.125));
+        // Wholly inside, no crossing: the whole slab, lit in its middle.
+        assert_eq!(
+            part(1, 1, (NO_CROSSING, NO_CROSSING), (1.5, 2.0), true),
+            (1.0, 0.5)
+        );
+        // Entering at 1 and leaving at 3 within one slab [0.5, 3.5): 2/3 of it (e = 3 here).
+        let through = slab_part(&ldi, (0, true), (0, 0), (0, 2), (0.5, 3.5), 1.0 / 3.0);
+        assert!((through.0 - 2.0 / 3.0).abs() < 1e-6 && through.1 == through.0 * 0.5);
+        // First-order media: the whole slab at its front, whatever was crossed.
+        assert_eq!(part(0, 1, (0, 0), (0.75, 1.25), false), (1.0, 0.0));
+        // A shell's crossing is a filter, not a slab of medium.
+        let shells = one_pixel(0b00);
+        let shell = slab_part(&shells, (0, true), (0, 0), (0, 0), (0.75, 1.25), 1.0 / e);
+        assert_eq!(shell, (1.0, 0.0));
     }
 
     #[test]

@@ -126,8 +126,16 @@ pub struct Globals {
     /// The meshes in the parity test (`Ldi::parity_meshes`, bit i: mesh i): the closed ones; an
     /// open mesh is a thin shell whose crossings toggle nothing.
     pub parity_meshes: u32,
+    /// `RenderPlan::inv_slab_distance`: 1/e in f32, for the part of a slab a medium fills.
+    pub inv_slab_distance: f32,
+    /// 1 with `sweep.media = "second-order"` (`RenderPlan::second_order_media`), else 0.
+    pub second_order_media: u32,
     /// Uniform structs are a multiple of 16 bytes.
-    pub _pad2: u32,
+    pub _pad3: u32,
+    /// Padding.
+    pub _pad4: u32,
+    /// Padding.
+    pub _pad5: u32,
 }
 
 /// One slab's faces and jitter hash.

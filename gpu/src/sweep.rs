@@ -282,6 +282,8 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             preintegration: u32::from(plan.preintegration),
             surface_holds: u32::from(plan.has_surface_hold()),
             parity_meshes: raster.parity_meshes,
+            inv_slab_distance: plan.inv_slab_distance,
+            second_order_media: u32::from(plan.second_order_media),
             ..Globals::default()
         },
         slabs: (0..slabs)

@@ -18,7 +18,7 @@ use std::time::Duration;
 use convshadow::exit_code;
 use convshadow::overrides::{self, OverrideError, RenderBackend, SweepOverrides};
 use convshadow::pipeline::{CpuPath, RenderError, RenderRequest, Rendered};
-use convshadow_common::model::scene::{GuardBandSpec, Penumbra, Scene, SlabSpec};
+use convshadow_common::model::scene::{GuardBandSpec, Media, Penumbra, Scene, SlabSpec};
 use convshadow_io::image::RgbImage;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::create_exception;
@@ -240,7 +240,7 @@ fn detached<T: Send>(
 /// newline or `=`), TOML text, or a dict of the TOML's tables. The keyword arguments mean what
 /// the command line's flags of the same name mean: `width`, `height`, `slabs` (int or "auto"),
 /// `kernel`, `penumbra`, `surface`, `guard_band` ("auto" or int), `seed`,
-/// `variance_compensation`, `preintegration`, `threads` (0: one per core), `backend` ("cpu",
+/// `variance_compensation`, `preintegration`, `media`, `threads` (0: one per core), `backend` ("cpu",
 /// "gpu", "auto", "reference"), `path` ("simd", "scalar"), `reference_samples`, `max_memory`
 /// (MiB), `allow_open`. `progress=True` shows the CLI's progress bar on a terminal's stderr.
 ///
@@ -250,7 +250,7 @@ fn detached<T: Send>(
 #[pyo3(signature = (
     scene = None, *, width = None, height = None, slabs = None, kernel = None, penumbra = None,
     surface = None, guard_band = None, seed = None, variance_compensation = None,
-    preintegration = None, threads = 0, backend = "cpu", path = "simd", reference_samples = None,
+    preintegration = None, media = None, threads = 0, backend = "cpu", path = "simd", reference_samples = None,
     max_memory = None, allow_open = false, progress = false
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -267,6 +267,7 @@ fn render<'py>(
     seed: Option<u32>,
     variance_compensation: Option<bool>,
     preintegration: Option<bool>,
+    media: Option<String>,
     threads: usize,
     backend: &str,
     path: &str,
@@ -307,6 +308,9 @@ fn render<'py>(
                 .transpose()?,
             variance_compensation,
             preintegration,
+            media: media
+                .map(|m| m.parse::<Media>().map_err(|e| bad("media", e)))
+                .transpose()?,
         },
         threads: overrides::parse_threads(&threads.to_string()).map_err(|e| bad("threads", e))?,
         backend,

@@ -39,7 +39,8 @@ def bits(a):
     "scene, overrides",
     [
         (DEFAULT, SMALL),
-        (DEFAULT, {**SMALL, "kernel": "poisson8", "penumbra": "iterated", "seed": 7}),
+        (DEFAULT, {**SMALL, "kernel": "poisson8", "penumbra": "iterated", "seed": 7,
+                   "media": "first-order"}),
         (REPO / "scenes" / "gobo.toml", {"width": 40, "height": 40, "slabs": 48}),
     ],
     ids=["default", "default-overridden", "gobo"],
@@ -146,6 +147,7 @@ def test_a_bad_scene_raises_error_with_the_cli_message_and_exit_code_3(cli, tmp_
         ({"slabs": "many"}, "slabs: expected an integer"),
         ({"slabs": 0}, "override: "),
         ({"penumbra": "sharp"}, "penumbra"),
+        ({"media": "exact"}, "media: expected \"second-order\" or \"first-order\""),
         ({"backend": "tpu"}, "backend: expected cpu, gpu, auto or reference"),
         ({"threads": 100000}, "threads: expected 0 (one per core)"),
         ({"reference_samples": 4}, "reference_samples only applies to backend reference"),

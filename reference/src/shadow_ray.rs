@@ -59,9 +59,9 @@ use convshadow_common::plan::{DEFAULT_REFERENCE_LENGTH, RenderPlan};
 use convshadow_common::prepare::geometry::SceneGeometry;
 use rayon::prelude::*;
 
-use convshadow_cpu::composite::{composite, finish};
+use convshadow_cpu::composite::{composite, finish, part_of_slab};
 use convshadow_cpu::ldi::Ldi;
-use convshadow_cpu::parity::{NO_CROSSING, advance, first_mesh};
+use convshadow_cpu::parity::{NO_CROSSING, advance, first_mesh, slab_part};
 use convshadow_cpu::shading::{Surface, detail_value, material_at, shade, shading_depth};
 
 /// Optical depth beyond which a shadow ray is treated as fully blocked (e^-40 ≈ 4e-18).
@@ -604,6 +604,7 @@ impl<'a> Reference<'a> {
                     for slab in 0..plan.slabs {
                         let back = plan.slab_back[slab as usize];
                         let front = plan.slab_front[slab as usize];
+                        let before = inside;
                         let crossed = advance(ldi, &mut next, end, &mut inside, back);
                         let mesh = if crossed != NO_CROSSING {
                             Some(u32::from(ldi.mesh[crossed as usize]))
@@ -617,7 +618,18 @@ impl<'a> Reference<'a> {
                         let jitter_row =
                             row_hash(plan.jitter_slab_hash[slab as usize], plan.hash_y(y as u32));
                         let z = shading_depth(plan, ldi, crossed, front, jitter_row, x);
-                        let tf = material_at(plan, mesh, ix as f32, iy as f32, z);
+                        let mut tf = material_at(plan, mesh, ix as f32, iy as f32, z);
+                        // The sweep's view samples: a medium's entry and exit slabs by the part
+                        // inside (the light needs no such factor: it is traced to the point).
+                        let (part, _) = slab_part(
+                            ldi,
+                            (mesh, plan.second_order_media),
+                            (before, inside),
+                            (crossed, next.wrapping_sub(1)),
+                            (front, back),
+                            plan.inv_slab_distance,
+                        );
+                        part_of_slab(&mut tf, part, 0.0);
                         let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
                         let (cx, cy) = (ix as f64 + 0.5, iy as f64 + 0.5);
                         // A crossing's shadow rays start on the exact surface and do not cross

@@ -151,6 +151,11 @@ pub fn parse_penumbra(s: &str) -> Result<convshadow_common::model::scene::Penumb
     s.parse()
 }
 
+/// `--media second-order|first-order`.
+pub fn parse_media(s: &str) -> Result<convshadow_common::model::scene::Media, String> {
+    s.parse()
+}
+
 /// The pipeline's thread pool with `threads` workers (0 = one per core), its error as a failure.
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, Failure> {
     Ok(convshadow::pipeline::thread_pool(threads)?)

@@ -21,3 +21,4 @@ mod reference_convergence;
 mod slab_convergence;
 mod surface_shading;
 mod sweep_accuracy;
+mod translucent_strip;

@@ -10,12 +10,12 @@ use crate::support;
 
 use std::path::Path;
 
-use convshadow::common::model::scene::{Penumbra, Scene, SlabSpec};
+use convshadow::common::model::scene::{Media, Penumbra, Scene, SlabSpec};
 use convshadow::io::metrics::rmse;
 use convshadow::pipeline::{CpuPath, RenderRequest, render};
 
 /// `scenes/narrowband.toml` at `size`² pixels, `slabs` slabs, pre-integration on or off.
-fn narrowband(size: u32, slabs: u32, pre: bool) -> Scene {
+fn narrowband(size: u32, slabs: u32, pre: bool, media: Media) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/narrowband.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     let mut scene = Scene::parse(&text, "narrowband.toml", path.parent().unwrap())
@@ -24,6 +24,7 @@ fn narrowband(size: u32, slabs: u32, pre: bool) -> Scene {
     scene.image.height = size;
     scene.sweep.slabs = SlabSpec::Count(slabs);
     scene.sweep.preintegration = pre;
+    scene.sweep.media = media;
     scene.revalidate().unwrap();
     scene
 }
@@ -46,24 +47,32 @@ fn image_rmse(a: &[f32], b: &[f32]) -> f64 {
 
 #[test]
 fn preintegration_halves_the_error_of_a_narrow_band_at_64_and_128_slabs() {
+    // Each media model against its own 2048-slab render. Pre-integration halves the error of
+    // the paper's first-order slabs (measured 0.0595 against 0.178 at 64 slabs, 0.0406 against
+    // 0.132 at 128); second-order media (issue 46) cut the error without pre-integration by
+    // 2.4× and 2.6× (0.0740, 0.0508), so pre-integration's gain over them is smaller (0.0477,
+    // 0.0378: 0.64×, 0.74×), and with it the error is lower than with first-order media too.
     let size = 128;
-    let (reference, _) = image(&narrowband(size, 2048, false), CpuPath::Simd, 0);
-    for slabs in [64, 128] {
-        let (with, _) = image(&narrowband(size, slabs, true), CpuPath::Simd, 0);
-        let (without, _) = image(&narrowband(size, slabs, false), CpuPath::Simd, 0);
-        let (e_with, e_without) = (
-            image_rmse(&with, &reference),
-            image_rmse(&without, &reference),
-        );
-        eprintln!(
-            "{slabs} slabs: RMSE against 2048 slabs {e_without:.5} without, {e_with:.5} with \
-             pre-integration (ratio {:.3})",
-            e_with / e_without
-        );
-        assert!(
-            e_with <= 0.5 * e_without,
-            "{slabs} slabs: {e_with} with pre-integration, {e_without} without"
-        );
+    for media in [Media::FirstOrder, Media::SecondOrder] {
+        let (reference, _) = image(&narrowband(size, 2048, false, media), CpuPath::Simd, 0);
+        for slabs in [64, 128] {
+            let (with, _) = image(&narrowband(size, slabs, true, media), CpuPath::Simd, 0);
+            let (without, _) = image(&narrowband(size, slabs, false, media), CpuPath::Simd, 0);
+            let (e_with, e_without) = (
+                image_rmse(&with, &reference),
+                image_rmse(&without, &reference),
+            );
+            eprintln!(
+                "{media}, {slabs} slabs: RMSE against 2048 slabs {e_without:.5} without, \
+                 {e_with:.5} with pre-integration (ratio {:.3})",
+                e_with / e_without
+            );
+            let most = if media == Media::FirstOrder { 0.5 } else { 0.8 };
+            assert!(
+                e_with <= most * e_without,
+                "{media}, {slabs} slabs: {e_with} with pre-integration, {e_without} without"
+            );
+        }
     }
 }
 
@@ -134,7 +143,7 @@ fn preintegration_keeps_the_bits_across_paths_threads_and_quiet_chunk_skipping()
         s
     };
     for (what, scene) in [
-        ("narrowband", narrowband(45, 48, true)),
+        ("narrowband", narrowband(45, 48, true, Media::SecondOrder)),
         ("default", default),
         // The iterated penumbra: its dark chunks are skipped (the distance penumbra's hold the
         // plate's depth, not 0, so they are computed).

@@ -10,13 +10,17 @@
 //!   scene whose own file changed pin that file, not the code: when issue 40 re-lit `bunny`,
 //!   `armadillo`, `spot` and `mri` for the gallery (a smaller key light, the wall closer), their
 //!   rows here and in the next table were rendered anew with the table's flags. Checked with
-//!   `--surface flat` since lambert surfaces became the default (2026-12-04), like the next.
+//!   `--surface flat` since lambert surfaces became the default (2026-12-04), like the next, and
+//!   `--media first-order` since second-order media did (2026-12-05, issue 46).
 //! - `tests/data/golden_hashes_iterated.tsv`: the same cases with the automatic guard band and the
 //!   iterated penumbra, recorded when the guard band became the default (new scenes added with
-//!   their rows). Never re-recorded either: checked with `--penumbra iterated --surface flat`.
+//!   their rows). Never re-recorded either: checked with `--penumbra iterated --surface flat
+//!   --media first-order`.
 //! - `tests/data/golden_hashes.tsv`: the same cases with the defaults (automatic guard band,
 //!   distance penumbra), recorded when the distance penumbra became the default and re-recorded
-//!   when lambert surfaces did (2026-12-04, issue 40: opaque surfaces get max(0, n·l)). A change that is
+//!   when lambert surfaces did (2026-12-04, issue 40: opaque surfaces get max(0, n·l)) and when
+//!   second-order media did (2026-12-05, issue 46: a medium's slabs count the part inside it,
+//!   let through its exact transmittance and light the shading point). A change that is
 //!   meant to change an image (a new default) re-records this table with
 //!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test contract golden_hashes::` and says
 //!   why in its commit.
@@ -144,7 +148,14 @@ fn every_example_scene_and_kernel_keeps_its_recorded_bits() {
 #[test]
 fn every_example_scene_and_kernel_keeps_the_iterated_bits() {
     let dir = support::temp_dir("golden-iterated");
-    let extra = ["--penumbra", "iterated", "--surface", "flat"];
+    let extra = [
+        "--penumbra",
+        "iterated",
+        "--surface",
+        "flat",
+        "--media",
+        "first-order",
+    ];
     let checked = check_table(GOLDEN_ITERATED, &extra, true, &dir);
     assert!(checked > 100, "only {checked} cases checked");
 }
@@ -159,6 +170,8 @@ fn every_example_scene_and_kernel_keeps_the_starting_bits_without_a_guard_band()
         "iterated",
         "--surface",
         "flat",
+        "--media",
+        "first-order",
     ];
     let checked = check_table(GOLDEN_BAND0, &extra, false, &dir);
     assert!(checked > 100, "only {checked} cases checked");

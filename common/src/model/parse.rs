@@ -145,6 +145,7 @@ struct RawSweep {
     variance_compensation: Option<bool>,
     guard_band: Option<toml::Value>,
     preintegration: Option<bool>,
+    media: Option<String>,
 }
 
 #[derive(Deserialize, Debug)]

@@ -118,8 +118,40 @@ pub(crate) fn flush_tiny(c: f32) -> f32 {
     if c < 1.0 / 16_777_216.0 { 0.0 } else { c }
 }
 
+/// The light a slab of opacity `alpha` (< 1) and transport `tau` lets through, per channel:
+/// `(1 − α)^(1 − τ)`, the medium's transmittance `e^(−(1 − τ)·κ·e)` over the slab (κ its
+/// extinction), so that slabs compose exactly: two half slabs let through what one whole slab
+/// does, whatever τ (the first-order `1 − α·(1 − τ)` did not: its error grew with the slab
+/// thickness). Opacity 1 (a surface, not a medium) and a thin shell keep `1 − α·(1 − τ)`.
+pub(crate) fn medium_transmittance(alpha: f64, tau: f64) -> f64 {
+    (1.0 - alpha).powf(1.0 - tau)
+}
+
+/// How a material's slab lets the light through: as a medium (`(1 − α)^(1 − τ)`, see
+/// [`medium_transmittance`]) or as a filter (`1 − α·(1 − τ)`: opacity 1, a thin shell's
+/// crossing, and every slab with `sweep.media = "first-order"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Passes {
+    /// A slab of a closed mesh's medium (`sweep.media = "second-order"`).
+    Medium,
+    /// A filter: a thin shell's crossing (one reference length of the material), or the paper's
+    /// first-order slab.
+    Filter,
+}
+
+impl Passes {
+    /// `(1 − α)^(1 − τ)` for a medium of opacity below 1, else `1 − α·(1 − τ)`.
+    fn attenuation(self, alpha: f64, tau: f64) -> f64 {
+        if self == Passes::Medium && alpha < 1.0 {
+            medium_transmittance(alpha, tau)
+        } else {
+            1.0 - alpha * (1.0 - tau)
+        }
+    }
+}
+
 /// The transfer-function entry for colour `c`, opacity `a`, transport `tau`, thickness ratio.
-pub(crate) fn tf_entry(c: [f64; 3], a: f64, tau: [f64; 3], ratio: f64) -> TfEntry {
+pub(crate) fn tf_entry(c: [f64; 3], a: f64, tau: [f64; 3], ratio: f64, passes: Passes) -> TfEntry {
     let alpha = 1.0 - (1.0 - a).powf(ratio);
     let alpha = if alpha < 1.0 / 16_777_216.0 {
         0.0
@@ -129,7 +161,7 @@ pub(crate) fn tf_entry(c: [f64; 3], a: f64, tau: [f64; 3], ratio: f64) -> TfEntr
     TfEntry {
         color: c.map(|v| flush_tiny(v as f32)),
         alpha: alpha as f32,
-        attenuation: tau.map(|t| (1.0 - alpha * (1.0 - t)) as f32),
+        attenuation: tau.map(|t| passes.attenuation(alpha, t) as f32),
     }
 }
 
@@ -137,14 +169,21 @@ pub(crate) fn tf_entry(c: [f64; 3], a: f64, tau: [f64; 3], ratio: f64) -> TfEntr
 /// detail value runs linearly from `front` to `back` (Engel, Kraus & Ertl 2001; Patel et al.
 /// 2013 §7). The slab is cut into `n` = max(16, ⌈|back − front| · [`PI_STEPS_PER_UNIT`]⌉) thin
 /// slabs of constant value (their midpoints' gradient colour `c_i` and opacity), each of
-/// opacity `a_i = 1 − (1 − α)^(ratio / n)` and light attenuation `1 − a_i·(1 − τ)`, and
+/// opacity `a_i = 1 − (1 − α)^(ratio / n)` and light attenuation `(1 − a_i)^(1 − τ)` (`passes`:
+/// [`Passes::Filter`] has the first-order `1 − a_i·(1 − τ)`), and
 /// composited front to back as the sweep would composite `n` slabs: opacity `A = 1 − Π(1 − a_i)`,
 /// colour `Σ T_i·a_i·c_i·L_i` with `T_i` the view's and `L_i` the light's transmittance through
 /// the thin slabs before i (the light entering the slab at its front, attenuated in the pixel's
 /// column: the slab shadows itself as thin slabs would), attenuation `Π(1 − a_i·(1 − τ))`. The
 /// entry keeps the sweep's single-sample form: colour = that sum / A (the sweep composites
 /// `A·colour` times the entering light).
-pub fn preintegrated_entry(m: &MaterialSpec, ratio: f64, front: f64, back: f64) -> TfEntry {
+pub fn preintegrated_entry(
+    m: &MaterialSpec,
+    ratio: f64,
+    front: f64,
+    back: f64,
+    passes: Passes,
+) -> TfEntry {
     let n = ((back - front).abs() * PI_STEPS_PER_UNIT)
         .ceil()
         .max(PI_MIN_STEPS) as usize;
@@ -163,7 +202,7 @@ pub fn preintegrated_entry(m: &MaterialSpec, ratio: f64, front: f64, back: f64) 
         for k in 0..3 {
             sum[k] += view * a_i * c[k] * light[k];
             mean[k] += c[k] / n as f64;
-            light[k] *= 1.0 - a_i * (1.0 - m.transport[k]);
+            light[k] *= passes.attenuation(a_i, m.transport[k]);
         }
         view *= 1.0 - a_i;
     }
@@ -186,7 +225,7 @@ pub fn preintegrated_entry(m: &MaterialSpec, ratio: f64, front: f64, back: f64) 
 }
 
 /// The pre-integration table of a detail material ([`MaterialPlan::pre`]).
-pub(crate) fn preintegration_table(m: &MaterialSpec, ratio: f64) -> Vec<TfEntry> {
+pub(crate) fn preintegration_table(m: &MaterialSpec, ratio: f64, passes: Passes) -> Vec<TfEntry> {
     let step = 1.0 / (PI_SIZE - 1) as f64;
     let mut table = Vec::with_capacity(PI_SIZE * PI_SIZE);
     for f in 0..PI_SIZE {
@@ -196,6 +235,7 @@ pub(crate) fn preintegration_table(m: &MaterialSpec, ratio: f64) -> Vec<TfEntry>
                 ratio,
                 f as f64 * step,
                 b as f64 * step,
+                passes,
             ));
         }
     }
@@ -207,18 +247,19 @@ pub(crate) fn preintegration_table(m: &MaterialSpec, ratio: f64) -> Vec<TfEntry>
 pub(crate) fn material_plan(
     m: &MaterialSpec,
     e: f64,
+    passes: Passes,
     preintegration: bool,
     texture: Option<TextureFile>,
 ) -> Result<MaterialPlan, TextureError> {
     let ratio = e / m.reference_length.unwrap_or(DEFAULT_REFERENCE_LENGTH);
     let tf = if m.gradient.is_empty() {
-        vec![tf_entry(m.color, m.opacity, m.transport, ratio)]
+        vec![tf_entry(m.color, m.opacity, m.transport, ratio, passes)]
     } else {
         (0..TF_SIZE)
             .map(|i| {
                 let v = i as f64 / (TF_SIZE - 1) as f64;
                 let (c, a) = gradient_at(m, v);
-                tf_entry(c, a, m.transport, ratio)
+                tf_entry(c, a, m.transport, ratio, passes)
             })
             .collect()
     };
@@ -241,7 +282,8 @@ pub(crate) fn material_plan(
         }
         (None, _) => (None, None),
     };
-    let pre = (preintegration && !m.gradient.is_empty()).then(|| preintegration_table(m, ratio));
+    let pre =
+        (preintegration && !m.gradient.is_empty()).then(|| preintegration_table(m, ratio, passes));
     Ok(MaterialPlan {
         tf,
         pre,
@@ -290,15 +332,25 @@ mod tests {
     #[test]
     fn slab_opacity_correction_composes() {
         // Two slabs of half the reference length let through what one reference slab does.
-        let half = tf_entry([1.0; 3], 0.6, [0.0; 3], 0.5);
-        let full = tf_entry([1.0; 3], 0.6, [0.0; 3], 1.0);
+        let half = tf_entry([1.0; 3], 0.6, [0.0; 3], 0.5, Passes::Medium);
+        let full = tf_entry([1.0; 3], 0.6, [0.0; 3], 1.0, Passes::Medium);
         let through_two = (1.0 - f64::from(half.alpha)).powi(2);
         assert!((through_two - (1.0 - f64::from(full.alpha))).abs() < 1e-6);
-        // Transport 1 lets the light through untouched.
-        let clear = tf_entry([1.0; 3], 0.9, [1.0, 0.0, 0.5], 1.0);
+        // Transport 1 lets the light through untouched; a shell is a filter, 1 − α·(1 − τ).
+        let clear = tf_entry([1.0; 3], 0.9, [1.0, 0.0, 0.5], 1.0, Passes::Filter);
         assert_eq!(clear.attenuation[0], 1.0);
         assert!((clear.attenuation[1] - 0.1).abs() < 1e-6);
         assert!((clear.attenuation[2] - 0.55).abs() < 1e-6);
+        // A medium's slab: (1 − α)^(1 − τ), so that its halves compose exactly for any τ.
+        let tau = [1.0, 0.0, 0.5];
+        let half = tf_entry([1.0; 3], 0.9, tau, 0.5, Passes::Medium);
+        let full = tf_entry([1.0; 3], 0.9, tau, 1.0, Passes::Medium);
+        for (k, t) in tau.iter().enumerate() {
+            let expected = 0.1f64.powf(1.0 - t);
+            assert!((f64::from(full.attenuation[k]) - expected).abs() < 1e-6);
+            let two = f64::from(half.attenuation[k]).powi(2);
+            assert!((two - expected).abs() < 1e-6, "channel {k}");
+        }
     }
 
     /// A detail material whose gradient is the given stops (value, grey colour, opacity).
@@ -334,13 +386,19 @@ mod tests {
         // A = 1 − T. With τ = 1 the light is not attenuated and the colour is c itself.
         let (alpha, r, c) = (0.6, 0.5, 0.8);
         let m = graded(&[(0.0, c, alpha), (1.0, c, alpha)], [0.0; 3]);
-        let e = preintegrated_entry(&m, r, 0.3, 0.3);
+        let e = preintegrated_entry(&m, r, 0.3, 0.3, Passes::Filter);
         let t = (1.0f64 - alpha).powf(r);
         let a = 1.0 - (1.0f64 - alpha).powf(r / 16.0);
         assert!((f64::from(e.alpha) - (1.0 - t)).abs() < 1e-6, "{e:?}");
         assert!((f64::from(e.color[0]) - c * (1.0 + t) / (2.0 - a)).abs() < 1e-6);
         assert!((f64::from(e.attenuation[1]) - t).abs() < 1e-6);
-        let clear = preintegrated_entry(&graded(&[(0.0, c, alpha)], [1.0; 3]), r, 0.3, 0.3);
+        let clear = preintegrated_entry(
+            &graded(&[(0.0, c, alpha)], [1.0; 3]),
+            r,
+            0.3,
+            0.3,
+            Passes::Filter,
+        );
         assert!((f64::from(clear.color[2]) - c).abs() < 1e-6);
         assert_eq!(clear.attenuation, [1.0; 3]);
         assert!((f64::from(clear.alpha) - (1.0 - t)).abs() < 1e-6);
@@ -362,10 +420,10 @@ mod tests {
             [0.3, 0.6, 0.9],
         );
         let r = 2.0;
-        let whole = preintegrated_entry(&m, r, 0.2, 0.8);
+        let whole = preintegrated_entry(&m, r, 0.2, 0.8, Passes::Medium);
         let (h1, h2) = (
-            preintegrated_entry(&m, r / 2.0, 0.2, 0.5),
-            preintegrated_entry(&m, r / 2.0, 0.5, 0.8),
+            preintegrated_entry(&m, r / 2.0, 0.2, 0.5, Passes::Medium),
+            preintegrated_entry(&m, r / 2.0, 0.5, 0.8, Passes::Medium),
         );
         let (a1, a2) = (f64::from(h1.alpha), f64::from(h2.alpha));
         let alpha = 1.0 - (1.0 - a1) * (1.0 - a2);

@@ -15,7 +15,7 @@ use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
 
 use crate::contract::files::PlanFiles;
-use crate::model::scene::{Penumbra, Scene};
+use crate::model::scene::{Media, Penumbra, Scene};
 use crate::pixel::hash::{JITTER_STREAM, slab_hash};
 use crate::pixel::texture3d::TextureError;
 use crate::plan::kernel::{
@@ -25,8 +25,8 @@ use crate::prepare::geometry::SceneGeometry;
 use crate::prepare::guard::GuardBand;
 
 pub use material::{
-    DEFAULT_REFERENCE_LENGTH, MaterialPlan, PI_MIN_STEPS, PI_SIZE, PI_STEPS_PER_UNIT, SpecularPlan,
-    TF_SIZE, TfEntry, preintegrated_entry,
+    DEFAULT_REFERENCE_LENGTH, MaterialPlan, PI_MIN_STEPS, PI_SIZE, PI_STEPS_PER_UNIT, Passes,
+    SpecularPlan, TF_SIZE, TfEntry, preintegrated_entry,
 };
 use material::{flush_tiny, material_plan};
 
@@ -131,6 +131,11 @@ pub struct RenderPlan {
     pub pixel_size: f64,
     /// Slab thickness (world units) as f32.
     pub slab_distance: f32,
+    /// `1 / slab_distance` in f32 (the part of a slab a medium fills, one division for all).
+    pub inv_slab_distance: f32,
+    /// `sweep.media = "second-order"`: a medium's entry and exit slabs count the part inside it
+    /// and its shading points are lit by the light at the point (`cpu::parity::slab_part`).
+    pub second_order_media: bool,
     /// Front face of each slab (depth relative to the first slab's front).
     pub slab_front: Vec<f32>,
     /// Back face of each slab.
@@ -250,19 +255,23 @@ impl RenderPlan {
         let Some(lights) = lights.filter(|_| !guard.stopped()) else {
             return Ok(None);
         };
+        let medium_passes = match scene.sweep.media {
+            Media::SecondOrder => Passes::Medium,
+            Media::FirstOrder => Passes::Filter,
+        };
         let materials = scene
             .materials
             .iter()
             .enumerate()
             .map(|(i, m)| {
                 let texture = files.textures.get(i).cloned().flatten();
-                material_plan(m, e, scene.sweep.preintegration, texture).map_err(|source| {
-                    PlanError {
+                material_plan(m, e, medium_passes, scene.sweep.preintegration, texture).map_err(
+                    |source| PlanError {
                         scene: scene.source.clone(),
                         what: format!("material `{}`", m.name),
                         source,
-                    }
-                })
+                    },
+                )
             })
             .collect::<Result<Vec<_>, PlanError>>()?;
         let mut materials = materials;
@@ -326,6 +335,8 @@ impl RenderPlan {
             slabs,
             auto_slabs: geometry.auto_slabs.clone(),
             slab_distance: e as f32,
+            inv_slab_distance: 1.0 / e as f32,
+            second_order_media: scene.sweep.media == Media::SecondOrder,
             slab_front: (0..slabs).map(|k| (f64::from(k) * e) as f32).collect(),
             slab_back: geometry.slab_back_faces(),
             channels: if scene.is_monochrome() { 1 } else { 3 },
@@ -550,10 +561,12 @@ fn shell_materials(
             let texture = files.textures.get(m).cloned().flatten();
             let length = spec.reference_length.unwrap_or(DEFAULT_REFERENCE_LENGTH);
             let mut shell =
-                material_plan(spec, length, false, texture).map_err(|source| PlanError {
-                    scene: scene.source.clone(),
-                    what: format!("material `{}`", spec.name),
-                    source,
+                material_plan(spec, length, Passes::Filter, false, texture).map_err(|source| {
+                    PlanError {
+                        scene: scene.source.clone(),
+                        what: format!("material `{}`", spec.name),
+                        source,
+                    }
                 })?;
             shell.light_color = materials[m].light_color.clone();
             shell_of[m] = Some(materials.len() as u32);

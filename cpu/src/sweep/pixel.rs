@@ -32,9 +32,9 @@ use super::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowContext, RowState, SlabContext, level_plane, light_block,
     light_planes,
 };
-use crate::composite::{Held, attenuate, composite, deepen, hold_step};
+use crate::composite::{Held, attenuate, composite, deepen, hold_step, part_of_slab};
 use crate::kernels::{TapOrigin, distance_row, gather, phase_at};
-use crate::parity::{NO_CROSSING, advance, first_mesh};
+use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
 use crate::shading::{
     Surface, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
@@ -56,11 +56,14 @@ impl LightIn {
     };
 }
 
-/// What step 2 found: the first fragment the cursor crossed in this slab ([`NO_CROSSING`] if
-/// none) and the mesh the pixel shades, if any.
+/// What step 2 found: the first and last fragments the cursor crossed in this slab
+/// ([`NO_CROSSING`] if none), the inside mask it had at the slab's front, and the mesh the pixel
+/// shades, if any.
 #[derive(Clone, Copy)]
 pub(crate) struct Hit {
     pub crossed: u32,
+    pub last: u32,
+    pub before: u32,
     pub mesh: Option<u32>,
 }
 
@@ -86,7 +89,7 @@ pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usi
     let held = hold(row.ctx, state, x, hit.crossed);
     // 3. Shading at one point, if inside a mesh or a surface was crossed; 4. composite.
     let attenuation = match hit.mesh {
-        Some(mesh) => shade_and_composite(row, state, x, &light.iin, mesh, hit.crossed),
+        Some(mesh) => shade_and_composite(row, state, x, &light.iin, mesh, &hit),
         None => [1.0; 3],
     };
     // 5. Attenuate (and flush) into this slab's outgoing light buffer — a held surface passes
@@ -163,34 +166,54 @@ pub(crate) fn intersect(
 ) -> Hit {
     let ldi = ctx.ldi;
     let end = ldi.offsets[y * ldi.width as usize + x + 1];
+    let before = state.inside[x];
     let crossed = advance(ldi, &mut state.next[x], end, &mut state.inside[x], ctx.back);
     let mesh = if crossed != NO_CROSSING {
         Some(u32::from(ldi.mesh[crossed as usize]))
     } else {
         first_mesh(state.inside[x])
     };
-    Hit { crossed, mesh }
+    Hit {
+        crossed,
+        last: state.next[x].wrapping_sub(1),
+        before,
+        mesh,
+    }
 }
 
 /// Steps 3 and 4 at pixel x, which lies in mesh `mesh` or crossed its surface at fragment
-/// `crossed`: the transfer-function entry at the one point it shades, the light `iin` (every
-/// light's channels) shaded with it, composited front to back. Returns the attenuation per
-/// channel for step 5.
+/// `hit.crossed`: the transfer-function entry at the one point it shades, as much of it as the
+/// slab's part inside the mesh (a medium's entry and exit slabs, [`part_of_slab`]), the light
+/// `iin` (every light's channels) shaded with it, composited front to back. Returns the
+/// attenuation per channel for step 5.
 pub(crate) fn shade_and_composite(
     row: &RowContext<'_>,
     state: &mut RowState<'_>,
     x: usize,
     iin: &[f32],
     mesh: u32,
-    crossed: u32,
+    hit: &Hit,
 ) -> [f32; 3] {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
+    let crossed = hit.crossed;
     let z = shading_depth(plan, ctx.ldi, crossed, ctx.front, row.jitter_hash, x);
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
     let (xi, yi) = plan.image_xy(x, row.y);
-    let tf = match &material.pre {
+    let (inside, mut lit_from) = slab_part(
+        ctx.ldi,
+        (mesh, plan.second_order_media),
+        (hit.before, state.inside[x]),
+        (crossed, hit.last),
+        (ctx.front, ctx.back),
+        plan.inv_slab_distance,
+    );
+    let mut tf = match &material.pre {
         // Pre-integrated compositing (shading.wgsl `preintegrated`).
-        Some(table) => preintegrated(row, state, x, mesh, table, crossed),
+        Some(table) => {
+            // A pre-integrated entry has the light's decay inside the slab in its colour.
+            lit_from = 0.0;
+            preintegrated(row, state, x, mesh, table, crossed)
+        }
         None => {
             if plan.preintegration {
                 state.pre[x] = f32::NAN;
@@ -209,7 +232,9 @@ pub(crate) fn shade_and_composite(
                 alpha: tf.alpha,
             }
         });
+    let light = part_of_slab(&mut tf, inside, lit_from);
     let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
+    let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
     let w = plan.grid_width as usize;
     let mut color = [state.color[x], state.color[w + x], state.color[2 * w + x]];
     composite(&mut color, &mut state.alpha[x], shaded, tf.alpha, true);

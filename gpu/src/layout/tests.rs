@@ -65,7 +65,11 @@ fn rust_layouts() -> Vec<Layout> {
             occlusion_eps,
             surface_holds,
             parity_meshes,
-            _pad2,
+            inv_slab_distance,
+            second_order_media,
+            _pad3,
+            _pad4,
+            _pad5,
         }),
         layout!(Slab {
             front,

@@ -2,6 +2,7 @@
 // explicit flush, the final background).
 
 #import shared/bindings
+#import shading
 
 // `composite`: t = (1 − A)·α; C += t·c; A += t. `acc` is (C.rgb, A).
 fn composite(acc: vec4<f32>, c: vec3<f32>, a: f32) -> vec4<f32> {
@@ -10,6 +11,41 @@ fn composite(acc: vec4<f32>, c: vec3<f32>, a: f32) -> vec4<f32> {
 }
 
 // `attenuate`: Iin·attenuation, flushed to zero below FLUSH_BELOW.
+// `taken_out`: what a fraction f of a slab takes out where the whole slab takes out s,
+// f·s·(1 + (1 − f)·s/2) (cpu/src/composite.rs).
+fn taken_out(s: f32, f: f32) -> f32 {
+    return f * s * (1.0 + (1.0 - f) * s * 0.5);
+}
+
+// `part_of_slab`: a medium's slab (alpha < 1) scaled to the part `inside` of it the pixel spends
+// in the medium; returns the light's attenuation from where it entered the medium to the
+// shading point (`lit_from`). Surfaces (alpha 1) are left as they are, with factor 1.
+struct SlabPart {
+    entry: TfEntry,
+    light: vec3<f32>,
+}
+
+fn part_of_slab(e: TfEntry, inside: f32, lit_from: f32) -> SlabPart {
+    var r = SlabPart(e, vec3<f32>(1.0, 1.0, 1.0));
+    if !(e.alpha < 1.0) {
+        return r;
+    }
+    r.light = vec3<f32>(
+        1.0 - taken_out(1.0 - e.attenuation.x, lit_from),
+        1.0 - taken_out(1.0 - e.attenuation.y, lit_from),
+        1.0 - taken_out(1.0 - e.attenuation.z, lit_from),
+    );
+    if inside < 1.0 {
+        r.entry.alpha = taken_out(e.alpha, inside);
+        r.entry.attenuation = vec3<f32>(
+            1.0 - taken_out(1.0 - e.attenuation.x, inside),
+            1.0 - taken_out(1.0 - e.attenuation.y, inside),
+            1.0 - taken_out(1.0 - e.attenuation.z, inside),
+        );
+    }
+    return r;
+}
+
 fn attenuate(v_in: f32, attenuation: f32) -> f32 {
     let v = v_in * attenuation;
     return select(v, 0.0, v < globals.flush_below);

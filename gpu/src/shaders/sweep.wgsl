@@ -66,6 +66,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = y * w + x;
     let state = cursors[p];
     let adv = advance(state.next, offsets[p + 1u], state.inside, back);
+    let last = adv.next - 1u; // the last fragment crossed, where one was
     cursors[p] = Cursor(adv.next, adv.inside);
     let crossed = adv.first != NO_CROSSING;
     var mesh = first_mesh(adv.inside);
@@ -104,7 +105,12 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         let xi = f32(i32(x) - i32(globals.guard_left)) + 0.5;
         let yi = f32(i32(y) - i32(globals.guard_top)) + 0.5;
         var e: TfEntry;
+        // A medium's entry and exit slabs by the part inside, the light at the point
+        // (composite.wgsl `part_of_slab`); a pre-integrated entry has the light's decay inside
+        // the slab in its colour.
+        var part = slab_part(mesh, state.inside, adv.inside, adv.first, last, front, back);
         if m.pre != NO_PRE {
+            part.y = 0.0;
             // Pre-integrated compositing (shading.wgsl `preintegrated`).
             e = preintegrated(p, mesh, m, crossed, z, front, back, xi, yi, first_mesh(adv.inside) == mesh);
         } else {
@@ -125,7 +131,10 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             let o = normals[frag_meta[adv.first] >> MESH_BITS];
             n = vec3<f32>(o[0], o[1], o[2]);
         }
-        let shaded = shade(mi, e.color, e.alpha, surface, n);
+        let alpha_at_surface = e.alpha;
+        let scaled = part_of_slab(e, part.x, part.y);
+        e = scaled.entry;
+        let shaded = shade(mi, e.color, alpha_at_surface, surface, n) * scaled.light;
         accum[p] = composite(accum[p], shaded, e.alpha);
         attenuation = e.attenuation;
     }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use convshadow::pipeline::{Aov, CpuPath};
 use convshadow_common::model::kernel::KERNEL_SYNTAX;
 use convshadow_common::model::scene::GuardBandSpec;
-use convshadow_common::model::scene::{Penumbra, SlabSpec, SurfaceModel};
+use convshadow_common::model::scene::{Media, Penumbra, SlabSpec, SurfaceModel};
 
 pub use convshadow::overrides::RenderBackend;
 
@@ -110,6 +110,11 @@ pub struct RenderArgs {
     /// `--preintegration true` turns it on, `--preintegration false` off.
     #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
     pub preintegration: Option<bool>,
+    /// Override how slabs of translucent medium are composited (`sweep.media`):
+    /// `second-order` (the default: exact slab transmittance, entry and exit slabs by the part
+    /// inside, light at the shading point) or `first-order` (the paper's whole slabs).
+    #[arg(long, value_name = "second-order|first-order", value_parser = crate::cli::parse_media)]
+    pub media: Option<Media>,
     /// Render even if a closed mesh leaves pixels with odd fragment counts (reported). Open
     /// meshes need no flag: they render as thin shells, with a warning.
     #[arg(long)]
@@ -169,6 +174,7 @@ mod tests {
             (None, None, None, None)
         );
         assert_eq!((a.preintegration, a.variance_compensation), (None, None));
+        assert_eq!(a.media, None);
         // --threads 0 (one per core), the SIMD path, the CPU, quiet-chunk skipping on.
         assert_eq!(a.threads, 0);
         assert_eq!(a.path, CpuPath::Simd);
@@ -196,6 +202,8 @@ mod tests {
             "--variance-compensation",
             "false",
             "--preintegration",
+            "--media",
+            "first-order",
             "--threads",
             "3",
             "--path",
@@ -222,6 +230,7 @@ mod tests {
         assert_eq!(a.variance_compensation, Some(false));
         // A bare --preintegration turns it on.
         assert_eq!(a.preintegration, Some(true));
+        assert_eq!(a.media, Some(Media::FirstOrder));
         assert_eq!(a.threads, 3);
         assert_eq!(a.path, CpuPath::Scalar);
         assert_eq!(a.backend.device(), None);
@@ -260,6 +269,7 @@ mod tests {
             &["--width", "0"],
             &["--slabs", "many"],
             &["--penumbra", "soft"],
+            &["--media", "third-order"],
             &["--guard-band", "-1"],
             &["--path", "gpu"],
             &["--aov", "normal"],

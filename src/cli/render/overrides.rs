@@ -80,7 +80,7 @@ pub(super) fn frame_list(args: &RenderArgs) -> Result<(Option<Vec<u32>>, f64), F
 }
 
 /// `--slabs`, `--kernel`, `--seed`, `--penumbra`, `--surface`, `--guard-band`,
-/// `--variance-compensation` and `--preintegration`, then the scene re-validated
+/// `--variance-compensation`, `--preintegration` and `--media`, then the scene re-validated
 /// ([`SweepOverrides::apply`], shared with the Python module).
 pub(super) fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Failure> {
     let overrides = SweepOverrides {
@@ -92,6 +92,7 @@ pub(super) fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Res
         guard_band: args.guard_band,
         variance_compensation: args.variance_compensation,
         preintegration: args.preintegration,
+        media: args.media,
     };
     overrides.apply(scene).map_err(|e| match e {
         OverrideError::Kernel(e) => Failure::new(exit::BAD_ARGUMENTS, format!("--kernel: {e}")),

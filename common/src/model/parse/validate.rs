@@ -345,6 +345,10 @@ impl Validator<'_> {
                 .parse::<Penumbra>()
                 .map_err(|e| self.err("sweep.penumbra", e))?,
         };
+        let media = match raw.media.as_deref() {
+            None => Media::default(),
+            Some(m) => m.parse::<Media>().map_err(|e| self.err("sweep.media", e))?,
+        };
         let optimal_distance = match raw.optimal_distance {
             Some(d) => Some(self.length("sweep.optimal_distance", d)?),
             None if penumbra == Penumbra::Iterated => {
@@ -367,6 +371,7 @@ impl Validator<'_> {
             variance_compensation: raw.variance_compensation.unwrap_or(true),
             guard_band,
             preintegration: raw.preintegration.unwrap_or(false),
+            media,
         })
     }
 

@@ -37,6 +37,7 @@ fn defaults_are_the_documented_ones() {
     assert_eq!(s.meshes[0].scale, 1.0);
     assert_eq!(s.materials[0].transport, [0.0; 3]);
     assert_eq!(s.materials[0].reference_length, None);
+    assert_eq!(s.sweep.media, Media::SecondOrder);
     assert!(s.is_monochrome());
 }
 
@@ -71,6 +72,13 @@ fn invalid_values_name_file_key_and_expectation() {
         "image.width",
         "16384",
     );
+    expect_err(
+        &MINIMAL.replace("slabs = 16", "slabs = 16\nmedia = \"exact\""),
+        "sweep.media",
+        "expected \"second-order\" or \"first-order\"",
+    );
+    let first = parse(&MINIMAL.replace("slabs = 16", "slabs = 16\nmedia = \"first-order\""));
+    assert_eq!(first.unwrap().sweep.media, Media::FirstOrder);
     expect_err(
         &MINIMAL.replace("slabs = 16", "slabs = 0"),
         "sweep.slabs",

@@ -21,9 +21,9 @@ use super::gather::{gather_inside, gather_lanes, store_pixels};
 use super::levels::{distance_rows, phases};
 use super::per_lane::{LaneRows, gather_per_lane};
 use super::quiet::{ChunkState, Values};
-use crate::composite::{Held, attenuate, composite, deepen};
+use crate::composite::{Held, attenuate, composite, deepen, part_of_slab};
 use crate::kernels::{LightPlanes, TapOrigin, phase_at};
-use crate::parity::{NO_CROSSING, advance, first_mesh};
+use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
 use crate::shading::{
     Surface, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
@@ -31,7 +31,7 @@ use crate::sweep::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, level_plane,
     light_block,
 };
-use crate::sweep::pixel::{hold, shade_and_composite};
+use crate::sweep::pixel::{Hit, hold, shade_and_composite};
 use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::{RenderPlan, TfEntry};
 use wide::f32x8;
@@ -62,7 +62,23 @@ pub(crate) struct Chunk<'a> {
 /// ([`NO_CROSSING`] if none) and the mesh it shades, if any (the per-pixel stage's `Hit`, by lane).
 struct LaneHits {
     crossed: [u32; MAX_LANES],
+    /// The last fragment crossed (meaningful where `crossed` is one).
+    last: [u32; MAX_LANES],
+    /// The inside mask at the slab's front.
+    before: [u32; MAX_LANES],
     mesh: [Option<u32>; MAX_LANES],
+}
+
+impl LaneHits {
+    /// Lane i's hit, as the per-pixel stage has it.
+    fn lane(&self, i: usize) -> Hit {
+        Hit {
+            crossed: self.crossed[i],
+            last: self.last[i],
+            before: self.before[i],
+            mesh: self.mesh[i],
+        }
+    }
 }
 
 /// What one chunk's stages tell the lane path about their lanes.
@@ -253,6 +269,8 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     // 2. Intersection: every lane's cursor.
     let mut hits = LaneHits {
         crossed: [NO_CROSSING; MAX_LANES],
+        last: [NO_CROSSING; MAX_LANES],
+        before: [0; MAX_LANES],
         mesh: [None; MAX_LANES],
     };
     let (crossed, mesh) = (&mut hits.crossed, &mut hits.mesh);
@@ -261,8 +279,10 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         // inside masks, none where no lane is inside one.
         Some(s) if s.crosses_nothing(ctx.back) => {
             if s.inside_any != 0 {
-                for (m, &inside) in mesh.iter_mut().zip(&state.inside[x0..x0 + L::LANES]) {
+                let insides = &state.inside[x0..x0 + L::LANES];
+                for ((m, b), &inside) in mesh.iter_mut().zip(&mut hits.before).zip(insides) {
                     *m = first_mesh(inside);
+                    *b = inside;
                 }
             }
         }
@@ -271,7 +291,9 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
                 let x = x0 + i;
                 let end = ldi.offsets[y * w + x + 1];
                 let (next, inside) = (&mut state.next[x], &mut state.inside[x]);
+                hits.before[i] = *inside;
                 crossed[i] = advance(ldi, next, end, inside, ctx.back);
+                hits.last[i] = next.wrapping_sub(1);
                 mesh[i] = if crossed[i] != NO_CROSSING {
                     Some(u32::from(ldi.mesh[crossed[i] as usize]))
                 } else {
@@ -375,7 +397,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
                     *dst = v.lane(i);
                 }
                 let lane_iin = &lane_iin[..n];
-                let a = shade_and_composite(row, state, x0 + i, lane_iin, mi, hits.crossed[i]);
+                let a = shade_and_composite(row, state, x0 + i, lane_iin, mi, &hits.lane(i));
                 for k in 0..3 {
                     att[k][i] = a[k];
                 }
@@ -636,20 +658,37 @@ fn shade_chunk<L: Layout>(
     let mut is_crossed = [false; MAX_LANES];
     let mut xs = [0.0f32; MAX_LANES];
     let mut zs = [0.0f32; MAX_LANES];
+    let mut insides = [1.0f32; MAX_LANES];
+    let mut lit_froms = [0.0f32; MAX_LANES];
     for i in 0..L::LANES {
         active[i] = mesh[i].is_some();
         is_crossed[i] = crossed[i] != NO_CROSSING;
         any_crossed |= is_crossed[i];
         xs[i] = plan.image_xy(x0 + i, y).0;
         zs[i] = shading_depth(plan, ldi, crossed[i], ctx.front, row.jitter_hash, x0 + i);
+        if active[i] {
+            (insides[i], lit_froms[i]) = slab_part(
+                ldi,
+                (m, plan.second_order_media),
+                (hits.before[i], state.inside[x0 + i]),
+                (crossed[i], hits.last[i]),
+                (ctx.front, ctx.back),
+                plan.inv_slab_distance,
+            );
+        }
     }
     let active_lanes = active;
     let active = L::m_from(&active);
     let z = L::load(&zs, 0);
     let material = &plan.materials[plan.mesh_material[m as usize] as usize];
     let (xv, yv) = (L::load(&xs, 0), L::splat(plan.image_xy(x0, y).1));
-    let tf = match &material.pre {
-        Some(table) => preintegrated(ctx, state, x0, m, table, [xv, yv], hits),
+    let mut lit_from = L::load(&lit_froms, 0);
+    let mut tf = match &material.pre {
+        Some(table) => {
+            // A pre-integrated entry has the light's decay inside the slab in its colour.
+            lit_from = L::splat(0.0);
+            preintegrated(ctx, state, x0, m, table, [xv, yv], hits)
+        }
         None => {
             if plan.preintegration {
                 forget_front(state, x0, L::LANES, &active_lanes);
@@ -683,7 +722,9 @@ fn shade_chunk<L: Layout>(
     } else {
         None
     };
+    let light = part_of_slab(&mut tf, L::load(&insides, 0), lit_from);
     let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
+    let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
 
     let mut color = [
         L::load(state.color, x0),

@@ -78,7 +78,11 @@ struct Globals {
     occlusion_eps: f32, // OCCLUSION_EPS (its f32 bits from Rust)
     surface_holds: u32, // 1: some surface is held (`hold` per grid pixel, `surface_hold` per triangle)
     parity_meshes: u32, // the closed meshes (bit i: mesh i); open ones are thin shells
-    _pad2: u32,
+    inv_slab_distance: f32, // 1/e (RenderPlan::inv_slab_distance), for a medium's part of a slab
+    second_order_media: u32, // 1: sweep.media = "second-order" (else slab_part is (1, 0))
+    _pad3: u32,
+    _pad4: u32,
+    _pad5: u32,
 }
 
 struct Slab {
