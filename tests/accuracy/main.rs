@@ -18,6 +18,7 @@ mod patterned_light;
 mod phase_function;
 mod preintegration;
 mod reference_convergence;
+mod several_depths;
 mod slab_convergence;
 mod surface_shading;
 mod sweep_accuracy;
