@@ -49,6 +49,7 @@ pub fn render_stats(
             "slab_distance": f64::from(r.plan.slab_distance),
             "kernel": scene.sweep.kernel.to_string(),
             "penumbra": scene.sweep.penumbra.to_string(),
+            "media": scene.sweep.media.to_string(),
             "preintegration": r.plan.preintegration,
             "guard_band": scene.sweep.guard_band.to_string(),
             "guard_band_px": {

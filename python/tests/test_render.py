@@ -57,7 +57,7 @@ def test_image_is_the_cli_exr_bit_for_bit(cli, tmp_path, scene, overrides):
     np.testing.assert_array_equal(bits(image), bits(expected))
     cli_stats = json.loads(stats_json.read_text())
     for key in ["image_hash", "ldi_hash", "slabs", "slabs_swept", "fragments", "kernel",
-                "penumbra", "guard_band_px", "grid_width", "grid_height", "backend", "path"]:
+                "penumbra", "media", "guard_band_px", "grid_width", "grid_height", "backend", "path"]:
         assert stats[key] == cli_stats[key], key
     # Every key of --stats-json but the files written.
     assert set(cli_stats) - set(stats) == {"outputs"}

@@ -6,7 +6,11 @@
 //! - **View samples** are the sweep's: per pixel and slab the same shading point (the crossing
 //!   point, else the slab centre plus the same hashed jitter), the same material, detail value,
 //!   transfer function, specular term and front-to-back compositing. Only the light term `Iin`
-//!   differs, so the image difference is the shadow error and nothing else.
+//!   differs, so the image difference is the shadow error and nothing else. With second-order
+//!   media (`sweep.media`) the sweep lights a medium's sample with the light in the middle of the
+//!   slab's part inside the medium, and composites the entry and exit slabs by that part: the
+//!   reference does the same (its light traced to the middle of the slab where no surface was
+//!   crossed; at a crossing, to the surface).
 //! - **Light directions**: per shading point and light, `M = k²` multi-jittered directions
 //!   (Chiu, Shirley and Wang 1994): one per cell of a k×k stratification of the unit square and
 //!   at the same time one per each of the M fine strata of either axis, the fine strata assigned
@@ -620,8 +624,8 @@ impl<'a> Reference<'a> {
                         let z = shading_depth(plan, ldi, crossed, front, jitter_row, x);
                         let mut tf = material_at(plan, mesh, ix as f32, iy as f32, z);
                         // The sweep's view samples: a medium's entry and exit slabs by the part
-                        // inside (the light needs no such factor: it is traced to the point).
-                        let (part, _) = slab_part(
+                        // inside (the light needs no such factor: it is traced).
+                        let (part, lit_from) = slab_part(
                             ldi,
                             (mesh, plan.second_order_media),
                             (before, inside),
@@ -629,13 +633,21 @@ impl<'a> Reference<'a> {
                             (front, back),
                             plan.inv_slab_distance,
                         );
+                        // With second-order media the sweep lights a medium's sample at the
+                        // middle of the slab's part inside it (`slab_part`): inside a medium, the
+                        // light is traced to there, not to the jittered point.
+                        let light_z = if plan.second_order_media && tf.alpha < 1.0 {
+                            f64::from(front) + f64::from(lit_from) * f64::from(plan.slab_distance)
+                        } else {
+                            f64::from(z)
+                        };
                         part_of_slab(&mut tf, part, 0.0);
                         let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
                         let (cx, cy) = (ix as f64 + 0.5, iy as f64 + 0.5);
                         // A crossing's shadow rays start on the exact surface and do not cross
                         // it (see `Start`); a point inside a medium starts where it is.
                         let (pos, start) = if crossed == NO_CROSSING {
-                            let pos = [cx, cy, f64::from(z)];
+                            let pos = [cx, cy, light_z];
                             (pos, Start::free(pos))
                         } else {
                             match self.surface_point(mesh, cx, cy, f64::from(z)) {
