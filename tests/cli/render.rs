@@ -90,6 +90,7 @@ fn repeated_outputs_png_and_exr_and_stats_json() {
         assert!(!v[key].is_null(), "missing {key}: {v}");
     }
     assert_eq!(v["kernel"], "poisson8");
+    assert_eq!(v["media"], "second-order");
     assert_eq!(v["threads"], 3);
     // The EXR holds exactly the hashed float image.
     assert_eq!(
@@ -312,4 +313,86 @@ material = "m"
         err.contains("sweep.slabs") && err.contains("mesh[0] thickness"),
         "{err}"
     );
+}
+
+#[test]
+fn a_world_direction_light_renders_like_its_tilt_and_bad_ones_exit_3() {
+    // A box over a wall, shadowed by one light given as a camera-space tilt or as the world
+    // direction it travels (the default camera looks along +z with +y up).
+    let dir = support::temp_dir("render-direction");
+    let scene = |light: &str| {
+        format!(
+            "[image]\nwidth = 48\nheight = 48\n[camera]\nview_width = 4.0\n[sweep]\nslabs = 48\n\
+             [[light]]\n{light}\nvariance = [0.02, 0.01]\n\
+             [[mesh]]\nshape = \"box\"\nsize = [1.0, 1.0, 0.4]\nmaterial = \"m\"\n\
+             [[mesh]]\nshape = \"box\"\nsize = [8.0, 8.0, 0.2]\ntranslate = [0.0, 0.0, 1.5]\n\
+             material = \"m\"\n[material.m]\ncolor = [0.8, 0.6, 0.4]\n"
+        )
+    };
+    let hash = |name: &str, light: &str| {
+        std::fs::write(dir.join(name), scene(light)).unwrap();
+        let (code, out, err) = support::run_cli(
+            &[
+                "render",
+                name,
+                "-o",
+                "x.exr",
+                "--quiet",
+                "--stats-json",
+                "s.json",
+            ],
+            &dir,
+        );
+        assert_eq!(code, 0, "{name}: {out}{err}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+        v["image_hash"].as_str().unwrap().to_string()
+    };
+    assert_eq!(
+        hash("tilt.toml", "tilt_deg = [0.0, 0.0]"),
+        hash("dir.toml", "direction = [0.0, 0.0, 1.0]"),
+        "a light along the view"
+    );
+    // Tilted 30° (world +x is the image's left): the same image up to the last bits of
+    // tan(atan(x)).
+    let a = 30f64.to_radians().tan();
+    let render_exr = |name: &str, light: &str| {
+        std::fs::write(dir.join(name), scene(light)).unwrap();
+        let (code, _, err) = support::run_cli(&["render", name, "-o", "x.exr", "--quiet"], &dir);
+        assert_eq!(code, 0, "{name}: {err}");
+        convshadow::io::image::RgbImage::load(&dir.join("x.exr"))
+            .unwrap()
+            .data
+    };
+    let ia = render_exr("tilt30.toml", "tilt_deg = [30.0, 0.0]");
+    let ib = render_exr("dir30.toml", &format!("direction = [{a}, 0.0, 1.0]"));
+    let worst = ia
+        .iter()
+        .zip(&ib)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst < 1e-5, "largest difference {worst}");
+    // Bad lights: exit code 3, the key named, no output file.
+    for (light, words) in [
+        ("direction = [0.0, 0.0, -1.0]", "light[0].direction"),
+        ("direction = [0.0, 0.0, 0.0]", "light[0].direction"),
+        (
+            "direction = [0.0, 0.0, 1.0]\ntilt_deg = [5.0, 0.0]",
+            "not both",
+        ),
+        ("kind = \"spot\"", "light[0].kind"),
+    ] {
+        std::fs::write(dir.join("bad.toml"), scene(light)).unwrap();
+        let (code, _, err) =
+            support::run_cli(&["render", "bad.toml", "-o", "bad.png", "--quiet"], &dir);
+        assert_eq!(code, 3, "{light}: {err}");
+        assert!(
+            err.contains("bad.toml") && err.contains(words),
+            "{light}: {err}"
+        );
+        assert!(
+            !dir.join("bad.png").exists(),
+            "{light}: an output was written"
+        );
+    }
 }

@@ -2,6 +2,7 @@
 //! strictly typed; [`validate`] turns it into a [`Scene`], naming the file, the key and what was
 //! expected for every unknown key, wrong type, missing key or invalid value.
 
+mod lights;
 mod overrides;
 mod tables;
 mod validate;
@@ -151,6 +152,9 @@ struct RawSweep {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 struct RawLight {
+    kind: Option<String>,
+    #[serde(default, deserialize_with = "exact")]
+    direction: Option<[f64; 3]>,
     #[serde(default, deserialize_with = "exact")]
     color: Option<[f64; 3]>,
     #[serde(default, deserialize_with = "exact")]

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use crate::model::display::DisplayMap;
 use crate::model::display::Tonemap;
 use crate::model::kernel::KernelSpec;
+use glam::DVec3;
 
 /// Largest accepted image width or height in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
@@ -140,6 +141,37 @@ pub struct CameraSpec {
     pub center: [f64; 3],
     /// World units across the image.
     pub view_width: f64,
+}
+
+impl CameraSpec {
+    /// The camera's world basis `[right, down, forward]` (camera x, y, z): forward the view
+    /// direction, down opposite the part of `up` across the view, right = down × forward.
+    pub fn basis(&self) -> [DVec3; 3] {
+        let forward = DVec3::from(self.direction).normalize();
+        let up = DVec3::from(self.up);
+        let down = -(up - forward * up.dot(forward)).normalize();
+        // Right-handed camera frame: right × down = forward.
+        let right = down.cross(forward);
+        [right, down, forward]
+    }
+
+    /// The camera-space tilt (ωx, ωy) in degrees of a light travelling along the world unit
+    /// vector `direction`: its camera-space travel is ∝ (−tan ωx, −tan ωy, 1) (the tilt's
+    /// convention, `[[light]] tilt_deg`). `Err` with the angle between its travel and the view
+    /// direction, in degrees, where that is 90° or more (a light beside or in front of the viewer).
+    pub fn tilt_of(&self, direction: [f64; 3]) -> Result<[f64; 2], f64> {
+        let [right, down, forward] = self.basis();
+        let d = DVec3::from(direction);
+        let (x, y, z) = (d.dot(right), d.dot(down), d.dot(forward));
+        if z <= 0.0 {
+            return Err(z.clamp(-1.0, 1.0).acos().to_degrees());
+        }
+        // `+ 0.0`: a light along the view gets tilt +0, not −0 (the bits of `tilt_deg = [0, 0]`).
+        Ok([
+            (-x / z).atan().to_degrees() + 0.0,
+            (-y / z).atan().to_degrees() + 0.0,
+        ])
+    }
 }
 
 /// How the slab thickness is given.
@@ -271,8 +303,13 @@ pub struct SweepSpec {
 pub struct LightSpec {
     /// Linear RGB colour.
     pub color: [f32; 3],
-    /// Tilt angles (ωx, ωy) in degrees, each |ω| < 90.
+    /// Tilt angles (ωx, ωy) in degrees, each |ω| < 90: given (`tilt_deg`, camera space), or
+    /// derived from `direction` and the camera ([`CameraSpec::tilt_of`]).
     pub tilt_deg: [f64; 2],
+    /// The world direction the light travels (`direction`, unit length), when the scene gives
+    /// it: the light stays put in the world when the camera turns (`Scene::override_camera`
+    /// derives `tilt_deg` again).
+    pub direction: Option<[f64; 3]>,
     /// Variances (σx², σy²) on the virtual light plane at unit distance.
     pub variance: [f64; 2],
     /// Rotation α of the principal axes, degrees.

@@ -31,11 +31,7 @@ pub struct Camera {
 impl Camera {
     /// Builds the camera basis from a validated camera spec and image size.
     pub fn new(spec: &CameraSpec, image: &ImageSpec) -> Camera {
-        let forward = DVec3::from(spec.direction).normalize();
-        let up = DVec3::from(spec.up);
-        let down = -(up - forward * up.dot(forward)).normalize();
-        // Right-handed camera frame: right × down = forward.
-        let right = down.cross(forward);
+        let [right, down, forward] = spec.basis();
         Camera {
             right,
             down,

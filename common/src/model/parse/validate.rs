@@ -228,12 +228,13 @@ impl Validator<'_> {
         }
         let mut lights = Vec::new();
         for (i, l) in raw.light.into_iter().enumerate() {
-            lights.push(self.light(i, l, base_dir)?);
+            lights.push(self.light(i, l, base_dir, &camera)?);
         }
         if lights.is_empty() {
             lights.push(LightSpec {
                 color: [1.0; 3],
                 tilt_deg: [0.0; 2],
+                direction: None,
                 variance: [0.0; 2],
                 rotation_deg: 0.0,
                 pattern: None,
@@ -375,10 +376,30 @@ impl Validator<'_> {
         })
     }
 
-    fn light(&self, i: usize, raw: RawLight, base_dir: &Path) -> Result<LightSpec, SceneError> {
+    fn light(
+        &self,
+        i: usize,
+        raw: RawLight,
+        base_dir: &Path,
+        camera: &CameraSpec,
+    ) -> Result<LightSpec, SceneError> {
         let key = |k: &str| format!("light[{i}].{k}");
         let color = self.color(&key("color"), raw.color.unwrap_or([1.0; 3]))?;
-        let tilt = raw.tilt_deg.unwrap_or([0.0; 2]);
+        self.light_kind(i, raw.kind.as_deref())?;
+        let direction = match (raw.direction, raw.tilt_deg) {
+            (Some(_), Some(_)) => {
+                return Err(self.err(
+                    format!("light[{i}]"),
+                    "expected `tilt_deg` (camera space) or `direction` (world space), not both",
+                ));
+            }
+            (Some(d), None) => Some(self.unit_vector(&key("direction"), d)?),
+            (None, _) => None,
+        };
+        let tilt = match direction {
+            Some(d) => self.light_tilt(i, d, camera, "")?,
+            None => raw.tilt_deg.unwrap_or([0.0; 2]),
+        };
         for (j, t) in tilt.iter().enumerate() {
             let k = format!("light[{i}].tilt_deg[{j}]");
             self.finite(&k, *t)?;
@@ -427,6 +448,7 @@ impl Validator<'_> {
             pattern,
             color: color.map(|c| c as f32),
             tilt_deg: tilt,
+            direction,
             variance,
             rotation_deg: self.bounded(
                 &key("rotation_deg"),

@@ -228,3 +228,89 @@ fn unknown_keys_name_their_table_and_the_nearest_key() {
     let e = parse(&format!("{MINIMAL}zzzzzz = 1\n")).unwrap_err();
     assert!(!e.message.contains("did you mean"), "{e}");
 }
+
+#[test]
+fn a_world_direction_light_gets_the_tilt_of_its_direction_seen_by_the_camera() {
+    let with = |light: &str| parse(&format!("{MINIMAL}\n[[light]]\n{light}\n"));
+    // Along the view: no tilt, the bits of `tilt_deg = [0, 0]`.
+    let s = with("direction = [0.0, 0.0, 2.0]").unwrap();
+    assert_eq!(s.lights[0].tilt_deg, [0.0, 0.0]);
+    assert!(s.lights[0].tilt_deg[0].is_sign_positive());
+    assert_eq!(s.lights[0].direction, Some([0.0, 0.0, 1.0]));
+    // World +x is the image's left and world +y its top: travelling along (tan 30°, −tan 20°, 1)
+    // moves left and down, which is a tilt of (30°, −20°) by the camera-space convention (travel
+    // ∝ (−tan ωx, −tan ωy, 1), x right, y down).
+    let (a, b) = (30f64.to_radians().tan(), 20f64.to_radians().tan());
+    let s = with(&format!("direction = [{a}, {}, 1.0]", -b)).unwrap();
+    let [wx, wy] = s.lights[0].tilt_deg;
+    assert!(
+        (wx - 30.0).abs() < 1e-9 && (wy + 20.0).abs() < 1e-9,
+        "{wx} {wy}"
+    );
+}
+
+#[test]
+fn a_world_direction_light_stays_put_when_the_camera_turns() {
+    let text = format!("{MINIMAL}\n[[light]]\ndirection = [1.0, 0.0, 1.0]\n");
+    let mut s = parse(&text).unwrap();
+    assert!((s.lights[0].tilt_deg[0] - 45.0).abs() < 1e-9);
+    // Looking along +x, camera right is world +z: the light now travels to the image's right.
+    s.override_camera(Some([1.0, 0.0, 0.0]), None, None)
+        .unwrap();
+    assert!(
+        (s.lights[0].tilt_deg[0] + 45.0).abs() < 1e-9,
+        "{:?}",
+        s.lights[0].tilt_deg
+    );
+    // Looking along −z the light comes from in front of the viewer: refused, by name.
+    let e = s
+        .override_camera(Some([0.0, 0.0, -1.0]), None, None)
+        .expect_err("a light in front of the viewer");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("light[0].direction") && msg.contains("135.0°"),
+        "{msg}"
+    );
+    assert!(msg.contains("after --camera-direction"), "{msg}");
+}
+
+#[test]
+fn bad_light_kinds_and_directions_name_the_key() {
+    let light = |l: &str| format!("{MINIMAL}\n[[light]]\n{l}\n");
+    expect_err(
+        &light("direction = [0.0, 0.0, 0.0]"),
+        "light[0].direction",
+        "non-zero",
+    );
+    expect_err(
+        &light("direction = [nan, 0.0, 1.0]"),
+        "light[0].direction",
+        "finite",
+    );
+    expect_err(
+        &light("direction = [0.0, 0.0, 1.0]\ntilt_deg = [10.0, 0.0]"),
+        "light[0]",
+        "not both",
+    );
+    expect_err(
+        &light("direction = [1.0, 0.0, 0.0]"),
+        "light[0].direction",
+        "90.0° to the view direction",
+    );
+    expect_err(
+        &light("direction = [0.0, 0.0, -1.0]"),
+        "light[0].direction",
+        "180.0°",
+    );
+    expect_err(
+        &light("kind = \"point\""),
+        "light[0].kind",
+        "point lights are not supported yet",
+    );
+    expect_err(
+        &light("kind = \"laser\""),
+        "light[0].kind",
+        "expected \"directional\"",
+    );
+    assert!(parse(&light("kind = \"directional\"")).is_ok());
+}
