@@ -323,7 +323,7 @@ fn a_world_direction_light_renders_like_its_tilt_and_bad_ones_exit_3() {
     let scene = |light: &str| {
         format!(
             "[image]\nwidth = 48\nheight = 48\n[camera]\nview_width = 4.0\n[sweep]\nslabs = 48\n\
-             [[light]]\n{light}\nvariance = [0.02, 0.01]\n\
+             [[light]]\n{light}\n\
              [[mesh]]\nshape = \"box\"\nsize = [1.0, 1.0, 0.4]\nmaterial = \"m\"\n\
              [[mesh]]\nshape = \"box\"\nsize = [8.0, 8.0, 0.2]\ntranslate = [0.0, 0.0, 1.5]\n\
              material = \"m\"\n[material.m]\ncolor = [0.8, 0.6, 0.4]\n"
@@ -349,13 +349,21 @@ fn a_world_direction_light_renders_like_its_tilt_and_bad_ones_exit_3() {
         v["image_hash"].as_str().unwrap().to_string()
     };
     assert_eq!(
-        hash("tilt.toml", "tilt_deg = [0.0, 0.0]"),
-        hash("dir.toml", "direction = [0.0, 0.0, 1.0]"),
+        hash(
+            "tilt.toml",
+            "tilt_deg = [0.0, 0.0]\nvariance = [0.02, 0.01]"
+        ),
+        hash(
+            "dir.toml",
+            "direction = [0.0, 0.0, 1.0]\nvariance = [0.02, 0.01]"
+        ),
         "a light along the view"
     );
-    // Tilted 30° (world +x is the image's left): the same image up to the last bits of
-    // tan(atan(x)).
-    let a = 30f64.to_radians().tan();
+    // Tilted 30° (world +x is the image's left). A world light's variances are those of its
+    // own directions: on the slab plane its slopes vary σx²/cos⁴ω along the tilt and σy²/cos²ω
+    // across it (scene-format.md), which the tilt light is given here: the same image up to
+    // the last bits.
+    let (a, c) = (30f64.to_radians().tan(), 30f64.to_radians().cos());
     let render_exr = |name: &str, light: &str| {
         std::fs::write(dir.join(name), scene(light)).unwrap();
         let (code, _, err) = support::run_cli(&["render", name, "-o", "x.exr", "--quiet"], &dir);
@@ -364,8 +372,16 @@ fn a_world_direction_light_renders_like_its_tilt_and_bad_ones_exit_3() {
             .unwrap()
             .data
     };
-    let ia = render_exr("tilt30.toml", "tilt_deg = [30.0, 0.0]");
-    let ib = render_exr("dir30.toml", &format!("direction = [{a}, 0.0, 1.0]"));
+    let slab_plane = format!(
+        "tilt_deg = [30.0, 0.0]\nvariance = [{}, {}]",
+        0.02 / c.powi(4),
+        0.01 / c.powi(2)
+    );
+    let ia = render_exr("tilt30.toml", &slab_plane);
+    let ib = render_exr(
+        "dir30.toml",
+        &format!("direction = [{a}, 0.0, 1.0]\nvariance = [0.02, 0.01]"),
+    );
     let worst = ia
         .iter()
         .zip(&ib)

@@ -156,6 +156,8 @@ struct RawLight {
     #[serde(default, deserialize_with = "exact")]
     direction: Option<[f64; 3]>,
     #[serde(default, deserialize_with = "exact")]
+    up: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "exact")]
     color: Option<[f64; 3]>,
     #[serde(default, deserialize_with = "exact")]
     tilt_deg: Option<[f64; 2]>,

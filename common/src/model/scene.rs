@@ -147,12 +147,57 @@ impl CameraSpec {
     /// The camera's world basis `[right, down, forward]` (camera x, y, z): forward the view
     /// direction, down opposite the part of `up` across the view, right = down × forward.
     pub fn basis(&self) -> [DVec3; 3] {
-        let forward = DVec3::from(self.direction).normalize();
-        let up = DVec3::from(self.up);
-        let down = -(up - forward * up.dot(forward)).normalize();
-        // Right-handed camera frame: right × down = forward.
-        let right = down.cross(forward);
-        [right, down, forward]
+        frame(DVec3::from(self.direction), DVec3::from(self.up))
+    }
+
+    /// A world-space light ([`WorldLight`]) as the sweep takes it, on the slab plane: its tilt
+    /// ([`CameraSpec::tilt_of`]) and the covariance of its directions' slopes per unit depth,
+    /// `J·R(α)·diag(σx², σy²)·R(α)ᵀ·Jᵀ` with J the derivative of the slope (camera x/z, y/z) by
+    /// small turns of the direction along the light's own axes ([`frame`] of its direction and
+    /// `up`), as `(variance, rotation_deg)`. Along the view with the camera's own `up`, J = 1 and
+    /// the light keeps its numbers.
+    /// `Err` with the angle to the view direction, as `tilt_of`.
+    pub fn light_on_slabs(&self, light: &WorldLight) -> Result<SlabLight, f64> {
+        let tilt_deg = self.tilt_of(light.direction)?;
+        let [right, down, forward] = self.basis();
+        let camera = |v: DVec3| DVec3::new(v.dot(right), v.dot(down), v.dot(forward));
+        let [u, v, d] = frame(DVec3::from(light.direction), DVec3::from(light.up)).map(camera);
+        if [u, v, d] == [DVec3::X, DVec3::Y, DVec3::Z] {
+            // The light's frame is the camera's (along the view, the camera's up): J = 1, and
+            // its numbers are the slab plane's, bit for bit.
+            return Ok(SlabLight {
+                tilt_deg,
+                variance: light.variance,
+                rotation_deg: light.rotation_deg,
+            });
+        }
+        let (s, c) = light.rotation_deg.to_radians().sin_cos();
+        let slope = |a: DVec3| {
+            [
+                (a.x * d.z - d.x * a.z) / (d.z * d.z),
+                (a.y * d.z - d.y * a.z) / (d.z * d.z),
+            ]
+        };
+        let (j1, j2) = (slope(u * c + v * s), slope(v * c - u * s));
+        let [vx, vy] = light.variance;
+        let cov = |p: usize, q: usize| vx * j1[p] * j1[q] + vy * j2[p] * j2[q];
+        let (xx, yy, xy) = (cov(0, 0), cov(1, 1), cov(0, 1));
+        if xy == 0.0 {
+            return Ok(SlabLight {
+                tilt_deg,
+                variance: [xx, yy],
+                rotation_deg: 0.0,
+            });
+        }
+        let alpha = 0.5 * (2.0 * xy).atan2(xx - yy);
+        let (sa, ca) = alpha.sin_cos();
+        let major = xx * ca * ca + 2.0 * xy * sa * ca + yy * sa * sa;
+        let minor = xx * sa * sa - 2.0 * xy * sa * ca + yy * ca * ca;
+        Ok(SlabLight {
+            tilt_deg,
+            variance: [major.max(0.0), minor.max(0.0)],
+            rotation_deg: alpha.to_degrees(),
+        })
     }
 
     /// The camera-space tilt (ωx, ωy) in degrees of a light travelling along the world unit
@@ -172,6 +217,42 @@ impl CameraSpec {
             (-y / z).atan().to_degrees() + 0.0,
         ])
     }
+}
+
+/// The right-handed frame `[right, down, forward]` of a view or light direction `forward` and an
+/// `up` not parallel to it: down is opposite the part of `up` across `forward`, right = down ×
+/// forward (the camera's axes, and a world-space light's own axes).
+pub fn frame(forward: DVec3, up: DVec3) -> [DVec3; 3] {
+    let forward = forward.normalize();
+    let down = -(up - forward * up.dot(forward)).normalize();
+    // Right-handed frame: right × down = forward.
+    let right = down.cross(forward);
+    [right, down, forward]
+}
+
+/// A light given in world space (`[[light]] direction`): what it keeps when the camera turns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorldLight {
+    /// The world direction it travels (unit).
+    pub direction: [f64; 3],
+    /// The world direction its own frame's "up" follows (unit, not parallel to `direction`).
+    pub up: [f64; 3],
+    /// Variances (σx², σy²) of its directions along its own right and down axes, per unit
+    /// distance.
+    pub variance: [f64; 2],
+    /// Rotation of its principal axes from its right axis towards its down axis, degrees.
+    pub rotation_deg: f64,
+}
+
+/// A light on the slab plane, as the sweep takes every light (`LightSpec`'s tilt and spread).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlabLight {
+    /// Tilt (ωx, ωy), degrees.
+    pub tilt_deg: [f64; 2],
+    /// Variances along the principal axes, per unit depth.
+    pub variance: [f64; 2],
+    /// Rotation of the principal axes, degrees.
+    pub rotation_deg: f64,
 }
 
 /// How the slab thickness is given.
@@ -306,11 +387,12 @@ pub struct LightSpec {
     /// Tilt angles (ωx, ωy) in degrees, each |ω| < 90: given (`tilt_deg`, camera space), or
     /// derived from `direction` and the camera ([`CameraSpec::tilt_of`]).
     pub tilt_deg: [f64; 2],
-    /// The world direction the light travels (`direction`, unit length), when the scene gives
-    /// it: the light stays put in the world when the camera turns (`Scene::override_camera`
-    /// derives `tilt_deg` again).
-    pub direction: Option<[f64; 3]>,
-    /// Variances (σx², σy²) on the virtual light plane at unit distance.
+    /// The light as the scene gives it in world space (`direction`, `up`, and its own
+    /// `variance` and `rotation_deg`), when it does: `tilt_deg`, `variance` and `rotation_deg`
+    /// above are derived from it and the camera ([`CameraSpec::light_on_slabs`]), again when
+    /// the camera turns (`Scene::override_camera`), so the light stays put in the world.
+    pub world: Option<WorldLight>,
+    /// Variances (σx², σy²) on the virtual light plane (parallel to the slabs) at unit distance.
     pub variance: [f64; 2],
     /// Rotation α of the principal axes, degrees.
     pub rotation_deg: f64,

@@ -264,7 +264,7 @@ mod tests {
         LightSpec {
             color: [1.0; 3],
             tilt_deg,
-            direction: None,
+            world: None,
             variance,
             rotation_deg: 0.0,
             pattern: None,

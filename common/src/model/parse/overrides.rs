@@ -30,9 +30,9 @@ impl Scene {
             self.camera.direction = d;
             // A world-space light stays put: its tilt follows the camera.
             for i in 0..self.lights.len() {
-                if let Some(dir) = self.lights[i].direction {
-                    let tilt = v.light_tilt(i, dir, &self.camera, " after --camera-direction")?;
-                    self.lights[i].tilt_deg = tilt;
+                if let Some(world) = self.lights[i].world {
+                    let after = " after --camera-direction";
+                    v.place_light(i, &mut self.lights[i], world, &self.camera, after)?;
                 }
             }
         }

@@ -19,7 +19,7 @@ impl Validator<'_> {
         }
     }
 
-    fn finite(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+    pub(super) fn finite(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         if v.is_finite() {
             Ok(v)
         } else {
@@ -234,7 +234,7 @@ impl Validator<'_> {
             lights.push(LightSpec {
                 color: [1.0; 3],
                 tilt_deg: [0.0; 2],
-                direction: None,
+                world: None,
                 variance: [0.0; 2],
                 rotation_deg: 0.0,
                 pattern: None,
@@ -386,27 +386,7 @@ impl Validator<'_> {
         let key = |k: &str| format!("light[{i}].{k}");
         let color = self.color(&key("color"), raw.color.unwrap_or([1.0; 3]))?;
         self.light_kind(i, raw.kind.as_deref())?;
-        let direction = match (raw.direction, raw.tilt_deg) {
-            (Some(_), Some(_)) => {
-                return Err(self.err(
-                    format!("light[{i}]"),
-                    "expected `tilt_deg` (camera space) or `direction` (world space), not both",
-                ));
-            }
-            (Some(d), None) => Some(self.unit_vector(&key("direction"), d)?),
-            (None, _) => None,
-        };
-        let tilt = match direction {
-            Some(d) => self.light_tilt(i, d, camera, "")?,
-            None => raw.tilt_deg.unwrap_or([0.0; 2]),
-        };
-        for (j, t) in tilt.iter().enumerate() {
-            let k = format!("light[{i}].tilt_deg[{j}]");
-            self.finite(&k, *t)?;
-            if t.abs() >= 90.0 {
-                return Err(self.err(k, format!("expected |angle| < 90 degrees, got {t}")));
-            }
-        }
+        let tilt = self.light_tilt(i, raw.tilt_deg, raw.direction.is_some())?;
         let variance = raw.variance.unwrap_or([0.0; 2]);
         for (j, v) in variance.iter().enumerate() {
             let k = format!("light[{i}].variance[{j}]");
@@ -444,18 +424,29 @@ impl Validator<'_> {
                 })
             }
         };
-        Ok(LightSpec {
+        let rotation_deg = self.bounded(
+            &key("rotation_deg"),
+            raw.rotation_deg.unwrap_or(0.0),
+            MAX_ANGLE_DEG,
+        )?;
+        let mut light = LightSpec {
             pattern,
             color: color.map(|c| c as f32),
             tilt_deg: tilt,
-            direction,
+            world: None,
             variance,
-            rotation_deg: self.bounded(
-                &key("rotation_deg"),
-                raw.rotation_deg.unwrap_or(0.0),
-                MAX_ANGLE_DEG,
-            )?,
-        })
+            rotation_deg,
+        };
+        if let Some(direction) = raw.direction {
+            let world = self.world_light(i, direction, raw.up, variance, rotation_deg)?;
+            self.place_light(i, &mut light, world, camera, "")?;
+        } else if raw.up.is_some() {
+            return Err(self.err(
+                key("up"),
+                "only applies with `direction` (a world-space light)",
+            ));
+        }
+        Ok(light)
     }
 
     /// The shape of mesh `i`: its `shape`, `size` and `path` keys.

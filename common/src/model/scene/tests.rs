@@ -236,7 +236,10 @@ fn a_world_direction_light_gets_the_tilt_of_its_direction_seen_by_the_camera() {
     let s = with("direction = [0.0, 0.0, 2.0]").unwrap();
     assert_eq!(s.lights[0].tilt_deg, [0.0, 0.0]);
     assert!(s.lights[0].tilt_deg[0].is_sign_positive());
-    assert_eq!(s.lights[0].direction, Some([0.0, 0.0, 1.0]));
+    assert_eq!(
+        s.lights[0].world.map(|w| w.direction),
+        Some([0.0, 0.0, 1.0])
+    );
     // World +x is the image's left and world +y its top: travelling along (tan 30°, −tan 20°, 1)
     // moves left and down, which is a tilt of (30°, −20°) by the camera-space convention (travel
     // ∝ (−tan ωx, −tan ωy, 1), x right, y down).
@@ -313,4 +316,63 @@ fn bad_light_kinds_and_directions_name_the_key() {
         "expected \"directional\"",
     );
     assert!(parse(&light("kind = \"directional\"")).is_ok());
+}
+
+#[test]
+fn a_world_lights_spread_is_turned_onto_the_slab_plane() {
+    let with = |light: &str| parse(&format!("{MINIMAL}\n[[light]]\n{light}\n")).unwrap();
+    // Along the view, its axes the camera's: the slab plane's own numbers, bit for bit.
+    let s = with("direction = [0.0, 0.0, 1.0]\nvariance = [0.02, 0.01]\nrotation_deg = 20.0");
+    let t = with("tilt_deg = [0.0, 0.0]\nvariance = [0.02, 0.01]\nrotation_deg = 20.0");
+    let (a, b) = (&s.lights[0], &t.lights[0]);
+    assert_eq!(
+        (a.tilt_deg, a.variance, a.rotation_deg),
+        (b.tilt_deg, b.variance, b.rotation_deg)
+    );
+    // Its up along world +x turns its frame a quarter turn on the view: its x axis is the
+    // camera's −y, so its variances swap on the slab plane.
+    let s = with("direction = [0.0, 0.0, 1.0]\nup = [1.0, 0.0, 0.0]\nvariance = [0.02, 0.01]");
+    assert_eq!(
+        (s.lights[0].variance, s.lights[0].rotation_deg),
+        ([0.01, 0.02], 0.0)
+    );
+    // Tilted ω = 40° about the camera's y axis, isotropic σ² = 0.01: a turn θ of its direction in
+    // the tilt's plane moves the slope tan(ω + θ) by θ/cos²ω, a turn across it by θ/cos ω, so the
+    // slope variances are σ²/cos⁴ω and σ²/cos²ω, unrotated.
+    let w = 40f64.to_radians();
+    let s = with(&format!(
+        "direction = [{}, 0.0, {}]\nvariance = [0.01, 0.01]",
+        w.sin(),
+        w.cos()
+    ));
+    let l = &s.lights[0];
+    let expected = [0.01 / w.cos().powi(4), 0.01 / w.cos().powi(2)];
+    assert!((l.tilt_deg[0] - 40.0).abs() < 1e-9, "{:?}", l.tilt_deg);
+    for (got, want) in l.variance.iter().zip(expected) {
+        assert!((got - want).abs() < 1e-12, "{:?}", l.variance);
+    }
+    assert!(l.rotation_deg.abs() < 1e-9, "{}", l.rotation_deg);
+    // Straight down (a light from above a floor the camera looks at from the side would be at
+    // 90°; seen from above it is along the view): the default up turns to +z.
+    let top = parse(&format!(
+        "{}\n[[light]]\ndirection = [0.0, -1.0, 0.0]\nvariance = [0.01, 0.03]\n",
+        MINIMAL.replace(
+            "view_width = 2.0",
+            "view_width = 2.0\ndirection = [0.0, -1.0, 0.0]\nup = [0.0, 0.0, 1.0]"
+        )
+    ))
+    .unwrap();
+    assert_eq!(top.lights[0].world.unwrap().up, [0.0, 0.0, 1.0]);
+    assert_eq!(top.lights[0].tilt_deg, [0.0, 0.0]);
+    assert!((top.lights[0].variance[0] - 0.01).abs() < 1e-12);
+    expect_err(
+        &format!("{MINIMAL}\n[[light]]\ndirection = [0.0, 0.0, 1.0]\nup = [0.0, 0.0, 2.0]\n"),
+        "light[0].up",
+        "not parallel",
+    );
+    expect_err(
+        &format!("{MINIMAL}\n[[light]]\nup = [0.0, 1.0, 0.0]\n"),
+        "light[0].up",
+        "only applies with `direction`",
+    );
 }
