@@ -8,6 +8,8 @@
 //! Open meshes are thin shells (`Ldi::parity_meshes` lacks their bits): their fragments are
 //! crossings like any other (the first one crossed in a slab is shaded) but toggle nothing.
 
+use convshadow_common::pixel::noise::clamp01;
+
 use crate::ldi::Ldi;
 
 /// Marks "no fragment crossed in this slab".
@@ -79,14 +81,8 @@ pub fn slab_part(
         (false, false) => z2 - z1,
         (true, true) => (z1 - front) + (back - z2),
     };
-    let inside = unit(length * inv_e);
+    let inside = clamp01::<f32>(length * inv_e);
     (inside, inside * 0.5)
-}
-
-/// `v` clamped to 0…1 (finite v: parity.wgsl's `min(max(v, 0), 1)` has the same bits).
-#[inline(always)]
-fn unit(v: f32) -> f32 {
-    v.clamp(0.0, 1.0)
 }
 
 /// The lowest set bit's mesh (scene order resolves overlapping materials), if any.

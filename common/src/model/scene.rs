@@ -151,17 +151,18 @@ impl CameraSpec {
     }
 
     /// A world-space light ([`WorldLight`]) as the sweep takes it, on the slab plane: its tilt
-    /// ([`CameraSpec::tilt_of`]) and the covariance of its directions' slopes per unit depth,
+    /// (ωx, ωy) with its camera-space travel ∝ (−tan ωx, −tan ωy, 1), and the covariance of its directions' slopes per unit depth,
     /// `J·R(α)·diag(σx², σy²)·R(α)ᵀ·Jᵀ` with J the derivative of the slope (camera x/z, y/z) by
     /// small turns of the direction along the light's own axes ([`frame`] of its direction and
     /// `up`), as `(variance, rotation_deg)`. Along the view with the camera's own `up`, J = 1 and
     /// the light keeps its numbers.
-    /// `Err` with the angle to the view direction, as `tilt_of`.
+    /// `Err` with its travel's angle to the view direction, in degrees, where that is 90° or
+    /// more (a light beside or in front of the viewer).
     pub fn light_on_slabs(&self, light: &WorldLight) -> Result<SlabLight, f64> {
-        let tilt_deg = self.tilt_of(light.direction)?;
         let [right, down, forward] = self.basis();
         let camera = |v: DVec3| DVec3::new(v.dot(right), v.dot(down), v.dot(forward));
         let [u, v, d] = frame(DVec3::from(light.direction), DVec3::from(light.up)).map(camera);
+        let tilt_deg = tilt_of_travel(camera(DVec3::from(light.direction)))?;
         if [u, v, d] == [DVec3::X, DVec3::Y, DVec3::Z] {
             // The light's frame is the camera's (along the view, the camera's up): J = 1, and
             // its numbers are the slab plane's, bit for bit.
@@ -199,24 +200,20 @@ impl CameraSpec {
             rotation_deg: alpha.to_degrees(),
         })
     }
+}
 
-    /// The camera-space tilt (ωx, ωy) in degrees of a light travelling along the world unit
-    /// vector `direction`: its camera-space travel is ∝ (−tan ωx, −tan ωy, 1) (the tilt's
-    /// convention, `[[light]] tilt_deg`). `Err` with the angle between its travel and the view
-    /// direction, in degrees, where that is 90° or more (a light beside or in front of the viewer).
-    pub fn tilt_of(&self, direction: [f64; 3]) -> Result<[f64; 2], f64> {
-        let [right, down, forward] = self.basis();
-        let d = DVec3::from(direction);
-        let (x, y, z) = (d.dot(right), d.dot(down), d.dot(forward));
-        if z <= 0.0 {
-            return Err(z.clamp(-1.0, 1.0).acos().to_degrees());
-        }
-        // `+ 0.0`: a light along the view gets tilt +0, not −0 (the bits of `tilt_deg = [0, 0]`).
-        Ok([
-            (-x / z).atan().to_degrees() + 0.0,
-            (-y / z).atan().to_degrees() + 0.0,
-        ])
+/// The tilt (ωx, ωy) in degrees of a light travelling along `(x, y, z)` in camera space (∝
+/// (−tan ωx, −tan ωy, 1)), or `Err` with its angle to the view direction where that is ≥ 90°.
+fn tilt_of_travel(t: DVec3) -> Result<[f64; 2], f64> {
+    let (x, y, z) = (t.x, t.y, t.z);
+    if z <= 0.0 {
+        return Err(z.clamp(-1.0, 1.0).acos().to_degrees());
     }
+    // `+ 0.0`: a light along the view gets tilt +0, not −0 (the bits of `tilt_deg = [0, 0]`).
+    Ok([
+        (-x / z).atan().to_degrees() + 0.0,
+        (-y / z).atan().to_degrees() + 0.0,
+    ])
 }
 
 /// The right-handed frame `[right, down, forward]` of a view or light direction `forward` and an
@@ -385,7 +382,7 @@ pub struct LightSpec {
     /// Linear RGB colour.
     pub color: [f32; 3],
     /// Tilt angles (ωx, ωy) in degrees, each |ω| < 90: given (`tilt_deg`, camera space), or
-    /// derived from `direction` and the camera ([`CameraSpec::tilt_of`]).
+    /// derived from `direction` and the camera ([`CameraSpec::light_on_slabs`]).
     pub tilt_deg: [f64; 2],
     /// The light as the scene gives it in world space (`direction`, `up`, and its own
     /// `variance` and `rotation_deg`), when it does: `tilt_deg`, `variance` and `rotation_deg`

@@ -181,9 +181,10 @@ pub fn improved_perlin4<L: Lane>(x: L, y: L, z: L, t: L) -> L {
     lerp(ft, az0, az1) * L::splat(PERLIN4_SCALE)
 }
 
-/// Clamps to [0, 1] with compares and selects: NaN and −0 map to +0.
+/// Clamps to [0, 1] with compares and selects: NaN and −0 map to +0 (noise.wgsl `clamp01`;
+/// also the part of a slab a medium fills, `cpu::parity::slab_part`).
 #[inline(always)]
-pub(crate) fn clamp01<L: Lane>(v: L) -> L {
+pub fn clamp01<L: Lane>(v: L) -> L {
     let zero = L::splat(0.0);
     let one = L::splat(1.0);
     let r = L::select(v.gt(zero), v, zero);

@@ -5,6 +5,7 @@
 
 #import shared/constants
 #import shared/bindings
+#import noise
 
 const NO_CROSSING: u32 = 0xffffffffu;
 
@@ -58,13 +59,8 @@ fn slab_part(mesh: u32, before: u32, after: u32, first: u32, last: u32, front: f
     } else {
         length = (z1 - front) + (back - z2);
     }
-    let inside = unit(length * globals.inv_slab_distance);
+    let inside = clamp01(length * globals.inv_slab_distance);
     return vec2<f32>(inside, inside * 0.5);
-}
-
-// `unit`: clamped to 0…1 (max, then min, as on the CPU).
-fn unit(v: f32) -> f32 {
-    return min(max(v, 0.0), 1.0);
 }
 
 // `first_mesh`: the lowest set bit (scene order resolves overlapping materials).
