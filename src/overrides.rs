@@ -164,7 +164,7 @@ impl SamplesError {
 }
 
 /// The sweep's scene keys a render may override (`--slabs`, `--kernel`, `--seed`, `--penumbra`,
-/// `--surface`, `--guard-band`, `--variance-compensation`, `--preintegration`, `--media`); `None` leaves
+/// `--surface`, `--guard-band`, `--variance-compensation`, `--preintegration`, `--media`, `--subpixel-shadows`); `None` leaves
 /// the scene's value.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SweepOverrides {
@@ -186,6 +186,8 @@ pub struct SweepOverrides {
     pub preintegration: Option<bool>,
     /// `sweep.media`.
     pub media: Option<Media>,
+    /// `sweep.subpixel_shadows`.
+    pub subpixel_shadows: Option<bool>,
 }
 
 /// Why a [`SweepOverrides`] was refused.
@@ -230,6 +232,9 @@ impl SweepOverrides {
         }
         if let Some(m) = self.media {
             scene.sweep.media = m;
+        }
+        if let Some(v) = self.subpixel_shadows {
+            scene.sweep.subpixel_shadows = v;
         }
         scene.revalidate().map_err(OverrideError::Invalid)
     }

@@ -51,6 +51,7 @@ pub fn render_stats(
             "penumbra": scene.sweep.penumbra.to_string(),
             "media": scene.sweep.media.to_string(),
             "preintegration": r.plan.preintegration,
+            "subpixel_shadows": !r.plan.subpixel_meshes.is_empty(),
             "guard_band": scene.sweep.guard_band.to_string(),
             "guard_band_px": {
                 "left": r.plan.guard.left,

@@ -61,13 +61,15 @@ pub fn attenuate<L: Lane>(iin: L, attenuation: L) -> L {
     L::select(v.lt(L::splat(FLUSH_BELOW)), L::splat(0.0), v)
 }
 
-/// Distance penumbra: the occluder-depth plane after a slab, `D + slab · removed` (`removed`:
-/// the light the slab took out, summed over channels, at depth `slab` per lane: this slab, or
-/// where a held surface was crossed, see [`hold_step`]), flushed like the light.
+/// Distance penumbra: the occluder-depth plane after a slab, `D + at · removed` (`removed`:
+/// the light the slab took out, summed over channels, at depth `at` (slabs) per lane: this
+/// slab, where a held surface was crossed (see [`hold_step`]), or an opaque crossing's
+/// `crate::subpixel::removal_depth`), flushed where its magnitude is below [`FLUSH_BELOW`]
+/// (D is negative where light was removed before slab 0's middle).
 #[inline(always)]
-pub fn deepen<L: Lane>(depth: L, slab: L, removed: L) -> L {
-    let v = depth + slab * removed;
-    L::select(v.lt(L::splat(FLUSH_BELOW)), L::splat(0.0), v)
+pub fn deepen<L: Lane>(depth: L, at: L, removed: L) -> L {
+    let v = depth + at * removed;
+    L::select(v.abs().lt(L::splat(FLUSH_BELOW)), L::splat(0.0), v)
 }
 
 /// A pixel's surface hold (`RenderPlan::surface_hold`), packed in one `u32`: 0 when it holds

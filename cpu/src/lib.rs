@@ -8,6 +8,7 @@ pub mod kernels;
 pub mod ldi;
 pub mod parity;
 pub mod shading;
+pub mod subpixel;
 pub mod sweep;
 
 /// The default memory budget: half the machine's physical memory where it can be read, else 4 GiB.

@@ -130,8 +130,9 @@ pub struct Globals {
     pub inv_slab_distance: f32,
     /// 1 with `sweep.media = "second-order"` (`RenderPlan::second_order_media`), else 0.
     pub second_order_media: u32,
-    /// Uniform structs are a multiple of 16 bytes.
-    pub _pad3: u32,
+    /// 1 when some mesh reads its light at the exact shift (`RenderPlan::subpixel_meshes`;
+    /// `MeshHeader::subpixel` says which), else 0.
+    pub subpixel_shadows: u32,
     /// Padding.
     pub _pad4: u32,
     /// Padding.
@@ -181,6 +182,8 @@ pub struct LightHeader {
     pub to_light: [f32; 3],
     /// Ashikmin–Shirley's Fresnel-over-(h·k) constants (`plan::fresnel_terms`).
     pub fresnel: [f32; 2],
+    /// The light's drift per slab in pixels (`LightPlan::drift`).
+    pub drift: [f32; 2],
 }
 
 /// One light's per-slab values (`light · slabs + slab` in the light-slab buffer).
@@ -193,6 +196,9 @@ pub struct LightSlab {
     pub phase: u32,
     /// The kernel's integer shift in this slab.
     pub shift: [i32; 2],
+    /// How far the sweep has moved the light beyond its exact drift after this slab's gather
+    /// (`LightPlan::carry_residual`; 0 without sub-pixel shadows).
+    pub residual: [f32; 2],
 }
 
 /// One kernel tap: the offset of its top-left pixel and the weights of its four corners.
@@ -297,6 +303,9 @@ pub struct MeshHeader {
     pub to_detail: [f32; 12],
     /// Material index.
     pub material: u32,
+    /// 1 when a crossing of this mesh reads its light at the exact shift
+    /// (`RenderPlan::subpixel_meshes`), else 0.
+    pub subpixel: u32,
 }
 
 /// A pixel's layer cursor: its next fragment and the inside bit of every mesh.

@@ -29,6 +29,7 @@ const FILES: &[(&str, &str)] = &[
     ("noise", include_str!("shaders/noise.wgsl")),
     ("texture3d", include_str!("shaders/texture3d.wgsl")),
     ("kernels", include_str!("shaders/kernels.wgsl")),
+    ("subpixel", include_str!("shaders/subpixel.wgsl")),
     ("parity", include_str!("shaders/parity.wgsl")),
     ("shading", include_str!("shaders/shading.wgsl")),
     ("composite", include_str!("shaders/composite.wgsl")),

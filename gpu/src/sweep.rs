@@ -157,6 +157,7 @@ fn light_tables(light: &LightPlan, slabs: usize, distance: bool, t: &mut Tables)
         half_vector: light.half_vector,
         to_light: light.to_light,
         fresnel: light.fresnel,
+        drift: light.drift,
     };
     t.taps.extend(table.taps.iter().map(|tap| Tap {
         dx: tap.dx,
@@ -167,6 +168,7 @@ fn light_tables(light: &LightPlan, slabs: usize, distance: bool, t: &mut Tables)
         hash: light.slab_hash.get(k).copied().unwrap_or(0),
         phase: table.slab_phase.get(k).copied().unwrap_or(0),
         shift: table.slab_shift.get(k).copied().unwrap_or([0, 0]),
+        residual: light.carry_residual.get(k).copied().unwrap_or([0.0; 2]),
     }));
     header
 }
@@ -284,6 +286,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             parity_meshes: raster.parity_meshes,
             inv_slab_distance: plan.inv_slab_distance,
             second_order_media: u32::from(plan.second_order_media),
+            subpixel_shadows: u32::from(!plan.subpixel_meshes.is_empty()),
             ..Globals::default()
         },
         slabs: (0..slabs)
@@ -305,9 +308,11 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             .mesh_to_detail
             .iter()
             .zip(&plan.mesh_material)
-            .map(|(&to_detail, &material)| MeshHeader {
+            .enumerate()
+            .map(|(m, (&to_detail, &material))| MeshHeader {
                 to_detail,
                 material,
+                subpixel: u32::from(plan.subpixel_meshes.get(m).copied().unwrap_or(false)),
             })
             .collect(),
         normals: raster.triangles.iter().map(|tri| tri.normal).collect(),

@@ -43,8 +43,10 @@ def cli():
 
 
 def flags(overrides):
-    """The command-line flags of `render`'s keyword arguments (`slabs=96` → `--slabs 96`)."""
+    """The command-line flags of `render`'s keyword arguments (`slabs=96` → `--slabs 96`,
+    `subpixel_shadows=False` → `--subpixel-shadows false`)."""
     out = []
     for key, value in overrides.items():
-        out += ["--" + key.replace("_", "-"), str(value)]
+        text = str(value).lower() if isinstance(value, bool) else str(value)
+        out += ["--" + key.replace("_", "-"), text]
     return out

@@ -42,8 +42,10 @@ def bits(a):
         (DEFAULT, {**SMALL, "kernel": "poisson8", "penumbra": "iterated", "seed": 7,
                    "media": "first-order"}),
         (REPO / "scenes" / "gobo.toml", {"width": 40, "height": 40, "slabs": 48}),
+        (REPO / "scenes" / "edge.toml", {"width": 40, "height": 40, "slabs": 48,
+                                         "subpixel_shadows": False}),
     ],
-    ids=["default", "default-overridden", "gobo"],
+    ids=["default", "default-overridden", "gobo", "edge-carried"],
 )
 def test_image_is_the_cli_exr_bit_for_bit(cli, tmp_path, scene, overrides):
     exr, stats_json = tmp_path / "out.exr", tmp_path / "stats.json"
@@ -57,7 +59,7 @@ def test_image_is_the_cli_exr_bit_for_bit(cli, tmp_path, scene, overrides):
     np.testing.assert_array_equal(bits(image), bits(expected))
     cli_stats = json.loads(stats_json.read_text())
     for key in ["image_hash", "ldi_hash", "slabs", "slabs_swept", "fragments", "kernel",
-                "penumbra", "media", "guard_band_px", "grid_width", "grid_height", "backend", "path"]:
+                "penumbra", "media", "subpixel_shadows", "guard_band_px", "grid_width", "grid_height", "backend", "path"]:
         assert stats[key] == cli_stats[key], key
     # Every key of --stats-json but the files written.
     assert set(cli_stats) - set(stats) == {"outputs"}

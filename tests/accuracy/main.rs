@@ -10,6 +10,7 @@
 mod support;
 
 mod distance_penumbra;
+mod fixed_pixel_edge;
 mod guard_band;
 mod hard_cases;
 mod oblique_receiver;

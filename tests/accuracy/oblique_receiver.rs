@@ -24,11 +24,20 @@ const D1: f64 = 1.0;
 /// The receiver's thickness, and the gap between the occluder and the receiver's nearest point.
 const THICK: f64 = 0.1;
 const GAP: f64 = 0.2;
-/// The RMSE asked over the receiver. Issue 40 asks 5e-3; what is left (0.023–0.045, measured) is
-/// the whole-pixel carry of this narrow light's mean: the rendered half-shadow line lies on pixel
-/// boundaries, 0.05–1.4 px behind the closed form's at 128 and 512 slabs alike
-/// (docs/accuracy.md §2b). Without the surface hold: 0.22–0.33, lit std/mean 0.27–0.91.
-const MAX_RMSE: f64 = 0.05;
+/// The occluder's thickness. Its front face casts the edge's shadow: every direction of the
+/// light travels towards +x (its spread, 0.05, is far below the tilt's tan 25° = 0.47), so the
+/// ray past the edge grazes the front corner (before 2026-12-05 the test measured the distance
+/// from the back face, 0.02 too short: the closed form's line 0.75 px too near the edge).
+const OCC_THICK: f64 = 0.02;
+/// The RMSE asked over the receiver: issue 40's 5e-3 where it is reached (the distance penumbra
+/// at 30°, with sub-pixel shadows: 1.4e-3–2.5e-3), else today's figures plus a margin as a
+/// guard (60°: 0.015–0.016, where the receiver's own released light blends into the mean
+/// occluder depth in the penumbra; the iterated penumbra, which has no depth plane and keeps the
+/// whole-pixel carry: 0.009–0.018). Measured 2026-12-05 (docs/accuracy.md §2b). Without
+/// sub-pixel shadows the distance penumbra's line lies on pixel boundaries, up to 0.8 px off
+/// (0.014–0.028); without the surface hold, 0.22–0.33 and lit std/mean 0.27–0.91.
+const ASKED_RMSE: f64 = 5e-3;
+const MAX_RMSE: f64 = 0.02;
 
 /// One oblique receiver: a white opaque plate turned `tilt` degrees about world x, under an
 /// opaque half-plane facing the camera that covers world x ≥ 0 (the image's left half); the
@@ -38,6 +47,8 @@ struct Oblique {
     slabs: u32,
     penumbra: Penumbra,
     kernel: &'static str,
+    /// `sweep.subpixel_shadows`.
+    subpixel: bool,
 }
 
 impl Oblique {
@@ -47,7 +58,7 @@ impl Oblique {
         -0.5 * THICK / t.cos() + y * t.tan()
     }
 
-    /// The occluder's depth: `GAP` in front of the receiver's nearest point in view.
+    /// The occluder's back face: `GAP` in front of the receiver's nearest point in view.
     fn occluder_depth(&self) -> f64 {
         let half = 0.5 * VIEW;
         self.receiver_depth(-half).min(self.receiver_depth(half)) - GAP
@@ -70,12 +81,13 @@ slabs = {slabs}
 penumbra = "{penumbra}"
 kernel = "{kernel}"
 optimal_distance = {D1}
+subpixel_shadows = {sp}
 [[light]]
 tilt_deg = [{TILT_X}, {TILT_Y}]
 variance = [{VARIANCE}, {VARIANCE}]
 [[mesh]]
 shape = "box"
-size = [4.0, 6.0, 0.02]
+size = [4.0, 6.0, {OCC_THICK}]
 translate = [2.0, 0.0, {ze}]
 material = "white"
 [[mesh]]
@@ -89,22 +101,23 @@ surface = "flat"  # the light itself, without the cosine: the shadow is measured
 "#,
             slabs = self.slabs,
             kernel = self.kernel,
-            ze = self.occluder_depth() - 0.01,
+            ze = self.occluder_depth() - 0.5 * OCC_THICK,
             tilt = self.tilt,
+            sp = self.subpixel,
         );
         Scene::parse(&text, "oblique.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
     }
 
     /// The closed-form light at pixel (x, y), or `None` where the camera sees the occluder: the
     /// edge at camera x = 0 (world x = 0; the occluder covers camera x ≤ 0) casts its half-shadow
-    /// line at x = −d·tan ωx, d the pixel's distance to the occluder, with a penumbra of standard
+    /// line at x = −d·tan ωx, d the pixel's distance to the occluder's front face, with a penumbra of standard
     /// deviation d·σ (distance) or √(d·d1)·σ (iterated). A tilt along y moves the shadow along
     /// the edge only.
     fn expected(&self, x: u32, y: u32) -> Option<f64> {
         let px = VIEW / f64::from(SIZE);
         let cx = (f64::from(x) + 0.5 - 0.5 * f64::from(SIZE)) * px;
         let world_y = -(f64::from(y) + 0.5 - 0.5 * f64::from(SIZE)) * px;
-        let d = self.receiver_depth(world_y) - self.occluder_depth();
+        let d = self.receiver_depth(world_y) - (self.occluder_depth() - OCC_THICK);
         let sigma = VARIANCE.sqrt();
         let std = match self.penumbra {
             Penumbra::Distance => d * sigma,
@@ -155,12 +168,28 @@ fn an_oblique_receiver_does_not_shadow_itself_and_keeps_the_edge_shadow() {
                     slabs,
                     penumbra,
                     kernel: "ellipse2",
+                    subpixel: true,
                 };
                 let (rmse, banding, lit) = case.measure();
-                let line = format!(
-                    "{penumbra:?} {tilt}° {slabs} slabs: RMSE {rmse:.5}, lit std/mean {banding:.2e} over {lit} px"
+                let asked = if penumbra == Penumbra::Distance && tilt == 30.0 {
+                    ASKED_RMSE
+                } else {
+                    MAX_RMSE
+                };
+                let mut line = format!(
+                    "{penumbra:?} {tilt}° {slabs} slabs: RMSE {rmse:.5} (≤ {asked}), lit std/mean {banding:.2e} over {lit} px"
                 );
-                failed |= rmse > MAX_RMSE || banding > 1e-3 || lit < 1000;
+                failed |= rmse > asked || banding > 1e-3 || lit < 1000;
+                if penumbra == Penumbra::Distance {
+                    // The same without sub-pixel shadows: the line on pixel boundaries.
+                    let carried = Oblique {
+                        subpixel: false,
+                        ..case
+                    };
+                    let (rmse_carried, _, _) = carried.measure();
+                    line += &format!("; carried in whole pixels: {rmse_carried:.5}");
+                    failed |= tilt == 30.0 && rmse_carried <= ASKED_RMSE;
+                }
                 report.push(line);
             }
         }
@@ -169,7 +198,8 @@ fn an_oblique_receiver_does_not_shadow_itself_and_keeps_the_edge_shadow() {
     println!("{report}");
     assert!(
         !failed,
-        "asked: RMSE ≤ {MAX_RMSE}, lit std/mean ≤ 1e-3\n{report}"
+        "asked: RMSE as shown (and above {ASKED_RMSE} at 30° when carried, so the check can \
+         fail), lit std/mean ≤ 1e-3\n{report}"
     );
 }
 
@@ -186,6 +216,7 @@ fn an_oblique_receiver_does_not_shadow_itself_with_any_kernel() {
                 slabs: 512,
                 penumbra,
                 kernel,
+                subpixel: true,
             };
             let (rmse, banding, lit) = case.measure();
             // The RMSE is printed only: the kernels' penumbra shapes differ (`box` 0.050).

@@ -91,6 +91,7 @@ fn repeated_outputs_png_and_exr_and_stats_json() {
     }
     assert_eq!(v["kernel"], "poisson8");
     assert_eq!(v["media"], "second-order");
+    assert!(v["subpixel_shadows"].is_boolean(), "{v}");
     assert_eq!(v["threads"], 3);
     // The EXR holds exactly the hashed float image.
     assert_eq!(

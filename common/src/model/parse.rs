@@ -147,6 +147,7 @@ struct RawSweep {
     guard_band: Option<toml::Value>,
     preintegration: Option<bool>,
     media: Option<String>,
+    subpixel_shadows: Option<bool>,
 }
 
 #[derive(Deserialize, Debug)]

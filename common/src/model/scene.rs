@@ -374,6 +374,10 @@ pub struct SweepSpec {
     pub preintegration: bool,
     /// How slabs of translucent medium are composited.
     pub media: Media,
+    /// Distance penumbra: a crossed surface that blocks light reads its light at the exact
+    /// sub-pixel shift from its mean occluder, not the whole pixels the sweep carries the light's
+    /// drift in (`sweep.subpixel_shadows`, default on; docs/how-it-works.md).
+    pub subpixel_shadows: bool,
 }
 
 /// A distant Gaussian light behind the viewer.

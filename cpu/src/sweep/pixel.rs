@@ -33,26 +33,30 @@ use super::kit::{
     light_planes,
 };
 use crate::composite::{Held, attenuate, composite, deepen, hold_step, part_of_slab};
-use crate::kernels::{TapOrigin, distance_row, gather, phase_at};
+use crate::kernels::{LightPlanes, TapOrigin, distance_row, gather, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
 use crate::shading::{
     Surface, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
+use crate::subpixel::{exact_shift, removal_depth, shifted_gather};
 
 /// The light a pixel gathered in step 1: every light's channels and (distance penumbra) its
 /// occluder depth.
-struct LightIn {
+pub(crate) struct LightIn {
     /// Light l's channel c at `l · channels + c`.
-    iin: [f32; MAX_LIGHT_CHANNELS],
+    pub(crate) iin: [f32; MAX_LIGHT_CHANNELS],
     /// Light l's gathered depth plane.
     depth: [f32; MAX_LIGHTS],
+    /// Light l's tap row (sub-pixel shadows read through it again).
+    row: [u32; MAX_LIGHTS],
 }
 
 impl LightIn {
     /// Nothing gathered yet.
-    const ZERO: LightIn = LightIn {
+    pub(crate) const ZERO: LightIn = LightIn {
         iin: [0.0; MAX_LIGHT_CHANNELS],
         depth: [0.0; MAX_LIGHTS],
+        row: [0; MAX_LIGHTS],
     };
 }
 
@@ -87,20 +91,97 @@ pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usi
     // 2. Intersection: advance the layer cursor to the slab's back face.
     let hit = intersect(row.ctx, row.y, state, x);
     let held = hold(row.ctx, state, x, hit.crossed);
+    // Sub-pixel shadows: a crossed opaque surface's light read at its exact shift.
+    let part = subpixel_part(row.ctx, &hit);
+    let mut shade_in = light.iin;
+    if let Some(part) = part {
+        exact_light(row, x, &light, part, &mut shade_in);
+    }
     // 3. Shading at one point, if inside a mesh or a surface was crossed; 4. composite.
     let attenuation = match hit.mesh {
-        Some(mesh) => shade_and_composite(row, state, x, &light.iin, mesh, &hit),
+        Some(mesh) => shade_and_composite(row, state, x, &shade_in, mesh, &hit),
         None => [1.0; 3],
     };
     // 5. Attenuate (and flush) into this slab's outgoing light buffer — a held surface passes
     // it, a released one removes it; distance penumbra: the light this slab removed, at its
-    // depth, into the depth plane, and the next level.
+    // depth (an opaque crossing's own, with sub-pixel shadows), into the depth plane, and the
+    // next level.
+    let slab = row.ctx.slab;
     let (attenuation, removed_at) = match held {
-        Held::Free => (attenuation, row.ctx.slab),
-        Held::Pass => ([1.0; 3], row.ctx.slab),
-        Held::Release { removed_at } => ([0.0; 3], removed_at),
+        Held::Free => (
+            attenuation,
+            part.map_or(slab as f32, |p| removal_depth(slab, p)),
+        ),
+        Held::Pass => ([1.0; 3], slab as f32),
+        Held::Release { removed_at } => ([0.0; 3], removed_at as f32),
     };
     attenuate_light(row.ctx, state, x, &light, attenuation, removed_at);
+}
+
+/// Sub-pixel shadows: where in its slab (0 at the front face, 1 at the back) the pixel crossed
+/// a surface of a mesh in [`RenderPlan::subpixel_meshes`](convshadow_common::plan::RenderPlan),
+/// or `None`.
+#[inline(always)]
+pub(crate) fn subpixel_part(ctx: &SlabContext<'_>, hit: &Hit) -> Option<f32> {
+    let meshes = &ctx.plan.subpixel_meshes;
+    if meshes.is_empty() || hit.crossed == NO_CROSSING {
+        return None;
+    }
+    let mesh = hit.mesh.expect("a crossing has a mesh") as usize;
+    meshes[mesh]
+        .then(|| (ctx.ldi.depth[hit.crossed as usize] - ctx.front) * ctx.plan.inv_slab_distance)
+}
+
+/// Sub-pixel shadows at pixel x, which crossed an opaque surface at `part` of the slab: every
+/// occluded light's channels in `shade_in` read again where the exact drift puts them
+/// ([`exact_shift`], [`shifted_gather`]), through the tap row step 1 used.
+pub(crate) fn exact_light(
+    row: &RowContext<'_>,
+    x: usize,
+    light: &LightIn,
+    part: f32,
+    shade_in: &mut [f32; MAX_LIGHT_CHANNELS],
+) {
+    let (ctx, plan) = (row.ctx, row.ctx.plan);
+    let ch = plan.channels as usize;
+    for (l, light_plan) in plan.lights.iter().enumerate() {
+        let channels = &light.iin[l * ch..(l + 1) * ch];
+        let lit = channels.iter().fold(0.0f32, |a, &v| a + v);
+        let gathered = (lit, plan.channels);
+        let row_level = light.row[l] / light_plan.table.phase_count;
+        let (slab, depth) = ((ctx.slab, part), light.depth[l]);
+        let Some(shift) = exact_shift(light_plan, slab, gathered, depth, row_level) else {
+            continue;
+        };
+        let at = TapOrigin {
+            x: x as i32,
+            y: row.y as i32,
+            shift: light_plan.table.slab_shift[ctx.slab as usize],
+            inside: false,
+        };
+        let planes = LightPlanes {
+            channels: ch,
+            ..light_planes(plan, row.prev.light, l)
+        };
+        let sums = shifted_gather(&planes, ctx.taps[l].weighted(light.row[l]), at, shift);
+        if std::env::var("PROTO_DBG").is_ok()
+            && row.y == 112 + plan.guard.top as usize
+            && (x as i32 - plan.guard.left as i32) >= 120
+            && (x as i32 - plan.guard.left as i32) % 5 == 0
+        {
+            eprintln!(
+                "x {} slab {} part {part} lit {lit} depth {} zbar {} shift {shift:?} in {} out {} guard {:?}",
+                x as i32 - plan.guard.left as i32,
+                ctx.slab,
+                light.depth[l],
+                light.depth[l] / (1.0 - lit),
+                channels[0],
+                sums[0],
+                plan.guard
+            );
+        }
+        shade_in[l * ch..(l + 1) * ch].copy_from_slice(&sums[..ch]);
+    }
 }
 
 /// Step 2's surface hold at pixel x, whose cursor crossed fragment `crossed` in this slab
@@ -129,7 +210,7 @@ pub(crate) fn hold(
 /// (Filled in place: a returned copy of it cost 5 % of the scalar sweep in store-forwarding
 /// stalls.)
 #[inline(always)]
-fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
+pub(crate) fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
     let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
     let distance = plan.depth_planes() > 0;
@@ -153,6 +234,7 @@ fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
         let sums = gather(&planes, taps.weighted(tap_row), at);
         copy_planes(&mut light.iin[l * ch..(l + 1) * ch], &sums);
         light.depth[l] = sums[ch];
+        light.row[l] = tap_row;
     }
 }
 
@@ -289,7 +371,7 @@ fn attenuate_light(
     x: usize,
     light: &LightIn,
     attenuation: [f32; 3],
-    removed_at: u32,
+    removed_at: f32,
 ) {
     let plan = ctx.plan;
     let (w, ch, planes) = (
@@ -307,7 +389,7 @@ fn attenuate_light(
             lit_out += out[c];
         }
         if plan.depth_planes() > 0 {
-            out[ch] = deepen(light.depth[l], removed_at as f32, lit_in - lit_out);
+            out[ch] = deepen(light.depth[l], removed_at, lit_in - lit_out);
             let occluded = ch as f32 - lit_out;
             let table = &plan.lights[l].table;
             state.levels[l * w + x] = pixel_level::<f32>(table, occluded, out[ch], ctx.slab + 1);

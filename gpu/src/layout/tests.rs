@@ -67,7 +67,7 @@ fn rust_layouts() -> Vec<Layout> {
             parity_meshes,
             inv_slab_distance,
             second_order_media,
-            _pad3,
+            subpixel_shadows,
             _pad4,
             _pad5,
         }),
@@ -88,9 +88,15 @@ fn rust_layouts() -> Vec<Layout> {
             color,
             half_vector,
             to_light,
-            fresnel
+            fresnel,
+            drift
         }),
-        layout!(LightSlab { hash, phase, shift }),
+        layout!(LightSlab {
+            hash,
+            phase,
+            shift,
+            residual
+        }),
         layout!(Tap { dx, dy, w }),
         layout!(MaterialHeader {
             tf,
@@ -124,7 +130,8 @@ fn rust_layouts() -> Vec<Layout> {
         }),
         layout!(MeshHeader {
             to_detail,
-            material
+            material,
+            subpixel
         }),
         layout!(Cursor { next, inside }),
     ]

@@ -51,12 +51,13 @@ fn attenuate(v_in: f32, attenuation: f32) -> f32 {
     return select(v, 0.0, v < globals.flush_below);
 }
 
-// `deepen` (distance penumbra): the occluder-depth plane after a slab, D + slab · removed
-// (`removed`: the light the slab took out, summed over channels, at depth `slab`: this slab, or a
-// released surface's crossing slab), flushed like the light.
-fn deepen(depth: f32, slab: u32, removed: f32) -> f32 {
-    let v = depth + f32(slab) * removed;
-    return select(v, 0.0, v < globals.flush_below);
+// `deepen` (distance penumbra): the occluder-depth plane after a slab, D + at · removed
+// (`removed`: the light the slab took out, summed over channels, at depth `at` in slabs: this
+// slab, a released surface's crossing slab, or an opaque crossing's `removal_depth`), flushed
+// where its magnitude is below flush_below (negative before slab 0's middle).
+fn deepen(depth: f32, at: f32, removed: f32) -> f32 {
+    let v = depth + at * removed;
+    return select(v, 0.0, abs(v) < globals.flush_below);
 }
 
 // `Held`: what step 5 does with a pixel's light under its surface hold.

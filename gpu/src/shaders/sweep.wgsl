@@ -11,6 +11,7 @@
 #import noise
 #import texture3d
 #import kernels
+#import subpixel
 #import parity
 #import shading
 #import composite
@@ -19,6 +20,8 @@
 var<private> iin: array<f32, MAX_LIGHT_CHANNELS>;
 // Distance penumbra: each light's gathered occluder-depth plane.
 var<private> depth_in: array<f32, MAX_LIGHTS>;
+// Each light's tap row (sub-pixel shadows gather through it again).
+var<private> tap_rows: array<u32, MAX_LIGHTS>;
 
 @compute @workgroup_size(8, 8)
 fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -54,6 +57,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let per_phase = light.taps_per_phase;
         let first_tap = light.taps + per_phase * phase;
+        tap_rows[l] = phase;
         for (var c = 0u; c < ch; c++) {
             iin[l * ch + c] = gather(base + c * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE);
         }
@@ -76,7 +80,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
 
     // The surface hold (composite.wgsl `hold_step`).
     var held = HELD_FREE;
-    var removed_at = slab;
+    var removed_at = f32(slab);
     if globals.surface_holds != 0u {
         var crossed_hold = 0u;
         if crossed {
@@ -85,7 +89,21 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         let step = hold_step(hold[p], slab, crossed_hold);
         hold[p] = step.state;
         held = step.held;
-        removed_at = step.removed_at;
+        removed_at = f32(step.removed_at);
+    }
+
+    // Sub-pixel shadows: a crossed opaque surface shades with its light read at the exact shift
+    // (subpixel.wgsl); the buffer keeps the gathered light (`kept`), and the crossing records
+    // its removed light at its place inside the slab.
+    let exact = globals.subpixel_shadows != 0u && crossed && meshes[mesh].subpixel != 0u;
+    var kept: array<f32, MAX_LIGHT_CHANNELS>;
+    if exact {
+        kept = iin;
+        let part = (frag_depth[adv.first] - front) * globals.inv_slab_distance;
+        exact_light(x, y, slab, part);
+        if held == HELD_FREE {
+            removed_at = removal_depth(slab, part);
+        }
     }
 
     // 3. Shading at one point, if inside a mesh or a surface was crossed; 4. composite.
@@ -138,6 +156,9 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         accum[p] = composite(accum[p], shaded, e.alpha);
         attenuation = e.attenuation;
     }
+    if exact {
+        iin = kept;
+    }
 
     // 5. Attenuate (and flush) into this slab's outgoing light buffer — a held surface passes
     // it, a released one removes it; distance penumbra: the light this slab removed, at its
@@ -164,6 +185,32 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             // The level this pixel starts the next slab with.
             let occluded = f32(ch) - lit_out;
             level_cur[(y * globals.lights + l) * w + x] = pixel_level(lights[l], occluded, depth_out, slab + 1u);
+        }
+    }
+}
+
+// Sub-pixel shadows at pixel (x, y), which crossed an opaque surface at `part` of slab `slab`:
+// every occluded light's channels in `iin` read again at their exact shift through the tap row
+// step 1 used (the CPU's `exact_light`).
+fn exact_light(x: u32, y: u32, slab: u32, part: f32) {
+    let w = globals.grid_w;
+    let ch = globals.channels;
+    for (var l = 0u; l < globals.lights; l++) {
+        var lit = 0.0;
+        for (var c = 0u; c < ch; c++) {
+            lit = lit + iin[l * ch + c];
+        }
+        let light = lights[l];
+        let s = exact_shift(l, slab, part, lit, depth_in[l], tap_rows[l] / light.phase_count);
+        if s.z == 0.0 {
+            continue;
+        }
+        let shift = light_slabs[l * globals.slabs + slab].shift;
+        let per_phase = light.taps_per_phase;
+        let first_tap = light.taps + per_phase * tap_rows[l];
+        let base = l * globals.planes * w;
+        for (var c = 0u; c < ch; c++) {
+            iin[l * ch + c] = shifted_gather(base + c * w, first_tap, per_phase, shift, i32(x), i32(y), s.xy);
         }
     }
 }

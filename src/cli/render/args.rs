@@ -115,6 +115,11 @@ pub struct RenderArgs {
     /// inside, light at the shading point) or `first-order` (the paper's whole slabs).
     #[arg(long, value_name = "second-order|first-order", value_parser = crate::cli::parse_media)]
     pub media: Option<Media>,
+    /// Override `sweep.subpixel_shadows` (distance penumbra): `true` (the default) reads the
+    /// light at crossed opaque surfaces at its exact sub-pixel shift, `false` at the whole
+    /// pixels the sweep carries it in.
+    #[arg(long, value_name = "BOOL")]
+    pub subpixel_shadows: Option<bool>,
     /// Render even if a closed mesh leaves pixels with odd fragment counts (reported). Open
     /// meshes need no flag: they render as thin shells, with a warning.
     #[arg(long)]
@@ -175,6 +180,7 @@ mod tests {
         );
         assert_eq!((a.preintegration, a.variance_compensation), (None, None));
         assert_eq!(a.media, None);
+        assert_eq!(a.subpixel_shadows, None);
         // --threads 0 (one per core), the SIMD path, the CPU, quiet-chunk skipping on.
         assert_eq!(a.threads, 0);
         assert_eq!(a.path, CpuPath::Simd);
@@ -204,6 +210,8 @@ mod tests {
             "--preintegration",
             "--media",
             "first-order",
+            "--subpixel-shadows",
+            "false",
             "--threads",
             "3",
             "--path",
@@ -231,6 +239,7 @@ mod tests {
         // A bare --preintegration turns it on.
         assert_eq!(a.preintegration, Some(true));
         assert_eq!(a.media, Some(Media::FirstOrder));
+        assert_eq!(a.subpixel_shadows, Some(false));
         assert_eq!(a.threads, 3);
         assert_eq!(a.path, CpuPath::Scalar);
         assert_eq!(a.backend.device(), None);

@@ -80,7 +80,7 @@ pub(super) fn frame_list(args: &RenderArgs) -> Result<(Option<Vec<u32>>, f64), F
 }
 
 /// `--slabs`, `--kernel`, `--seed`, `--penumbra`, `--surface`, `--guard-band`,
-/// `--variance-compensation`, `--preintegration` and `--media`, then the scene re-validated
+/// `--variance-compensation`, `--preintegration`, `--media` and `--subpixel-shadows`, then the scene re-validated
 /// ([`SweepOverrides::apply`], shared with the Python module).
 pub(super) fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Result<(), Failure> {
     let overrides = SweepOverrides {
@@ -93,6 +93,7 @@ pub(super) fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Res
         variance_compensation: args.variance_compensation,
         preintegration: args.preintegration,
         media: args.media,
+        subpixel_shadows: args.subpixel_shadows,
     };
     overrides.apply(scene).map_err(|e| match e {
         OverrideError::Kernel(e) => Failure::new(exit::BAD_ARGUMENTS, format!("--kernel: {e}")),

@@ -373,6 +373,7 @@ impl Validator<'_> {
             guard_band,
             preintegration: raw.preintegration.unwrap_or(false),
             media,
+            subpixel_shadows: raw.subpixel_shadows.unwrap_or(true),
         })
     }
 

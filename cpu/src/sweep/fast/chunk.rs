@@ -27,11 +27,14 @@ use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
 use crate::shading::{
     Surface, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
 };
+use crate::subpixel::removal_depth;
 use crate::sweep::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, level_plane,
     light_block,
 };
-use crate::sweep::pixel::{Hit, hold, shade_and_composite};
+use crate::sweep::pixel::{
+    Hit, LightIn, convolve, exact_light, hold, shade_and_composite, subpixel_part,
+};
 use convshadow_common::pixel::levels::pixel_level;
 use convshadow_common::plan::{RenderPlan, TfEntry};
 use wide::f32x8;
@@ -379,6 +382,15 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         }
     }
 
+    // Sub-pixel shadows: the lanes that crossed an opaque surface shade with their light read at
+    // its exact shift (the per-pixel stage's, lane by lane); the buffer keeps `iin`.
+    let mut parts = [None; MAX_LANES];
+    let mut shade_in = iin;
+    if any_crossing_subpixel(row, &hits, &mut parts) {
+        exact_lanes::<L>(row, x0, &parts, &mut shade_in[..n]);
+    }
+    let iin_shaded = &shade_in;
+
     // 3–4. Shading and compositing.
     let mut attenuation = [L::splat(1.0); 3];
     let lane_mesh = &hits.mesh[..L::LANES];
@@ -386,14 +398,14 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     let shaded = lane_mesh.iter().any(Option::is_some) || any_crossed;
     if let Some(m) = lane_mesh.iter().flatten().next().copied() {
         if lane_mesh.iter().all(|&k| k.is_none() || k == Some(m)) {
-            attenuation = shade_chunk(row, state, x0, &iin[..n], m, &hits);
+            attenuation = shade_chunk(row, state, x0, &iin_shaded[..n], m, &hits);
         } else {
             // Lanes on different meshes: the per-pixel stage's shading, lane by lane.
             let mut att = [[1.0f32; MAX_LANES]; 3];
             for (i, lm) in lane_mesh.iter().enumerate() {
                 let Some(mi) = *lm else { continue };
                 let mut lane_iin = [0.0f32; N];
-                for (dst, v) in lane_iin.iter_mut().zip(&iin[..n]) {
+                for (dst, v) in lane_iin.iter_mut().zip(&iin_shaded[..n]) {
                     *dst = v.lane(i);
                 }
                 let lane_iin = &lane_iin[..n];
@@ -413,8 +425,8 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     // 5. Attenuate (and flush) into this slab's outgoing light buffer: held lanes pass the
     // light, released ones remove it (recorded at their crossing's depth).
     let mut removed_at = L::splat(ctx.slab as f32);
-    if held[..L::LANES].iter().any(|&h| h != Held::Free) {
-        (attenuation, removed_at) = held_attenuation(ctx.slab, &held, attenuation);
+    if held[..L::LANES].iter().any(|&h| h != Held::Free) || parts.iter().any(Option::is_some) {
+        (attenuation, removed_at) = held_attenuation(ctx.slab, &held, &parts, attenuation);
     }
     let (zero, one) = (L::splat(0.0), L::splat(1.0));
     let mut not_one = zero.ne(zero);
@@ -461,11 +473,13 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
 
 /// Step 5's attenuation per lane under the lanes' surface holds `held`: 1 where held, 0 where
 /// released, else `attenuation`; and the depth (slabs) each lane's removed light is recorded at:
-/// a released lane's crossing slab, else this slab.
+/// a released lane's crossing slab, a free lane's sub-pixel crossing at its part of the slab
+/// (`parts`: [`removal_depth`]), else this slab.
 #[inline(always)]
 fn held_attenuation<L: Layout>(
     slab: u32,
     held: &[Held; MAX_LANES],
+    parts: &[Option<f32>; MAX_LANES],
     attenuation: [L; 3],
 ) -> ([L; 3], L) {
     let (mut pass, mut release, mut at) = (
@@ -476,7 +490,11 @@ fn held_attenuation<L: Layout>(
     for i in 0..L::LANES {
         at[i] = slab as f32;
         match held[i] {
-            Held::Free => {}
+            Held::Free => {
+                if let Some(part) = parts[i] {
+                    at[i] = removal_depth(slab, part);
+                }
+            }
             Held::Pass => pass[i] = 1.0,
             Held::Release { removed_at } => {
                 release[i] = 1.0;
@@ -488,6 +506,50 @@ fn held_attenuation<L: Layout>(
     let (pass, release) = (L::load(&pass, 0).gt(zero), L::load(&release, 0).gt(zero));
     let attenuation = attenuation.map(|a| L::select(pass, one, L::select(release, zero, a)));
     (attenuation, L::load(&at, 0))
+}
+
+/// Sub-pixel shadows: whether some lane crossed a surface that reads its light at the exact
+/// shift, with each such lane's part of the slab in `parts` (`None` elsewhere).
+#[inline(always)]
+fn any_crossing_subpixel(
+    row: &RowContext<'_>,
+    hits: &LaneHits,
+    parts: &mut [Option<f32>; MAX_LANES],
+) -> bool {
+    if row.ctx.plan.subpixel_meshes.is_empty() || hits.crossed.iter().all(|&c| c == NO_CROSSING) {
+        return false;
+    }
+    let mut any = false;
+    for (i, part) in parts.iter_mut().enumerate() {
+        *part = subpixel_part(row.ctx, &hits.lane(i));
+        any |= part.is_some();
+    }
+    any
+}
+
+/// Sub-pixel shadows for the lanes at pixels x0.. with a part in `parts`: each one's light
+/// gathered again by the per-pixel stage and read at its exact shift ([`exact_light`]), into
+/// its lane of `shade_in` (every light's channels).
+#[cold]
+fn exact_lanes<L: Layout>(
+    row: &RowContext<'_>,
+    x0: usize,
+    parts: &[Option<f32>; MAX_LANES],
+    shade_in: &mut [L],
+) {
+    for (i, part) in parts.iter().enumerate().take(L::LANES) {
+        let Some(part) = *part else { continue };
+        let mut light = LightIn::ZERO;
+        convolve(row, x0 + i, false, &mut light);
+        let mut lane_in = light.iin;
+        exact_light(row, x0 + i, &light, part, &mut lane_in);
+        for (v, &value) in shade_in.iter_mut().zip(&lane_in) {
+            let mut lanes = [0.0f32; MAX_LANES];
+            v.store(&mut lanes, 0);
+            lanes[i] = value;
+            *v = L::load(&lanes, 0);
+        }
+    }
 }
 
 /// `dst = src` for a light's channels, as fixed-length copies for 1 and 3 channels (a run-time

@@ -80,7 +80,7 @@ struct Globals {
     parity_meshes: u32, // the closed meshes (bit i: mesh i); open ones are thin shells
     inv_slab_distance: f32, // 1/e (RenderPlan::inv_slab_distance), for a medium's part of a slab
     second_order_media: u32, // 1: sweep.media = "second-order" (else slab_part is (1, 0))
-    _pad3: u32,
+    subpixel_shadows: u32, // 1: some mesh reads its light at the exact shift (MeshHeader.subpixel)
     _pad4: u32,
     _pad5: u32,
 }
@@ -106,6 +106,7 @@ struct LightHeader {
     half_vector: array<f32, 3>,
     to_light: array<f32, 3>, // unit direction towards the light (Lambert, Ashikmin–Shirley)
     fresnel: array<f32, 2>,  // Ashikmin–Shirley: [p/(h·k), (1 − p)/(h·k)], p = (1 − h·k)^5
+    drift: array<f32, 2>,    // the light's drift per slab (pixels), for sub-pixel shadows
 }
 
 // A light's values in one slab, at `light · slabs + slab`.
@@ -113,6 +114,7 @@ struct LightSlab {
     hash: u32,
     phase: u32,       // the scheduled phase (PHASE_SCHEDULE)
     shift: vec2<i32>,
+    residual: array<f32, 2>, // the carried drift beyond the exact one after this slab (sub-pixel shadows)
 }
 
 // Offset of the top-left pixel read and the weights of corners (0,0), (1,0), (0,1), (1,1).
@@ -160,6 +162,7 @@ struct Octave {
 struct MeshHeader {
     to_detail: array<f32, 12>,
     material: u32,
+    subpixel: u32, // 1: a crossing reads its light at the exact shift (sub-pixel shadows)
 }
 
 // A pixel's layer cursor: the next fragment and the inside bit of every mesh.
