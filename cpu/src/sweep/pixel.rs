@@ -47,8 +47,6 @@ pub(crate) struct LightIn {
     pub(crate) iin: [f32; MAX_LIGHT_CHANNELS],
     /// Light l's gathered depth plane.
     depth: [f32; MAX_LIGHTS],
-    /// Light l's tap row (sub-pixel shadows read through it again).
-    row: [u32; MAX_LIGHTS],
 }
 
 impl LightIn {
@@ -56,7 +54,6 @@ impl LightIn {
     pub(crate) const ZERO: LightIn = LightIn {
         iin: [0.0; MAX_LIGHT_CHANNELS],
         depth: [0.0; MAX_LIGHTS],
-        row: [0; MAX_LIGHTS],
     };
 }
 
@@ -93,13 +90,17 @@ pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usi
     let held = hold(row.ctx, state, x, hit.crossed);
     // Sub-pixel shadows: a crossed opaque surface's light read at its exact shift.
     let part = subpixel_part(row.ctx, &hit);
-    let mut shade_in = light.iin;
+    let exact_in;
+    let mut shade_in = &light.iin;
     if let Some(part) = part {
-        exact_light(row, x, &light, part, &mut shade_in);
+        let mut read = light.iin;
+        exact_light(row, x, &light, part, &mut read);
+        exact_in = read;
+        shade_in = &exact_in;
     }
     // 3. Shading at one point, if inside a mesh or a surface was crossed; 4. composite.
     let attenuation = match hit.mesh {
-        Some(mesh) => shade_and_composite(row, state, x, &shade_in, mesh, &hit),
+        Some(mesh) => shade_and_composite(row, state, x, shade_in, mesh, &hit),
         None => [1.0; 3],
     };
     // 5. Attenuate (and flush) into this slab's outgoing light buffer — a held surface passes
@@ -148,22 +149,24 @@ pub(crate) fn exact_light(
         let channels = &light.iin[l * ch..(l + 1) * ch];
         let lit = channels.iter().fold(0.0f32, |a, &v| a + v);
         let gathered = (lit, plan.channels);
-        let row_level = light.row[l] / light_plan.table.phase_count;
-        let (slab, depth) = ((ctx.slab, part), light.depth[l]);
-        let Some(shift) = exact_shift(light_plan, slab, gathered, depth, row_level) else {
-            continue;
-        };
         let at = TapOrigin {
             x: x as i32,
             y: row.y as i32,
             shift: light_plan.table.slab_shift[ctx.slab as usize],
             inside: false,
         };
+        // The row step 1 gathered through (bounds-checked reads: the same values).
+        let tap_row = tap_row(row, l, at);
+        let row_level = tap_row / light_plan.table.phase_count;
+        let (slab, depth) = ((ctx.slab, part), light.depth[l]);
+        let Some(shift) = exact_shift(light_plan, slab, gathered, depth, row_level) else {
+            continue;
+        };
         let planes = LightPlanes {
             channels: ch,
             ..light_planes(plan, row.prev.light, l)
         };
-        let sums = shifted_gather(&planes, ctx.taps[l].weighted(light.row[l]), at, shift);
+        let sums = shifted_gather(&planes, ctx.taps[l].weighted(tap_row), at, shift);
         if std::env::var("PROTO_DBG").is_ok()
             && row.y == 112 + plan.guard.top as usize
             && (x as i32 - plan.guard.left as i32) >= 120
@@ -213,29 +216,50 @@ pub(crate) fn hold(
 pub(crate) fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
     let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
-    let distance = plan.depth_planes() > 0;
-    for (l, light_plan) in plan.lights.iter().enumerate() {
-        let table = &light_plan.table;
+    for l in 0..plan.lights.len() {
         let taps = &ctx.taps[l];
         let at = TapOrigin {
             x: x as i32,
             y: row.y as i32,
-            shift: table.slab_shift[slab],
+            shift: plan.lights[l].table.slab_shift[slab],
             inside,
         };
-        let hashes = (light_plan.slab_hash[slab], row.light_hashes[l]);
-        let mut tap_row = phase_at(table, ctx.slab, hashes.0, hashes.1, plan.hash_x(x as u32));
-        if distance {
-            let levels = level_plane(plan, row.prev, l);
-            tap_row = distance_row(&levels, table, taps, tap_row, ctx.slab, plan.slabs, at);
-        }
+        let tap_row = tap_row(row, l, at);
         // The light's channels, then its depth plane if any (0 without one).
         let planes = light_planes(plan, row.prev.light, l);
         let sums = gather(&planes, taps.weighted(tap_row), at);
         copy_planes(&mut light.iin[l * ch..(l + 1) * ch], &sums);
         light.depth[l] = sums[ch];
-        light.row[l] = tap_row;
     }
+}
+
+/// Light l's tap row at the pixel of `at` in this slab: its phase's, or (distance penumbra) the
+/// row of the nearest occluder's level in its reach.
+#[inline(always)]
+fn tap_row(row: &RowContext<'_>, l: usize, at: TapOrigin) -> u32 {
+    let (ctx, plan) = (row.ctx, row.ctx.plan);
+    let (light, table) = (&plan.lights[l], &plan.lights[l].table);
+    let hashes = (light.slab_hash[ctx.slab as usize], row.light_hashes[l]);
+    let phase = phase_at(
+        table,
+        ctx.slab,
+        hashes.0,
+        hashes.1,
+        plan.hash_x(at.x as u32),
+    );
+    if plan.depth_planes() == 0 {
+        return phase;
+    }
+    let levels = level_plane(plan, row.prev, l);
+    distance_row(
+        &levels,
+        table,
+        &ctx.taps[l],
+        phase,
+        ctx.slab,
+        plan.slabs,
+        at,
+    )
 }
 
 /// Step 2: pixel x's layer cursor advanced past every fragment before the slab's back face.

@@ -36,6 +36,7 @@ use crate::sweep::pixel::{
     Hit, LightIn, convolve, exact_light, hold, shade_and_composite, subpixel_part,
 };
 use convshadow_common::pixel::levels::pixel_level;
+use convshadow_common::plan::OCCLUSION_EPS;
 use convshadow_common::plan::{RenderPlan, TfEntry};
 use wide::f32x8;
 
@@ -385,11 +386,14 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     // Sub-pixel shadows: the lanes that crossed an opaque surface shade with their light read at
     // its exact shift (the per-pixel stage's, lane by lane); the buffer keeps `iin`.
     let mut parts = [None; MAX_LANES];
-    let mut shade_in = iin;
+    let exact_in;
+    let mut iin_shaded = &iin;
     if any_crossing_subpixel(row, &hits, &mut parts) {
+        let mut shade_in = iin;
         exact_lanes::<L>(row, x0, &parts, &mut shade_in[..n]);
+        exact_in = shade_in;
+        iin_shaded = &exact_in;
     }
-    let iin_shaded = &shade_in;
 
     // 3–4. Shading and compositing.
     let mut attenuation = [L::splat(1.0); 3];
@@ -537,8 +541,19 @@ fn exact_lanes<L: Layout>(
     parts: &[Option<f32>; MAX_LANES],
     shade_in: &mut [L],
 ) {
+    let plan = row.ctx.plan;
+    let ch = plan.channels as usize;
     for (i, part) in parts.iter().enumerate().take(L::LANES) {
         let Some(part) = *part else { continue };
+        // A lane whose every light is unoccluded reads nothing again (`exact_shift`'s first
+        // test, on the chunk's own gathered values: the per-pixel stage's bits).
+        let occluded = (0..plan.lights.len()).any(|l| {
+            let lit = (0..ch).fold(0.0f32, |a, c| a + shade_in[l * ch + c].lane(i));
+            ch as f32 - lit > OCCLUSION_EPS
+        });
+        if !occluded {
+            continue;
+        }
         let mut light = LightIn::ZERO;
         convolve(row, x0 + i, false, &mut light);
         let mut lane_in = light.iin;
