@@ -10,9 +10,9 @@
 //! line within 0.03 px at every distance (0.27, 0.68, 0.45 px at 16, 32, 64 below); RMSE 7.1e-3,
 //! 4.0e-3, 1.8e-3, 6.8e-4, 4.0e-4 at 16, 32, 64, 128, 256 below (0.066, 0.070, 0.023, 9.5e-4,
 //! 4.3e-4). So 2e-3 is reached from 64 slabs below, not yet from 16: there the penumbra's standard
-//! deviation is 0.8 px, and the read's bilinear blend (up to ¼ px² of variance) and the smallest
-//! levels' few taps are what is left. The test asks the line within 0.25 px everywhere, 2e-3
-//! from 64 below, and today's RMSE plus 25 % above it.
+//! deviation is 0.8 px and its shape is what is left (not the read's bilinear blend: a
+//! Catmull–Rom read, which adds no variance, was worse; docs/accuracy.md §1b). The test asks the
+//! line within 0.25 px everywhere, 2e-3 from 64 below, and today's RMSE plus 25 % above it.
 
 use std::path::Path;
 
