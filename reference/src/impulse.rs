@@ -33,6 +33,7 @@ guard_band = 0  # the impulse response is read on the grid as the image
 slab_distance = 1.0
 optimal_distance = 1.0
 penumbra = "iterated"  # the iterated kernel's impulse response
+subpixel_shadows = false  # the bare kernel: no depth plane, no levels
 kernel = "{kernel}"
 variance_compensation = {compensate}
 [[light]]

@@ -29,15 +29,16 @@ const GAP: f64 = 0.2;
 /// ray past the edge grazes the front corner (before 2026-12-05 the test measured the distance
 /// from the back face, 0.02 too short: the closed form's line 0.75 px too near the edge).
 const OCC_THICK: f64 = 0.02;
-/// The RMSE asked over the receiver: issue 40's 5e-3 where it is reached (the distance penumbra
-/// at 30°, with sub-pixel shadows: 1.4e-3–2.5e-3), else today's figures plus a margin as a
-/// guard (60°: 0.015–0.016, where the receiver's own released light blends into the mean
-/// occluder depth in the penumbra; the iterated penumbra, which has no depth plane and keeps the
-/// whole-pixel carry: 0.009–0.018). Measured 2026-12-05 (docs/accuracy.md §2b). Without
-/// sub-pixel shadows the distance penumbra's line lies on pixel boundaries, up to 0.8 px off
-/// (0.014–0.028); without the surface hold, 0.22–0.33 and lit std/mean 0.27–0.91.
+/// The RMSE asked over the receiver: issue 40's 5e-3 where it is reached (with sub-pixel
+/// shadows: the distance penumbra at 30°, 1.4e-3–2.5e-3; the iterated penumbra at 30° and 60°,
+/// 9.5e-4–3.0e-3), else today's figures plus a margin as a guard (the distance penumbra at 60°:
+/// 0.0087–0.0124, where the occluder's large level reaches the receiver's own released zeros in
+/// the penumbra; 0.015–0.016 before a release owned its pixel's depth plane). Measured
+/// 2026-12-05 (docs/accuracy.md §2b). Without sub-pixel shadows the line lies on pixel
+/// boundaries, up to 0.8 px off (0.009–0.028); without the surface hold, 0.22–0.33 and lit
+/// std/mean 0.27–0.91.
 const ASKED_RMSE: f64 = 5e-3;
-const MAX_RMSE: f64 = 0.02;
+const MAX_RMSE: f64 = 0.015;
 
 /// One oblique receiver: a white opaque plate turned `tilt` degrees about world x, under an
 /// opaque half-plane facing the camera that covers world x ≥ 0 (the image's left half); the
@@ -171,25 +172,23 @@ fn an_oblique_receiver_does_not_shadow_itself_and_keeps_the_edge_shadow() {
                     subpixel: true,
                 };
                 let (rmse, banding, lit) = case.measure();
-                let asked = if penumbra == Penumbra::Distance && tilt == 30.0 {
-                    ASKED_RMSE
-                } else {
+                let asked = if penumbra == Penumbra::Distance && tilt == 60.0 {
                     MAX_RMSE
+                } else {
+                    ASKED_RMSE
                 };
                 let mut line = format!(
                     "{penumbra:?} {tilt}° {slabs} slabs: RMSE {rmse:.5} (≤ {asked}), lit std/mean {banding:.2e} over {lit} px"
                 );
                 failed |= rmse > asked || banding > 1e-3 || lit < 1000;
-                if penumbra == Penumbra::Distance {
-                    // The same without sub-pixel shadows: the line on pixel boundaries.
-                    let carried = Oblique {
-                        subpixel: false,
-                        ..case
-                    };
-                    let (rmse_carried, _, _) = carried.measure();
-                    line += &format!("; carried in whole pixels: {rmse_carried:.5}");
-                    failed |= tilt == 30.0 && rmse_carried <= ASKED_RMSE;
-                }
+                // The same without sub-pixel shadows: the line on pixel boundaries.
+                let carried = Oblique {
+                    subpixel: false,
+                    ..case
+                };
+                let (rmse_carried, _, _) = carried.measure();
+                line += &format!("; carried in whole pixels: {rmse_carried:.5}");
+                failed |= tilt == 30.0 && rmse_carried <= ASKED_RMSE;
                 report.push(line);
             }
         }

@@ -275,3 +275,45 @@ fn surface_models_give_the_same_bits_on_every_path_and_thread_count() {
         );
     }
 }
+
+#[test]
+fn subpixel_shadows_with_the_iterated_penumbra_gather_its_own_light() {
+    // With the iterated penumbra, sub-pixel shadows add a depth plane and copy its kernel to
+    // every level (`KernelTable::with_distance_levels`): the light gathered must be the
+    // iterated penumbra's, bit for bit. A light along the view has no drift, so nothing moves
+    // the shading read either: the whole image keeps its bits. Tilted, the read moves (so the
+    // check can fail), and scalar and SIMD agree.
+    use convshadow::common::model::scene::Penumbra;
+    let edge = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/edge.toml");
+    let base = convshadow_io::load_scene(&edge).unwrap_or_else(|e| panic!("{e}"));
+    let run = |tilt: [f64; 2], subpixel: bool, path: CpuPath| {
+        let mut scene = base.clone();
+        scene.image.width = 53;
+        scene.image.height = 40;
+        scene.sweep.slabs = SlabSpec::Count(48);
+        scene.sweep.penumbra = Penumbra::Iterated;
+        scene.sweep.subpixel_shadows = subpixel;
+        for light in &mut scene.lights {
+            light.tilt_deg = tilt;
+        }
+        scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+        let req = RenderRequest {
+            threads: 2,
+            path,
+            every_slab: true,
+            ..RenderRequest::default()
+        };
+        let r = render(&scene, &req).unwrap_or_else(|e| panic!("{e}"));
+        (r.image_hash, r.light.len())
+    };
+    let (off, off_len) = run([0.0, 0.0], false, CpuPath::Simd);
+    let (on, on_len) = run([0.0, 0.0], true, CpuPath::Simd);
+    assert!(on_len > off_len, "no depth plane with sub-pixel shadows");
+    assert_eq!(on, off, "no drift: sub-pixel shadows changed the image");
+    let tilted = [30.0, 0.0];
+    let (carried, _) = run(tilted, false, CpuPath::Simd);
+    let (simd, _) = run(tilted, true, CpuPath::Simd);
+    let (scalar, _) = run(tilted, true, CpuPath::Scalar);
+    assert_ne!(simd, carried, "tilted: sub-pixel shadows changed nothing");
+    assert_eq!(simd, scalar, "tilted: SIMD differs from scalar");
+}

@@ -665,6 +665,33 @@ fn gpu_image_equals_cpu_with_the_distance_penumbra() {
 }
 
 #[test]
+fn gpu_image_equals_cpu_with_subpixel_shadows_and_the_iterated_penumbra() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    // All-opaque scenes under tilted lights: the iterated penumbra with a depth plane and its
+    // kernel at every level, the crossing lanes read at their exact shift (the CPU image must
+    // differ from the whole-pixel read's, so that path ran).
+    let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    for name in ["edge", "fence", "disk"] {
+        let mut scene = gpu_common::small(&scenes.join(format!("{name}.toml")), 48, 40);
+        scene.sweep.penumbra = Penumbra::Iterated;
+        scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+        let cpu = check(
+            &ctx,
+            &scene,
+            &format!("{name}, iterated, sub-pixel shadows"),
+        );
+        scene.sweep.subpixel_shadows = false;
+        let carried = run(&scene, Backend::Cpu);
+        assert_ne!(
+            cpu.image_hash, carried.image_hash,
+            "{name}: no pixel read at its shift"
+        );
+    }
+}
+
+#[test]
 fn gpu_image_equals_cpu_with_the_distance_penumbra_for_every_kernel() {
     let Some(ctx) = gpu_common::gpu() else {
         return;

@@ -181,7 +181,7 @@ pub struct RenderPlan {
     /// crossing of it keeps passing its pixel's light before removing it
     /// ([`surface_hold::surface_hold`]; 0: removed at the crossing).
     pub surface_hold: Vec<u32>,
-    /// `sweep.subpixel_shadows` with the distance penumbra: per mesh, whether a crossing of its
+    /// `sweep.subpixel_shadows`: per mesh, whether a crossing of its
     /// surface (its material blocks light: [`MaterialPlan::blocks_light`]) is shaded with the
     /// light read at its exact sub-pixel shift from its mean occluder (`cpu::kernels::
     /// exact_shift`), and records the crossing's depth within its slab in the depth plane.
@@ -379,24 +379,28 @@ impl RenderPlan {
     }
 
     /// Sets [`RenderPlan::subpixel_meshes`] and every light's
-    /// [`LightPlan::carry_residual`] (`sweep.subpixel_shadows`). Only with the distance penumbra
-    /// (the correction needs the depth plane's mean occluder depth) and where every mesh blocks
+    /// [`LightPlan::carry_residual`] (`sweep.subpixel_shadows`). Only where every mesh blocks
     /// light: a medium removes light in every slab it fills, its mean depth falls between slabs
     /// whose whole-pixel carries differ by a pixel, and reading at that mean's drift drew contour
     /// lines across the default scene's wall (measured: its successive-slab-count RMSE doubled).
+    /// The correction needs the depth plane's mean occluder depth: with the iterated penumbra the
+    /// buffer gains one (see [`RenderPlan::depth_planes`]) and its kernel is copied to every
+    /// level ([`KernelTable::with_distance_levels`]), so the light gathered is the iterated
+    /// penumbra's, bit for bit.
     fn with_subpixel_shadows(mut self, scene: &Scene) -> RenderPlan {
         let meshes: Vec<bool> = self
             .mesh_material
             .iter()
             .map(|&m| self.materials[m as usize].blocks_light())
             .collect();
-        if !scene.sweep.subpixel_shadows
-            || self.penumbra != Penumbra::Distance
-            || !meshes.iter().all(|&b| b)
-        {
+        if !scene.sweep.subpixel_shadows || !meshes.iter().all(|&b| b) {
             return self;
         }
+        let slabs = self.slabs;
         for light in &mut self.lights {
+            if self.penumbra == Penumbra::Iterated {
+                light.table = light.table.clone().with_distance_levels(slabs);
+            }
             // The same f64 products and rounding as the table's `slab_shift` (`mean_carry`).
             let mean = light.moments.mean;
             let carried = light.table.slab_shift.iter().any(|&s| s != [0, 0]);
@@ -552,9 +556,10 @@ impl RenderPlan {
         }
     }
 
-    /// Depth planes per light: 1 (the occluder depth D) with the distance penumbra, else 0.
+    /// Depth planes per light: 1 (the occluder depth D) with the distance penumbra or sub-pixel
+    /// shadows ([`RenderPlan::subpixel_meshes`]), else 0.
     pub fn depth_planes(&self) -> usize {
-        usize::from(self.penumbra == Penumbra::Distance)
+        usize::from(self.penumbra == Penumbra::Distance || !self.subpixel_meshes.is_empty())
     }
 
     /// Planes per light in the light buffer: its channels, then its depth plane if any.

@@ -32,7 +32,7 @@ use super::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowContext, RowState, SlabContext, level_plane, light_block,
     light_planes,
 };
-use crate::composite::{Held, attenuate, composite, deepen, hold_step, part_of_slab};
+use crate::composite::{Held, attenuate, composite, deepen, hold_step, owned_depth, part_of_slab};
 use crate::kernels::{LightPlanes, TapOrigin, distance_row, gather, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
 use crate::shading::{
@@ -116,7 +116,15 @@ pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usi
         Held::Pass => ([1.0; 3], slab as f32),
         Held::Release { removed_at } => ([0.0; 3], removed_at as f32),
     };
-    attenuate_light(row.ctx, state, x, &light, attenuation, removed_at);
+    let released = matches!(held, Held::Release { .. });
+    attenuate_light(
+        row.ctx,
+        state,
+        x,
+        &light,
+        attenuation,
+        (removed_at, released),
+    );
 }
 
 /// Sub-pixel shadows: where in its slab (0 at the front face, 1 at the back) the pixel crossed
@@ -386,8 +394,9 @@ fn preintegrated(
 
 /// Step 5 at pixel x: every light's gathered channels attenuated (and flushed) into this slab's
 /// outgoing buffer; with the distance penumbra, the light the slab removed (Σ in − Σ out) at
-/// depth `removed_at` (slabs) deepens the occluder depth, stored with the channels, and gives the
-/// level the pixel gathers through in the next slab.
+/// depth `removed_at` (slabs) deepens the occluder depth (`released`: a held surface's release
+/// owns it all, [`owned_depth`]), stored with the channels, and gives the level the pixel
+/// gathers through in the next slab.
 #[inline(always)]
 fn attenuate_light(
     ctx: &SlabContext<'_>,
@@ -395,7 +404,7 @@ fn attenuate_light(
     x: usize,
     light: &LightIn,
     attenuation: [f32; 3],
-    removed_at: f32,
+    (removed_at, released): (f32, bool),
 ) {
     let plan = ctx.plan;
     let (w, ch, planes) = (
@@ -413,8 +422,12 @@ fn attenuate_light(
             lit_out += out[c];
         }
         if plan.depth_planes() > 0 {
-            out[ch] = deepen(light.depth[l], removed_at, lit_in - lit_out);
             let occluded = ch as f32 - lit_out;
+            out[ch] = if released {
+                owned_depth(removed_at, occluded)
+            } else {
+                deepen(light.depth[l], removed_at, lit_in - lit_out)
+            };
             let table = &plan.lights[l].table;
             state.levels[l * w + x] = pixel_level::<f32>(table, occluded, out[ch], ctx.slab + 1);
         }

@@ -60,6 +60,12 @@ fn deepen(depth: f32, at: f32, removed: f32) -> f32 {
     return select(v, 0.0, abs(v) < globals.flush_below);
 }
 
+// `owned_depth` (distance penumbra): at a held surface's release the surface owns the pixel's
+// darkness, the depth plane `at · occluded` (occluded: channels − Σ outgoing light).
+fn owned_depth(at: f32, occluded: f32) -> f32 {
+    return deepen(0.0, at, occluded);
+}
+
 // `Held`: what step 5 does with a pixel's light under its surface hold.
 const HELD_FREE: u32 = 0u;    // the slab's own attenuation
 const HELD_PASS: u32 = 1u;    // attenuation 1

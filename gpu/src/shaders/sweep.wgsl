@@ -162,7 +162,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
 
     // 5. Attenuate (and flush) into this slab's outgoing light buffer — a held surface passes
     // it, a released one removes it; distance penumbra: the light this slab removed, at its
-    // depth, into the depth plane (`deepen`).
+    // depth, into the depth plane (`deepen`; a release owns it all, `owned_depth`).
     if held == HELD_PASS {
         attenuation = vec3<f32>(1.0, 1.0, 1.0);
     } else if held == HELD_RELEASE {
@@ -180,10 +180,13 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             lit_out = lit_out + out;
         }
         if distance {
-            let depth_out = deepen(depth_in[l], removed_at, lit_in - lit_out);
+            let occluded = f32(ch) - lit_out;
+            var depth_out = deepen(depth_in[l], removed_at, lit_in - lit_out);
+            if held == HELD_RELEASE {
+                depth_out = owned_depth(removed_at, occluded);
+            }
             light_cur[row_base + (l * planes + ch) * w + x] = depth_out;
             // The level this pixel starts the next slab with.
-            let occluded = f32(ch) - lit_out;
             level_cur[(y * globals.lights + l) * w + x] = pixel_level(lights[l], occluded, depth_out, slab + 1u);
         }
     }

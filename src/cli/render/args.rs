@@ -115,9 +115,9 @@ pub struct RenderArgs {
     /// inside, light at the shading point) or `first-order` (the paper's whole slabs).
     #[arg(long, value_name = "second-order|first-order", value_parser = crate::cli::parse_media)]
     pub media: Option<Media>,
-    /// Override `sweep.subpixel_shadows` (distance penumbra): `true` (the default) reads the
-    /// light at crossed opaque surfaces at its exact sub-pixel shift, `false` at the whole
-    /// pixels the sweep carries it in.
+    /// Override `sweep.subpixel_shadows` (all-opaque scenes, either penumbra): `true` (the
+    /// default) reads the light at crossed opaque surfaces at its exact sub-pixel shift, `false`
+    /// at the whole pixels the sweep carries it in.
     #[arg(long, value_name = "BOOL")]
     pub subpixel_shadows: Option<bool>,
     /// Render even if a closed mesh leaves pixels with odd fragment counts (reported). Open

@@ -384,6 +384,30 @@ pub(crate) fn discretise(
     }
 }
 
+impl KernelTable {
+    /// The iterated penumbra's one kernel at every level of the distance penumbra's
+    /// [`distance_levels`] (`levels` copies of its rows and schedule, and their `level_of`), for
+    /// a sweep that keeps a depth plane with the iterated penumbra (sub-pixel shadows): a pixel
+    /// gathers the iterated kernel's bits whichever level it reads through, and the level plane
+    /// still tells occluders at several depths apart.
+    pub fn with_distance_levels(mut self, slabs: u32) -> KernelTable {
+        assert_eq!(self.levels, 1, "already a table of levels");
+        let ranges = distance_levels(slabs);
+        let levels = ranges.len();
+        self.taps = self.taps.repeat(levels);
+        if self.phase_mode == PhaseMode::Schedule {
+            self.slab_phase = self.slab_phase.repeat(levels);
+        }
+        let mut level_of = vec![0u32; slabs.max(1) as usize + 1];
+        for (level, &[a, b]) in ranges.iter().enumerate() {
+            level_of[a as usize..=b as usize].fill(level as u32);
+        }
+        self.levels = levels as u32;
+        self.level_of = level_of;
+        self
+    }
+}
+
 /// The f32 sum of a phase's weights in the sweep's order (tap by tap, corner by corner).
 pub fn sequential_weight_sum(taps: &[Tap]) -> f32 {
     let mut acc = 0.0f32;

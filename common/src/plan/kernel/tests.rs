@@ -414,3 +414,49 @@ fn gaussian_taps_of_small_variance_are_three_points() {
         );
     }
 }
+
+#[test]
+fn distance_levels_of_one_kernel_repeat_its_rows_and_map_distances_as_the_distance_table() {
+    // The iterated kernel at every level (sub-pixel shadows with the iterated penumbra): every
+    // level's rows and schedule are the kernel's own, and `level_of` is the distance table's.
+    let m = KernelMoments {
+        mean: [0.3, -0.2],
+        cov: [[0.8, 0.1], [0.1, 0.5]],
+    };
+    let slabs = 300;
+    for spec in ["ellipse2", "ellipse2:slab", "gaussian:7", "poisson8"] {
+        let kernel: KernelSpec = spec.parse().unwrap();
+        let one = build_table(kernel, &m, slabs, true);
+        let t = one.clone().with_distance_levels(slabs);
+        let ranges = distance_levels(slabs);
+        assert_eq!(t.levels as usize, ranges.len(), "{spec}");
+        assert!(t.levels > 16, "{spec}: {} levels", t.levels);
+        for level in 0..t.levels {
+            for p in 0..t.phase_count {
+                assert_eq!(t.phase(level * t.phase_count + p), one.phase(p), "{spec}");
+            }
+        }
+        if t.phase_mode == PhaseMode::Schedule {
+            assert_eq!(t.slab_phase.len(), ranges.len() * slabs as usize, "{spec}");
+            assert!(
+                t.slab_phase
+                    .chunks(slabs as usize)
+                    .all(|c| c == one.slab_phase)
+            );
+        }
+        let scale = |f: f64| KernelMoments {
+            mean: m.mean,
+            cov: [
+                [m.cov[0][0] * f, m.cov[0][1] * f],
+                [m.cov[1][0] * f, m.cov[1][1] * f],
+            ],
+        };
+        let distance = build_distance_table(kernel, &scale, slabs, true, &TableGuard::unlimited())
+            .expect("an unlimited guard never stops");
+        assert_eq!(t.level_of, distance.level_of, "{spec}");
+        assert_eq!(
+            (t.slab_shift, t.taps_per_phase),
+            (one.slab_shift, one.taps_per_phase)
+        );
+    }
+}

@@ -21,7 +21,7 @@ use super::gather::{gather_inside, gather_lanes, store_pixels};
 use super::levels::{distance_rows, phases};
 use super::per_lane::{LaneRows, gather_per_lane};
 use super::quiet::{ChunkState, Values};
-use crate::composite::{Held, attenuate, composite, deepen, part_of_slab};
+use crate::composite::{Held, attenuate, composite, deepen, owned_depth, part_of_slab};
 use crate::kernels::{LightPlanes, TapOrigin, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
 use crate::shading::{
@@ -429,8 +429,11 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     // 5. Attenuate (and flush) into this slab's outgoing light buffer: held lanes pass the
     // light, released ones remove it (recorded at their crossing's depth).
     let mut removed_at = L::splat(ctx.slab as f32);
+    let mut release_lanes = None;
     if held[..L::LANES].iter().any(|&h| h != Held::Free) || parts.iter().any(Option::is_some) {
-        (attenuation, removed_at) = held_attenuation(ctx.slab, &held, &parts, attenuation);
+        let release;
+        (attenuation, removed_at, release) = held_attenuation(ctx.slab, &held, &parts, attenuation);
+        release_lanes = Some(release);
     }
     let (zero, one) = (L::splat(0.0), L::splat(1.0));
     let mut not_one = zero.ne(zero);
@@ -453,7 +456,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         if distance {
             // The light this slab removed, at this slab's depth; a depth plane's quiet value is 0.
             let removed = (lit_in, lit_out, removed_at);
-            let depth = finish_depth(ctx, state, l, x0, depth_in[l], removed);
+            let depth = finish_depth(ctx, state, l, x0, depth_in[l], removed, release_lanes);
             let moved_depth = depth.ne(zero);
             not_one = L::m_or(not_one, moved_depth);
             not_zero = L::m_or(not_zero, moved_depth);
@@ -476,16 +479,16 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
 }
 
 /// Step 5's attenuation per lane under the lanes' surface holds `held`: 1 where held, 0 where
-/// released, else `attenuation`; and the depth (slabs) each lane's removed light is recorded at:
+/// released, else `attenuation`; the depth (slabs) each lane's removed light is recorded at:
 /// a released lane's crossing slab, a free lane's sub-pixel crossing at its part of the slab
-/// (`parts`: [`removal_depth`]), else this slab.
+/// (`parts`: [`removal_depth`]), else this slab; and the released lanes.
 #[inline(always)]
 fn held_attenuation<L: Layout>(
     slab: u32,
     held: &[Held; MAX_LANES],
     parts: &[Option<f32>; MAX_LANES],
     attenuation: [L; 3],
-) -> ([L; 3], L) {
+) -> ([L; 3], L, L::M) {
     let (mut pass, mut release, mut at) = (
         [0.0f32; MAX_LANES],
         [0.0f32; MAX_LANES],
@@ -509,7 +512,7 @@ fn held_attenuation<L: Layout>(
     let (zero, one) = (L::splat(0.0), L::splat(1.0));
     let (pass, release) = (L::load(&pass, 0).gt(zero), L::load(&release, 0).gt(zero));
     let attenuation = attenuation.map(|a| L::select(pass, one, L::select(release, zero, a)));
-    (attenuation, L::load(&at, 0))
+    (attenuation, L::load(&at, 0), release)
 }
 
 /// Sub-pixel shadows: whether some lane crossed a surface that reads its light at the exact
@@ -640,9 +643,9 @@ fn distance_gather<L: Layout>(
 
 /// Distance penumbra, step 5 for light `l`'s depth plane at pixels x0..: the gathered depth
 /// `depth_in` deepened by the light the slab removed (`lit_in − lit_out`, summed over channels,
-/// at depth `removed_at` per lane),
-/// and the level each pixel starts the next slab with (stored). Returns the outgoing depth,
-/// for the caller to store with the light's channels.
+/// at depth `removed_at` per lane; `released` lanes: [`owned_depth`]), and the level each pixel
+/// starts the next slab with (stored). Returns the outgoing depth, for the caller to store with
+/// the light's channels.
 #[inline(always)]
 fn finish_depth<L: Layout>(
     ctx: &SlabContext<'_>,
@@ -651,11 +654,15 @@ fn finish_depth<L: Layout>(
     x0: usize,
     depth_in: L,
     (lit_in, lit_out, removed_at): (L, L, L),
+    released: Option<L::M>,
 ) -> L {
     let plan = ctx.plan;
     let (w, ch) = (plan.grid_width as usize, plan.channels as usize);
-    let out = deepen(depth_in, removed_at, lit_in - lit_out);
     let occluded = L::splat(ch as f32) - lit_out;
+    let mut out = deepen(depth_in, removed_at, lit_in - lit_out);
+    if let Some(released) = released {
+        out = L::select(released, owned_depth(removed_at, occluded), out);
+    }
     let level = pixel_level::<L>(&plan.lights[l].table, occluded, out, ctx.slab + 1);
     let mut lanes = [0u32; MAX_LANES];
     L::u_store(level, &mut lanes);
@@ -703,7 +710,7 @@ pub(crate) fn dark_depth_chunk(
         distance_gather(simd, ctx, l, &depth_plane, rows, at, &mut depth_in);
         // Σ of the gathered and of the attenuated light, as the stage sums them: 0 + 0 + … = 0.
         let at = f32x8::splat(ctx.slab as f32);
-        let depth = finish_depth(ctx, state, l, x0, depth_in[0], (zero, zero, at));
+        let depth = finish_depth(ctx, state, l, x0, depth_in[0], (zero, zero, at), None);
         let mut outs = [zero; 4];
         outs[ch] = depth;
         let block = light_block(plan, l) + x0 * (ch + 1);
