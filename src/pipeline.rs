@@ -19,6 +19,7 @@ mod aov;
 mod backend;
 mod budget;
 mod error;
+mod passes;
 mod reference;
 
 use std::sync::atomic::AtomicBool;
@@ -109,8 +110,15 @@ pub struct Rendered {
     /// Light buffers after the last slab swept ([`Rendered::slabs_swept`]).
     pub light: Vec<f32>,
     /// Slabs swept: the plan's count, or fewer when the image was final earlier (see
-    /// [`RenderRequest::every_slab`]); 0 for the shadow-ray reference, which sweeps none.
+    /// [`RenderRequest::every_slab`]); 0 for the shadow-ray reference, which sweeps none. With
+    /// lights from in front of the viewer, both passes' slabs.
     pub slabs_swept: u32,
+    /// Lights from in front of the viewer, swept in the turned-round pass (`Scene::passes`);
+    /// [`Rendered::plan`] is the other pass's when there is one.
+    pub turned_round_lights: usize,
+    /// The sweep's pixel·slab·light updates over every pass (the grid, every slab of the plan,
+    /// every light: the frame's work, whatever an early finish left out).
+    pub updates: f64,
     /// Threads used.
     pub threads: usize,
     /// Seconds building geometry and the LDI.
@@ -132,6 +140,14 @@ pub struct Rendered {
     pub backend_note: Option<String>,
     /// Warnings about accepted meshes (closed non-manifold edges), one line each.
     pub mesh_warnings: Vec<String>,
+}
+
+/// A plan's pixel·slab·light updates: grid pixels × slabs × lights.
+pub fn plan_updates(plan: &RenderPlan) -> f64 {
+    f64::from(plan.grid_width)
+        * f64::from(plan.grid_height)
+        * f64::from(plan.slabs)
+        * plan.lights.len() as f64
 }
 
 /// Fingerprint of a float image's bits.
@@ -202,13 +218,26 @@ pub fn build_ldi(
 /// Renders a scene on the CPU or, with `req.backend`, on the GPU: the stages in order, each
 /// timed, with a cancel point between them; then the extra layers of `req.aovs` (a light the
 /// scene lacks is refused first, [`RenderError::BadRequest`]).
+///
+/// A scene with lights from in front of the viewer is rendered in two passes, added
+/// ([`passes::render_passes`]).
 pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, RenderError> {
-    let start = Instant::now();
     for aov in &req.aovs {
         if let Aov::Light(l) = *aov {
             check_light_index(scene, l)?;
         }
     }
+    passes::render_passes(scene, &req.aovs, |pass, aovs| render_pass(pass, req, aovs))
+}
+
+/// [`render`] of one pass: every light at the same end of the sweep, `aovs` instead of
+/// `req.aovs`.
+fn render_pass(
+    scene: &Scene,
+    req: &RenderRequest<'_>,
+    aovs: &[Aov],
+) -> Result<Rendered, RenderError> {
+    let start = Instant::now();
     // 1. The backend and the threads, once the scene's per-pixel need fits the budget.
     let engine = Engine::open(scene, true, req.backend, req.threads, req.memory_budget)?;
     // 2. Geometry, and with its guard band what the budget leaves for the LDI's fragments.
@@ -237,7 +266,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     let mut plan = plan;
     let mut light_layers = Vec::new();
     let colors = LightColors::of(&plan);
-    for aov in &req.aovs {
+    for aov in aovs {
         if let Aov::Light(l) = *aov {
             check_cancel(req.cancel)?;
             colors.isolate(&mut plan, l);
@@ -246,8 +275,7 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
             light_layers.push((l, layer?.image));
         }
     }
-    let depth = req
-        .aovs
+    let depth = aovs
         .contains(&Aov::Depth)
         .then(|| first_hit_depth(&plan, &ldi, geometry.z_origin));
     // 7. The image and its numbers.
@@ -264,6 +292,12 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
         light_layers,
         ldi: stats,
         ldi_hash: ldi.fingerprint(),
+        turned_round_lights: if plan.turned_round {
+            plan.lights.len()
+        } else {
+            0
+        },
+        updates: plan_updates(&plan),
         plan,
         light: out.light,
         slabs_swept: out.slabs_swept,

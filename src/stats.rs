@@ -8,14 +8,11 @@ use serde_json::json;
 
 use crate::pipeline::{CpuPath, Rendered};
 
-/// The plan's pixel·slab·light updates per second of the sweep: the frame's rate, counting the
-/// slabs an early finish left out (there is nothing in them to compute).
+/// The sweep's pixel·slab·light updates per second ([`Rendered::updates`], every pass): the
+/// frame's rate, counting the slabs an early finish left out (there is nothing in them to
+/// compute).
 pub fn throughput(r: &Rendered) -> f64 {
-    let updates = f64::from(r.plan.grid_width)
-        * f64::from(r.plan.grid_height)
-        * f64::from(r.plan.slabs)
-        * r.plan.lights.len() as f64;
-    updates / r.seconds_sweep.max(1e-9)
+    r.updates / r.seconds_sweep.max(1e-9)
 }
 
 /// The `--stats-json` object of one render.
@@ -61,7 +58,8 @@ pub fn render_stats(
             },
             "grid_width": r.plan.grid_width,
             "grid_height": r.plan.grid_height,
-            "lights": r.plan.lights.len(),
+            "lights": scene.lights.len(),
+            "lights_toward_viewer": r.turned_round_lights,
             "channels": r.plan.channels,
             "fragments": r.ldi.fragments,
             "max_layers": r.ldi.max_layers,

@@ -9,10 +9,27 @@ use convshadow_common::plan::FLUSH_BELOW;
 
 use crate::shading::TfLanes;
 
-/// `C += (1 − A)·α·c`, `A += (1 − A)·α`, in that order, applied only in the lanes of `lanes`
-/// (planar colours: one lane value per channel).
+/// Front to back, `C += (1 − A)·α·c`, `A += (1 − A)·α`, in that order; with `back_to_front`
+/// (a turned-round pass, the viewer at the sweep's far end) `C = α·c + (1 − α)·C`,
+/// `A = α + (1 − α)·A`. Applied only in the lanes of `lanes` (planar colours: one lane value
+/// per channel).
 #[inline(always)]
-pub fn composite<L: Lane>(color: &mut [L; 3], alpha: &mut L, c: [L; 3], a: L, lanes: L::M) {
+pub fn composite<L: Lane>(
+    color: &mut [L; 3],
+    alpha: &mut L,
+    c: [L; 3],
+    a: L,
+    lanes: L::M,
+    back_to_front: bool,
+) {
+    if back_to_front {
+        let keep = L::splat(1.0) - a;
+        for (dst, src) in color.iter_mut().zip(c) {
+            *dst = L::select(lanes, a * src + keep * *dst, *dst);
+        }
+        *alpha = L::select(lanes, a + keep * *alpha, *alpha);
+        return;
+    }
     let t = (L::splat(1.0) - *alpha) * a;
     for (dst, src) in color.iter_mut().zip(c) {
         *dst = L::select(lanes, *dst + t * src, *dst);

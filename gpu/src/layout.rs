@@ -133,8 +133,8 @@ pub struct Globals {
     /// 1 when some mesh reads its light at the exact shift (`RenderPlan::subpixel_meshes`;
     /// `MeshHeader::subpixel` says which), else 0.
     pub subpixel_shadows: u32,
-    /// Padding.
-    pub _pad4: u32,
+    /// 1 in a turned-round pass (`RenderPlan::turned_round`): composite back to front.
+    pub back_to_front: u32,
     /// Padding.
     pub _pad5: u32,
 }

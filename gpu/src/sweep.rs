@@ -287,6 +287,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             inv_slab_distance: plan.inv_slab_distance,
             second_order_media: u32::from(plan.second_order_media),
             subpixel_shadows: u32::from(!plan.subpixel_meshes.is_empty()),
+            back_to_front: u32::from(plan.turned_round),
             ..Globals::default()
         },
         slabs: (0..slabs)

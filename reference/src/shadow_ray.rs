@@ -616,7 +616,7 @@ impl<'a> Reference<'a> {
                             first_mesh(inside)
                         };
                         let Some(mesh) = mesh else { continue };
-                        if 1.0 - alpha < TRANSPARENCY_CUTOFF {
+                        if !plan.turned_round && 1.0 - alpha < TRANSPARENCY_CUTOFF {
                             break;
                         }
                         let jitter_row =
@@ -688,7 +688,14 @@ impl<'a> Reference<'a> {
                         });
                         let iin = &iin[..lights * ch];
                         let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
-                        composite(&mut color, &mut alpha, shaded, tf.alpha, true);
+                        composite(
+                            &mut color,
+                            &mut alpha,
+                            shaded,
+                            tf.alpha,
+                            true,
+                            plan.turned_round,
+                        );
                     }
                     finish(&mut color, alpha, plan.background);
                     row[3 * ix..3 * ix + 3].copy_from_slice(&color);

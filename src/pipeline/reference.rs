@@ -10,6 +10,7 @@ use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_io::image::RgbImage;
 use convshadow_reference::{Reference, ReferenceOptions};
 
+use super::passes::render_passes;
 use super::{
     Aov, LightColors, MemoryNeed, RenderError, Rendered, check_cancel, first_hit_depth,
     image_fingerprint, refuse_open_meshes, thread_pool,
@@ -20,8 +21,24 @@ use super::{
 /// `threads` workers (0 = one per core) within `budget` bytes; each light layer of `aovs` is one
 /// more reference render, on the plan with the other lights and the background black (as the
 /// pipeline's, `pipeline/aov.rs`). `cancel` is read between the stages (the reference itself
-/// has no cancel point).
+/// has no cancel point). Lights from in front of the viewer are a second pass, as the
+/// pipeline's ([`render_passes`]).
 pub fn render_reference(
+    scene: &Scene,
+    threads: usize,
+    samples: u32,
+    budget: u64,
+    allow_open: bool,
+    aovs: &[Aov],
+    cancel: Option<&AtomicBool>,
+) -> Result<Rendered, RenderError> {
+    render_passes(scene, aovs, |pass, aovs| {
+        reference_pass(pass, threads, samples, budget, allow_open, aovs, cancel)
+    })
+}
+
+/// [`render_reference`] of one pass (every light at the same end of the sweep).
+fn reference_pass(
     scene: &Scene,
     threads: usize,
     samples: u32,
@@ -84,10 +101,16 @@ pub fn render_reference(
         light_layers,
         ldi: stats,
         ldi_hash: ldi.fingerprint(),
+        turned_round_lights: if plan.turned_round {
+            plan.lights.len()
+        } else {
+            0
+        },
         plan,
         light: Vec::new(),
         // The reference traces shadow rays: it sweeps no slab.
         slabs_swept: 0,
+        updates: 0.0,
         threads: pool.current_num_threads(),
         seconds_ldi,
         seconds_plan,

@@ -391,7 +391,7 @@ fn a_world_direction_light_renders_like_its_tilt_and_bad_ones_exit_3() {
     assert!(worst < 1e-5, "largest difference {worst}");
     // Bad lights: exit code 3, the key named, no output file.
     for (light, words) in [
-        ("direction = [0.0, 0.0, -1.0]", "light[0].direction"),
+        ("direction = [1.0, 0.0, 0.0]", "light[0].direction"),
         ("direction = [0.0, 0.0, 0.0]", "light[0].direction"),
         (
             "direction = [0.0, 0.0, 1.0]\ntilt_deg = [5.0, 0.0]",

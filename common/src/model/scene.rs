@@ -103,6 +103,10 @@ pub struct Scene {
     pub meshes: Vec<MeshSpec>,
     /// Materials, indexed by `MeshSpec::material`.
     pub materials: Vec<MaterialSpec>,
+    /// The pass of the lights from in front of the viewer ([`Scene::passes`]): the camera is
+    /// turned round, so the sweep runs towards the viewer, who is at its far end (compositing
+    /// back to front, shading for a viewer along +z). False for every scene as parsed.
+    pub turned_round: bool,
 }
 
 /// Output image size and background.
@@ -156,9 +160,19 @@ impl CameraSpec {
     /// small turns of the direction along the light's own axes ([`frame`] of its direction and
     /// `up`), as `(variance, rotation_deg)`. Along the view with the camera's own `up`, J = 1 and
     /// the light keeps its numbers.
-    /// `Err` with its travel's angle to the view direction, in degrees, where that is 90° or
-    /// more (a light beside or in front of the viewer).
+    /// A light travelling towards the viewer (more than 90° from the view direction) is taken
+    /// as the camera turned round sees it ([`CameraSpec::turned_round`]), with `toward_viewer`
+    /// set. `Err` with its travel's angle to the view direction, in degrees, where that is 90°
+    /// (a light travelling along the slab planes: no sweep order suits it).
     pub fn light_on_slabs(&self, light: &WorldLight) -> Result<SlabLight, f64> {
+        let travel = DVec3::from(light.direction).dot(DVec3::from(self.direction));
+        if travel < 0.0 {
+            let on_slabs = self.turned_round().light_on_slabs(light)?;
+            return Ok(SlabLight {
+                toward_viewer: true,
+                ..on_slabs
+            });
+        }
         let [right, down, forward] = self.basis();
         let camera = |v: DVec3| DVec3::new(v.dot(right), v.dot(down), v.dot(forward));
         let [u, v, d] = frame(DVec3::from(light.direction), DVec3::from(light.up)).map(camera);
@@ -170,6 +184,7 @@ impl CameraSpec {
                 tilt_deg,
                 variance: light.variance,
                 rotation_deg: light.rotation_deg,
+                toward_viewer: false,
             });
         }
         let (s, c) = light.rotation_deg.to_radians().sin_cos();
@@ -188,6 +203,7 @@ impl CameraSpec {
                 tilt_deg,
                 variance: [xx, yy],
                 rotation_deg: 0.0,
+                toward_viewer: false,
             });
         }
         let alpha = 0.5 * (2.0 * xy).atan2(xx - yy);
@@ -198,12 +214,24 @@ impl CameraSpec {
             tilt_deg,
             variance: [major.max(0.0), minor.max(0.0)],
             rotation_deg: alpha.to_degrees(),
+            toward_viewer: false,
         })
+    }
+
+    /// The camera turned round: the same centre, view width and `up`, looking the other way.
+    /// Its x axis is the image's, mirrored (its pixel column i is the image's W − 1 − i); its
+    /// rows and pixel centres are the image's.
+    pub fn turned_round(&self) -> CameraSpec {
+        CameraSpec {
+            direction: self.direction.map(|c| -c),
+            ..*self
+        }
     }
 }
 
 /// The tilt (ωx, ωy) in degrees of a light travelling along `(x, y, z)` in camera space (∝
-/// (−tan ωx, −tan ωy, 1)), or `Err` with its angle to the view direction where that is ≥ 90°.
+/// (−tan ωx, −tan ωy, 1)), or `Err` with its angle to the view direction where that is ≥ 90°
+/// (only 90° reaches it from [`CameraSpec::light_on_slabs`]).
 fn tilt_of_travel(t: DVec3) -> Result<[f64; 2], f64> {
     let (x, y, z) = (t.x, t.y, t.z);
     if z <= 0.0 {
@@ -250,6 +278,9 @@ pub struct SlabLight {
     pub variance: [f64; 2],
     /// Rotation of the principal axes, degrees.
     pub rotation_deg: f64,
+    /// The light travels towards the viewer (more than 90° from the view direction): the
+    /// numbers above are those the camera turned round sees ([`Scene::passes`]).
+    pub toward_viewer: bool,
 }
 
 /// How the slab thickness is given.
@@ -380,7 +411,8 @@ pub struct SweepSpec {
     pub subpixel_shadows: bool,
 }
 
-/// A distant Gaussian light behind the viewer.
+/// A distant Gaussian light: from behind the viewer, or (a world-space light with
+/// `toward_viewer`) from in front of it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightSpec {
     /// Linear RGB colour.
@@ -399,6 +431,10 @@ pub struct LightSpec {
     pub rotation_deg: f64,
     /// A gobo: an image that is the light's initial light buffer (see `convshadow_io::pattern`).
     pub pattern: Option<PatternSpec>,
+    /// A world-space light travelling towards the viewer (more than 90° from the view): it is
+    /// swept in the scene's turned-round pass ([`Scene::passes`]), and `tilt_deg`, `variance`
+    /// and `rotation_deg` are those the turned-round camera sees.
+    pub toward_viewer: bool,
 }
 
 /// A light's pattern (`[[light]] pattern = { path, size, center }`).
@@ -702,6 +738,27 @@ impl std::str::FromStr for GuardBandSpec {
     }
 }
 
+/// A scene split by the end of the sweep its lights need ([`Scene::passes`]).
+#[derive(Clone, Debug)]
+pub struct ScenePasses {
+    /// The lights from behind the viewer, swept away from it.
+    pub front: Option<Scene>,
+    /// The lights from in front of the viewer, swept towards it (the camera turned round).
+    pub back: Option<Scene>,
+}
+
+impl ScenePasses {
+    /// Light `l` of the scene as (pass, index in that pass): 0 = front, 1 = back.
+    pub fn light(&self, scene: &Scene, l: usize) -> (usize, usize) {
+        let toward = scene.lights[l].toward_viewer;
+        let index = scene.lights[..l]
+            .iter()
+            .filter(|o| o.toward_viewer == toward)
+            .count();
+        (usize::from(toward), index)
+    }
+}
+
 impl Scene {
     /// Whether every material's transport is grey and no light has a pattern (which may be
     /// coloured), so one light-buffer channel suffices.
@@ -711,6 +768,38 @@ impl Scene {
                 .materials
                 .iter()
                 .all(|m| m.transport[0] == m.transport[1] && m.transport[1] == m.transport[2])
+    }
+
+    /// The scene as the sweeps take it: one pass per end the lights need the sweep to start
+    /// from. `front` has the lights from behind the viewer (`None` when there is none), `back`
+    /// the lights travelling towards the viewer, its camera turned round
+    /// ([`CameraSpec::turned_round`], [`Scene::turned_round`]; `None` when there is none). The
+    /// image is linear in each light, so the image is front's plus back's mirrored in x; the
+    /// background is composited once, in `front` when there is one (back's is then black).
+    /// Each pass numbers its lights in scene order.
+    pub fn passes(&self) -> ScenePasses {
+        let with_lights = |toward: bool| -> Option<Scene> {
+            let lights: Vec<LightSpec> = self
+                .lights
+                .iter()
+                .filter(|l| l.toward_viewer == toward)
+                .cloned()
+                .collect();
+            (!lights.is_empty()).then(|| Scene {
+                lights,
+                ..self.clone()
+            })
+        };
+        let front = with_lights(false);
+        let back = with_lights(true).map(|mut s| {
+            s.camera = s.camera.turned_round();
+            s.turned_round = true;
+            if front.is_some() {
+                s.image.background = [0.0; 3];
+            }
+            s
+        });
+        ScenePasses { front, back }
     }
 
     /// Every file the scene reads, with the key that names it (`mesh[0].path`,

@@ -65,10 +65,13 @@ pub struct LightPlan {
     pub table: KernelTable,
     /// Per slab: hash of (seed, light, slab), the prefix of every per-pixel phase hash.
     pub slab_hash: Vec<u32>,
-    /// Blinn–Phong half vector in camera space (towards light + towards viewer, normalised).
+    /// Blinn–Phong half vector in camera space (towards light + towards viewer, normalised);
+    /// negated in a turned-round pass ([`RenderPlan::turned_round`]).
     pub half_vector: [f32; 3],
     /// Unit direction towards the light in camera space, (tan ωx, tan ωy, −1)/‖·‖: the `l` of
-    /// the Lambert cosine and of Ashikmin–Shirley (the mean direction of an area light).
+    /// the Lambert cosine and of Ashikmin–Shirley (the mean direction of an area light);
+    /// negated in a turned-round pass, where the normal the shading faces towards −z is the
+    /// viewer's negated.
     pub to_light: [f32; 3],
     /// Ashikmin–Shirley's Fresnel-over-(h·k) constants ([`fresnel_terms`]).
     pub fresnel: [f32; 2],
@@ -85,10 +88,13 @@ pub struct LightPlan {
 /// cos θ of the scattering angle of a distant light with tilt `tilt_deg` towards an orthographic
 /// camera: θ is the angle between the light's propagation direction, ∝ (−tan ωx, −tan ωy, 1) in
 /// camera space, and the direction to the camera, (0, 0, −1); so cos θ = −1/√(1 + tan²ωx +
-/// tan²ωy) (−1 for a light straight behind the viewer: back-scattering).
-pub fn scattering_cos(tilt_deg: [f64; 2]) -> f64 {
+/// tan²ωy) (−1 for a light straight behind the viewer: back-scattering). In a turned-round pass
+/// (`turned_round`: the viewer at the sweep's far end, along +z) the sign is +: a light in front
+/// of the viewer scatters forward towards it.
+pub fn scattering_cos(tilt_deg: [f64; 2], turned_round: bool) -> f64 {
     let [mx, my] = tilt_deg.map(|t| t.to_radians().tan());
-    -1.0 / (1.0 + mx * mx + my * my).sqrt()
+    let c = 1.0 / (1.0 + mx * mx + my * my).sqrt();
+    if turned_round { c } else { -c }
 }
 
 /// The Henyey–Greenstein phase function normalised to 1 for an isotropic medium:
@@ -100,9 +106,10 @@ pub fn henyey_greenstein(g: f64, cos_theta: f64) -> f64 {
     (1.0 - g * g) / (1.0 + g * g - 2.0 * g * cos_theta).powf(1.5)
 }
 
-/// The phase factor of a medium of asymmetry `g` lit by a light of tilt `tilt_deg`.
-pub fn phase_factor(g: f64, tilt_deg: [f64; 2]) -> f64 {
-    henyey_greenstein(g, scattering_cos(tilt_deg))
+/// The phase factor of a medium of asymmetry `g` lit by a light of tilt `tilt_deg`
+/// ([`scattering_cos`]).
+pub fn phase_factor(g: f64, tilt_deg: [f64; 2], turned_round: bool) -> f64 {
+    henyey_greenstein(g, scattering_cos(tilt_deg, turned_round))
 }
 
 /// Errors while planning: a material's 3D texture or a light's pattern that cannot be read.
@@ -154,6 +161,10 @@ pub struct RenderPlan {
     /// more plane after its channels: the occlusion-weighted occluder depth D (in slabs), so that
     /// the mean occluder depth is D / (channels − Σ light).
     pub penumbra: Penumbra,
+    /// The pass of the lights from in front of the viewer (`Scene::turned_round`): the sweep
+    /// runs towards the viewer, so it composites back to front (`C = α·c + (1 − α)·C`) and
+    /// never stops early; the lights' shading vectors are negated ([`LightPlan::to_light`]).
+    pub turned_round: bool,
     /// Lights.
     pub lights: Vec<LightPlan>,
     /// Materials.
@@ -254,14 +265,23 @@ impl RenderPlan {
                 };
                 let mu = spec.tilt_deg.map(|t| t.to_radians().tan());
                 let to_light = DVec3::new(mu[0], mu[1], -1.0).normalize();
-                let h = (to_light + DVec3::new(0.0, 0.0, -1.0)).normalize();
+                // The viewer looks along +z, or in a turned-round pass along −z from the sweep's
+                // far end: there the normal the shading turns towards −z (`facing`) is the
+                // viewer's negated, so the vectors it is dotted with are negated too.
+                let (to_viewer, facing) = if scene.turned_round {
+                    (DVec3::Z, -1.0)
+                } else {
+                    (DVec3::NEG_Z, 1.0)
+                };
+                let h = (to_light + to_viewer).normalize();
+                let (shade_h, shade_l) = (h * facing, to_light * facing);
                 Some(LightPlan {
                     color: spec.color.map(flush_tiny),
                     moments,
                     table,
                     slab_hash: (0..slabs).map(|k| slab_hash(seed, l as u32, k)).collect(),
-                    half_vector: [h.x as f32, h.y as f32, h.z as f32],
-                    to_light: [to_light.x as f32, to_light.y as f32, to_light.z as f32],
+                    half_vector: [shade_h.x as f32, shade_h.y as f32, shade_h.z as f32],
+                    to_light: [shade_l.x as f32, shade_l.y as f32, shade_l.z as f32],
                     fresnel: fresnel_terms(h, to_light),
                     drift: moments.mean.map(|m| m as f32),
                     carry_residual: Vec::new(),
@@ -300,7 +320,7 @@ impl RenderPlan {
                         // Bit for bit the colour the shading used before phase functions.
                         l.color.map(flush_tiny)
                     } else {
-                        let f = phase_factor(spec.phase_g, l.tilt_deg);
+                        let f = phase_factor(spec.phase_g, l.tilt_deg, scene.turned_round);
                         l.color.map(|c| flush_tiny((f64::from(c) * f) as f32))
                     }
                 })
@@ -357,6 +377,7 @@ impl RenderPlan {
             slab_back: geometry.slab_back_faces(),
             channels: if scene.is_monochrome() { 1 } else { 3 },
             penumbra: scene.sweep.penumbra,
+            turned_round: scene.turned_round,
             lights,
             materials,
             mesh_material,

@@ -268,6 +268,7 @@ mod tests {
             variance,
             rotation_deg: 0.0,
             pattern: None,
+            toward_viewer: false,
         }
     }
 

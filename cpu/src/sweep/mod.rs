@@ -469,7 +469,11 @@ pub fn sweep_with(
             quiet.as_mut(),
         );
         (options.progress)(slab);
-        if !options.every_slab && slab + 1 < plan.slabs && opaque.is_final(&state.alpha) {
+        if !options.every_slab
+            && !plan.turned_round
+            && slab + 1 < plan.slabs
+            && opaque.is_final(&state.alpha)
+        {
             // No later slab can change an image bit (see `OpaqueImage`).
             slabs_swept = slab + 1;
             (options.progress)(plan.slabs - 1);

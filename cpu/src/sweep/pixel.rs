@@ -351,7 +351,14 @@ pub(crate) fn shade_and_composite(
     let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
     let w = plan.grid_width as usize;
     let mut color = [state.color[x], state.color[w + x], state.color[2 * w + x]];
-    composite(&mut color, &mut state.alpha[x], shaded, tf.alpha, true);
+    composite(
+        &mut color,
+        &mut state.alpha[x],
+        shaded,
+        tf.alpha,
+        true,
+        plan.turned_round,
+    );
     [state.color[x], state.color[w + x], state.color[2 * w + x]] = color;
     tf.attenuation
 }

@@ -68,7 +68,7 @@ fn rust_layouts() -> Vec<Layout> {
             inv_slab_distance,
             second_order_media,
             subpixel_shadows,
-            _pad4,
+            back_to_front,
             _pad5,
         }),
         layout!(Slab {

@@ -4,8 +4,18 @@
 #import shared/bindings
 #import shading
 
-// `composite`: t = (1 − A)·α; C += t·c; A += t. `acc` is (C.rgb, A).
+// `composite`: t = (1 − A)·α; C += t·c; A += t. `acc` is (C.rgb, A). In a turned-round pass
+// (back_to_front) C = α·c + (1 − α)·C, A = α + (1 − α)·A.
 fn composite(acc: vec4<f32>, c: vec3<f32>, a: f32) -> vec4<f32> {
+    if globals.back_to_front != 0u {
+        let keep = 1.0 - a;
+        return vec4<f32>(
+            a * c.x + keep * acc.x,
+            a * c.y + keep * acc.y,
+            a * c.z + keep * acc.z,
+            a + keep * acc.w,
+        );
+    }
     let t = (1.0 - acc.w) * a;
     return vec4<f32>(acc.x + t * c.x, acc.y + t * c.y, acc.z + t * c.z, acc.w + t);
 }

@@ -100,7 +100,7 @@ pub(super) fn finish(
             r.plan.slabs,
             auto_note(r),
             early_note(r),
-            plural(r.plan.lights.len(), "light"),
+            lights_note(scene, r),
             scene.sweep.kernel,
             r.plan.guard,
             r.ldi.fragments,
@@ -190,11 +190,20 @@ pub(super) fn finish_frames(
             scene.image.height,
             last.plan.slabs,
             auto_note(last),
-            plural(last.plan.lights.len(), "light"),
+            lights_note(scene, last),
             seconds
         );
     }
     Ok(exit::OK)
+}
+
+/// `n lights`, and how many of them the turned-round pass swept.
+fn lights_note(scene: &Scene, r: &Rendered) -> String {
+    let all = plural(scene.lights.len(), "light");
+    match r.turned_round_lights {
+        0 => all,
+        n => format!("{all} ({n} from in front of the viewer: a second pass, from the far end)"),
+    }
 }
 
 /// `n thing` or `n things`.

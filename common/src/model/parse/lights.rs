@@ -94,12 +94,22 @@ impl Validator<'_> {
             self.err(
                 format!("light[{i}].direction"),
                 format!(
-                    "the light travels at {angle:.1}° to the view direction{after}; only lights \
-                     from behind the viewer (less than 90°) are supported yet, not lights from \
-                     beside or in front of it"
+                    "the light travels at {angle:.1}° to the view direction{after}, along the \
+                     slab planes: a light beside the viewer (exactly 90°) has no sweep order; \
+                     any other angle is supported"
                 ),
             )
         })?;
+        if on_slabs.toward_viewer && light.pattern.is_some() {
+            return Err(self.err(
+                format!("light[{i}].pattern"),
+                format!(
+                    "the light travels towards the viewer{after}; a pattern is supported only \
+                     on lights from behind the viewer (less than 90° from the view direction) yet"
+                ),
+            ));
+        }
+        light.toward_viewer = on_slabs.toward_viewer;
         light.tilt_deg = on_slabs.tilt_deg;
         light.variance = on_slabs.variance;
         light.rotation_deg = on_slabs.rotation_deg;

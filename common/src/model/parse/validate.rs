@@ -238,6 +238,7 @@ impl Validator<'_> {
                 variance: [0.0; 2],
                 rotation_deg: 0.0,
                 pattern: None,
+                toward_viewer: false,
             });
         }
 
@@ -273,6 +274,7 @@ impl Validator<'_> {
             lights,
             meshes,
             materials,
+            turned_round: false,
         })
     }
 
@@ -437,6 +439,7 @@ impl Validator<'_> {
             world: None,
             variance,
             rotation_deg,
+            toward_viewer: false,
         };
         if let Some(direction) = raw.direction {
             let world = self.world_light(i, direction, raw.up, variance, rotation_deg)?;

@@ -265,16 +265,77 @@ fn a_world_direction_light_stays_put_when_the_camera_turns() {
         "{:?}",
         s.lights[0].tilt_deg
     );
-    // Looking along −z the light comes from in front of the viewer: refused, by name.
+    // Looking along −z the light comes from in front of the viewer (135°): the camera turned
+    // round (along +z, its x axis world −x) sees it travel +x, to its image's left: tilt +45°.
+    s.override_camera(Some([0.0, 0.0, -1.0]), None, None)
+        .unwrap();
+    assert!(s.lights[0].toward_viewer);
+    assert!(
+        (s.lights[0].tilt_deg[0] - 45.0).abs() < 1e-9 && s.lights[0].tilt_deg[1] == 0.0,
+        "{:?}",
+        s.lights[0].tilt_deg
+    );
+    // Along the slab planes (90°): refused, by name.
     let e = s
-        .override_camera(Some([0.0, 0.0, -1.0]), None, None)
-        .expect_err("a light in front of the viewer");
+        .override_camera(Some([1.0, 0.0, -1.0]), None, None)
+        .expect_err("a light along the slab planes");
     let msg = e.to_string();
     assert!(
-        msg.contains("light[0].direction") && msg.contains("135.0°"),
+        msg.contains("light[0].direction") && msg.contains("90.0°"),
         "{msg}"
     );
     assert!(msg.contains("after --camera-direction"), "{msg}");
+}
+
+#[test]
+fn a_light_towards_the_viewer_is_a_second_pass_with_the_camera_turned_round() {
+    let text = format!(
+        "{MINIMAL}\n[[light]]\ndirection = [0.0, 0.0, 1.0]\n[[light]]\ncolor = [0.5, 0.5, 0.5]\n\
+         direction = [0.0, -1.0, -1.0]\n[[light]]\ndirection = [1.0, 0.0, -3.0]\n"
+    );
+    let s = parse(&text).unwrap();
+    assert_eq!(
+        s.lights.iter().map(|l| l.toward_viewer).collect::<Vec<_>>(),
+        [false, true, true]
+    );
+    let passes = s.passes();
+    let front = passes
+        .front
+        .as_ref()
+        .expect("a light from behind the viewer");
+    let back = passes.back.as_ref().expect("lights from in front of it");
+    assert_eq!((front.lights.len(), back.lights.len()), (1, 2));
+    assert!(!front.turned_round && back.turned_round);
+    assert_eq!(back.camera.direction, [0.0, 0.0, -1.0]);
+    // The background is composited once, in the front pass.
+    assert_eq!(back.image.background, [0.0; 3]);
+    assert_eq!(front.image.background, s.image.background);
+    // Light 1 travels down and towards the camera: the turned-round camera (x = world −x,
+    // y = world −y) sees it travel towards its image's bottom, tilt ωy = atan(−y/z) = −45°.
+    let l1 = &back.lights[0];
+    assert_eq!(l1.color, [0.5; 3]);
+    assert!(
+        l1.tilt_deg[0].abs() < 1e-12 && (l1.tilt_deg[1] + 45.0).abs() < 1e-9,
+        "{l1:?}"
+    );
+    // Light 2 travels +x: the turned camera's image right (its x axis is world +x, the
+    // image's is world −x), ωx = −atan(1/3).
+    let wx = back.lights[1].tilt_deg[0];
+    assert!(
+        (wx + (1.0f64 / 3.0).atan().to_degrees()).abs() < 1e-9,
+        "{wx}"
+    );
+    assert_eq!(passes.light(&s, 0), (0, 0));
+    assert_eq!(passes.light(&s, 1), (1, 0));
+    assert_eq!(passes.light(&s, 2), (1, 1));
+    // Only lights towards the viewer: one pass, which keeps the background.
+    let text = format!("{MINIMAL}\n[[light]]\ndirection = [0.0, 0.0, -1.0]\n");
+    let passes = parse(&text).unwrap().passes();
+    assert!(passes.front.is_none());
+    assert_eq!(
+        passes.back.expect("the back pass").image.background,
+        parse(&text).unwrap().image.background
+    );
 }
 
 #[test]
@@ -301,9 +362,9 @@ fn bad_light_kinds_and_directions_name_the_key() {
         "90.0° to the view direction",
     );
     expect_err(
-        &light("direction = [0.0, 0.0, -1.0]"),
-        "light[0].direction",
-        "180.0°",
+        &light("direction = [0.0, 0.0, -1.0]\npattern = { path = \"g.png\", size = [1.0, 1.0] }"),
+        "light[0].pattern",
+        "towards the viewer",
     );
     expect_err(
         &light("kind = \"point\""),

@@ -815,8 +815,8 @@ fn shade_chunk<L: Layout>(
         L::load(state.color, w + x0),
         L::load(state.color, 2 * w + x0),
     ];
-    let mut alpha = L::load(state.alpha, x0);
-    composite(&mut color, &mut alpha, shaded, tf.alpha, active);
+    let (mut alpha, over) = (L::load(state.alpha, x0), plan.turned_round);
+    composite(&mut color, &mut alpha, shaded, tf.alpha, active, over);
     for (k, v) in color.iter().enumerate() {
         v.store(state.color, k * w + x0);
     }

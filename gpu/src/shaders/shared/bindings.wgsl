@@ -81,7 +81,7 @@ struct Globals {
     inv_slab_distance: f32, // 1/e (RenderPlan::inv_slab_distance), for a medium's part of a slab
     second_order_media: u32, // 1: sweep.media = "second-order" (else slab_part is (1, 0))
     subpixel_shadows: u32, // 1: some mesh reads its light at the exact shift (MeshHeader.subpixel)
-    _pad4: u32,
+    back_to_front: u32, // 1: a turned-round pass (RenderPlan::turned_round): composite back to front
     _pad5: u32,
 }
 

@@ -1,0 +1,115 @@
+//! Lights from in front of the viewer: the scene split into one pass per end of the sweep
+//! ([`Scene::passes`]), each rendered on its own and their images added (the image is linear
+//! in each light). A scene whose lights are all behind the viewer is one pass, as before.
+
+use convshadow_common::model::scene::Scene;
+
+use super::{Aov, RenderError, Rendered, image_fingerprint};
+
+/// Renders `scene` with `render_pass` once per pass it needs: the front pass as it is, the
+/// turned-round pass (its image mirrored back in x) added to it. The requested layers go to
+/// the pass that has their light (renumbered there, reported under the scene's numbers); the
+/// depth layer is the front pass's, refused when every light is in front of the viewer.
+pub fn render_passes(
+    scene: &Scene,
+    aovs: &[Aov],
+    mut render_pass: impl FnMut(&Scene, &[Aov]) -> Result<Rendered, RenderError>,
+) -> Result<Rendered, RenderError> {
+    let passes = scene.passes();
+    let Some(back_scene) = &passes.back else {
+        return render_pass(scene, aovs);
+    };
+    let mut pass_aovs = [Vec::new(), Vec::new()];
+    for aov in aovs {
+        match *aov {
+            Aov::Depth if passes.front.is_none() => {
+                return Err(RenderError::BadRequest(
+                    "the depth layer needs a light from behind the viewer; every light of this \
+                     scene travels towards the viewer (its pass sweeps from the far end)"
+                        .into(),
+                ));
+            }
+            Aov::Depth => pass_aovs[0].push(Aov::Depth),
+            Aov::Light(l) => {
+                let (pass, index) = passes.light(scene, l);
+                pass_aovs[pass].push(Aov::Light(index));
+            }
+        }
+    }
+    let front = match &passes.front {
+        Some(s) => Some(render_pass(s, &pass_aovs[0])?),
+        None => None,
+    };
+    let mut back = render_pass(back_scene, &pass_aovs[1])?;
+    let width = back.image.width as usize;
+    mirror_rows(&mut back.image.data, width, 3);
+    mirror_rows(&mut back.alpha, width, 1);
+    for (_, layer) in &mut back.light_layers {
+        mirror_rows(layer, width, 3);
+    }
+    // Each layer under the scene's light number, in request order.
+    let mut layers = [
+        front
+            .as_ref()
+            .map_or(Vec::new(), |f| f.light_layers.clone()),
+        std::mem::take(&mut back.light_layers),
+    ];
+    let mut light_layers = Vec::new();
+    for aov in aovs {
+        if let Aov::Light(l) = *aov {
+            let (pass, index) = passes.light(scene, l);
+            let at = layers[pass].iter().position(|(i, _)| *i == index);
+            let (_, layer) = layers[pass].swap_remove(at.expect("each pass renders its layers"));
+            light_layers.push((l, layer));
+        }
+    }
+    let Some(mut front) = front else {
+        back.light_layers = light_layers;
+        back.image_hash = image_fingerprint(&back.image.data);
+        return Ok(back);
+    };
+    // C_front + (1 − A)·background + C_back: the background once, in the front pass.
+    for (f, b) in front.image.data.iter_mut().zip(&back.image.data) {
+        *f += *b;
+    }
+    front.light_layers = light_layers;
+    front.image_hash = image_fingerprint(&front.image.data);
+    front.slabs_swept += back.slabs_swept;
+    front.turned_round_lights = back.turned_round_lights;
+    front.updates += back.updates;
+    front.seconds_ldi += back.seconds_ldi;
+    front.seconds_plan += back.seconds_plan;
+    front.seconds_sweep += back.seconds_sweep;
+    front.seconds_total += back.seconds_total;
+    for (f, b) in front.chunks.iter_mut().zip(back.chunks) {
+        *f += b;
+    }
+    Ok(front)
+}
+
+/// Reverses the order of the pixels in each row of an image of `width` pixels of `channels`
+/// floats each.
+fn mirror_rows(data: &mut [f32], width: usize, channels: usize) {
+    for row in data.chunks_exact_mut(width * channels) {
+        for x in 0..width / 2 {
+            for c in 0..channels {
+                row.swap(x * channels + c, (width - 1 - x) * channels + c);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mirror_rows;
+
+    #[test]
+    fn mirroring_reverses_each_row_and_keeps_a_pixels_channels_together() {
+        let mut rgb: Vec<f32> = (0..18).map(|v| v as f32).collect(); // 3 × 2 pixels
+        mirror_rows(&mut rgb, 3, 3);
+        let want = [
+            6., 7., 8., 3., 4., 5., 0., 1., 2., 15., 16., 17., 12., 13., 14., 9., 10., 11.,
+        ];
+        assert_eq!(rgb, want);
+    }
+}
