@@ -554,7 +554,15 @@ proptest! {
             r.image.data.iter().all(|v| v.is_finite() && *v >= 0.0),
             "non-finite or negative pixel\n{}", text
         );
-        prop_assert!(r.light.iter().all(|v| v.is_finite() && *v >= 0.0), "light\n{}", text);
+        // The light buffers: `[row][light][plane][x]`; a light's channels are ≥ 0, its depth
+        // plane (distance penumbra, sub-pixel shadows) is D, negative where light was removed
+        // before slab 0's middle (`deepen`): finite only.
+        let (w, planes) = (r.plan.grid_width as usize, r.plan.planes_per_light());
+        let channels = r.plan.channels as usize;
+        let bad = r.light.iter().enumerate().find(|&(i, v)| {
+            !v.is_finite() || (((i / w) % planes) < channels && *v < 0.0)
+        });
+        prop_assert!(bad.is_none(), "light value {:?}\n{}", bad, text);
     }
 
     /// One key of a valid scene set to an invalid value: rejected by the parser with a message
