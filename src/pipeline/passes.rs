@@ -36,7 +36,7 @@ pub fn render_passes(
             }
         }
     }
-    let front = match &passes.front {
+    let mut front = match &passes.front {
         Some(s) => Some(render_pass(s, &pass_aovs[0])?),
         None => None,
     };
@@ -50,8 +50,8 @@ pub fn render_passes(
     // Each layer under the scene's light number, in request order.
     let mut layers = [
         front
-            .as_ref()
-            .map_or(Vec::new(), |f| f.light_layers.clone()),
+            .as_mut()
+            .map_or(Vec::new(), |f| std::mem::take(&mut f.light_layers)),
         std::mem::take(&mut back.light_layers),
     ];
     let mut light_layers = Vec::new();
