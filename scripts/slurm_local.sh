@@ -3,8 +3,8 @@
 # checks them against local runs (issue 44 item 5):
 #   - scripts/slurm/render_frames.sbatch for frames 0-3: each task's image_hash must equal the
 #     same frame's image_hash from one local `render --frames 0..4` run;
-#   - scripts/slurm/report_cases.sbatch for 4 cases of the quick report, one of each family (an
-#     edge, a disk, a scene and a narrow-band case; their errors are not zero, unlike
+#   - scripts/slurm/report_cases.sbatch for 5 cases of the quick report, one of each family (an
+#     edge, a disk, a scene, a narrow-band and a light-direction case; their errors are not zero, unlike
 #     the first cases'): the gathered report.csv must equal the local `report --quick --case K`
 #     rows, every column but time_ms (a measurement).
 #
@@ -21,10 +21,10 @@ set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 FRAMES=4 # frames 0..4: enough for an array, quick to run
 # Quick-report cases, one per family in the order of report.csv (edge, disk, scene,
-# narrowband; `convshadow report --quick --case 100000` prints the count). When the report's
+# narrowband, direction; `convshadow report --quick --case 100000` prints the count). When the report's
 # grid changes, the family check below fails: pick one case of each family again.
-CASE_LIST=(100 395 411 415)
-CASE_FAMILIES=edge,disk,scene,narrowband
+CASE_LIST=(100 395 411 415 419)
+CASE_FAMILIES=edge,disk,scene,narrowband,direction
 CASES=${#CASE_LIST[@]}
 CASE_ARRAY=$(IFS=,; echo "${CASE_LIST[*]}")
 START=$(date +%s)

@@ -220,7 +220,7 @@ pub fn build_ldi(
 /// scene lacks is refused first, [`RenderError::BadRequest`]).
 ///
 /// A scene with lights from in front of the viewer is rendered in two passes, added
-/// ([`passes::render_passes`]).
+/// (`passes::render_passes`).
 pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, RenderError> {
     for aov in &req.aovs {
         if let Aov::Light(l) = *aov {

@@ -5,12 +5,15 @@
 //! - [`edge`]: a straight shadow edge, whose exact profile is a normal CDF;
 //! - [`disk`]: a polygonal occluder over a plane, whose exact shadow is a Gaussian integral over
 //!   the polygon;
+//! - [`half_plane_sheet`]: an opaque half-plane's shadow on a translucent sheet, both
+//!   perpendicular to a directional light seen from any angle, integrated along each view ray;
 //! - [`impulse`]: a single lit pixel through an empty scene, whose exact spread is n·Σκ.
 //!
 //! Library code only: no exit codes, no printing.
 
 pub mod disk;
 pub mod edge;
+pub mod half_plane_sheet;
 pub mod impulse;
 pub mod light_samples;
 pub mod shadow_ray;

@@ -22,7 +22,7 @@ use super::{
 /// more reference render, on the plan with the other lights and the background black (as the
 /// pipeline's, `pipeline/aov.rs`). `cancel` is read between the stages (the reference itself
 /// has no cancel point). Lights from in front of the viewer are a second pass, as the
-/// pipeline's ([`render_passes`]).
+/// pipeline's (`passes::render_passes`).
 pub fn render_reference(
     scene: &Scene,
     threads: usize,

@@ -61,7 +61,8 @@ impl ReportOptions {
              d = 4·d1, tilt 45°, high variance, slabs 128, all kernels; default scene at 24×24, \
              slabs 64, all kernels, reference M = 16 (self-error against M = 64); narrow-band \
              scene at 48×48, ellipse2 with and without pre-integration, slabs 64, 128, against \
-             2048 slabs (self-error against 4096)"
+             2048 slabs (self-error against 4096); a directional light at 0°, 100°, 180° from the view \
+             over a half-plane and a translucent sheet (isotropic light)"
                 .to_string()
         } else {
             "full grid: edge at d = d1/4, d1, 4·d1 × 7 kernels × slabs 64, 128, 256, 512 × variance \
@@ -69,7 +70,9 @@ impl ReportOptions {
              × 7 kernels × 4 slab counts × 3 variances × 2 tilts (compensation on); default scene \
              at 24×24 × 7 kernels × slabs 64, 128, 256, 512, reference M = 16 (self-error against \
              M = 64); narrow-band scene at 64×64, ellipse2 with and without pre-integration × \
-             slabs 64, 128, 256, 512, against 2048 slabs (self-error against 4096)"
+             slabs 64, 128, 256, 512, against 2048 slabs (self-error against 4096); a directional \
+             light at 0°, 45°, 80°, 100°, 135°, 180° from the view over a half-plane and a \
+             translucent sheet (isotropic and rotated anisotropic light)"
                 .to_string()
         }
     }

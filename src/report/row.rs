@@ -5,7 +5,7 @@
 /// One row of `report.csv`.
 #[derive(Clone, Debug, Default)]
 pub struct Row {
-    /// `edge`, `disk` or `scene`.
+    /// `edge`, `disk`, `scene`, `narrowband` or `direction`.
     pub family: String,
     /// Kernel name.
     pub kernel: String,
@@ -47,6 +47,8 @@ pub struct Row {
     pub rmse_reference: Option<f64>,
     /// The reference's own error: RMS difference between its M and 4·M sample runs.
     pub reference_self_err: Option<f64>,
+    /// The angle between the light's travel and the view direction (degrees; `direction`).
+    pub view_angle_deg: Option<f64>,
     /// Why cells are empty.
     pub note: String,
 }

@@ -17,7 +17,7 @@ use super::grid::{
     edge_setup, kernels,
 };
 use super::row::{Report, Row};
-use super::{csv, markdown, plot};
+use super::{csv, direction, markdown, plot};
 
 /// Runs one edge case.
 pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
@@ -65,6 +65,7 @@ pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
         width_px: width,
         rmse_reference: None,
         reference_self_err: None,
+        view_angle_deg: None,
         note: if note.is_empty() {
             "analytic case: closed-form references, no shadow-ray reference needed".into()
         } else {
@@ -162,6 +163,7 @@ fn disk_row(setup: &DiskSetup, level: &str, r: &DiskReference) -> Row {
         width_px: Some(wm),
         rmse_reference: None,
         reference_self_err: None,
+        view_angle_deg: None,
         note: "analytic case (numerical f64 disk convolution); isoline error = mean unsigned \
                displacement (symmetric-difference area / perimeter); widths = area between the \
                0.1 and 0.9 levels / perimeter"
@@ -492,6 +494,27 @@ fn scene_cases(cases: &mut Cases<'_>) {
     }
 }
 
+/// The light-direction family: light × view angle × penumbra model (`ellipse2`).
+fn direction_cases(cases: &mut Cases<'_>) -> Result<(), String> {
+    let quick = cases.options.quick;
+    let angles: &[f64] = if quick {
+        &direction::QUICK_VIEW_ANGLES
+    } else {
+        &direction::VIEW_ANGLES
+    };
+    for light in direction::lights(quick) {
+        for &theta in angles {
+            for penumbra in cases.options.penumbras() {
+                cases.next += 1;
+                if cases.want(cases.next - 1) {
+                    cases.push(direction::direction_row(theta, light, penumbra)?);
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Refuses an `options.case` past the last of the `count` cases.
 fn check_case(options: &ReportOptions, count: usize) -> Result<(), String> {
     if let Some(c) = options.case
@@ -554,6 +577,8 @@ pub fn case_count(options: &ReportOptions) -> usize {
     let _ = disk_cases(&mut cases);
     scene_cases(&mut cases);
     narrowband_cases(&mut cases);
+    // Without a wanted case the direction family renders nothing, so it cannot fail.
+    let _ = direction_cases(&mut cases);
     cases.next
 }
 
@@ -594,6 +619,7 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
     disk_cases(&mut cases)?;
     scene_cases(&mut cases);
     narrowband_cases(&mut cases);
+    direction_cases(&mut cases)?;
     check_case(options, cases.next)?;
     write_files(options, cases.rows, start)
 }

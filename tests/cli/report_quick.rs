@@ -89,6 +89,8 @@ fn check_case_counts(t: &Csv<'_>) {
         };
         assert!(err("true") < err("false"), "narrowband, {n} slabs");
     }
+    // Light directions: 0°, 100°, 180° from the view, isotropic light, both penumbra models.
+    assert_eq!(count("direction"), 3 * 2);
     for k in kernels() {
         for family in ["edge", "disk", "scene"] {
             assert!(
@@ -120,6 +122,7 @@ fn check_cells(t: &Csv<'_>) {
         "width_px",
         "rmse_reference",
         "reference_self_err",
+        "view_angle_deg",
     ];
     for r in rows {
         for name in numeric {
@@ -142,6 +145,7 @@ fn check_cells(t: &Csv<'_>) {
                 "width_err_correct_px",
                 "width_err_iterated_px",
             ],
+            "direction" => &["rmse_correct", "view_angle_deg"],
             _ => &["rmse_reference", "reference_self_err"],
         };
         for name in required {
@@ -149,6 +153,29 @@ fn check_cells(t: &Csv<'_>) {
         }
         assert!(r[col("time_ms")].parse::<f64>().unwrap() > 0.0);
     }
+}
+
+/// Lights along the view and against it (a second pass from the far end): the distance
+/// penumbra's profile within issue 41's 5·10⁻³ of the closed form
+/// (`convshadow_reference::half_plane_sheet`); at 100° both passes' slabs are counted.
+fn check_directions(t: &Csv<'_>) {
+    let col = |name: &str| t.col(name);
+    let row = |angle: &str, penumbra: &str| {
+        t.rows
+            .iter()
+            .find(|r| {
+                r[col("family")] == "direction"
+                    && r[col("view_angle_deg")].parse::<f64>().ok() == angle.parse().ok()
+                    && r[col("penumbra")] == penumbra
+            })
+            .unwrap_or_else(|| panic!("no direction row at {angle}° ({penumbra})"))
+    };
+    for angle in ["0", "180"] {
+        let err: f64 = row(angle, "distance")[col("rmse_correct")].parse().unwrap();
+        assert!(err <= 5e-3, "direction {angle}°: RMSE {err}");
+    }
+    let slabs = |angle: &str| row(angle, "distance")[col("slabs")].parse::<u32>().unwrap();
+    assert!(slabs("100") > slabs("0"), "100° sweeps both passes");
 }
 
 /// The reference's own error must be well below the errors it measures.
@@ -225,6 +252,7 @@ fn quick_report_writes_a_complete_csv_markdown_and_plot() {
     check_case_counts(&table);
     check_cells(&table);
     check_reference_self_error(&table);
+    check_directions(&table);
     check_markdown_and_plot(&out);
     check_single_cases(&dir, &csv, &table);
     let _ = std::fs::remove_dir_all(&dir);

@@ -1,0 +1,262 @@
+//! A directional light from any direction (issue 41): an opaque thin half-plane and a
+//! translucent thin receiver sheet, both perpendicular to a Gaussian light's mean direction,
+//! seen by a camera at any angle from that direction, with the exact profile of the sheet.
+//!
+//! World: the light travels along +z; the half-plane is the box x ∈ [0, 3], z ∈ [−h, h]; the
+//! sheet the box x ∈ [−1.5, 1.5], z ∈ [W − t/2, W + t/2], translucent (extinction κ per unit
+//! depth for the eye) with transport 1 (it takes no light out), white; both are 8 long in y.
+//! A light ray of slope δ (x per unit z, N(0, Σxx) with Σxx = cos²α·σx² + sin²α·σy² for a light
+//! whose own frame is rotated by α) reaching (x, z) passed depth z' at x − δ·(z − z'); it misses
+//! the half-plane iff δ > x/(z − h) for x ≥ 0 and δ > x/(z + h) for x < 0 (the corner it grazes),
+//! so V(x, z) = Φ(−x/((z ∓ h)·√Σxx)). A pixel sees the sheet's light scattered along its view
+//! ray, `∫ κ·e^(−κs)·V ds / ∫ κ·e^(−κs) ds` over the part of the ray inside the sheet
+//! (Gauss–Legendre), divided by the sheet's lit level (the render's mean where V = 1 on the same
+//! rows). Behind the sheet nothing is lit: the background is black and the half-plane's faces
+//! seen through the sheet are in its own shadow (for a camera at more than 90° they face away
+//! from the light; below 90° pixels whose ray meets the half-plane first are left out).
+//!
+//! Used by `tests/accuracy/lights_from_any_direction.rs` and the report's `direction` family.
+
+use crate::edge::phi;
+
+/// Image width and height in pixels (the profile runs along x; rows are alike).
+pub const WIDTH: u32 = 128;
+/// Image height in pixels.
+pub const HEIGHT: u32 = 8;
+/// The view's width in world units.
+pub const VIEW: f64 = 2.0;
+/// Half the half-plane's thickness.
+pub const H: f64 = 0.01;
+/// The sheet's middle depth (its distance from the half-plane).
+pub const W: f64 = 1.0;
+/// The sheet's thickness.
+pub const T: f64 = 0.02;
+/// The sheet's opacity per unit depth: κ = −ln(1 − 0.9).
+pub const OPACITY: f64 = 0.9;
+/// The slab distance: at 80° the light moves tan 80° ≈ 5.7 slab distances across the view per
+/// slab, and must not step over the half-plane (0.02 thick, 0.02/sin 80° across a slab).
+pub const SLAB_DISTANCE: f64 = 0.002;
+
+/// A Gaussian light along +z: variances along its own axes, rotation of them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SheetLight {
+    /// σ² along the light's own x and y axes.
+    pub variance: [f64; 2],
+    /// Rotation of those axes (degrees).
+    pub rotation_deg: f64,
+}
+
+impl SheetLight {
+    /// An isotropic light, σ² = 0.01.
+    pub const ISOTROPIC: SheetLight = SheetLight {
+        variance: [0.01, 0.01],
+        rotation_deg: 0.0,
+    };
+    /// An anisotropic light, σ² = (0.02, 0.005), its axes rotated 30°.
+    pub const ROTATED: SheetLight = SheetLight {
+        variance: [0.02, 0.005],
+        rotation_deg: 30.0,
+    };
+
+    /// Σxx: the variance of its slopes along world x (its own x axis is world −x: `frame` of +z
+    /// with `up` = +y), a marginal that the axis's sign does not change.
+    pub fn var_x(&self) -> f64 {
+        let r = self.rotation_deg.to_radians();
+        r.cos().powi(2) * self.variance[0] + r.sin().powi(2) * self.variance[1]
+    }
+}
+
+/// The camera's view direction at `theta` degrees from the light's travel (+z), turned about y.
+pub fn view_direction(theta: f64) -> [f64; 3] {
+    let t = theta.to_radians();
+    [t.sin(), 0.0, t.cos()]
+}
+
+/// The scene (TOML) of the camera at `theta` degrees from the light `light`, with `[sweep]`
+/// lines `sweep` added after the slab distance (e.g. `penumbra = "iterated"`).
+pub fn scene_toml(theta: f64, light: SheetLight, sweep: &str) -> String {
+    let [dx, dy, dz] = view_direction(theta);
+    format!(
+        "[image]\nwidth = {WIDTH}\nheight = {HEIGHT}\nbackground = [0.0, 0.0, 0.0]\n\
+         [camera]\ndirection = [{dx}, {dy}, {dz}]\ncenter = [0.0, 0.0, {W}]\nview_width = {VIEW}\n\
+         [sweep]\nslab_distance = {SLAB_DISTANCE}\n{sweep}\n\
+         [[light]]\ndirection = [0.0, 0.0, 1.0]\nvariance = [{}, {}]\nrotation_deg = {}\n\
+         [[mesh]]\nshape = \"box\"\nsize = [3.0, 8.0, {}]\ntranslate = [1.5, 0.0, 0.0]\n\
+         material = \"plane\"\n\
+         [[mesh]]\nshape = \"box\"\nsize = [3.0, 8.0, {T}]\ntranslate = [0.0, 0.0, {W}]\n\
+         material = \"sheet\"\n\
+         [material.plane]\ncolor = [1.0, 1.0, 1.0]\n\
+         [material.sheet]\ncolor = [1.0, 1.0, 1.0]\nopacity = {OPACITY}\ntransport = [1.0, 1.0, 1.0]\n",
+        light.variance[0],
+        light.variance[1],
+        light.rotation_deg,
+        2.0 * H,
+    )
+}
+
+/// The ray parameters (entry, exit) of `p + s·f` in the box x ∈ `x`, z ∈ `z`, if it meets it.
+fn slab_hit(p: [f64; 3], f: [f64; 3], x: (f64, f64), z: (f64, f64)) -> Option<(f64, f64)> {
+    let mut lo = f64::NEG_INFINITY;
+    let mut hi = f64::INFINITY;
+    for (o, d, (a, b)) in [(p[0], f[0], x), (p[2], f[2], z)] {
+        if d.abs() < 1e-15 {
+            if o < a || o > b {
+                return None;
+            }
+            continue;
+        }
+        let (s0, s1) = ((a - o) / d, (b - o) / d);
+        lo = lo.max(s0.min(s1));
+        hi = hi.min(s0.max(s1));
+    }
+    (lo < hi).then_some((lo, hi))
+}
+
+/// The visibility of the light at (x, z) behind the half-plane.
+fn visibility(x: f64, z: f64, sigma: f64) -> f64 {
+    let d = if x >= 0.0 { z - H } else { z + H };
+    phi(-x / (d * sigma))
+}
+
+/// 16-point Gauss–Legendre on [0, 1]: (node, weight).
+fn gauss_legendre_16() -> Vec<(f64, f64)> {
+    // Nodes by Newton on P16 from the Chebyshev guesses; weights 2/((1 − x²)·P16'(x)²).
+    let n = 16;
+    (0..n)
+        .map(|i| {
+            let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+            let mut dp = 0.0;
+            for _ in 0..100 {
+                let (mut p0, mut p1) = (1.0, x);
+                for k in 2..=n {
+                    let k = k as f64;
+                    (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
+                }
+                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+                x -= p1 / dp;
+            }
+            (0.5 * (x + 1.0), 1.0 / ((1.0 - x * x) * dp * dp))
+        })
+        .collect()
+}
+
+/// Per pixel of a middle row: the expected normalised value, or `None` where the pixel does not
+/// see the sheet first (or the sheet's penumbra lies off the measured range).
+pub fn expected_row(theta: f64, light: SheetLight) -> Vec<Option<f64>> {
+    let f = view_direction(theta);
+    // The camera's axes (`frame` of the view direction and up = +y).
+    let down = [0.0, -1.0, 0.0];
+    let right = [
+        down[1] * f[2] - down[2] * f[1],
+        down[2] * f[0] - down[0] * f[2],
+        down[0] * f[1] - down[1] * f[0],
+    ];
+    let px = VIEW / f64::from(WIDTH);
+    let kappa = -(1.0 - OPACITY).ln();
+    let sigma = light.var_x().sqrt();
+    let nodes = gauss_legendre_16();
+    (0..WIDTH)
+        .map(|i| {
+            let cx = (f64::from(i) + 0.5 - f64::from(WIDTH) / 2.0) * px;
+            let cy = 0.5 * px; // the row just below the centre
+            let p = [
+                right[0] * cx,
+                right[1] * cx + down[1] * cy,
+                W + right[2] * cx,
+            ];
+            let (s0, s1) = slab_hit(p, f, (-1.5, 1.5), (W - T / 2.0, W + T / 2.0))?;
+            if let Some((h0, _)) = slab_hit(p, f, (0.0, 3.0), (-H, H))
+                && h0 < s0
+            {
+                return None; // the half-plane hides the sheet
+            }
+            // Away from the sheet's ends (their own edges, 2 pixels) only.
+            let x_at = |s: f64| p[0] + s * f[0];
+            if x_at(s0).abs().max(x_at(s1).abs()) > 1.5 - 2.0 * px {
+                return None;
+            }
+            // ∫ κ e^{−κ(s − s0)} V ds over [s0, s1], in pieces of at most 0.005.
+            let pieces = ((s1 - s0) / 0.005).ceil().max(1.0) as usize;
+            let step = (s1 - s0) / pieces as f64;
+            let (mut num, mut den) = (0.0, 0.0);
+            for k in 0..pieces {
+                for &(u, w) in &nodes {
+                    let s = s0 + step * (k as f64 + u);
+                    let weight = w * step * kappa * (-kappa * (s - s0)).exp();
+                    num += weight * visibility(x_at(s), p[2] + s * f[2], sigma);
+                    den += weight;
+                }
+            }
+            Some(num / den)
+        })
+        .collect()
+}
+
+/// The profile's error: the RMSE of the two middle rows of `image` (RGB, [`WIDTH`] ×
+/// [`HEIGHT`]) normalised by the sheet's lit level, against `expected` ([`expected_row`]) over
+/// the sheet's penumbra (expected value within 1e-4 of neither 0 nor 1), and the number of
+/// pixels measured. Err when too few pixels are lit or in the penumbra to measure.
+pub fn profile_rmse(image: &[f32], expected: &[Option<f64>]) -> Result<(f64, usize), String> {
+    let w = WIDTH as usize;
+    let rows = [HEIGHT as usize / 2 - 1, HEIGHT as usize / 2];
+    let value = |row: usize, i: usize| f64::from(image[3 * (row * w + i)]);
+    // The lit level: the render's mean where the sheet sees the whole light.
+    let lit: Vec<f64> = rows
+        .iter()
+        .flat_map(|&r| {
+            (0..w)
+                .filter(|&i| expected[i].is_some_and(|v| v > 1.0 - 1e-12))
+                .map(move |i| value(r, i))
+        })
+        .collect();
+    if lit.len() < 8 {
+        return Err(format!("only {} lit pixels", lit.len()));
+    }
+    let level = lit.iter().sum::<f64>() / lit.len() as f64;
+    let (mut sq, mut n) = (0.0, 0usize);
+    for &r in &rows {
+        for (i, e) in expected.iter().enumerate() {
+            let Some(e) = *e else { continue };
+            if !(1e-4..=1.0 - 1e-4).contains(&e) {
+                continue;
+            }
+            sq += (value(r, i) / level - e).powi(2);
+            n += 1;
+        }
+    }
+    if n < 2 {
+        return Err(format!("only {n} penumbra pixels"));
+    }
+    Ok(((sq / n as f64).sqrt(), n))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gauss_legendre_integrates_polynomials_to_degree_31() {
+        let nodes = gauss_legendre_16();
+        let w: f64 = nodes.iter().map(|&(_, w)| w).sum();
+        assert!((w - 1.0).abs() < 1e-13);
+        for d in [1, 7, 20, 31] {
+            let got: f64 = nodes.iter().map(|&(x, w)| w * x.powi(d)).sum();
+            assert!((got - 1.0 / f64::from(d + 1)).abs() < 1e-13, "degree {d}");
+        }
+    }
+
+    #[test]
+    fn a_camera_along_the_light_sees_the_edge_profile() {
+        // θ = 0: each pixel looks along the light (its right is world −x). Where x > 0
+        // (pixels up to 63) the half-plane hides the sheet; beside it, V is Φ(−x/(d·σ)) with
+        // d = W + h at the sheet's depth, averaged over its thickness.
+        let row = expected_row(0.0, SheetLight::ISOTROPIC);
+        let sigma = 0.1;
+        for k in 0..8 {
+            assert_eq!(row[63 - k], None, "pixel {} sees the half-plane", 63 - k);
+            let x = -(k as f64 + 0.5) * VIEW / f64::from(WIDTH);
+            let v = row[64 + k].unwrap();
+            assert!((v - phi(-x / ((W + H) * sigma))).abs() < 2e-3, "{k}: {v}");
+        }
+    }
+}
