@@ -10,7 +10,7 @@
 use std::path::Path;
 
 use convshadow::common::model::scene::Scene;
-use convshadow::pipeline::{CpuPath, RenderRequest, render};
+use convshadow::pipeline::{Aov, CpuPath, RenderRequest, render};
 use convshadow::reference::half_plane_sheet::{SheetLight, expected_row, profile_rmse, scene_toml};
 
 /// The issue's bound on the normalised profile's RMSE.
@@ -75,5 +75,67 @@ fn a_light_towards_the_camera_gives_the_same_bits_on_the_scalar_and_simd_paths()
     assert!(
         bits(&simd) == bits(&scalar),
         "the turned-round pass differs between paths"
+    );
+}
+
+/// The set-up at 30° with a second light travelling towards the camera (a second pass) and both
+/// lights' layers asked for, last light first: each layer is that light's own render (the
+/// scene with the other light left out; the background is black) and the two add up to the
+/// image.
+#[test]
+fn each_lights_layer_is_its_own_render_when_the_lights_need_two_passes() {
+    let one = scene_toml(30.0, ISOTROPIC, "");
+    let back_light = "[[light]]\ndirection = [0.2, 0.0, -1.0]\ncolor = [0.3, 0.5, 1.0]\n\
+                      variance = [0.02, 0.02]\n";
+    let parse = |text: &str| {
+        Scene::parse(text, "two_lights.toml", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let both = parse(&format!("{one}{back_light}"));
+    let only_front = parse(&one);
+    // The back light alone: the same scene text with its [[light]] block replaced.
+    let start = one.find("[[light]]").unwrap();
+    let end = one.find("[[mesh]]").unwrap();
+    let only_back = parse(&format!("{}{back_light}{}", &one[..start], &one[end..]));
+    assert_eq!(both.passes().back.map(|s| s.lights.len()), Some(1));
+
+    let req = RenderRequest {
+        aovs: vec![Aov::Light(1), Aov::Light(0)],
+        ..RenderRequest::default()
+    };
+    let r = render(&both, &req).unwrap_or_else(|e| panic!("{e}"));
+    let alone = |s: &Scene| {
+        render(s, &RenderRequest::default())
+            .unwrap_or_else(|e| panic!("{e}"))
+            .image
+            .data
+    };
+    let own = [alone(&only_front), alone(&only_back)];
+    assert_eq!(
+        r.light_layers.iter().map(|(l, _)| *l).collect::<Vec<_>>(),
+        [1, 0],
+        "layers in request order"
+    );
+    let layer = |l: usize| &r.light_layers.iter().find(|(i, _)| *i == l).unwrap().1;
+    let image = &r.image.data;
+    let mut lit = [0.0f64; 2];
+    for p in 0..image.len() {
+        for (l, lit) in lit.iter_mut().enumerate() {
+            let (got, want) = (layer(l)[p], own[l][p]);
+            assert!(
+                (got - want).abs() <= 1e-6 * want.abs().max(1.0),
+                "light {l}, value {p}: layer {got}, alone {want}"
+            );
+            *lit += f64::from(got);
+        }
+        let sum = layer(0)[p] + layer(1)[p];
+        assert!(
+            (sum - image[p]).abs() <= 1e-5 * image[p].abs().max(1.0),
+            "value {p}: layers {sum}, image {}",
+            image[p]
+        );
+    }
+    assert!(
+        lit[0] > 10.0 && lit[1] > 10.0,
+        "both lights light the sheet: {lit:?}"
     );
 }
