@@ -175,22 +175,6 @@ pub(crate) fn exact_light(
             ..light_planes(plan, row.prev.light, l)
         };
         let sums = shifted_gather(&planes, ctx.taps[l].weighted(tap_row), at, shift);
-        if std::env::var("PROTO_DBG").is_ok()
-            && row.y == 112 + plan.guard.top as usize
-            && (x as i32 - plan.guard.left as i32) >= 120
-            && (x as i32 - plan.guard.left as i32) % 5 == 0
-        {
-            eprintln!(
-                "x {} slab {} part {part} lit {lit} depth {} zbar {} shift {shift:?} in {} out {} guard {:?}",
-                x as i32 - plan.guard.left as i32,
-                ctx.slab,
-                light.depth[l],
-                light.depth[l] / (1.0 - lit),
-                channels[0],
-                sums[0],
-                plan.guard
-            );
-        }
         shade_in[l * ch..(l + 1) * ch].copy_from_slice(&sums[..ch]);
     }
 }
