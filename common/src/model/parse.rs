@@ -28,11 +28,28 @@ impl Scene {
     /// Parses and validates scene text; `source` names it in messages, `base_dir` resolves paths.
     pub fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, SceneError> {
         // Through `Tables`: a table-typed key given an array is an error, not read in order.
+        let validator = Validator { file: source };
         let raw = toml::Deserializer::parse(text)
             .and_then(|d| RawScene::deserialize(tables::Tables(d)))
-            .map_err(|e| toml_error(source, text, &e))?;
-        Validator { file: source }.scene(raw, base_dir)
+            .map_err(|e| {
+                // A point or spot light's own keys (`position`, `radius`, …) are unknown to a
+                // directional light: say the kind is not supported, not that its keys are unknown.
+                unsupported_light_kind(&validator, text)
+                    .unwrap_or_else(|| toml_error(source, text, &e))
+            })?;
+        validator.scene(raw, base_dir)
     }
+}
+
+/// The error for the first `[[light]]` whose `kind` is not one the renderer sweeps, if the text
+/// is TOML with such a light.
+fn unsupported_light_kind(validator: &Validator<'_>, text: &str) -> Option<SceneError> {
+    let table: toml::Table = text.parse().ok()?;
+    let lights = table.get("light")?.as_array()?;
+    lights.iter().enumerate().find_map(|(i, light)| {
+        let kind = light.get("kind")?.as_str()?;
+        validator.light_kind(i, Some(kind)).err()
+    })
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -371,6 +371,23 @@ fn bad_light_kinds_and_directions_name_the_key() {
         "light[0].kind",
         "point lights are not supported yet",
     );
+    // With the point light's own keys, the kind is what is named, not the unknown keys.
+    expect_err(
+        &light("kind = \"point\"\nposition = [0.0, 1.0, -2.0]\nradius = 0.1"),
+        "light[0].kind",
+        "point lights are not supported yet",
+    );
+    expect_err(
+        &light("kind = \"spot\"\nposition = [0.0, 1.0, -2.0]\ncone_deg = 20.0"),
+        "light[0].kind",
+        "spot lights are not supported yet",
+    );
+    // A directional light's unknown key is still named as one.
+    expect_err(
+        &light("position = [0.0, 1.0, -2.0]"),
+        "light[0].position",
+        "unknown field",
+    );
     expect_err(
         &light("kind = \"laser\""),
         "light[0].kind",
