@@ -5,6 +5,7 @@
 #   scripts/compare_speed.sh OLD_BIN NEW_BIN            # 3 alternations per case
 #   REPS=5 scripts/compare_speed.sh OLD_BIN NEW_BIN
 #   CASES="default:simd bunny:scalar" scripts/compare_speed.sh OLD_BIN NEW_BIN
+#   EXTRA="--penumbra iterated" scripts/compare_speed.sh OLD_BIN NEW_BIN   # more render options
 #
 # Cases are SCENE:PATH; SCENE `default` is `render` without a scene file, any other name is
 # scenes/SCENE.toml. Every run uses --threads 1. Prints per case the user seconds of each run and
@@ -28,7 +29,7 @@ user_seconds() {
     local bin="$1" out="$2" scene="$3" path="$4" args=()
     [ "$scene" != default ] && args+=("$ROOT/scenes/$scene.toml")
     /usr/bin/time -f %U -o "$TMP/time" "$bin" render "${args[@]}" -o "$out" --quiet \
-        --threads 1 --path "$path" >/dev/null
+        --threads 1 --path "$path" ${EXTRA:-} >/dev/null
     cat "$TMP/time"
 }
 

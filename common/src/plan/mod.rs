@@ -583,6 +583,14 @@ impl RenderPlan {
         usize::from(self.penumbra == Penumbra::Distance || !self.subpixel_meshes.is_empty())
     }
 
+    /// Whether every level of every light's table is one kernel: the iterated penumbra keeping a
+    /// depth plane for sub-pixel shadows (`KernelTable::with_distance_levels`). The gather then
+    /// reads the same bits through any level, so it needs no level search; the sub-pixel read at
+    /// a crossing still searches (its level tells occluder depths apart).
+    pub fn levels_share_one_kernel(&self) -> bool {
+        self.penumbra == Penumbra::Iterated && self.depth_planes() > 0
+    }
+
     /// Planes per light in the light buffer: its channels, then its depth plane if any.
     pub fn planes_per_light(&self) -> usize {
         self.channels as usize + self.depth_planes()

@@ -163,8 +163,8 @@ pub(crate) fn exact_light(
             shift: light_plan.table.slab_shift[ctx.slab as usize],
             inside: false,
         };
-        // The row step 1 gathered through (bounds-checked reads: the same values).
-        let tap_row = tap_row(row, l, at);
+        // The row of the level step 1 would search (bounds-checked reads: the same values).
+        let tap_row = tap_row(row, l, at, true);
         let row_level = tap_row / light_plan.table.phase_count;
         let (slab, depth) = ((ctx.slab, part), light.depth[l]);
         let Some(shift) = exact_shift(light_plan, slab, gathered, depth, row_level) else {
@@ -216,7 +216,7 @@ pub(crate) fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut
             shift: plan.lights[l].table.slab_shift[slab],
             inside,
         };
-        let tap_row = tap_row(row, l, at);
+        let tap_row = tap_row(row, l, at, false);
         // The light's channels, then its depth plane if any (0 without one).
         let planes = light_planes(plan, row.prev.light, l);
         let sums = gather(&planes, taps.weighted(tap_row), at);
@@ -226,9 +226,11 @@ pub(crate) fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut
 }
 
 /// Light l's tap row at the pixel of `at` in this slab: its phase's, or (distance penumbra) the
-/// row of the nearest occluder's level in its reach.
+/// row of the nearest occluder's level in its reach. Where every level is one kernel
+/// ([`RenderPlan::levels_share_one_kernel`](convshadow_common::plan::RenderPlan::levels_share_one_kernel)) the gather reads level 0's row, the same bits,
+/// unless `search_shared` asks for the level (the sub-pixel read).
 #[inline(always)]
-fn tap_row(row: &RowContext<'_>, l: usize, at: TapOrigin) -> u32 {
+fn tap_row(row: &RowContext<'_>, l: usize, at: TapOrigin, search_shared: bool) -> u32 {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
     let (light, table) = (&plan.lights[l], &plan.lights[l].table);
     let hashes = (light.slab_hash[ctx.slab as usize], row.light_hashes[l]);
@@ -239,7 +241,7 @@ fn tap_row(row: &RowContext<'_>, l: usize, at: TapOrigin) -> u32 {
         hashes.1,
         plan.hash_x(at.x as u32),
     );
-    if plan.depth_planes() == 0 {
+    if plan.depth_planes() == 0 || (!search_shared && plan.levels_share_one_kernel()) {
         return phase;
     }
     let levels = level_plane(plan, row.prev, l);

@@ -18,7 +18,7 @@ use convshadow_common::plan::kernel::PhaseMode;
 
 use super::SimdSlab;
 use super::gather::{gather_inside, gather_lanes, store_pixels};
-use super::levels::{distance_rows, phases};
+use super::levels::{distance_rows, level_rows, phases};
 use super::per_lane::{LaneRows, gather_per_lane};
 use super::quiet::{ChunkState, Values};
 use crate::composite::{Held, attenuate, composite, deepen, owned_depth, part_of_slab};
@@ -603,6 +603,11 @@ fn every_light_rows<L: Layout>(
             PhaseMode::PerSlab => L::u_splat(phase_at(t, ctx.slab, light.slab_hash[slab], 0, 0)),
             PhaseMode::Schedule => L::u_splat(0),
         };
+        // Every level one kernel: level 0's rows gather the same bits, no search needed.
+        if plan.levels_share_one_kernel() {
+            *rows = level_rows::<L>(t, L::u_splat(0), phase, plan.slabs, ctx.slab);
+            continue;
+        }
         let levels = level_plane(plan, row.prev, l);
         let at = TapOrigin {
             x: x0 as i32,

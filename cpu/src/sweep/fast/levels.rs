@@ -134,7 +134,7 @@ pub(crate) fn distance_rows<L: Layout>(
 /// The rows of levels `level` at the lanes' phases: `level · phase_count + phase`, or for a
 /// scheduled kernel the level's phase of slab `slab`, `slab_phase[level · slabs + slab]`.
 #[inline(always)]
-fn level_rows<L: Layout>(
+pub(crate) fn level_rows<L: Layout>(
     table: &KernelTable,
     level: L::U,
     phase: L::U,
