@@ -11,6 +11,7 @@ use convshadow_common::plan::kernel::eigen2;
 use convshadow_common::prepare::geometry::SceneGeometry;
 
 use crate::edge::{CaseFrame, phi};
+use crate::quadrature::gauss_legendre;
 
 /// One disk set-up (see the module documentation).
 #[derive(Clone, Debug, PartialEq)]
@@ -172,31 +173,6 @@ pub fn convex_hull(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
         hull.pop();
     }
     hull
-}
-
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton on the Legendre polynomial).
-fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    let mut out = Vec::with_capacity(n);
-    for i in 0..n {
-        let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 0.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, x);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-            let dx = p1 / dp;
-            x -= dx;
-            if dx.abs() < 1e-16 {
-                break;
-            }
-        }
-        out.push((x, 2.0 / ((1.0 - x * x) * dp * dp)));
-    }
-    out
 }
 
 /// P(X ∈ polygon) for X ~ N(mean, cov) (px, px²) and a convex counter-clockwise polygon.

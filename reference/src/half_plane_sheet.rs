@@ -18,6 +18,7 @@
 //! Used by `tests/accuracy/lights_from_any_direction.rs` and the report's `direction` family.
 
 use crate::edge::phi;
+use crate::quadrature::gauss_legendre;
 
 /// Image width and height in pixels (the profile runs along x; rows are alike).
 pub const WIDTH: u32 = 128;
@@ -120,23 +121,9 @@ fn visibility(x: f64, z: f64, sigma: f64) -> f64 {
 
 /// 16-point Gauss–Legendre on [0, 1]: (node, weight).
 fn gauss_legendre_16() -> Vec<(f64, f64)> {
-    // Nodes by Newton on P16 from the Chebyshev guesses; weights 2/((1 − x²)·P16'(x)²).
-    let n = 16;
-    (0..n)
-        .map(|i| {
-            let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 0.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let k = k as f64;
-                    (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
-                }
-                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                x -= p1 / dp;
-            }
-            (0.5 * (x + 1.0), 1.0 / ((1.0 - x * x) * dp * dp))
-        })
+    gauss_legendre(16)
+        .into_iter()
+        .map(|(x, w)| (0.5 * (x + 1.0), 0.5 * w))
         .collect()
 }
 
@@ -235,7 +222,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn gauss_legendre_integrates_polynomials_to_degree_31() {
+    fn the_nodes_on_0_1_integrate_polynomials_to_degree_31() {
         let nodes = gauss_legendre_16();
         let w: f64 = nodes.iter().map(|&(_, w)| w).sum();
         assert!((w - 1.0).abs() < 1e-13);

@@ -7,7 +7,8 @@
 //!   the polygon;
 //! - [`half_plane_sheet`]: an opaque half-plane's shadow on a translucent sheet, both
 //!   perpendicular to a directional light seen from any angle, integrated along each view ray;
-//! - [`impulse`]: a single lit pixel through an empty scene, whose exact spread is n·Σκ.
+//! - [`impulse`]: a single lit pixel through an empty scene, whose exact spread is n·Σκ;
+//! - [`quadrature`]: the Gauss–Legendre nodes of the disk's and the sheet's integrals.
 //!
 //! Library code only: no exit codes, no printing.
 
@@ -16,6 +17,7 @@ pub mod edge;
 pub mod half_plane_sheet;
 pub mod impulse;
 pub mod light_samples;
+pub mod quadrature;
 pub mod shadow_ray;
 
 pub use light_samples::{inverse_normal_cdf, normal_cdf, samples_side};
