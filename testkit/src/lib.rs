@@ -9,25 +9,44 @@ use std::path::{Path, PathBuf};
 
 use convshadow_common::pixel::hash::mix32;
 
-/// `shared/models` beside the repository (`repo_root`: the repository's root folder), or `None`
+/// `shared/<name>` beside the repository (`repo_root`: the repository's root folder), or `None`
 /// with a loud message when it is missing. Under CI (env `CI` set) a missing folder is a
 /// failure, not a skip.
-pub fn models_dir(repo_root: &Path) -> Option<PathBuf> {
-    let dir = repo_root.join("../shared/models");
+pub fn shared_dir(repo_root: &Path, name: &str) -> Option<PathBuf> {
+    let dir = repo_root.join("../shared").join(name);
     if dir.is_dir() {
         Some(dir)
     } else if std::env::var_os("CI").is_some() {
         panic!(
-            "../shared/models not found at {} (required when CI is set)",
+            "../shared/{name} not found at {} (required when CI is set)",
             dir.display()
         );
     } else {
         eprintln!(
-            "SKIP: ../shared/models not found (looked in {}); model tests skipped",
+            "SKIP: ../shared/{name} not found (looked in {}); tests that read it skipped",
             dir.display()
         );
         None
     }
+}
+
+/// `shared/models` beside the repository ([`shared_dir`]).
+pub fn models_dir(repo_root: &Path) -> Option<PathBuf> {
+    shared_dir(repo_root, "models")
+}
+
+/// `shared/volumes` beside the repository ([`shared_dir`]).
+pub fn volumes_dir(repo_root: &Path) -> Option<PathBuf> {
+    shared_dir(repo_root, "volumes")
+}
+
+/// Whether an example scene (its TOML `text`) can be rendered here: every `shared/` folder it
+/// reads (`shared/models`, `shared/volumes`) is beside the repository ([`shared_dir`]: a loud
+/// skip when missing, a failure under CI).
+pub fn shared_inputs_present(repo_root: &Path, text: &str) -> bool {
+    ["models", "volumes"].iter().all(|name| {
+        !text.contains(&format!("shared/{name}")) || shared_dir(repo_root, name).is_some()
+    })
 }
 
 /// A deterministic random sequence for tests, benches and fuzzing: a counter hashed by [`mix32`].

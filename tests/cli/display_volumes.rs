@@ -3,7 +3,7 @@
 
 use crate::support;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use convshadow::common::model::display::DisplayMap;
 use convshadow::common::model::display::Tonemap;
@@ -11,19 +11,6 @@ use convshadow::common::model::scene::Scene;
 use convshadow::io::image::RgbImage;
 use convshadow::io::nifti::load_nifti;
 use convshadow::pipeline::{RenderRequest, render};
-
-/// `../shared/volumes` beside the repository, or `None` (loudly) when missing; a failure under CI.
-fn volumes_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/volumes");
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    if std::env::var_os("CI").is_some() {
-        panic!("../shared/volumes not found (required under CI)");
-    }
-    eprintln!("SKIP: ../shared/volumes not found");
-    None
-}
 
 fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
@@ -114,7 +101,9 @@ fn exr_stays_linear_and_png_follows_the_curve() {
 
 #[test]
 fn nifti_big_endian_and_gzip_4d_match_the_readme() {
-    let Some(dir) = volumes_dir() else { return };
+    let Some(dir) = support::volumes_dir() else {
+        return;
+    };
     let a = load_nifti(&dir.join("anatomical.nii"), Some([-610.0, 30393.0])).unwrap();
     assert_eq!(a.texture.dims, [33, 41, 25]);
     assert_eq!(a.spacing, [2.0, 2.0, 2.0]);
@@ -152,7 +141,9 @@ fn nifti_big_endian_and_gzip_4d_match_the_readme() {
 
 #[test]
 fn truncated_and_foreign_files_get_a_clear_error_naming_the_file() {
-    let Some(dir) = volumes_dir() else { return };
+    let Some(dir) = support::volumes_dir() else {
+        return;
+    };
     let tmp = support::temp_dir("nifti-bad");
     let full = std::fs::read(dir.join("anatomical.nii")).unwrap();
     let cases = [
@@ -193,7 +184,9 @@ fn truncated_and_foreign_files_get_a_clear_error_naming_the_file() {
 
 #[test]
 fn the_texture_keeps_the_voxel_spacings_aspect() {
-    let Some(dir) = volumes_dir() else { return };
+    let Some(dir) = support::volumes_dir() else {
+        return;
+    };
     let scene_text = |size: &str| {
         format!(
             "[image]\nwidth = 24\nheight = 24\n[camera]\nview_width = 3.0\n[sweep]\nslabs = 8\n\

@@ -9,10 +9,10 @@ use std::path::{Path, PathBuf};
 use convshadow::common::model::scene::{Scene, SlabSpec};
 use convshadow::pipeline::{CpuPath, RenderRequest, render};
 
-/// The example scenes, small; scenes using ../shared/models are skipped (loudly) without it.
+/// The example scenes, small; scenes using ../shared/models or ../shared/volumes are skipped
+/// (loudly) without it.
 fn example_scenes() -> Vec<(PathBuf, Scene)> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let have_models = support::models_dir().is_some();
     let mut out = Vec::new();
     let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap()
@@ -21,8 +21,7 @@ fn example_scenes() -> Vec<(PathBuf, Scene)> {
         .collect();
     paths.sort();
     for path in paths {
-        let text = std::fs::read_to_string(&path).unwrap();
-        if text.contains("shared/models") && !have_models {
+        if !support::example_scene_inputs_present(&path) {
             continue;
         }
         let mut scene = convshadow_io::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));

@@ -75,24 +75,15 @@ fn hashes(scene: &Path, extra: &[&str], dir: &Path) -> (String, String) {
     (field("image_hash"), field("ldi_hash"))
 }
 
-/// The example scenes in file-name order; model scenes only where ../shared/models exists.
+/// The example scenes in file-name order; those reading ../shared/models or ../shared/volumes
+/// only where that folder exists.
 fn example_scenes() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let have_models = support::models_dir().is_some();
-    // The MRI scene reads ../shared/volumes, like the model scenes read ../shared/models.
-    let have_volumes = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/volumes")
-        .is_dir()
-        || std::env::var_os("CI").is_some();
     let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .filter(|p| {
-            let text = std::fs::read_to_string(p).unwrap();
-            (have_models || !text.contains("shared/models"))
-                && (have_volumes || !text.contains("shared/volumes"))
-        })
+        .filter(|p| support::example_scene_inputs_present(p))
         .collect();
     paths.sort();
     assert!(paths.len() >= 5, "expected the example scenes in scenes/");

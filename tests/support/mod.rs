@@ -37,6 +37,18 @@ pub fn models_dir() -> Option<PathBuf> {
     convshadow_testkit::models_dir(Path::new(env!("CARGO_MANIFEST_DIR")))
 }
 
+/// `../shared/volumes` beside the repository, as [`models_dir`].
+pub fn volumes_dir() -> Option<PathBuf> {
+    convshadow_testkit::volumes_dir(Path::new(env!("CARGO_MANIFEST_DIR")))
+}
+
+/// Whether the example scene at `path` can be rendered here: the `../shared` folders it reads
+/// exist (a loud skip otherwise, a failure under CI).
+pub fn example_scene_inputs_present(path: &Path) -> bool {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    convshadow_testkit::shared_inputs_present(Path::new(env!("CARGO_MANIFEST_DIR")), &text)
+}
+
 /// A scene from TOML text (paths resolve against `base`).
 pub fn scene(text: &str, base: &Path) -> Scene {
     Scene::parse(text, "test-scene.toml", base).unwrap_or_else(|e| panic!("{e}"))
