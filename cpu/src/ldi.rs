@@ -96,7 +96,8 @@ pub fn build(setup: &RasterSetup, budget_bytes: u64) -> Result<Ldi, LdiError> {
         let tri = &setup.triangles[t as usize];
         for_each_covered(tri, y0, y1, |i, j| {
             let slot = cursor[j as usize * w + i as usize].fetch_add(1, Ordering::Relaxed);
-            let key = (u64::from(sortable_bits(tri.depth_at(i, j))) << 32) | u64::from(t);
+            let key =
+                (u64::from(sortable_bits(setup.fragment_depth(tri, i, j))) << 32) | u64::from(t);
             keys[slot as usize].store(key, Ordering::Relaxed);
         });
     });

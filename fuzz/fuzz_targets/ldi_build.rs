@@ -61,6 +61,7 @@ fuzz_target!(|input: Input| {
         forward: DVec3::Z,
         center: DVec3::ZERO,
         pixel_size: 2f64.powf(f64::from(input.pixel_size_exp) / 16.0 - 4.0),
+        focal_px: None,
         width,
         height,
     };

@@ -23,12 +23,12 @@ pub struct LdiParams {
     pub pixels: u32,
     /// Invocations per dispatch row (x groups · workgroup size).
     pub stride: u32,
+    /// 1 for a perspective camera: planes are inverse depths (`RasterSetup::fragment_depth`).
+    pub perspective: u32,
+    /// Perspective: the sweep's origin subtracted from `1 / plane`.
+    pub depth_origin: f32,
     /// Uniform structs are a multiple of 16 bytes.
     pub _pad0: u32,
-    /// See `_pad0`.
-    pub _pad1: u32,
-    /// See `_pad0`.
-    pub _pad2: u32,
 }
 
 /// One rasterized triangle as the LDI passes read it (`TriangleSetup` less its normal).

@@ -86,6 +86,8 @@ fn params(ctx: &GpuContext, items: u32, setup: &RasterSetup) -> wgpu::Buffer {
             height: setup.height,
             pixels: setup.width * setup.height,
             stride: x * WORKGROUP,
+            perspective: u32::from(setup.perspective_origin.is_some()),
+            depth_origin: setup.perspective_origin.unwrap_or(0.0),
             ..LdiParams::default()
         },
     )

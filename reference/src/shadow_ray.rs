@@ -53,10 +53,23 @@
 //!   (its pattern, as the plan sampled it at pixel centres; bilinear between them, 1 outside the
 //!   grid like the sweep's reads) where the ray leaves the scene through the first slab plane.
 //!
+//! - **A perspective camera** (`camera.projection`): the tracer works in slab-grid coordinates
+//!   (`Camera::to_grid`: camera x/y over the pixel size at the `look_at` distance, depth along
+//!   the view), an affine image of world space in which a directional light's rays keep one
+//!   slope; only the view samples move: pixel (i, j)'s sample at depth z is where its ray from
+//!   the eye is at that depth (`Camera::pixel_to_grid`), a crossing's surface point is the ray's
+//!   f64 intersection with the crossed mesh, and the detail is read there. The LDI is the
+//!   perspective one (view depths along each pixel's ray). Highlights keep the view direction
+//!   of the image centre.
+//!
 //! It is slow — every shading point marches `lights × M` rays — and meant for small images.
 
 use convshadow_common::model::scene::{MaterialSpec, Scene};
 use convshadow_common::pixel::hash::{mix32, row_hash};
+
+mod geometry;
+
+use geometry::{Start, Tri, add, intersect, sub, to_detail_f64};
 
 use crate::light_samples::{fine_strata, inverse_normal_cdf, samples_side};
 use convshadow_common::plan::{DEFAULT_REFERENCE_LENGTH, RenderPlan};
@@ -91,15 +104,6 @@ impl Default for ReferenceOptions {
             seed: 0x5eed,
         }
     }
-}
-
-/// One triangle in grid space: x, y in grid pixels, z in world depth relative to the first slab.
-#[derive(Clone, Copy, Debug)]
-struct Tri {
-    v0: [f64; 3],
-    e1: [f64; 3],
-    e2: [f64; 3],
-    mesh: u32,
 }
 
 /// A material as the reference sees it: extinction per unit depth as a function of the detail
@@ -193,8 +197,10 @@ impl<'a> Reference<'a> {
                 .positions
                 .iter()
                 .map(|p| {
-                    let q = cam.to_pixel(*p);
-                    // Image pixel coordinates (as the plan's detail affine takes them).
+                    let q = cam.to_grid(*p);
+                    // Slab-grid coordinates (an orthographic camera's pixels, as the plan's
+                    // detail affine takes them): a directional light's rays are straight lines
+                    // of one slope in them, perspective or not.
                     [q.x, q.y, q.z - geometry.z_origin]
                 })
                 .collect();
@@ -499,6 +505,9 @@ impl<'a> Reference<'a> {
     /// the one whose plane at (x, y) is nearest `z`, if within a slab thickness. Returns that
     /// depth, computed in f64 on the unsnapped triangle, and the triangle's index.
     fn surface_point(&self, mesh: u32, x: f64, y: f64, z: f64) -> Option<(f64, u32)> {
+        if let Some(focal) = self.geometry.camera.focal_px {
+            return self.surface_point_on_ray(mesh, x, y, z, focal);
+        }
         let cell = |v: f64, a: usize| {
             (((v - self.bin_origin[a]) / BIN).floor().max(0.0) as usize).min(self.bin_dims[a] - 1)
         };
@@ -528,6 +537,58 @@ impl<'a> Reference<'a> {
         }
         best.filter(|&(off, _, _)| off <= self.geometry.slab_distance)
             .map(|(_, depth, i)| (depth, i))
+    }
+
+    /// [`Reference::surface_point`] for a perspective camera (focal length `focal` px): the
+    /// view ray from the eye through pixel centre (x, y), intersected in f64 with the mesh's
+    /// triangles near the slab-grid position it has within a slab of depth `z`; the hit nearest
+    /// `z`, if within a slab thickness.
+    fn surface_point_on_ray(
+        &self,
+        mesh: u32,
+        x: f64,
+        y: f64,
+        z: f64,
+        focal: f64,
+    ) -> Option<(f64, u32)> {
+        let cam = &self.geometry.camera;
+        let (cx, cy) = (f64::from(cam.width) * 0.5, f64::from(cam.height) * 0.5);
+        let s = focal * cam.pixel_size;
+        // The eye sits at relative depth −z_origin on the view axis; the ray's depth grows by 1
+        // per unit of its parameter.
+        let origin = [cx, cy, -self.geometry.z_origin];
+        let dir = [(x - cx) / s, (y - cy) / s, 1.0];
+        let e = self.geometry.slab_distance;
+        let at = |zr: f64| {
+            let t = zr - origin[2];
+            [origin[0] + dir[0] * t, origin[1] + dir[1] * t]
+        };
+        let mut candidates = Vec::new();
+        self.candidates(at(z - e), at(z + e), &mut candidates);
+        let mut best: Option<(f64, f64, u32)> = None;
+        for i in candidates {
+            let t = &self.tris[i as usize];
+            if t.mesh != mesh {
+                continue;
+            }
+            if let Some(param) = intersect(origin, dir, t) {
+                let depth = origin[2] + param;
+                let off = (depth - z).abs();
+                if best.is_none_or(|(o, _, _)| off < o) {
+                    best = Some((off, depth, i));
+                }
+            }
+        }
+        best.filter(|&(off, _, _)| off <= e)
+            .map(|(_, depth, i)| (depth, i))
+    }
+
+    /// Where pixel centre (x, y)'s view ray is at relative depth `z`, in the tracer's slab-grid
+    /// coordinates: (x, y) for an orthographic camera (`Camera::pixel_to_grid`).
+    fn view_point(&self, x: f64, y: f64, z: f64) -> [f64; 3] {
+        let g = self.geometry;
+        let (gx, gy) = g.camera.pixel_to_grid(x, y, g.z_origin + z);
+        [gx, gy, z]
     }
 
     /// Light `l`'s initial light (its pattern) at image position (x, y) in pixels (the ray
@@ -622,7 +683,16 @@ impl<'a> Reference<'a> {
                         let jitter_row =
                             row_hash(plan.jitter_slab_hash[slab as usize], plan.hash_y(y as u32));
                         let z = shading_depth(plan, ldi, crossed, front, jitter_row, x);
-                        let mut tf = material_at(plan, mesh, ix as f32, iy as f32, z);
+                        let (cx, cy) = (ix as f64 + 0.5, iy as f64 + 0.5);
+                        // The detail where the view ray is (the plan's slab-grid pixel, whose
+                        // centre is +0.5: `detail_at`); an orthographic camera's own pixel.
+                        let (dx, dy) = if self.geometry.camera.focal_px.is_some() {
+                            let [gx, gy, _] = self.view_point(cx, cy, f64::from(z));
+                            ((gx - 0.5) as f32, (gy - 0.5) as f32)
+                        } else {
+                            (ix as f32, iy as f32)
+                        };
+                        let mut tf = material_at(plan, mesh, dx, dy, z);
                         // The sweep's view samples: a medium's entry and exit slabs by the part
                         // inside (the light needs no such factor: it is traced).
                         let (part, lit_from) = slab_part(
@@ -643,20 +713,19 @@ impl<'a> Reference<'a> {
                         };
                         part_of_slab(&mut tf, part, 0.0);
                         let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
-                        let (cx, cy) = (ix as f64 + 0.5, iy as f64 + 0.5);
                         // A crossing's shadow rays start on the exact surface and do not cross
                         // it (see `Start`); a point inside a medium starts where it is.
                         let (pos, start) = if crossed == NO_CROSSING {
-                            let pos = [cx, cy, light_z];
+                            let pos = self.view_point(cx, cy, light_z);
                             (pos, Start::free(pos))
                         } else {
                             match self.surface_point(mesh, cx, cy, f64::from(z)) {
                                 Some((depth, tri)) => {
-                                    let pos = [cx, cy, depth];
+                                    let pos = self.view_point(cx, cy, depth);
                                     (pos, Start::on(pos, tri))
                                 }
                                 None => {
-                                    let pos = [cx, cy, f64::from(z)];
+                                    let pos = self.view_point(cx, cy, f64::from(z));
                                     (pos, Start::near(pos))
                                 }
                             }
@@ -706,130 +775,9 @@ impl<'a> Reference<'a> {
     }
 }
 
-/// Where a shadow ray starts, and what it does not count as crossed there.
-///
-/// The renderer's model at a surface crossing reads the light *arriving at* the surface point:
-/// the surface itself does not occlude it (its inside does, where a ray heads into it). So a
-/// crossing's rays start on the exact f64 surface under the pixel centre (not at the LDI's f32
-/// depth, which is off the surface by its rounding and the vertices' fixed-point snapping, up to
-/// ~1e-4 of depth on a surface at 60° to the view) and skip the triangle they start on; a ray
-/// heading into the mesh then crosses its far side and is attenuated by the inside, a ray
-/// heading out crosses nothing of it. Crossings closer than `tol` are the start met again
-/// through f64 rounding (a neighbouring triangle at a shared edge or vertex, a coincident face
-/// of a touching mesh) and are ignored too.
-#[derive(Clone, Copy, Debug)]
-struct Start {
-    /// Index of the triangle the ray starts on (`u32::MAX`: none).
-    skip: u32,
-    /// Crossings at ray parameters (depth) up to this are not counted.
-    tol: f64,
-}
-
-impl Start {
-    /// f64 rounding of a crossing at the start: 2^-30 relative to the depth.
-    fn rounding(p: [f64; 3]) -> f64 {
-        (1.0 + p[2].abs()) * (1.0 / 1_073_741_824.0)
-    }
-
-    /// A point off any surface (inside a medium or given exactly).
-    fn free(p: [f64; 3]) -> Start {
-        Start {
-            skip: u32::MAX,
-            tol: Start::rounding(p),
-        }
-    }
-
-    /// A point on triangle `tri`, exactly.
-    fn on(p: [f64; 3], tri: u32) -> Start {
-        Start {
-            skip: tri,
-            tol: Start::rounding(p),
-        }
-    }
-
-    /// A crossing whose triangle was not found (never seen in the tests; kept for safety): the
-    /// LDI's depth, with crossings within 2^-16 (relative) taken for its own surface.
-    fn near(p: [f64; 3]) -> Start {
-        Start {
-            skip: u32::MAX,
-            tol: (1.0 + p[2].abs()) / 65_536.0,
-        }
-    }
-}
-
 /// Per-thread scratch buffers.
 #[derive(Default)]
 struct Scratch {
     tris: Vec<u32>,
     hits: Vec<(f64, u32)>,
-}
-
-fn to_detail_f64(m: &[f32; 12], q: [f64; 3]) -> [f32; 3] {
-    let row = |r: usize| {
-        f64::from(m[4 * r]) * q[0]
-            + f64::from(m[4 * r + 1]) * q[1]
-            + f64::from(m[4 * r + 2]) * q[2]
-            + f64::from(m[4 * r + 3])
-    };
-    [row(0) as f32, row(1) as f32, row(2) as f32]
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// Möller–Trumbore: the ray parameter where `o + u·d` meets triangle `t`, if it does.
-fn intersect(o: [f64; 3], d: [f64; 3], t: &Tri) -> Option<f64> {
-    let pv = cross(d, t.e2);
-    let det = dot(t.e1, pv);
-    if det == 0.0 {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let tv = sub(o, t.v0);
-    let a = dot(tv, pv) * inv;
-    if !(0.0..=1.0).contains(&a) {
-        return None;
-    }
-    let qv = cross(tv, t.e1);
-    let b = dot(d, qv) * inv;
-    if b < 0.0 || a + b > 1.0 {
-        return None;
-    }
-    Some(dot(t.e2, qv) * inv)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ray_meets_a_triangle_where_expected() {
-        let t = Tri {
-            v0: [0.0, 0.0, 2.0],
-            e1: [4.0, 0.0, 0.0],
-            e2: [0.0, 4.0, 0.0],
-            mesh: 0,
-        };
-        // From (1, 1, 5) towards depth 0 with slope (0.1, 0): meets depth 2 at u = 3.
-        let u = intersect([1.0, 1.0, 5.0], [0.1, 0.0, -1.0], &t).unwrap();
-        assert!((u - 3.0).abs() < 1e-12);
-        assert!(intersect([5.0, 5.0, 5.0], [0.0, 0.0, -1.0], &t).is_none());
-    }
 }

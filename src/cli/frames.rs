@@ -195,8 +195,9 @@ pub fn parse_vec3(text: &str) -> Result<[f64; 3], String> {
 }
 
 /// Applies `--size WxH`: the image becomes W×H and, when the aspect changes, `view_width` grows
-/// so the scene's whole original view (its width and its height) stays in frame. Returns the
-/// note to print when `view_width` changed.
+/// so the scene's whole original view (its width and its height) stays in frame (a perspective
+/// camera keeps its vertical field of view instead). Returns the note to print when
+/// `view_width` changed.
 pub fn apply_size(scene: &mut Scene, w: u32, h: u32) -> Result<Option<String>, Failure> {
     if w == 0 || h == 0 {
         return Err(Failure::new(
@@ -207,7 +208,8 @@ pub fn apply_size(scene: &mut Scene, w: u32, h: u32) -> Result<Option<String>, F
     // The same aspect, compared exactly in integers: the view stays as it is (in floats,
     // view_width·(h/w)·(W/H) could come back one ulp off and "change" view_width).
     let (old_w, old_h) = (u64::from(scene.image.width), u64::from(scene.image.height));
-    if u64::from(w) * old_h == u64::from(h) * old_w {
+    // A perspective camera keeps its vertical field of view: a wider image shows more across.
+    if u64::from(w) * old_h == u64::from(h) * old_w || scene.camera.is_perspective() {
         scene.image.width = w;
         scene.image.height = h;
         return Ok(None);

@@ -32,6 +32,15 @@ pub fn render_reference(
     aovs: &[Aov],
     cancel: Option<&AtomicBool>,
 ) -> Result<Rendered, RenderError> {
+    if scene.camera.is_perspective() && scene.passes().back.is_some() {
+        // The second pass turns the camera round, which a perspective eye cannot do.
+        return Err(RenderError::BadPlan(format!(
+            "{}: key `camera.projection`: a perspective camera takes lights from behind the \
+             viewer only (travelling less than 90° from the view); a light travelling towards \
+             the viewer needs the second pass from the far end, which is orthographic",
+            scene.source
+        )));
+    }
     render_passes(scene, aovs, |pass, aovs| {
         reference_pass(pass, threads, samples, budget, allow_open, aovs, cancel)
     })

@@ -234,7 +234,9 @@ material = "m"
 }
 
 /// The analytic shapes and their signed distance functions (negative inside).
-fn sdf(shape: &str, p: DVec3) -> f64 {
+/// Signed distance to the analytic shape `shape` ("box", "sphere" or a torus) of the
+/// inside-classification tests (here and in `ldi_perspective.rs`).
+pub(crate) fn sdf(shape: &str, p: DVec3) -> f64 {
     match shape {
         "box" => {
             let h = DVec3::new(0.6, 0.45, 0.35);
@@ -247,6 +249,25 @@ fn sdf(shape: &str, p: DVec3) -> f64 {
             (q * q + p.z * p.z).sqrt() - 0.25
         }
     }
+}
+
+/// The largest |sdf| of `shape` over points sampled densely on every face of the scene's first
+/// mesh (vertices lie on the analytic surface; face interiors deviate by the sagitta).
+pub(crate) fn tessellation_error(g: &SceneGeometry, shape: &str) -> f64 {
+    let mesh = &g.meshes[0];
+    let to_obj = mesh.world_to_object;
+    let mut tess: f64 = 0.0;
+    for t in &mesh.mesh.triangles {
+        let v = t.map(|i| to_obj.transform_point3(mesh.mesh.positions[i as usize]));
+        for a in 0..=6 {
+            for b in 0..=(6 - a) {
+                let (u, w) = (f64::from(a) / 6.0, f64::from(b) / 6.0);
+                let p = v[0] + (v[1] - v[0]) * u + (v[2] - v[0]) * w;
+                tess = tess.max(sdf(shape, p).abs());
+            }
+        }
+    }
+    tess
 }
 
 #[test]
@@ -265,21 +286,8 @@ fn inside_classification_matches_analytic_shapes() {
             96,
         );
         let (g, ldi) = build(&s);
-        let mesh = &g.meshes[0];
-        // Tessellation error: the largest |sdf| over points sampled densely on every face
-        // (vertices lie on the analytic surface; face interiors deviate by the sagitta).
-        let to_obj = mesh.world_to_object;
-        let mut tess: f64 = 0.0;
-        for t in &mesh.mesh.triangles {
-            let v = t.map(|i| to_obj.transform_point3(mesh.mesh.positions[i as usize]));
-            for a in 0..=6 {
-                for b in 0..=(6 - a) {
-                    let (u, w) = (f64::from(a) / 6.0, f64::from(b) / 6.0);
-                    let p = v[0] + (v[1] - v[0]) * u + (v[2] - v[0]) * w;
-                    tess = tess.max(sdf(shape, p).abs());
-                }
-            }
-        }
+        let to_obj = g.meshes[0].world_to_object;
+        let tess = tessellation_error(&g, shape);
         // Snapping moves vertices by at most √2·2^-9 px laterally; f32 depths err by a few ulps
         // of the depth range. Points farther than this band from the surface must be exact.
         let px = g.camera.pixel_size;

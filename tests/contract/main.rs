@@ -13,6 +13,7 @@ mod determinism;
 mod early_finish;
 mod golden_hashes;
 mod ldi_parity;
+mod ldi_perspective;
 mod reliability_props;
 mod rules;
 mod simd_quiet;

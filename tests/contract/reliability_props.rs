@@ -111,6 +111,7 @@ fn camera(direction: [f64; 3], width: u32, view: f64) -> Camera {
         up,
         center: [0.0; 3],
         view_width: view,
+        projection: Default::default(),
     };
     let image = ImageSpec {
         width,

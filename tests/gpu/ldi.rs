@@ -246,7 +246,62 @@ fn gpu_ldi_equals_cpu_on_hard_triangles() {
         triangles,
         zero_area: 0,
         parity_meshes: u32::MAX,
+        perspective_origin: None,
     };
     let (fragments, _) = assert_same_ldi(&ctx, &setup, "hard triangles");
     assert!(fragments > 10_000, "only {fragments} fragments");
+    // The same planes read as inverse depths (perspective): `1 / plane − origin`, with planes
+    // through zero and of either sign, in the CPU's f32 order.
+    let perspective = RasterSetup {
+        perspective_origin: Some(0.37),
+        ..setup
+    };
+    assert_same_ldi(&ctx, &perspective, "hard triangles in perspective");
+}
+
+#[test]
+fn gpu_ldi_equals_cpu_in_perspective() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    // A ball on a floor running back, and (with ../shared/models) real models close up.
+    let mut scenes = vec![(
+        "ball on a floor".to_string(),
+        support::perspective_ball_scene(160, 96, "[0.0, 1.0, -5.0]", 60.0, ""),
+    )];
+    if let Some(models) = support::models_dir() {
+        for name in ["bunny_hr.obj", "armadillo_100k.obj"] {
+            let path = models.join(name);
+            let mesh = convshadow::io::obj::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
+            let (lo, hi) = mesh.bounds();
+            let (c, r) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+            for fov in [30.0f64, 90.0] {
+                let eye = c - glam::DVec3::new(0.3, -0.2, 1.0).normalize() * r
+                    / (0.5 * fov).to_radians().sin();
+                scenes.push((
+                    format!("{name} fov {fov}"),
+                    format!(
+                        "[image]\nwidth = 256\nheight = 192\n[camera]\nprojection = \"perspective\"\n\
+                         eye = [{}, {}, {}]\nlook_at = [{}, {}, {}]\nfov_deg = {fov}\n[sweep]\n\
+                         slabs = 32\noptimal_distance = 0.5\n[[mesh]]\nshape = \"obj\"\n\
+                         path = \"{}\"\nmaterial = \"m\"\n[material.m]\n",
+                        eye.x,
+                        eye.y,
+                        eye.z,
+                        c.x,
+                        c.y,
+                        c.z,
+                        path.display()
+                    ),
+                ));
+            }
+        }
+    }
+    for (what, text) in scenes {
+        let scene = support::scene(&text, std::path::Path::new("."));
+        let geometry = convshadow_io::build_geometry(&scene).unwrap();
+        assert!(geometry.raster.perspective_origin.is_some(), "{what}");
+        let (fragments, _) = assert_same_ldi(&ctx, &geometry.raster, &what);
+        assert!(fragments > 1000, "{what}: only {fragments} fragments");
+    }
 }

@@ -131,6 +131,45 @@ color = [0.8, 0.6, 0.4]
     )
 }
 
+/// A ball on a floor running back from it, seen by a `width × height` perspective camera at
+/// `eye` looking at the ball's centre (the origin) with a vertical field of view of `fov_deg`;
+/// `extra` adds lines to `[camera]`.
+#[allow(dead_code)] // the cli and gpu tests' only
+pub fn perspective_ball_scene(
+    width: u32,
+    height: u32,
+    eye: &str,
+    fov_deg: f64,
+    extra: &str,
+) -> String {
+    format!(
+        r#"
+[image]
+width = {width}
+height = {height}
+[camera]
+projection = "perspective"
+eye = {eye}
+look_at = [0.0, 0.0, 0.0]
+fov_deg = {fov_deg}
+{extra}
+[sweep]
+slabs = 32
+optimal_distance = 0.5
+[[mesh]]
+shape = "sphere"
+size = [1.0, 4]
+material = "m"
+[[mesh]]
+shape = "box"
+size = [6.0, 0.2, 20.0]
+translate = [0.0, -1.2, 8.0]
+material = "m"
+[material.m]
+"#
+    )
+}
+
 /// A one-mesh scene around an OBJ file, camera framing a box of half-size `half`.
 pub fn obj_scene(path: &Path, width: u32, view_width: f64) -> String {
     format!(

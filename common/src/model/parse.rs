@@ -2,6 +2,7 @@
 //! strictly typed; [`validate`] turns it into a [`Scene`], naming the file, the key and what was
 //! expected for every unknown key, wrong type, missing key or invalid value.
 
+mod camera;
 mod lights;
 mod overrides;
 mod tables;
@@ -117,7 +118,14 @@ struct RawCamera {
     up: Option<[f64; 3]>,
     #[serde(default, deserialize_with = "exact")]
     center: Option<[f64; 3]>,
-    view_width: f64,
+    view_width: Option<f64>,
+    projection: Option<String>,
+    #[serde(default, deserialize_with = "exact")]
+    eye: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "exact")]
+    look_at: Option<[f64; 3]>,
+    fov_deg: Option<f64>,
+    near: Option<f64>,
 }
 
 /// `sweep.slabs` as written: an integer or a word (only `"auto"` is valid; checked with the key).

@@ -93,7 +93,7 @@ pub struct Scene {
     pub base_dir: PathBuf,
     /// Output image.
     pub image: ImageSpec,
-    /// Orthographic camera.
+    /// The camera (orthographic or perspective).
     pub camera: CameraSpec,
     /// Slab sweep parameters.
     pub sweep: SweepSpec,
@@ -134,20 +134,53 @@ impl ImageSpec {
     }
 }
 
-/// Orthographic camera.
+/// The camera: orthographic (parallel rays along `direction`) or perspective (rays from the eye
+/// at `center`, [`Projection::Perspective`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraSpec {
-    /// View direction (normalized).
+    /// View direction (normalized); perspective: from the eye towards `look_at`.
     pub direction: [f64; 3],
     /// World direction shown at the top of the image.
     pub up: [f64; 3],
-    /// Centre of the view.
+    /// Centre of the view; perspective: the eye.
     pub center: [f64; 3],
-    /// World units across the image.
+    /// World units across the image; perspective: across the image at the `look_at` distance
+    /// (`2·d·tan(fov/2)·width/height`), the scale host code that needs one length per pixel
+    /// takes.
     pub view_width: f64,
+    /// How rays leave the image.
+    pub projection: Projection,
 }
 
+/// `camera.projection`: how the camera's rays leave the image.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Projection {
+    /// Parallel rays along the view direction, `view_width` world units across the image.
+    #[default]
+    Orthographic,
+    /// Rays from the eye (`camera.eye`, kept as [`CameraSpec::center`]) through each pixel.
+    Perspective {
+        /// The point looked at (`camera.look_at`): the view direction points at it.
+        look_at: [f64; 3],
+        /// The vertical field of view in degrees, in [`MIN_FOV_DEG`, `MAX_FOV_DEG`].
+        fov_deg: f64,
+        /// The view depth where the sweep starts (`camera.near`), if given; every mesh must lie
+        /// beyond it.
+        near: Option<f64>,
+    },
+}
+
+/// The narrowest vertical field of view a perspective camera takes, in degrees.
+pub const MIN_FOV_DEG: f64 = 1.0;
+/// The widest vertical field of view a perspective camera takes, in degrees.
+pub const MAX_FOV_DEG: f64 = 170.0;
+
 impl CameraSpec {
+    /// Whether rays leave the eye in perspective.
+    pub fn is_perspective(&self) -> bool {
+        matches!(self.projection, Projection::Perspective { .. })
+    }
+
     /// The camera's world basis `[right, down, forward]` (camera x, y, z): forward the view
     /// direction, down opposite the part of `up` across the view, right = down × forward.
     pub fn basis(&self) -> [DVec3; 3] {

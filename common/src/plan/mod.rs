@@ -332,9 +332,10 @@ impl RenderPlan {
             .iter()
             .zip(&geometry.meshes)
             .map(|(spec, wm)| {
-                // Image pixel coordinates → world → object (→ texture).
+                // Slab-grid coordinates (an orthographic camera's pixels) → world → object
+                // (→ texture).
                 let cam = &geometry.camera;
-                let origin = cam.pixel_to_world(0.0, 0.0, geometry.z_origin);
+                let origin = cam.grid_to_world(0.0, 0.0, geometry.z_origin);
                 let dx = cam.right * cam.pixel_size;
                 let dy = cam.down * cam.pixel_size;
                 let pixel_to_world = DAffine3::from_cols(dx, dy, cam.forward, origin);

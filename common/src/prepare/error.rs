@@ -17,6 +17,31 @@ pub enum GeometryError {
         /// The loader's error.
         source: MeshError,
     },
+    /// Perspective: a mesh reaches the eye or `camera.near` (there is no clipping; an eye inside
+    /// a closed mesh is refused so).
+    #[error(
+        "{scene}: mesh[{index}]: reaches view depth {depth:.6e}, {}",
+        match near {
+            Some(n) => format!(
+                "in front of key `camera.near` = {n}: expected every mesh beyond it (lower \
+                 camera.near or move camera.eye)"
+            ),
+            None => "at or behind key `camera.eye`: expected every mesh in front of the \
+                     perspective camera's eye (an eye inside or beside a mesh is not supported; \
+                     move camera.eye)"
+                .to_string(),
+        }
+    )]
+    BeforeNear {
+        /// Scene file.
+        scene: String,
+        /// Mesh index.
+        index: usize,
+        /// The mesh's nearest view depth.
+        depth: f64,
+        /// `camera.near`, if given.
+        near: Option<f64>,
+    },
     /// A mesh has no triangle left after dropping degenerate ones.
     #[error("{scene}: mesh[{index}]: no non-degenerate triangle")]
     EmptyMesh {

@@ -5,7 +5,7 @@ use std::borrow::Cow;
 use glam::DVec3;
 
 use crate::contract::files::GeometryFiles;
-use crate::model::scene::{MAX_SLABS, MeshSpec, Scene, ShapeSpec, SlabSpec};
+use crate::model::scene::{MAX_SLABS, MeshSpec, Projection, Scene, ShapeSpec, SlabSpec};
 use crate::prepare::auto_slabs::{AutoSlabs, auto_slabs};
 use crate::prepare::camera::Camera;
 use crate::prepare::error::GeometryError;
@@ -21,7 +21,8 @@ pub struct SceneGeometry {
     pub camera: Camera,
     /// World meshes in scene order.
     pub meshes: Vec<WorldMesh>,
-    /// Camera depth of the front of the first slab (the scene's nearest vertex).
+    /// Camera depth of the front of the first slab (the scene's nearest vertex; a perspective
+    /// camera's `near` where given).
     pub z_origin: f64,
     /// Slab thickness (world units).
     pub slab_distance: f64,
@@ -96,12 +97,37 @@ impl SceneGeometry {
             });
         }
         let (mut z_min, mut z_max) = (f64::INFINITY, f64::NEG_INFINITY);
-        for m in &meshes {
+        let near = match scene.camera.projection {
+            Projection::Orthographic => None,
+            // In perspective every mesh lies beyond the near depth (the eye, or camera.near).
+            Projection::Perspective { near, .. } => Some(near),
+        };
+        for (index, m) in meshes.iter().enumerate() {
+            let mesh_min = m
+                .mesh
+                .positions
+                .iter()
+                .map(|p| camera.to_camera(*p).z)
+                .fold(f64::INFINITY, f64::min);
+            if let Some(near) = near
+                && mesh_min <= near.unwrap_or(0.0)
+            {
+                return Err(GeometryError::BeforeNear {
+                    scene: scene.source.clone(),
+                    index,
+                    depth: mesh_min,
+                    near,
+                });
+            }
             for p in &m.mesh.positions {
                 let z = camera.to_camera(*p).z;
                 z_min = z_min.min(z);
                 z_max = z_max.max(z);
             }
+        }
+        // A perspective sweep given camera.near starts there.
+        if let Some(Some(near)) = near {
+            z_min = near;
         }
         // Widen the far end slightly so the farthest surface lies strictly before the last back face.
         let depth = (z_max - z_min).max(1e-12 * z_min.abs().max(1.0));
@@ -132,19 +158,25 @@ impl SceneGeometry {
             .iter()
             .map(|m| (m.mesh.positions.as_slice(), m.mesh.triangles.as_slice()))
             .collect();
-        let guard = GuardBand::resolve(
-            scene.sweep.guard_band,
-            &AutoGuardInput {
-                camera: &camera,
-                meshes: refs.clone(),
-                lights: &scene.lights,
-                slabs,
-                slab_distance,
-                optimal_distance: scene.sweep.optimal_distance,
-                penumbra: scene.sweep.penumbra,
-                variance_compensation: scene.sweep.variance_compensation,
-            },
-        );
+        // Perspective: the LDI covers the image alone (where the perspective sweep's light
+        // buffers live is its own choice: docs/how-it-works.md, "A perspective camera").
+        let guard = if near.is_some() {
+            GuardBand::default()
+        } else {
+            GuardBand::resolve(
+                scene.sweep.guard_band,
+                &AutoGuardInput {
+                    camera: &camera,
+                    meshes: refs.clone(),
+                    lights: &scene.lights,
+                    slabs,
+                    slab_distance,
+                    optimal_distance: scene.sweep.optimal_distance,
+                    penumbra: scene.sweep.penumbra,
+                    variance_compensation: scene.sweep.variance_compensation,
+                },
+            )
+        };
         let mut raster = RasterSetup::new(&camera, guard, &refs, z_min).map_err(|source| {
             GeometryError::Raster {
                 scene: scene.source.clone(),

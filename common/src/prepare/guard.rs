@@ -249,6 +249,7 @@ mod tests {
                 up: [0.0, 1.0, 0.0],
                 center: [0.0, 0.0, 0.0],
                 view_width,
+                projection: Default::default(),
             },
             &ImageSpec {
                 width,

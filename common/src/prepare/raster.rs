@@ -5,7 +5,9 @@
 //! centres is then decided by exact integer edge functions with the top-left rule, so a pixel
 //! centre on an edge shared by two triangles is covered by exactly one of them. The depth of a
 //! fragment is the triangle's plane evaluated at the pixel centre in f32 in a fixed order
-//! ([`TriangleSetup::depth_at`]), relative to a reference pixel inside the triangle's box.
+//! ([`TriangleSetup::depth_at`]), relative to a reference pixel inside the triangle's box. In
+//! perspective the plane is the inverse depth `1/z` (affine in pixel coordinates, as depth is
+//! not) and a fragment's depth is `1 / plane − origin` ([`RasterSetup::fragment_depth`]).
 
 use glam::DVec3;
 
@@ -93,6 +95,19 @@ impl TriangleSetup {
 /// Why a triangle cannot be rasterized.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RasterError {
+    /// Perspective: a vertex lies at or behind the eye (view depth ≤ 0), where it has no pixel.
+    #[error(
+        "mesh {mesh} triangle {triangle}: a vertex at view depth {depth:.6e}, at or behind the \
+         perspective camera's eye; move camera.eye so that every mesh lies in front of it"
+    )]
+    BehindEye {
+        /// Mesh index.
+        mesh: usize,
+        /// Triangle index within the mesh.
+        triangle: usize,
+        /// The vertex's view depth.
+        depth: f64,
+    },
     /// A vertex projects too far from the image for exact 64-bit edge functions.
     #[error(
         "mesh {mesh} triangle {triangle}: a vertex projects to pixel ({x:.0}, {y:.0}), beyond the \
@@ -130,10 +145,29 @@ pub struct RasterSetup {
     /// toggle no inside bit (docs/scene-format.md, "Open meshes"). All set by [`RasterSetup::new`];
     /// the scene's geometry clears the open meshes' bits.
     pub parity_meshes: u32,
+    /// Perspective: every triangle's plane is the inverse view depth, and a fragment's depth
+    /// is `1 / plane − origin` with this origin (the sweep's first depth, in f32); `None` for an
+    /// orthographic camera, whose planes are the depth relative to the origin.
+    pub perspective_origin: Option<f32>,
 }
 
 impl RasterSetup {
-    /// Sets up every triangle of every mesh; depths are relative to `z_origin` (camera depth).
+    /// The depth of `tri`'s fragment at grid pixel (i, j), relative to the sweep's origin:
+    /// [`TriangleSetup::depth_at`], or in perspective `1 / depth_at − origin` (in f32, the GPU's
+    /// order).
+    #[inline(always)]
+    pub fn fragment_depth(&self, tri: &TriangleSetup, i: i32, j: i32) -> f32 {
+        let plane = tri.depth_at(i, j);
+        match self.perspective_origin {
+            None => plane,
+            Some(origin) => 1.0 / plane - origin,
+        }
+    }
+}
+
+impl RasterSetup {
+    /// Sets up every triangle of every mesh; depths are relative to `z_origin` (camera depth;
+    /// perspective: [`RasterSetup::fragment_depth`]).
     pub fn new(
         camera: &Camera,
         guard: GuardBand,
@@ -142,11 +176,24 @@ impl RasterSetup {
     ) -> Result<RasterSetup, RasterError> {
         let (width, height) = guard.grid(camera.width, camera.height);
         let (gx, gy) = (f64::from(guard.left), f64::from(guard.top));
+        let perspective = camera.focal_px.is_some();
         let mut triangles = Vec::new();
         let mut zero_area = 0;
         for (mesh, (positions, tris)) in meshes.iter().enumerate() {
             let projected: Vec<DVec3> = positions.iter().map(|p| camera.to_pixel(*p)).collect();
             for (t, tri) in tris.iter().enumerate() {
+                if perspective
+                    && let Some(z) = tri
+                        .iter()
+                        .map(|&v| projected[v as usize].z)
+                        .find(|z| *z <= 0.0)
+                {
+                    return Err(RasterError::BehindEye {
+                        mesh,
+                        triangle: t,
+                        depth: z,
+                    });
+                }
                 let mut fixed = [[0i64; 2]; 3];
                 let mut depth = [0f64; 3];
                 for k in 0..3 {
@@ -165,7 +212,12 @@ impl RasterSetup {
                         (x * FIXED_ONE as f64).round() as i64,
                         (y * FIXED_ONE as f64).round() as i64,
                     ];
-                    depth[k] = p.z - z_origin;
+                    // Perspective: the inverse depth, whose plane is affine in pixels.
+                    depth[k] = if perspective {
+                        1.0 / p.z
+                    } else {
+                        p.z - z_origin
+                    };
                 }
                 let area = (fixed[1][0] - fixed[0][0]) * (fixed[2][1] - fixed[0][1])
                     - (fixed[1][1] - fixed[0][1]) * (fixed[2][0] - fixed[0][0]);
@@ -219,6 +271,7 @@ impl RasterSetup {
             triangles,
             zero_area,
             parity_meshes: u32::MAX,
+            perspective_origin: perspective.then_some(z_origin as f32),
         })
     }
 }

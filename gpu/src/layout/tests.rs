@@ -22,9 +22,9 @@ fn rust_layouts() -> Vec<Layout> {
             height,
             pixels,
             stride,
-            _pad0,
-            _pad1,
-            _pad2
+            perspective,
+            depth_origin,
+            _pad0
         }),
         layout!(Triangle {
             v,

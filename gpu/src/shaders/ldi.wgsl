@@ -5,7 +5,8 @@
 // `dx·(py − ay) − dy·(px − ax)` is evaluated exactly in 64-bit two's complement held in a
 // vec2<u32> (lo, hi): each factor fits an i32 (vertices lie within ±2^21 px = ±2^29 fixed point,
 // pixel centres within the grid), each product fits 61 bits, and the difference fits 62 bits.
-// Depth is `(depth_ref + depth_dx·Δi) + depth_dy·Δj` in f32, in the CPU's order.
+// Depth is `(depth_ref + depth_dx·Δi) + depth_dy·Δj` in f32, in the CPU's order (perspective:
+// the plane is the inverse depth, and the depth `1 / plane − origin`).
 //
 // Passes: `count` (atomic per-pixel counts), host prefix sum, `fill` (atomic slot claim, sort
 // keys), `sort` (per-pixel sort by (sortable depth bits, triangle index), by rank).
@@ -91,6 +92,15 @@ fn depth_at(t: u32, i: i32, j: i32) -> f32 {
     return (tri.depth_ref + a) + b;
 }
 
+// `RasterSetup::fragment_depth`: the plane, or in perspective 1 / plane − origin.
+fn fragment_depth(t: u32, i: i32, j: i32) -> f32 {
+    let plane = depth_at(t, i, j);
+    if ldi_params.perspective != 0u {
+        return 1.0 / plane - ldi_params.depth_origin;
+    }
+    return plane;
+}
+
 // `sortable_bits`: unsigned order of the result is the float's total order.
 fn sortable_bits(f: f32) -> u32 {
     let b = bitcast<u32>(f);
@@ -132,7 +142,7 @@ fn fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var i = tris[t].bbox[0]; i <= tris[t].bbox[2]; i++) {
         if covers(t, i, j) {
             let slot = atomicAdd(&cursor[u32(j) * ldi_params.width + u32(i)], 1u);
-            key_depth[slot] = sortable_bits(depth_at(t, i, j));
+            key_depth[slot] = sortable_bits(fragment_depth(t, i, j));
             key_tri[slot] = t;
         }
     }

@@ -44,6 +44,15 @@ pub struct RenderArgs {
     /// Override camera.center (X,Y,Z).
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub camera_center: Option<String>,
+    /// Perspective camera: override camera.eye (X,Y,Z).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub eye: Option<String>,
+    /// Perspective camera: override camera.look_at (X,Y,Z).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub look_at: Option<String>,
+    /// Perspective camera: override camera.fov_deg (the vertical field of view, 1–170 degrees).
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub fov: Option<f64>,
     /// PNG output: exposure in stops (overrides image.exposure; EXR stays linear).
     #[arg(long, value_name = "STOPS", allow_hyphen_values = true)]
     pub exposure: Option<f64>,

@@ -43,6 +43,16 @@ pub(super) fn apply_view_overrides(scene: &mut Scene, args: &RenderArgs) -> Resu
     scene
         .override_camera(direction, center, args.view_width)
         .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, e.to_string()))?;
+    let vec3 = |flag: &str, text: &Option<String>| {
+        text.as_deref()
+            .map(frames::parse_vec3)
+            .transpose()
+            .map_err(|e| bad(flag, e))
+    };
+    let (eye, look_at) = (vec3("--eye", &args.eye)?, vec3("--look-at", &args.look_at)?);
+    scene
+        .override_perspective(eye, look_at, args.fov)
+        .map_err(|e| Failure::new(exit::BAD_ARGUMENTS, e.to_string()))?;
     if let Some(x) = args.exposure {
         scene.image.exposure = x;
     }

@@ -13,6 +13,22 @@ impl Scene {
         view_width: Option<f64>,
     ) -> Result<(), SceneError> {
         let v = Validator { file: &self.source };
+        if self.camera.is_perspective() {
+            let flag = [
+                (direction.is_some(), "--camera-direction"),
+                (center.is_some(), "--camera-center"),
+                (view_width.is_some(), "--view-width"),
+            ]
+            .into_iter()
+            .find_map(|(given, flag)| given.then_some(flag));
+            if let Some(flag) = flag {
+                return Err(v.err(
+                    flag,
+                    "an orthographic camera's flag; this scene's camera is perspective \
+                     (camera.projection): use --eye, --look-at and --fov",
+                ));
+            }
+        }
         if let Some(d) = direction {
             let d = v.unit_vector("--camera-direction", d)?;
             let u = self.camera.up;
@@ -41,6 +57,72 @@ impl Scene {
         }
         if let Some(w) = view_width {
             self.camera.view_width = v.length("--view-width", w)?;
+        }
+        Ok(())
+    }
+
+    /// Overrides a perspective camera's eye, `look_at` and vertical field of view (command
+    /// line), checked as the file's are; world-space lights stay put. Refused on an orthographic
+    /// camera.
+    pub fn override_perspective(
+        &mut self,
+        eye: Option<[f64; 3]>,
+        look_at: Option<[f64; 3]>,
+        fov_deg: Option<f64>,
+    ) -> Result<(), SceneError> {
+        let v = Validator { file: &self.source };
+        let Projection::Perspective {
+            look_at: ref mut target,
+            fov_deg: ref mut fov,
+            ..
+        } = self.camera.projection
+        else {
+            let flag = [
+                (eye.is_some(), "--eye"),
+                (look_at.is_some(), "--look-at"),
+                (fov_deg.is_some(), "--fov"),
+            ]
+            .into_iter()
+            .find_map(|(given, flag)| given.then_some(flag));
+            return match flag {
+                Some(flag) => Err(v.err(
+                    flag,
+                    "a perspective camera's flag; this scene's camera is orthographic \
+                     (camera.projection): use --camera-direction, --camera-center and --view-width",
+                )),
+                None => Ok(()),
+            };
+        };
+        if let Some(p) = look_at {
+            *target = v.bounded3("--look-at", p, MAX_WORLD)?;
+        }
+        if let Some(f) = fov_deg {
+            *fov = v.fov("--fov", f)?;
+        }
+        if let Some(e) = eye {
+            self.camera.center = v.bounded3("--eye", e, MAX_WORLD)?;
+        }
+        if eye.is_none() && look_at.is_none() && fov_deg.is_none() {
+            return Ok(());
+        }
+        let aspect = f64::from(self.image.width) / f64::from(self.image.height);
+        let look_at_key = if look_at.is_some() {
+            "--look-at"
+        } else {
+            "camera.look_at"
+        };
+        let eye_key = if eye.is_some() { "--eye" } else { "camera.eye" };
+        v.aim(
+            &mut self.camera,
+            aspect,
+            [look_at_key, "camera.up", eye_key],
+        )?;
+        // A world-space light stays put: its tilt follows the camera.
+        for i in 0..self.lights.len() {
+            if let Some(world) = self.lights[i].world {
+                let after = " after --eye/--look-at";
+                v.place_light(i, &mut self.lights[i], world, &self.camera, after)?;
+            }
         }
         Ok(())
     }

@@ -188,32 +188,8 @@ impl Validator<'_> {
             tonemap: raw.image.tonemap.unwrap_or_default(),
         };
 
-        let direction = self.unit_vector(
-            "camera.direction",
-            raw.camera.direction.unwrap_or([0.0, 0.0, 1.0]),
-        )?;
-        let up = self.unit_vector("camera.up", raw.camera.up.unwrap_or([0.0, 1.0, 0.0]))?;
-        let cross = [
-            direction[1] * up[2] - direction[2] * up[1],
-            direction[2] * up[0] - direction[0] * up[2],
-            direction[0] * up[1] - direction[1] * up[0],
-        ];
-        if (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt() < 1e-6 {
-            return Err(self.err(
-                "camera.up",
-                "expected a direction not parallel to camera.direction",
-            ));
-        }
-        let camera = CameraSpec {
-            direction,
-            up,
-            center: self.bounded3(
-                "camera.center",
-                raw.camera.center.unwrap_or([0.0; 3]),
-                MAX_WORLD,
-            )?,
-            view_width: self.length("camera.view_width", raw.camera.view_width)?,
-        };
+        let aspect = f64::from(image.width) / f64::from(image.height);
+        let camera = self.camera(&raw.camera, aspect)?;
 
         let sweep = self.sweep(raw.sweep)?;
 

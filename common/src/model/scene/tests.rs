@@ -454,3 +454,131 @@ fn a_world_lights_spread_is_turned_onto_the_slab_plane() {
         "only applies with `direction`",
     );
 }
+
+/// [`MINIMAL`] with its camera replaced by `camera` (the `[camera]` table's lines).
+fn with_camera(camera: &str) -> String {
+    MINIMAL.replace("[camera]\nview_width = 2.0", &format!("[camera]\n{camera}"))
+}
+
+#[test]
+fn a_perspective_camera_looks_from_its_eye_at_its_target() {
+    let s = parse(&with_camera(
+        "projection = \"perspective\"\neye = [0.0, 0.0, -4.0]\nlook_at = [0.0, 0.0, 4.0]\nfov_deg = 60",
+    ))
+    .unwrap();
+    assert_eq!(s.camera.direction, [0.0, 0.0, 1.0]);
+    assert_eq!(s.camera.center, [0.0, 0.0, -4.0]);
+    assert!(s.camera.is_perspective());
+    let Projection::Perspective { fov_deg, near, .. } = s.camera.projection else {
+        unreachable!()
+    };
+    assert_eq!((fov_deg, near), (60.0, None));
+    // 8 units to the target, 2·8·tan 30° high, twice that wide (64 × 32 pixels).
+    let expect = 2.0 * 8.0 * (1.0f64 / 3.0).sqrt() * 2.0;
+    assert!((s.camera.view_width - expect).abs() < 1e-12 * expect);
+    // Orthographic stays the default.
+    assert_eq!(
+        parse(MINIMAL).unwrap().camera.projection,
+        Projection::Orthographic
+    );
+}
+
+#[test]
+fn bad_perspective_cameras_name_the_key() {
+    let p = "projection = \"perspective\"\n";
+    let aim = "eye = [0.0, 0.0, -4.0]\nlook_at = [0.0, 0.0, 0.0]\n";
+    let err =
+        |camera: String, key: &str, words: &str| expect_err(&with_camera(&camera), key, words);
+    err(
+        format!("projection = \"fisheye\"\nview_width = 2.0"),
+        "camera.projection",
+        "\"orthographic\" or \"perspective\"",
+    );
+    err(
+        format!("{p}eye = [1.0, 2.0, 3.0]\nlook_at = [1.0, 2.0, 3.0]\nfov_deg = 40"),
+        "camera.look_at",
+        "other than camera.eye",
+    );
+    err(
+        format!("{p}{aim}up = [0.0, 0.0, 2.0]\nfov_deg = 40"),
+        "camera.up",
+        "not parallel to the view",
+    );
+    err(
+        format!("{p}{aim}fov_deg = 0.5"),
+        "camera.fov_deg",
+        "[1, 170]",
+    );
+    err(
+        format!("{p}{aim}fov_deg = 171"),
+        "camera.fov_deg",
+        "[1, 170]",
+    );
+    err(format!("{p}{aim}fov_deg = nan"), "camera.fov_deg", "finite");
+    err(
+        format!("{p}{aim}fov_deg = 40\nnear = -1.0"),
+        "camera.near",
+        "",
+    );
+    err(
+        format!("{p}look_at = [0.0, 0.0, 0.0]\nfov_deg = 40"),
+        "camera.eye",
+        "missing",
+    );
+    err(
+        format!("{p}eye = [0.0, 0.0, -4.0]\nfov_deg = 40"),
+        "camera.look_at",
+        "missing",
+    );
+    err(format!("{p}{aim}"), "camera.fov_deg", "missing");
+    // One projection's keys only.
+    err(
+        format!("{p}{aim}fov_deg = 40\nview_width = 2.0"),
+        "camera.view_width",
+        "orthographic camera's key",
+    );
+    err(
+        format!("{p}{aim}fov_deg = 40\ndirection = [0.0, 0.0, 1.0]"),
+        "camera.direction",
+        "orthographic camera's key",
+    );
+    err(
+        "view_width = 2.0\nfov_deg = 40".to_string(),
+        "camera.fov_deg",
+        "perspective camera's key",
+    );
+    err(
+        "view_width = 2.0\neye = [0.0, 0.0, 1.0]".to_string(),
+        "camera.eye",
+        "perspective camera's key",
+    );
+    err(
+        "direction = [0.0, 0.0, 1.0]".to_string(),
+        "camera.view_width",
+        "missing",
+    );
+}
+
+#[test]
+fn perspective_overrides_aim_the_camera_and_refuse_the_other_projections_flags() {
+    let mut s = parse(&with_camera(
+        "projection = \"perspective\"\neye = [0.0, 0.0, -4.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_deg = 60",
+    ))
+    .unwrap();
+    s.override_perspective(Some([4.0, 0.0, 0.0]), None, Some(30.0))
+        .unwrap();
+    assert_eq!(s.camera.direction, [-1.0, 0.0, 0.0]);
+    assert_eq!(s.camera.center, [4.0, 0.0, 0.0]);
+    let e = s
+        .override_perspective(None, Some([4.0, 0.0, 0.0]), None)
+        .unwrap_err();
+    assert_eq!(e.key, "--look-at", "{e}");
+    let e = s.override_perspective(None, None, Some(200.0)).unwrap_err();
+    assert_eq!(e.key, "--fov", "{e}");
+    let e = s.override_camera(None, None, Some(3.0)).unwrap_err();
+    assert_eq!(e.key, "--view-width", "{e}");
+    let mut o = parse(MINIMAL).unwrap();
+    let e = o.override_perspective(None, None, Some(30.0)).unwrap_err();
+    assert_eq!(e.key, "--fov", "{e}");
+    o.override_perspective(None, None, None).unwrap();
+}

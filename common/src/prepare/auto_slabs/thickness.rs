@@ -84,7 +84,7 @@ pub fn thinnest_feature(
                 let i = a * stride + offset;
                 if tri.covers(i, j) {
                     let sample = (b * columns + a) as u32;
-                    fragments.push((sample, tri.mesh, tri.depth_at(i, j), t as u32));
+                    fragments.push((sample, tri.mesh, setup.fragment_depth(tri, i, j), t as u32));
                 }
             }
         }

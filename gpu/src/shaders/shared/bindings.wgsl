@@ -12,9 +12,9 @@ struct LdiParams {
     height: u32,      // grid height
     pixels: u32,      // width · height
     stride: u32,      // invocations per dispatch row (x groups · 64)
+    perspective: u32, // 1: planes are inverse depths (`RasterSetup::fragment_depth`)
+    depth_origin: f32, // perspective: subtracted from 1 / plane
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 // `TriangleSetup` as rasterized: fixed-point vertices, inclusive pixel box, depth plane, mesh.
