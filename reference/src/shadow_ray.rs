@@ -14,7 +14,7 @@
 //! - **Light directions**: per shading point and light, `M = k²` multi-jittered directions
 //!   (Chiu, Shirley and Wang 1994): one per cell of a k×k stratification of the unit square and
 //!   at the same time one per each of the M fine strata of either axis, the fine strata assigned
-//!   by hashed permutations ([`permute`], Kensler 2013) and jittered by the integer hash (no
+//!   by hashed permutations (`light_samples::permute`, Kensler 2013) and jittered by the integer hash (no
 //!   `rand`), mapped through the inverse normal CDF to the light's Gaussian
 //!   `N(μl, R diag(σ²) Rᵀ)` per unit depth. The fine strata make a shadow edge along a principal
 //!   axis of the light converge like 1/M instead of the plain k×k grid's M^-3/4; any other edge
@@ -43,7 +43,7 @@
 //!   side and is attenuated by the inside (an opaque sphere's surface point is lit by the
 //!   directions of its tangent half-space), a ray heading out meets nothing of it. Crossings
 //!   within 2^-30 (relative) of the start are the start met again through rounding (a
-//!   neighbouring triangle at a shared edge, a coincident face) and are ignored. See [`Start`].
+//!   neighbouring triangle at a shared edge, a coincident face) and are ignored. See `geometry::Start`.
 //!
 //! - **Open meshes** are thin shells (docs/scene-format.md, "Open meshes"): their crossings
 //!   toggle no inside bit, and a shadow ray crossing one is attenuated there by one reference
