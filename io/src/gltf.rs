@@ -1,6 +1,6 @@
 //! glTF 2.0 reading (`.gltf` JSON and `.glb` binary): the `gltf` crate parses and validates the
 //! document; the vertex data is read here with checked bounds, then welded with every other
-//! format's vertices ([`crate::weld::Welder`]).
+//! format's vertices (`weld::Welder`).
 //!
 //! What is read: the scene to show (the file's `scene`, else its first scene; a file with no
 //! scene at all: every mesh once, untransformed), walked from its root nodes with each node's

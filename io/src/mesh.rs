@@ -1,6 +1,6 @@
 //! Mesh files: the format chosen by the file's extension ([`MeshFormat::from_path`]), one loader
 //! per format (OBJ, PLY, glTF 2.0, STL), each ending in the one welding step
-//! ([`crate::weld::Welder`]), so closure is judged the same way (by position) whatever the format.
+//! (`weld::Welder`), so closure is judged the same way (by position) whatever the format.
 
 use std::path::Path;
 

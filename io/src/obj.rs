@@ -1,5 +1,5 @@
 //! OBJ reading: a validating scan that names the line, then tobj, then the shared welding
-//! ([`crate::weld::Welder`]).
+//! (`weld::Welder`).
 
 use std::ops::Div;
 use std::path::Path;

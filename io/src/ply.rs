@@ -1,5 +1,5 @@
 //! PLY reading (the Stanford polygon format; ASCII, binary little- and big-endian) through the
-//! `ply-rs-bw` crate, then the shared welding ([`crate::weld::Welder`]).
+//! `ply-rs-bw` crate, then the shared welding (`weld::Welder`).
 //!
 //! What is read: the `vertex` element's `x`, `y`, `z` (any scalar type) and the `face`
 //! element's vertex index list (`vertex_indices` or `vertex_index`, any integer type); faces
@@ -270,7 +270,7 @@ fn parse_error(path: &Path, what: &str, e: ply_rs_bw::parser::ParseError) -> Mes
 
 /// Loads a PLY file (ASCII or binary, read whole, at most [`crate::input::MAX_MESH_BYTES`]).
 ///
-/// The header is checked first ([`check_header`]: elements, property types, counts against
+/// The header is checked first (`check_header`: elements, property types, counts against
 /// the bytes that follow); then every element is read in file order; then each vertex must be
 /// finite and each face have 3 or more indices, all in range. Errors name the file and the
 /// element: `bunny.ply: face 12: index 99 out of range (the file has 40 vertices)` (vertices

@@ -1,5 +1,5 @@
 //! STL reading (ASCII and binary) through the `stl_io` crate's triangle iterator, then the
-//! shared welding ([`crate::weld::Welder`]): STL stores every triangle's three corners on their
+//! shared welding (`weld::Welder`): STL stores every triangle's three corners on their
 //! own, so welding by exact position is what recovers the mesh's topology.
 //!
 //! What is read: the three vertices of every facet, in their order (the stored facet normal and

@@ -62,7 +62,7 @@ pub struct MaterialPlan {
     /// "lambert"`); false: flat (the medium's model everywhere).
     pub lambert: bool,
     /// Per light: the light's colour times this material's phase function at the light's
-    /// scattering angle ([`phase_factor`]); exactly the light's colour for an isotropic medium
+    /// scattering angle ([`crate::plan::phase_factor`]); exactly the light's colour for an isotropic medium
     /// (g = 0). Shading sums `Iin ⊙ light_color`; the specular term uses the bare colour.
     pub light_color: Vec<[f32; 3]>,
 }
@@ -70,7 +70,7 @@ pub struct MaterialPlan {
 impl MaterialPlan {
     /// Whether every slab of this material takes out all light: attenuation exactly 0 in every
     /// channel of every transfer-function entry (and pre-integrated entry). Such a material's
-    /// surfaces are held ([`RenderPlan::surface_hold`]).
+    /// surfaces are held ([`crate::plan::RenderPlan::surface_hold`]).
     pub fn blocks_light(&self) -> bool {
         let blocks = |t: &TfEntry| t.attenuation == [0.0; 3];
         self.tf.iter().all(blocks) && self.pre.iter().flatten().all(blocks)
@@ -128,7 +128,7 @@ pub(crate) fn medium_transmittance(alpha: f64, tau: f64) -> f64 {
 }
 
 /// How a material's slab lets the light through: as a medium (`(1 − α)^(1 − τ)`, see
-/// [`medium_transmittance`]) or as a filter (`1 − α·(1 − τ)`: opacity 1, a thin shell's
+/// `medium_transmittance`) or as a filter (`1 − α·(1 − τ)`: opacity 1, a thin shell's
 /// crossing, and every slab with `sweep.media = "first-order"`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Passes {

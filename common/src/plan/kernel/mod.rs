@@ -12,7 +12,7 @@
 //! integer offset plus four bilinear corner weights: no per-pixel `floor`, and the same table on
 //! the GPU. All host maths here is f64; only the final weights are rounded to f32.
 //!
-//! One file per topic: [`spec`] (names), [`moments`] (μκ, Σκ), [`table`] (taps, discretisation),
+//! One file per topic: `crate::model::kernel` (names), [`moments`] (μκ, Σκ), [`table`] (taps, discretisation),
 //! `compensation` (bilinear variance), and one file per kernel family; every item is
 //! re-exported here, so `kernel::X` paths do not depend on the file layout.
 
