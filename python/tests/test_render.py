@@ -200,3 +200,38 @@ def test_scene_of_another_type_is_a_type_error():
         convshadow.render(42)
     with pytest.raises(TypeError):
         convshadow.render({"image": {"width": object()}})
+
+
+
+PERSPECTIVE = """
+[image]
+width = 24
+height = 16
+[camera]
+projection = "perspective"
+eye = [0.0, 1.0, -5.0]
+look_at = [0.0, 0.0, 0.0]
+fov_deg = 40.0
+[sweep]
+slabs = 16
+[[mesh]]
+shape = "sphere"
+size = [1.0, 3]
+material = "m"
+[material.m]
+"""
+
+
+def test_a_perspective_scene_renders_on_the_reference_and_is_refused_by_the_sweep(cli, tmp_path):
+    image, stats = convshadow.render(PERSPECTIVE, backend="reference", reference_samples=4)
+    assert image.shape == (16, 24, 3) and np.isfinite(image).all()
+    assert (image > 0).any() and stats["odd_pixels"] == 0
+    # The sweep refuses it (issue 42) with the command line's code and message.
+    with pytest.raises(convshadow.Error) as info:
+        convshadow.render(PERSPECTIVE)
+    assert info.value.exit_code == 3 and "camera.projection" in info.value.message
+    path = tmp_path / "persp.toml"
+    path.write_text(PERSPECTIVE)
+    run = cli("render", path, "-o", tmp_path / "x.exr", "-q")
+    assert run.returncode == 3 and "camera.projection" in run.stderr
+    assert not (tmp_path / "x.exr").exists()
