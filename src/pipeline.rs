@@ -20,6 +20,7 @@ mod backend;
 mod budget;
 mod error;
 mod passes;
+mod perspective;
 mod reference;
 
 use std::sync::atomic::AtomicBool;
@@ -222,28 +223,15 @@ pub fn build_ldi(
 /// A scene with lights from in front of the viewer is rendered in two passes, added
 /// (`passes::render_passes`).
 pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, RenderError> {
-    refuse_perspective(scene)?;
+    if scene.camera.is_perspective() {
+        return perspective::render_perspective(scene, req);
+    }
     for aov in &req.aovs {
         if let Aov::Light(l) = *aov {
             check_light_index(scene, l)?;
         }
     }
     passes::render_passes(scene, &req.aovs, |pass, aovs| render_pass(pass, req, aovs))
-}
-
-/// A perspective camera is refused by the sweep (CPU and GPU) until it follows perspective rays
-/// (issue 42); its LDI is built ([`build_ldi`]) and the shadow-ray reference renders it.
-fn refuse_perspective(scene: &Scene) -> Result<(), RenderError> {
-    if scene.camera.is_perspective() {
-        return Err(RenderError::BadPlan(format!(
-            "{}: key `camera.projection`: \"perspective\" is not rendered by the sweep yet (its \
-             LDI is built, `convshadow ldi`, and `--backend reference` renders it with shadow \
-             rays; docs/how-it-works.md, \"A perspective camera\"); expected \"orthographic\" \
-             for the cpu and gpu backends",
-            scene.source
-        )));
-    }
-    Ok(())
 }
 
 /// [`render`] of one pass: every light at the same end of the sweep, `aovs` instead of

@@ -17,7 +17,7 @@ mod lights_from_any_direction;
 mod oblique_receiver;
 mod open_meshes;
 mod patterned_light;
-mod perspective_reference;
+mod perspective;
 mod phase_function;
 mod preintegration;
 mod reference_convergence;

@@ -21,6 +21,7 @@
 //! row state, row hashes) → the stage functions in `kernels`, `parity`, `shading` and
 //! `composite`; `level_blocks` (the level plane's block minima, which both paths read) beside.
 
+mod eye;
 mod fast;
 mod kit;
 mod level_blocks;
@@ -36,6 +37,7 @@ use crate::composite::finish;
 use crate::kernels::LightTaps;
 use crate::ldi::Ldi;
 use convshadow_common::plan::levels::initial_levels;
+use eye::{EyeState, GridLight};
 use fast::{ChunkState, QuietRow, QuietSetup, RowSpans, SimdSlab, TapColumns, sweep_row_simd};
 use kit::{Previous, Reach, RowContext, RowState, SlabContext};
 use level_blocks::LevelBlocks;
@@ -43,6 +45,7 @@ use level_blocks::LevelBlocks;
 pub use convshadow_common::contract::sweep_io::{
     MAX_LIGHT_CHANNELS, SweepError, SweepOptions, SweepOutput,
 };
+pub use eye::EyeView;
 pub use fast::ChunkCounts;
 
 /// Which CPU code path runs the sweep. Both give the same bits.
@@ -409,6 +412,65 @@ pub fn sweep_with(
     options: &SweepOptions<'_>,
     cpu: &CpuOptions<'_>,
 ) -> Result<SweepOutput, SweepError> {
+    let (state, slabs_swept) = drive(plan, raster, ldi, options, cpu, |_, _| {})?;
+    let (image, alpha) = finish_image(plan, &state.color, &state.alpha);
+    Ok(SweepOutput {
+        image,
+        alpha,
+        light: to_plane_rows(plan, &state.prev),
+        slabs_swept,
+    })
+}
+
+/// The sweep for a perspective camera (`eye`): the light swept on the slab grid of `plan`,
+/// `raster` and `ldi` (every slab: the early finish watches the grid, not the eye), and before
+/// each slab the eye's rays take their step through it ([`eye::eye_slab`]). The image is the
+/// eye's, `eye.width × eye.height`.
+pub fn sweep_perspective(
+    plan: &RenderPlan,
+    raster: &RasterSetup,
+    ldi: &Ldi,
+    eye: &EyeView<'_>,
+    options: &SweepOptions<'_>,
+    cpu: &CpuOptions<'_>,
+) -> Result<SweepOutput, SweepError> {
+    let mut view = EyeState::new(eye);
+    let every_slab = SweepOptions {
+        every_slab: true,
+        ..*options
+    };
+    let (state, slabs_swept) = drive(plan, raster, ldi, &every_slab, cpu, |slab, state| {
+        let grid = GridLight {
+            light: &state.prev,
+            inside: &state.inside,
+        };
+        eye::eye_slab(plan, eye, &grid, slab, &mut view);
+    })?;
+    let n = (eye.width * eye.height) as usize;
+    let mut image = vec![0.0f32; n * 3];
+    for (k, (c, &a)) in view.color.iter().zip(&view.alpha).enumerate() {
+        let mut c = *c;
+        finish(&mut c, a, plan.background);
+        image[3 * k..3 * k + 3].copy_from_slice(&c);
+    }
+    Ok(SweepOutput {
+        image,
+        alpha: view.alpha,
+        light: to_plane_rows(plan, &state.prev),
+        slabs_swept,
+    })
+}
+
+/// The slab loop of [`sweep_with`] and [`sweep_perspective`]: `before_slab(k, state)` runs before
+/// slab k is swept. Returns the state after the last slab swept and how many were.
+fn drive(
+    plan: &RenderPlan,
+    raster: &RasterSetup,
+    ldi: &Ldi,
+    options: &SweepOptions<'_>,
+    cpu: &CpuOptions<'_>,
+    mut before_slab: impl FnMut(u32, &PixelState),
+) -> Result<(PixelState, u32), SweepError> {
     let ch = plan.channels as usize;
     let lights = plan.lights.len();
     assert!(
@@ -460,6 +522,7 @@ pub fn sweep_with(
             back: plan.slab_back[slab as usize],
             front: plan.slab_front[slab as usize],
         };
+        before_slab(slab, &state);
         let lanes = simd.then(|| SimdSlab::new(plan, &columns, slab));
         sweep_slab(
             &ctx,
@@ -481,13 +544,7 @@ pub fn sweep_with(
         }
     }
 
-    let (image, alpha) = finish_image(plan, &state.color, &state.alpha);
-    Ok(SweepOutput {
-        image,
-        alpha,
-        light: to_plane_rows(plan, &state.prev),
-        slabs_swept,
-    })
+    Ok((state, slabs_swept))
 }
 
 /// Unit tests' scenes: `text` parsed (as the file `name`) and built into what a sweep takes.

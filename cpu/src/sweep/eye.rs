@@ -1,0 +1,255 @@
+//! The perspective camera's eye pass (docs/how-it-works.md, "A perspective camera"): the light
+//! is swept on the slab grid as for an orthographic camera (light buffers on the slab planes in
+//! world units), and before each slab every image pixel's ray from the eye takes its step
+//! through the slab: its own layer cursor over the perspective LDI, one shading point, front to
+//! back compositing — with the light *read* from the grid's buffer where its ray meets the slab
+//! (a per-slab zoom of the read: `centre + (p − centre)·z·zoom`, bilinear), never resampled.
+//!
+//! At a crossed surface the read leaves out grid pixels that were already inside the crossed
+//! mesh at the slab's front (their light is the mesh's inside, not the light arriving at its
+//! surface), the weights of the others renormalised; where every neighbour is inside, the plain
+//! bilinear read. One code path (plain `f32`, one pixel): the same bits on `--path scalar` and
+//! `simd`, at any thread count (a pixel reads only the previous slab's grid and its own state).
+
+use rayon::prelude::*;
+
+use convshadow_common::pixel::hash::row_hash;
+use convshadow_common::plan::RenderPlan;
+use convshadow_common::prepare::raster::RasterSetup;
+
+use super::kit::{MAX_LIGHT_CHANNELS, light_block};
+use crate::composite::{composite, part_of_slab};
+use crate::ldi::Ldi;
+use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
+use crate::shading::{Surface, material_at, shade, shading_depth};
+
+/// A perspective camera as the eye pass reads it.
+pub struct EyeView<'a> {
+    /// The LDI along the eye's rays (the image's pixels, no guard band), depths relative to the
+    /// sweep's origin.
+    pub ldi: &'a Ldi,
+    /// Its rasterizer set-up (the crossed triangles' normals).
+    pub raster: &'a RasterSetup,
+    /// Image width and height.
+    pub width: u32,
+    /// See `width`.
+    pub height: u32,
+    /// Grid pixels per image pixel of offset from the centre, per unit of view depth:
+    /// `1 / (focal_px · pixel_size)`.
+    pub zoom: f32,
+    /// The sweep's origin as a view depth (the eye's depths are relative to it).
+    pub z_origin: f32,
+    /// Where the view axis meets the slab grid, in grid pixel coordinates (guard band included).
+    pub axis: [f32; 2],
+}
+
+/// The eye's per-pixel state: layer cursor, inside mask, composited colour and alpha.
+pub(crate) struct EyeState {
+    next: Vec<u32>,
+    inside: Vec<u32>,
+    /// Per pixel `[r, g, b]`.
+    pub(crate) color: Vec<[f32; 3]>,
+    pub(crate) alpha: Vec<f32>,
+}
+
+impl EyeState {
+    /// Before the first slab: each cursor at its pixel's first fragment, nothing composited.
+    pub(crate) fn new(view: &EyeView<'_>) -> EyeState {
+        let n = (view.width * view.height) as usize;
+        EyeState {
+            next: view.ldi.offsets[..n].to_vec(),
+            inside: vec![0; n],
+            color: vec![[0.0; 3]; n],
+            alpha: vec![0.0; n],
+        }
+    }
+}
+
+/// The grid as the previous slab left it: its outgoing light (pixel-interleaved rows, as the
+/// sweep keeps it) and every grid pixel's inside mask at this slab's front.
+pub(crate) struct GridLight<'a> {
+    pub(crate) light: &'a [f32],
+    pub(crate) inside: &'a [u32],
+}
+
+/// Slab `slab` for every image pixel (rows in parallel).
+pub(crate) fn eye_slab(
+    plan: &RenderPlan,
+    view: &EyeView<'_>,
+    grid: &GridLight<'_>,
+    slab: u32,
+    state: &mut EyeState,
+) {
+    let w = view.width as usize;
+    let (front, back) = (
+        plan.slab_front[slab as usize],
+        plan.slab_back[slab as usize],
+    );
+    state
+        .next
+        .par_chunks_mut(w)
+        .zip(state.inside.par_chunks_mut(w))
+        .zip(state.color.par_chunks_mut(w))
+        .zip(state.alpha.par_chunks_mut(w))
+        .enumerate()
+        .for_each(|(y, (((next, inside), color), alpha))| {
+            let jitter_row = row_hash(
+                plan.jitter_slab_hash[slab as usize],
+                plan.hash_y(y as u32 + plan.guard.top),
+            );
+            for x in 0..w {
+                let pixel = EyePixel {
+                    x,
+                    y,
+                    jitter_row,
+                    front,
+                    back,
+                };
+                eye_pixel(
+                    plan,
+                    view,
+                    grid,
+                    &pixel,
+                    (&mut next[x], &mut inside[x]),
+                    (&mut color[x], &mut alpha[x]),
+                );
+            }
+        });
+}
+
+/// Where one eye pixel is in the sweep.
+struct EyePixel {
+    x: usize,
+    y: usize,
+    jitter_row: u32,
+    front: f32,
+    back: f32,
+}
+
+/// One image pixel through one slab: cursor, shading point, light read, composite.
+fn eye_pixel(
+    plan: &RenderPlan,
+    view: &EyeView<'_>,
+    grid: &GridLight<'_>,
+    p: &EyePixel,
+    (next, inside): (&mut u32, &mut u32),
+    (color, alpha): (&mut [f32; 3], &mut f32),
+) {
+    if *alpha == 1.0 {
+        // Opaque: compositing adds (1 − 1)·α·c, exactly 0 (the early finish's argument), so
+        // nothing later changes this pixel's bits.
+        return;
+    }
+    let ldi = view.ldi;
+    let end = ldi.offsets[p.y * view.width as usize + p.x + 1];
+    let before = *inside;
+    let crossed = advance(ldi, next, end, inside, p.back);
+    let mesh = if crossed != NO_CROSSING {
+        u32::from(ldi.mesh[crossed as usize])
+    } else {
+        match first_mesh(*inside) {
+            Some(m) => m,
+            None => return,
+        }
+    };
+    let z = shading_depth(
+        plan,
+        ldi,
+        crossed,
+        p.front,
+        p.jitter_row,
+        p.x + plan.guard.left as usize,
+    );
+    // The ray's point at view depth z_origin + z, in grid pixel coordinates.
+    let scale = (view.z_origin + z) * view.zoom;
+    let (cx, cy) = (view.width as f32 * 0.5, view.height as f32 * 0.5);
+    let gx = view.axis[0] + (p.x as f32 + 0.5 - cx) * scale;
+    let gy = view.axis[1] + (p.y as f32 + 0.5 - cy) * scale;
+    let skip_inside = if crossed != NO_CROSSING {
+        1u32 << mesh
+    } else {
+        0
+    };
+    let iin = read_light(plan, grid, gx, gy, skip_inside);
+    let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
+    let (xi, yi) = (
+        gx - 0.5 - plan.guard.left as f32,
+        gy - 0.5 - plan.guard.top as f32,
+    );
+    let (part, lit_from) = slab_part(
+        ldi,
+        (mesh, plan.second_order_media),
+        (before, *inside),
+        (crossed, next.wrapping_sub(1)),
+        (p.front, p.back),
+        plan.inv_slab_distance,
+    );
+    let mut tf = material_at(plan, mesh, xi, yi, z);
+    let surface = (crossed != NO_CROSSING && (material.specular.is_some() || material.lambert))
+        .then(|| Surface {
+            normal: view.raster.triangles[ldi.triangle[crossed as usize] as usize].normal,
+            lanes: true,
+            alpha: tf.alpha,
+        });
+    let light = part_of_slab(&mut tf, part, lit_from);
+    let n = plan.lights.len() * plan.channels as usize;
+    let shaded = shade(plan, material, tf.color, &iin[..n], surface.as_ref());
+    let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
+    composite(color, alpha, shaded, tf.alpha, true, plan.turned_round);
+}
+
+/// Every light's channels read bilinearly from the grid's outgoing light at grid position
+/// (gx, gy) (pixel centres at +0.5; outside the grid the unoccluded light, 1), leaving out the
+/// neighbours inside any mesh of `skip_inside` at the slab's front unless all four are.
+fn read_light(
+    plan: &RenderPlan,
+    grid: &GridLight<'_>,
+    gx: f32,
+    gy: f32,
+    skip_inside: u32,
+) -> [f32; MAX_LIGHT_CHANNELS] {
+    let (w, h) = (plan.grid_width as i64, plan.grid_height as i64);
+    let (fx, fy) = (gx - 0.5, gy - 0.5);
+    let (x0, y0) = (fx.floor(), fy.floor());
+    let (ax, ay) = (fx - x0, fy - y0);
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let corners = [
+        (x0, y0, (1.0 - ax) * (1.0 - ay)),
+        (x0 + 1, y0, ax * (1.0 - ay)),
+        (x0, y0 + 1, (1.0 - ax) * ay),
+        (x0 + 1, y0 + 1, ax * ay),
+    ];
+    let in_grid = |x: i64, y: i64| x >= 0 && y >= 0 && x < w && y < h;
+    let skipped =
+        |x: i64, y: i64| in_grid(x, y) && grid.inside[(y * w + x) as usize] & skip_inside != 0;
+    // The weights of the neighbours read: all four, or those outside the crossed mesh.
+    let mut weight = corners.map(|(x, y, a)| if skipped(x, y) { 0.0 } else { a });
+    let total = ((weight[0] + weight[1]) + weight[2]) + weight[3];
+    if total > 0.0 && skip_inside != 0 {
+        weight = weight.map(|a| a / total);
+    } else {
+        weight = corners.map(|c| c.2);
+    }
+    let (ch, planes, row_len) = (
+        plan.channels as usize,
+        plan.planes_per_light(),
+        plan.light_row_len(),
+    );
+    let mut out = [0.0f32; MAX_LIGHT_CHANNELS];
+    for l in 0..plan.lights.len() {
+        for c in 0..ch {
+            let mut sum = 0.0f32;
+            for (k, &(x, y, _)) in corners.iter().enumerate() {
+                let v = if in_grid(x, y) {
+                    let at = y as usize * row_len + light_block(plan, l) + x as usize * planes;
+                    grid.light[at + c]
+                } else {
+                    1.0
+                };
+                sum += weight[k] * v;
+            }
+            out[l * ch + c] = sum;
+        }
+    }
+    out
+}

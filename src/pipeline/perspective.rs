@@ -1,0 +1,186 @@
+//! A perspective camera on the CPU sweep (docs/how-it-works.md, "A perspective camera"): the
+//! light is swept on an orthographic slab grid around the view axis that holds every mesh within
+//! the view's frustum (the same slab planes and depths as the eye's), and the eye's rays read it
+//! slab by slab (`convshadow_cpu::sweep::sweep_perspective`).
+
+use std::time::Instant;
+
+use convshadow_common::model::scene::{CameraSpec, MAX_IMAGE_SIDE, Projection, Scene, SlabSpec};
+use convshadow_common::prepare::geometry::SceneGeometry;
+use convshadow_cpu::ldi::{BuildLdi, Ldi};
+use convshadow_cpu::sweep::{ChunkCounts, CpuOptions, EyeView, SweepOptions, sweep_perspective};
+use convshadow_io::image::RgbImage;
+
+use super::{
+    Backend, Engine, RenderError, RenderRequest, Rendered, check_cancel, image_fingerprint,
+    plan_updates, refuse_open_meshes,
+};
+
+/// What the perspective sweep does not do yet, refused by name.
+fn refuse_unsupported(scene: &Scene, req: &RenderRequest<'_>) -> Result<(), RenderError> {
+    let unsupported = |what: &str| {
+        Err(RenderError::BadPlan(format!(
+            "{}: key `camera.projection`: a perspective camera on the sweep does not take {what} \
+             yet (docs/how-it-works.md, \"A perspective camera\"); `--backend reference` renders \
+             the scene with shadow rays",
+            scene.source
+        )))
+    };
+    if req.backend == Backend::Gpu {
+        return unsupported("the GPU backend");
+    }
+    if let Projection::Perspective { near: Some(_), .. } = scene.camera.projection {
+        return unsupported("`camera.near`");
+    }
+    if scene.passes().back.is_some() {
+        return unsupported("lights travelling towards the viewer");
+    }
+    if !req.aovs.is_empty() {
+        return unsupported("extra layers (--aov)");
+    }
+    Ok(())
+}
+
+/// The orthographic scene whose sweep carries the light for `scene`'s perspective camera: the
+/// same view axis, `up` and pixel size (the footprint at the `look_at` distance), centred on the
+/// eye (so every view depth is the eye's bit for bit), `eye`'s slab count, and a grid that holds
+/// every vertex within the frustum, symmetric about the axis.
+fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, RenderError> {
+    let cam = &eye.camera;
+    let focal = cam.focal_px.expect("a perspective camera");
+    let (w, h) = (f64::from(cam.width), f64::from(cam.height));
+    let (mut half_x, mut half_y, mut z_max) = (0.0f64, 0.0f64, 0.0f64);
+    for m in &eye.meshes {
+        for p in &m.mesh.positions {
+            let g = cam.to_grid(*p);
+            half_x = half_x.max((g.x - 0.5 * w).abs());
+            half_y = half_y.max((g.y - 0.5 * h).abs());
+            z_max = z_max.max(g.z);
+        }
+    }
+    // Nothing beyond the frustum at the farthest depth can shadow what the eye sees, but through
+    // the guard band the grid adds for the lights' reach.
+    let frustum = z_max / (focal * cam.pixel_size);
+    let side = |half: f64, image: f64| 2.0 * (half.min(0.5 * image * frustum) + 2.0).ceil();
+    let (gw, gh) = (side(half_x, w), side(half_y, h));
+    if gw > f64::from(MAX_IMAGE_SIDE) || gh > f64::from(MAX_IMAGE_SIDE) {
+        return Err(RenderError::OutOfMemory(format!(
+            "{}: the perspective view's light grid would be {gw} × {gh} pixels, more than \
+             {MAX_IMAGE_SIDE} a side; narrow camera.fov_deg or the scene's depth",
+            scene.source
+        )));
+    }
+    let mut grid = scene.clone();
+    grid.camera = CameraSpec {
+        view_width: gw * cam.pixel_size,
+        projection: Projection::Orthographic,
+        ..scene.camera.clone()
+    };
+    grid.image.width = gw as u32;
+    grid.image.height = gh as u32;
+    grid.sweep.slabs = SlabSpec::Count(eye.slabs);
+    Ok(grid)
+}
+
+/// [`super::render`] for a perspective camera (one pass, the CPU).
+pub(super) fn render_perspective(
+    scene: &Scene,
+    req: &RenderRequest<'_>,
+) -> Result<Rendered, RenderError> {
+    refuse_unsupported(scene, req)?;
+    let start = Instant::now();
+    let eye = convshadow_io::build_geometry(scene)?;
+    let grid = grid_scene(scene, &eye)?;
+    let engine = Engine::open(&grid, true, Backend::Cpu, req.threads, req.memory_budget)?;
+    let (geometry, fragment_budget) = engine.geometry(&grid, req.memory_budget)?;
+    if (geometry.z_origin, geometry.slab_distance, geometry.slabs)
+        != (eye.z_origin, eye.slab_distance, eye.slabs)
+    {
+        return Err(RenderError::BadPlan(format!(
+            "{}: the perspective view's light grid and its eye disagree on the slabs ({} slabs of \
+             {:e} from {:e} against {} of {:e} from {:e}); please report this",
+            scene.source,
+            geometry.slabs,
+            geometry.slab_distance,
+            geometry.z_origin,
+            eye.slabs,
+            eye.slab_distance,
+            eye.z_origin
+        )));
+    }
+    check_cancel(req.cancel)?;
+    let ldi = engine.ldi(&geometry, fragment_budget)?;
+    let eye_ldi = engine
+        .pool
+        .install(|| Ldi::build(&eye.raster, fragment_budget))?;
+    check_cancel(req.cancel)?;
+    let stats = engine.pool.install(|| eye_ldi.stats());
+    refuse_open_meshes(scene, &eye, &stats, req.allow_open)?;
+    let seconds_ldi = start.elapsed().as_secs_f64();
+    let t_plan = Instant::now();
+    let fragments = stats.fragments + engine.pool.install(|| ldi.stats()).fragments;
+    let allowance = super::budget::table_allowance(fragment_budget, fragments);
+    let plan = engine.plan(&grid, &geometry, req.cancel, allowance, fragments)?;
+    let seconds_plan = t_plan.elapsed().as_secs_f64();
+    engine.check_tables(&grid, &plan, fragment_budget, fragments)?;
+    check_cancel(req.cancel)?;
+    let t_sweep = Instant::now();
+    let cam = &eye.camera;
+    let view = EyeView {
+        ldi: &eye_ldi,
+        raster: &eye.raster,
+        width: cam.width,
+        height: cam.height,
+        zoom: (1.0 / (cam.focal_px.expect("perspective") * cam.pixel_size)) as f32,
+        z_origin: eye.z_origin as f32,
+        axis: [
+            (plan.width / 2 + plan.guard.left) as f32,
+            (plan.height / 2 + plan.guard.top) as f32,
+        ],
+    };
+    let options = SweepOptions {
+        progress: req.progress,
+        cancel: req.cancel,
+        initial_light: plan.initial_light.as_deref(),
+        every_slab: true,
+    };
+    let chunk_counts = ChunkCounts::default();
+    let cpu = CpuOptions {
+        path: req.path.sweep_path(),
+        skip_quiet: req.skip_quiet,
+        chunk_counts: Some(&chunk_counts),
+    };
+    let out = engine
+        .pool
+        .install(|| sweep_perspective(&plan, &geometry.raster, &ldi, &view, &options, &cpu))
+        .map_err(|_| RenderError::Interrupted)?;
+    let seconds_sweep = t_sweep.elapsed().as_secs_f64();
+    Ok(Rendered {
+        mesh_warnings: eye.mesh_warnings(),
+        image_hash: image_fingerprint(&out.image),
+        image: RgbImage {
+            width: scene.image.width,
+            height: scene.image.height,
+            data: out.image,
+        },
+        alpha: out.alpha,
+        depth: None,
+        light_layers: Vec::new(),
+        ldi: stats,
+        ldi_hash: eye_ldi.fingerprint(),
+        turned_round_lights: 0,
+        updates: plan_updates(&plan),
+        plan,
+        light: out.light,
+        slabs_swept: out.slabs_swept,
+        threads: engine.pool.current_num_threads(),
+        seconds_ldi,
+        seconds_plan,
+        seconds_sweep,
+        chunks: chunk_counts.snapshot(),
+        seconds_total: start.elapsed().as_secs_f64(),
+        backend: "cpu",
+        adapter: None,
+        backend_note: None,
+    })
+}
