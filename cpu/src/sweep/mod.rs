@@ -19,7 +19,9 @@
 //! buffers, cancel and progress) → `fast` (the SIMD path: the 8-lane row and chunk, quiet-chunk
 //! skipping, the lane gathers) → `pixel` (the per-pixel stage) → `kit` (slab and row context,
 //! row state, row hashes) → the stage functions in `kernels`, `parity`, `shading` and
-//! `composite`; `level_blocks` (the level plane's block minima, which both paths read) beside.
+//! `composite`; `level_blocks` (the level plane's block minima, which both paths read) beside;
+//! `eye` (a perspective camera's rays, reading the light this driver sweeps on the slab grid:
+//! [`sweep_perspective`]) beside.
 
 mod eye;
 mod fast;
