@@ -426,7 +426,7 @@ pub fn sweep_with(
 
 /// The sweep for a perspective camera (`eye`): the light swept on the slab grid of `plan`,
 /// `raster` and `ldi` (every slab: the early finish watches the grid, not the eye), and before
-/// each slab the eye's rays take their step through it ([`eye::eye_slab`]). The image is the
+/// each slab the eye's rays take their step through it (`eye::eye_slab`). The image is the
 /// eye's, `eye.width × eye.height`.
 pub fn sweep_perspective(
     plan: &RenderPlan,
