@@ -234,6 +234,7 @@ def test_a_perspective_scene_renders_on_the_sweep_and_the_reference_like_the_com
     assert run.returncode == 0
     assert bits(read_exr(tmp_path / "x.exr")).tolist() == bits(image).tolist()
     # What the perspective sweep does not take yet is refused as on the command line.
+    back_light = PERSPECTIVE + "[[light]]\ndirection = [0.0, 0.0, -1.0]\n"
     with pytest.raises(convshadow.Error) as info:
-        convshadow.render(PERSPECTIVE.replace("fov_deg = 40.0", "fov_deg = 40.0\nnear = 1.0"))
-    assert info.value.exit_code == 3 and "camera.near" in info.value.message
+        convshadow.render(back_light)
+    assert info.value.exit_code == 3 and "towards the viewer" in info.value.message

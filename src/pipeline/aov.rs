@@ -64,9 +64,20 @@ impl std::str::FromStr for Aov {
 /// LDI's first fragment at the pixel (its grid pixel, the guard band skipped), whose depth is
 /// relative to `z_origin`, made camera depth again.
 pub fn first_hit_depth(plan: &RenderPlan, ldi: &Ldi, z_origin: f64) -> Vec<f32> {
-    let w = plan.grid_width as usize;
-    let (left, top) = (plan.guard.left as usize, plan.guard.top as usize);
-    let (iw, ih) = (plan.width as usize, plan.height as usize);
+    let origin = (plan.guard.left as usize, plan.guard.top as usize);
+    let image = (plan.width as usize, plan.height as usize);
+    first_hit_depth_in(ldi, origin, image, z_origin)
+}
+
+/// [`first_hit_depth`] of the `image` = (width, height) pixels at grid pixel `origin` = (left,
+/// top) of an LDI (a perspective camera's eye LDI: its image, at (0, 0)).
+pub fn first_hit_depth_in(
+    ldi: &Ldi,
+    (left, top): (usize, usize),
+    (iw, ih): (usize, usize),
+    z_origin: f64,
+) -> Vec<f32> {
+    let w = ldi.width as usize;
     let mut out = Vec::with_capacity(iw * ih);
     for y in 0..ih {
         for x in 0..iw {

@@ -11,10 +11,12 @@ use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_cpu::sweep::{ChunkCounts, CpuOptions, EyeView, SweepOptions, sweep_perspective};
 use convshadow_io::image::RgbImage;
 
+use super::aov::first_hit_depth_in;
 use super::{
-    Backend, Engine, RenderError, RenderRequest, Rendered, check_cancel, image_fingerprint,
-    plan_updates, refuse_open_meshes,
+    Aov, Backend, Engine, LightColors, RenderError, RenderRequest, Rendered, check_cancel,
+    check_light_index, image_fingerprint, plan_updates, refuse_open_meshes,
 };
+use convshadow_common::plan::RenderPlan;
 
 /// What the perspective sweep does not do yet, refused by name.
 fn refuse_unsupported(scene: &Scene, req: &RenderRequest<'_>) -> Result<(), RenderError> {
@@ -29,14 +31,8 @@ fn refuse_unsupported(scene: &Scene, req: &RenderRequest<'_>) -> Result<(), Rend
     if req.backend == Backend::Gpu {
         return unsupported("the GPU backend");
     }
-    if let Projection::Perspective { near: Some(_), .. } = scene.camera.projection {
-        return unsupported("`camera.near`");
-    }
     if scene.passes().back.is_some() {
         return unsupported("lights travelling towards the viewer");
-    }
-    if !req.aovs.is_empty() {
-        return unsupported("extra layers (--aov)");
     }
     Ok(())
 }
@@ -93,6 +89,12 @@ pub(super) fn render_perspective(
     let grid = grid_scene(scene, &eye)?;
     let engine = Engine::open(&grid, true, Backend::Cpu, req.threads, req.memory_budget)?;
     let (geometry, fragment_budget) = engine.geometry(&grid, req.memory_budget)?;
+    // `camera.near`: the grid's sweep starts where the eye's does, in the eye's slabs.
+    let geometry = if let Projection::Perspective { near: Some(_), .. } = scene.camera.projection {
+        geometry.with_slabs(&grid, eye.z_origin, eye.slab_distance, eye.slabs)?
+    } else {
+        geometry
+    };
     if (geometry.z_origin, geometry.slab_distance, geometry.slabs)
         != (eye.z_origin, eye.slab_distance, eye.slabs)
     {
@@ -138,10 +140,12 @@ pub(super) fn render_perspective(
             (plan.height / 2 + plan.guard.top) as f32,
         ],
     };
+    // A light's pattern (gobo) is its initial light buffer, the same for every layer's sweep.
+    let initial_light = plan.initial_light.clone();
     let options = SweepOptions {
         progress: req.progress,
         cancel: req.cancel,
-        initial_light: plan.initial_light.as_deref(),
+        initial_light: initial_light.as_deref(),
         every_slab: true,
     };
     let chunk_counts = ChunkCounts::default();
@@ -150,11 +154,34 @@ pub(super) fn render_perspective(
         skip_quiet: req.skip_quiet,
         chunk_counts: Some(&chunk_counts),
     };
-    let out = engine
-        .pool
-        .install(|| sweep_perspective(&plan, &geometry.raster, &ldi, &view, &options, &cpu))
-        .map_err(|_| RenderError::Interrupted)?;
+    let run = |plan: &RenderPlan, cpu: &CpuOptions<'_>| {
+        engine
+            .pool
+            .install(|| sweep_perspective(plan, &geometry.raster, &ldi, &view, &options, cpu))
+            .map_err(|_| RenderError::Interrupted)
+    };
+    let out = run(&plan, &cpu)?;
     let seconds_sweep = t_sweep.elapsed().as_secs_f64();
+    // The extra layers, as `super::render_pass` makes them: one more sweep per light layer on
+    // the plan with the other lights and the background black; the depth from the eye's LDI.
+    let mut plan = plan;
+    let mut light_layers = Vec::new();
+    let colors = LightColors::of(&plan);
+    for aov in &req.aovs {
+        if let Aov::Light(l) = *aov {
+            check_light_index(scene, l)?;
+            check_cancel(req.cancel)?;
+            colors.isolate(&mut plan, l);
+            let layer = run(&plan, &CpuOptions::default());
+            colors.restore(&mut plan);
+            light_layers.push((l, layer?.image));
+        }
+    }
+    let image = (cam.width as usize, cam.height as usize);
+    let depth = req
+        .aovs
+        .contains(&Aov::Depth)
+        .then(|| first_hit_depth_in(&eye_ldi, (0, 0), image, eye.z_origin));
     Ok(Rendered {
         mesh_warnings: eye.mesh_warnings(),
         image_hash: image_fingerprint(&out.image),
@@ -164,8 +191,8 @@ pub(super) fn render_perspective(
             data: out.image,
         },
         alpha: out.alpha,
-        depth: None,
-        light_layers: Vec::new(),
+        depth,
+        light_layers,
         ldi: stats,
         ldi_hash: eye_ldi.fingerprint(),
         turned_round_lights: 0,

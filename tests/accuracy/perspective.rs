@@ -223,6 +223,65 @@ fn perspective_sweep_matches_the_closed_form_edge_over_a_receiver() {
 }
 
 #[test]
+fn perspective_sweep_from_camera_near_matches_the_closed_form_too() {
+    // The sweep starts at `near` (2.0, before the plate at 4): the slab grid shares its slabs.
+    let mut s = scene(30.0, "");
+    if let convshadow::common::model::scene::Projection::Perspective { near, .. } =
+        &mut s.camera.projection
+    {
+        *near = Some(2.0);
+    }
+    let r = render(&s, &RenderRequest::default()).unwrap_or_else(|e| panic!("{e}"));
+    let (rmse, band, line) = measure("sweep from near = 2", 30.0, &r.image.data);
+    assert!(
+        rmse <= 5e-3 && band <= 1.5e-2 && line <= 0.5,
+        "{rmse:.2e} {band:.2e} {line:.3}"
+    );
+}
+
+#[test]
+fn perspective_light_layers_add_up_to_the_image_and_depth_is_the_view_depth() {
+    let mut s = scene(60.0, "");
+    s.lights.push(s.lights[0].clone());
+    s.lights[1].color = [0.5, 0.25, 0.125];
+    let req = RenderRequest {
+        aovs: vec![
+            convshadow::pipeline::Aov::Light(1),
+            convshadow::pipeline::Aov::Depth,
+            convshadow::pipeline::Aov::Light(0),
+        ],
+        ..RenderRequest::default()
+    };
+    let r = render(&s, &req).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.light_layers.len(), 2);
+    let sum: Vec<f32> = (r.light_layers[0].1.iter().zip(&r.light_layers[1].1))
+        .map(|(a, b)| a + b)
+        .collect();
+    let worst = sum
+        .iter()
+        .zip(&r.image.data)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst < 1e-5, "layers differ from the image by {worst}");
+    // Depth: the receiver's view depth where a pixel's ray meets it first.
+    let depth = r.depth.expect("the depth layer");
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for j in 0..HEIGHT {
+        for i in 0..WIDTH {
+            if let Some(p) = receiver_point(60.0, i, j) {
+                let want = p.z - EYE.z;
+                worst = worst.max((f64::from(depth[(j * WIDTH + i) as usize]) - want).abs());
+                checked += 1;
+            }
+        }
+    }
+    assert!(
+        checked > 1000 && worst < 1e-4,
+        "{checked} pixels, depth off by {worst:.2e}"
+    );
+}
+
+#[test]
 fn perspective_sweep_is_the_same_bits_on_both_paths_and_any_thread_count() {
     let s = scene(60.0, "");
     let image = |path: CpuPath, threads: usize| {

@@ -237,23 +237,34 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_the_cpu_sweep_and_the_refer
     )
     .unwrap();
     let refused = dir.join("refused.png");
-    for args in [
-        vec!["render", s, "--backend", "gpu"],
-        vec!["render", near.to_str().unwrap()],
-    ] {
-        let (code, _, err) = support::run_cli(
-            &[&args[..], &["-o", refused.to_str().unwrap()]].concat(),
-            &dir,
-        );
-        assert!(code == BAD_INPUT || code == 5, "{args:?}: {err}");
-        if code == BAD_INPUT {
-            assert!(err.contains("camera.projection"), "{args:?}: {err}");
-        }
-        assert!(
-            !refused.exists(),
-            "{args:?}: no output for a refused render"
-        );
+    // `camera.near` renders (the slab grid starts there too).
+    let (code, _, err) = support::run_cli(
+        &[
+            "render",
+            near.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{err}");
+    // The GPU backend does not take a perspective camera yet: refused (or no adapter, 5).
+    let (code, _, err) = support::run_cli(
+        &[
+            "render",
+            s,
+            "--backend",
+            "gpu",
+            "-o",
+            refused.to_str().unwrap(),
+        ],
+        &dir,
+    );
+    assert!(code == BAD_INPUT || code == 5, "{err}");
+    if code == BAD_INPUT {
+        assert!(err.contains("camera.projection"), "{err}");
     }
+    assert!(!refused.exists(), "no output for a refused render");
     // Each projection's flags on the other are bad arguments (2).
     let (code, _, err) = support::run_cli(&["render", s, "--view-width", "3"], &dir);
     assert_eq!(code, 2, "{err}");

@@ -200,6 +200,36 @@ impl SceneGeometry {
         })
     }
 
+    /// The same geometry swept from `z_origin` in `slabs` slabs of `slab_distance` (a
+    /// perspective camera's `near`, which its slab grid shares): the rasterizer set-up again,
+    /// depths relative to the new origin; the guard band kept (it depends on where occluders
+    /// and receivers are, not on where the sweep starts).
+    pub fn with_slabs(
+        mut self,
+        scene: &Scene,
+        z_origin: f64,
+        slab_distance: f64,
+        slabs: u32,
+    ) -> Result<SceneGeometry, GeometryError> {
+        let refs: Vec<(&[DVec3], &[[u32; 3]])> = self
+            .meshes
+            .iter()
+            .map(|m| (m.mesh.positions.as_slice(), m.mesh.triangles.as_slice()))
+            .collect();
+        let parity_meshes = self.raster.parity_meshes;
+        let mut raster = RasterSetup::new(&self.camera, self.raster.guard, &refs, z_origin)
+            .map_err(|source| GeometryError::Raster {
+                scene: scene.source.clone(),
+                source,
+            })?;
+        raster.parity_meshes = parity_meshes;
+        self.raster = raster;
+        self.z_origin = z_origin;
+        self.slab_distance = slab_distance;
+        self.slabs = slabs;
+        Ok(self)
+    }
+
     /// Back face of every slab relative to `z_origin`, in f32: a fragment is crossed in slab k
     /// when its depth is `< back[k]` and it was not crossed before.
     pub fn slab_back_faces(&self) -> Vec<f32> {
