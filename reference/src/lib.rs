@@ -7,6 +7,8 @@
 //!   the polygon;
 //! - [`half_plane_sheet`]: an opaque half-plane's shadow on a translucent sheet, both
 //!   perpendicular to a directional light seen from any angle, integrated along each view ray;
+//! - [`perspective_edge`]: a half-plane's shadow on a receiver seen through a perspective camera,
+//!   evaluated where each pixel's ray meets the receiver;
 //! - [`impulse`]: a single lit pixel through an empty scene, whose exact spread is n·Σκ;
 //! - [`quadrature`]: the Gauss–Legendre nodes of the disk's and the sheet's integrals.
 //!
@@ -17,6 +19,7 @@ pub mod edge;
 pub mod half_plane_sheet;
 pub mod impulse;
 pub mod light_samples;
+pub mod perspective_edge;
 pub mod quadrature;
 pub mod shadow_ray;
 

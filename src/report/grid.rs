@@ -62,7 +62,8 @@ impl ReportOptions {
              slabs 64, all kernels, reference M = 16 (self-error against M = 64); narrow-band \
              scene at 48×48, ellipse2 with and without pre-integration, slabs 64, 128, against \
              2048 slabs (self-error against 4096); a directional light at 0°, 100°, 180° from the view \
-             over a half-plane and a translucent sheet (isotropic light)"
+             over a half-plane and a translucent sheet (isotropic light); a perspective camera \
+             at fov 30° and 90° over a half-plane's shadow on a receiver"
                 .to_string()
         } else {
             "full grid: edge at d = d1/4, d1, 4·d1 × 7 kernels × slabs 64, 128, 256, 512 × variance \
@@ -72,7 +73,8 @@ impl ReportOptions {
              M = 64); narrow-band scene at 64×64, ellipse2 with and without pre-integration × \
              slabs 64, 128, 256, 512, against 2048 slabs (self-error against 4096); a directional \
              light at 0°, 45°, 80°, 100°, 135°, 180° from the view over a half-plane and a \
-             translucent sheet (isotropic and rotated anisotropic light)"
+             translucent sheet (isotropic and rotated anisotropic light); a perspective camera at \
+             fov 30° and 90° over a half-plane's shadow on a receiver"
                 .to_string()
         }
     }

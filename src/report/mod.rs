@@ -13,20 +13,23 @@
 //!   `ellipse2`, with and without pre-integrated compositing; reference: the same scene swept
 //!   with 2048 slabs without pre-integration, whose own error (against 4096 slabs) is reported;
 //! - `direction`: a directional light at 0°–180° from the view axis ([`direction`]), an opaque
-//!   half-plane's shadow on a translucent sheet; reference: its closed form along each view ray.
+//!   half-plane's shadow on a translucent sheet; reference: its closed form along each view ray;
+//! - `perspective`: a perspective camera at fov 30° and 90° over a half-plane's shadow on a
+//!   receiver ([`perspective`]); reference: the closed form where each pixel's ray meets it.
 //!
 //! "Slab count" for the edge and disk is the number of convolutions between occluder and
 //! receiver (d = n·e); for the scene it is the scene's slab count.
 //!
 //! Files: [`row`] (the numbers of a case and of a report, which every other file reads),
 //! [`grid`] (the cases), [`runner`] (running them against their references, then the writers),
-//! [`direction`] (the light-direction family's case), [`csv`] and [`markdown`] (the writers), [`plot`] (the figure). Imports go one way: runner →
+//! [`direction`] and [`perspective`] (those families' cases), [`csv`] and [`markdown`] (the writers), [`plot`] (the figure). Imports go one way: runner →
 //! writers → grid and row.
 
 pub mod csv;
 pub mod direction;
 pub mod grid;
 pub mod markdown;
+pub mod perspective;
 pub mod plot;
 pub mod row;
 pub mod runner;

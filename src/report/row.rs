@@ -5,7 +5,7 @@
 /// One row of `report.csv`.
 #[derive(Clone, Debug, Default)]
 pub struct Row {
-    /// `edge`, `disk`, `scene`, `narrowband` or `direction`.
+    /// `edge`, `disk`, `scene`, `narrowband`, `direction` or `perspective`.
     pub family: String,
     /// Kernel name.
     pub kernel: String,
@@ -49,6 +49,8 @@ pub struct Row {
     pub reference_self_err: Option<f64>,
     /// The angle between the light's travel and the view direction (degrees; `direction`).
     pub view_angle_deg: Option<f64>,
+    /// A perspective camera's vertical field of view (degrees; `perspective`).
+    pub fov_deg: Option<f64>,
     /// Why cells are empty.
     pub note: String,
 }

@@ -17,7 +17,7 @@ use super::grid::{
     edge_setup, kernels,
 };
 use super::row::{Report, Row};
-use super::{csv, direction, markdown, plot};
+use super::{csv, direction, markdown, perspective, plot};
 
 /// Runs one edge case.
 pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
@@ -66,6 +66,7 @@ pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
         rmse_reference: None,
         reference_self_err: None,
         view_angle_deg: None,
+        fov_deg: None,
         note: if note.is_empty() {
             "analytic case: closed-form references, no shadow-ray reference needed".into()
         } else {
@@ -164,6 +165,7 @@ fn disk_row(setup: &DiskSetup, level: &str, r: &DiskReference) -> Row {
         rmse_reference: None,
         reference_self_err: None,
         view_angle_deg: None,
+        fov_deg: None,
         note: "analytic case (numerical f64 disk convolution); isoline error = mean unsigned \
                displacement (symmetric-difference area / perimeter); widths = area between the \
                0.1 and 0.9 levels / perimeter"
@@ -515,6 +517,20 @@ fn direction_cases(cases: &mut Cases<'_>) -> Result<(), String> {
     Ok(())
 }
 
+/// The perspective family: field of view × penumbra model (`ellipse2`), the same in the quick
+/// and the full report.
+fn perspective_cases(cases: &mut Cases<'_>) -> Result<(), String> {
+    for fov in perspective::FIELDS_OF_VIEW {
+        for penumbra in cases.options.penumbras() {
+            cases.next += 1;
+            if cases.want(cases.next - 1) {
+                cases.push(perspective::perspective_row(fov, penumbra)?);
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Refuses an `options.case` past the last of the `count` cases.
 fn check_case(options: &ReportOptions, count: usize) -> Result<(), String> {
     if let Some(c) = options.case
@@ -577,8 +593,10 @@ pub fn case_count(options: &ReportOptions) -> usize {
     let _ = disk_cases(&mut cases);
     scene_cases(&mut cases);
     narrowband_cases(&mut cases);
-    // Without a wanted case the direction family renders nothing, so it cannot fail.
+    // Without a wanted case the direction and perspective families render nothing, so they
+    // cannot fail.
     let _ = direction_cases(&mut cases);
+    let _ = perspective_cases(&mut cases);
     cases.next
 }
 
@@ -620,6 +638,7 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
     scene_cases(&mut cases);
     narrowband_cases(&mut cases);
     direction_cases(&mut cases)?;
+    perspective_cases(&mut cases)?;
     check_case(options, cases.next)?;
     write_files(options, cases.rows, start)
 }

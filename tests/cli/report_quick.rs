@@ -91,6 +91,8 @@ fn check_case_counts(t: &Csv<'_>) {
     }
     // Light directions: 0°, 100°, 180° from the view, isotropic light, both penumbra models.
     assert_eq!(count("direction"), 3 * 2);
+    // A perspective camera: fov 30° and 90°, both penumbra models.
+    assert_eq!(count("perspective"), 2 * 2);
     for k in kernels() {
         for family in ["edge", "disk", "scene"] {
             assert!(
@@ -146,6 +148,7 @@ fn check_cells(t: &Csv<'_>) {
                 "width_err_iterated_px",
             ],
             "direction" => &["rmse_correct", "view_angle_deg"],
+            "perspective" => &["rmse_correct", "isoline_err_px", "fov_deg"],
             _ => &["rmse_reference", "reference_self_err"],
         };
         for name in required {
@@ -176,6 +179,17 @@ fn check_directions(t: &Csv<'_>) {
     }
     let slabs = |angle: &str| row(angle, "distance")[col("slabs")].parse::<u32>().unwrap();
     assert!(slabs("100") > slabs("0"), "100° sweeps both passes");
+}
+
+/// A perspective camera's edge (issue 42: ≤ 5·10⁻³ and the shadow line within 0.5 px of the
+/// closed form of `convshadow_reference::perspective_edge`) in every perspective row.
+fn check_perspective(t: &Csv<'_>) {
+    let col = |name: &str| t.col(name);
+    for r in t.rows.iter().filter(|r| r[col("family")] == "perspective") {
+        let err: f64 = r[col("rmse_correct")].parse().unwrap();
+        let line: f64 = r[col("isoline_err_px")].parse().unwrap();
+        assert!(err <= 5e-3 && line <= 0.5, "perspective {r:?}");
+    }
 }
 
 /// The reference's own error must be well below the errors it measures.
@@ -253,6 +267,7 @@ fn quick_report_writes_a_complete_csv_markdown_and_plot() {
     check_cells(&table);
     check_reference_self_error(&table);
     check_directions(&table);
+    check_perspective(&table);
     check_markdown_and_plot(&out);
     check_single_cases(&dir, &csv, &table);
     let _ = std::fs::remove_dir_all(&dir);
