@@ -208,6 +208,10 @@ pub(super) fn render_perspective(
         seconds_total: start.elapsed().as_secs_f64(),
         backend: "cpu",
         adapter: None,
-        backend_note: None,
+        // `--backend auto` would have taken a GPU for an orthographic camera: say why not.
+        backend_note: (req.backend == Backend::Auto).then(|| {
+            "a perspective camera renders on the CPU (the GPU port of its eye pass is not built)"
+                .to_string()
+        }),
     })
 }

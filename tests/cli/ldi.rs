@@ -248,6 +248,20 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_the_cpu_sweep_and_the_refer
         &dir,
     );
     assert_eq!(code, 0, "{err}");
+    // `--backend auto` renders it on the CPU, and says why.
+    let (code, _, err) = support::run_cli(
+        &[
+            "render",
+            s,
+            "--backend",
+            "auto",
+            "-o",
+            png.to_str().unwrap(),
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("renders on the CPU"), "{err}");
     // The GPU backend does not take a perspective camera yet: refused (or no adapter, 5).
     let (code, _, err) = support::run_cli(
         &[
