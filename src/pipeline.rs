@@ -223,13 +223,13 @@ pub fn build_ldi(
 /// A scene with lights from in front of the viewer is rendered in two passes, added
 /// (`passes::render_passes`).
 pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, RenderError> {
-    if scene.camera.is_perspective() {
-        return perspective::render_perspective(scene, req);
-    }
     for aov in &req.aovs {
         if let Aov::Light(l) = *aov {
             check_light_index(scene, l)?;
         }
+    }
+    if scene.camera.is_perspective() {
+        return perspective::render_perspective(scene, req);
     }
     passes::render_passes(scene, &req.aovs, |pass, aovs| render_pass(pass, req, aovs))
 }
@@ -268,17 +268,10 @@ fn render_pass(
     // 6. The extra layers: one more sweep per light layer, on the plan with the other lights
     // and the background black (`pipeline/aov.rs`).
     let mut plan = plan;
-    let mut light_layers = Vec::new();
-    let colors = LightColors::of(&plan);
-    for aov in aovs {
-        if let Aov::Light(l) = *aov {
-            check_cancel(req.cancel)?;
-            colors.isolate(&mut plan, l);
-            let layer = engine.sweep(&plan, &geometry, &ldi, req, &ChunkCounts::default());
-            colors.restore(&mut plan);
-            light_layers.push((l, layer?.image));
-        }
-    }
+    let light_layers = aov::light_layers(&mut plan, aovs, req.cancel, |plan| {
+        let layer = engine.sweep(plan, &geometry, &ldi, req, &ChunkCounts::default());
+        Ok(layer?.image)
+    })?;
     let depth = aovs
         .contains(&Aov::Depth)
         .then(|| first_hit_depth(&plan, &ldi, geometry.z_origin));

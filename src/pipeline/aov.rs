@@ -12,8 +12,12 @@
 //! `C + (1 − A)·background`, so `Σ_l layer_l + (1 − A)·background` is the image up to float
 //! rounding (the sum over lights is taken in a different order).
 
+use std::sync::atomic::AtomicBool;
+
 use convshadow_common::contract::ldi::Ldi;
 use convshadow_common::plan::RenderPlan;
+
+use super::{RenderError, check_cancel};
 
 /// One extra output layer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -91,6 +95,29 @@ pub fn first_hit_depth_in(
         }
     }
     out
+}
+
+/// The light layers of `aovs`, in their order: light l's image is `sweep` of `plan` with every
+/// other light's colour and the background 0 ([`LightColors::isolate`]; the plan's colours are
+/// given back after each), with a cancel point before each.
+pub fn light_layers(
+    plan: &mut RenderPlan,
+    aovs: &[Aov],
+    cancel: Option<&AtomicBool>,
+    mut sweep: impl FnMut(&RenderPlan) -> Result<Vec<f32>, RenderError>,
+) -> Result<Vec<(usize, Vec<f32>)>, RenderError> {
+    let colors = LightColors::of(plan);
+    let mut layers = Vec::new();
+    for aov in aovs {
+        if let Aov::Light(l) = *aov {
+            check_cancel(cancel)?;
+            colors.isolate(plan, l);
+            let layer = sweep(plan);
+            colors.restore(plan);
+            layers.push((l, layer?));
+        }
+    }
+    Ok(layers)
 }
 
 /// The lights' colours and the background of a plan, kept so that the plan can be turned into

@@ -11,10 +11,10 @@ use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_cpu::sweep::{ChunkCounts, CpuOptions, EyeView, SweepOptions, sweep_perspective};
 use convshadow_io::image::RgbImage;
 
-use super::aov::first_hit_depth_in;
+use super::aov::{first_hit_depth_in, light_layers};
 use super::{
-    Aov, Backend, Engine, LightColors, RenderError, RenderRequest, Rendered, check_cancel,
-    check_light_index, image_fingerprint, plan_updates, refuse_open_meshes,
+    Aov, Backend, Engine, RenderError, RenderRequest, Rendered, check_cancel, image_fingerprint,
+    plan_updates, refuse_open_meshes,
 };
 use convshadow_common::plan::RenderPlan;
 
@@ -165,18 +165,9 @@ pub(super) fn render_perspective(
     // The extra layers, as `super::render_pass` makes them: one more sweep per light layer on
     // the plan with the other lights and the background black; the depth from the eye's LDI.
     let mut plan = plan;
-    let mut light_layers = Vec::new();
-    let colors = LightColors::of(&plan);
-    for aov in &req.aovs {
-        if let Aov::Light(l) = *aov {
-            check_light_index(scene, l)?;
-            check_cancel(req.cancel)?;
-            colors.isolate(&mut plan, l);
-            let layer = run(&plan, &CpuOptions::default());
-            colors.restore(&mut plan);
-            light_layers.push((l, layer?.image));
-        }
-    }
+    let light_layers = light_layers(&mut plan, &req.aovs, req.cancel, |plan| {
+        Ok(run(plan, &CpuOptions::default())?.image)
+    })?;
     let image = (cam.width as usize, cam.height as usize);
     let depth = req
         .aovs

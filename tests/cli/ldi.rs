@@ -4,6 +4,8 @@ use crate::support;
 
 use std::path::Path;
 
+use glam::DVec3;
+
 /// Exit code for meshes that are not closed (docs/errors.md).
 /// Exit code for a bad scene or mesh file.
 const BAD_INPUT: i32 = 3;
@@ -203,7 +205,7 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_the_cpu_sweep_and_the_refer
     let scene = dir.join("persp.toml");
     std::fs::write(
         &scene,
-        support::perspective_ball_scene(96, 64, "[0.0, 1.0, -5.0]", 50.0, ""),
+        support::perspective_ball_scene(96, 64, DVec3::new(0.0, 1.0, -5.0), 50.0, ""),
     )
     .unwrap();
     let s = scene.to_str().unwrap();
@@ -233,7 +235,7 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_the_cpu_sweep_and_the_refer
     let near = dir.join("near.toml");
     std::fs::write(
         &near,
-        support::perspective_ball_scene(96, 64, "[0.0, 1.0, -5.0]", 50.0, "near = 1.0"),
+        support::perspective_ball_scene(96, 64, DVec3::new(0.0, 1.0, -5.0), 50.0, "near = 1.0"),
     )
     .unwrap();
     let refused = dir.join("refused.png");
@@ -303,9 +305,9 @@ fn an_eye_inside_or_behind_a_mesh_or_a_mesh_before_near_is_refused_naming_the_ke
     // The eye inside the ball; then on the floor's far side of the view (the floor runs behind
     // the eye); then a near plane that cuts the ball.
     for (eye, extra, key) in [
-        ("[0.0, 0.0, 0.2]", "", "camera.eye"),
-        ("[0.0, 1.0, 5.0]", "", "camera.eye"),
-        ("[0.0, 1.0, -5.0]", "near = 4.5", "camera.near"),
+        (DVec3::new(0.0, 0.0, 0.2), "", "camera.eye"),
+        (DVec3::new(0.0, 1.0, 5.0), "", "camera.eye"),
+        (DVec3::new(0.0, 1.0, -5.0), "near = 4.5", "camera.near"),
     ] {
         let scene = dir.join("eye.toml");
         std::fs::write(

@@ -270,6 +270,66 @@ pub(crate) fn tessellation_error(g: &SceneGeometry, shape: &str) -> f64 {
     tess
 }
 
+/// The inside test of `ldi` at 40 depths along every pixel's ray of `g`'s camera (orthographic
+/// or perspective) against `shape`'s signed distance, skipping the points within `band(z)` of
+/// the surface (z the view depth); asserts each point and that more than 10× as many points were
+/// checked as skipped, naming `what`. Returns (checked, skipped).
+pub(crate) fn check_inside_along_rays(
+    g: &SceneGeometry,
+    ldi: &Ldi,
+    shape: &str,
+    band: impl Fn(f64) -> f64,
+    what: &str,
+) -> (u32, u32) {
+    let to_obj = g.meshes[0].world_to_object;
+    let depth_range = f64::from(g.slabs) * g.slab_distance;
+    let (mut checked, mut skipped) = (0u32, 0u32);
+    for j in 0..ldi.height {
+        for i in 0..ldi.width {
+            for k in 0..40 {
+                let z_rel = depth_range * (f64::from(k) + 0.37) / 40.0;
+                let z_f32 = z_rel as f32;
+                let z = g.z_origin + f64::from(z_f32);
+                let world = g
+                    .camera
+                    .pixel_to_world(f64::from(i) + 0.5, f64::from(j) + 0.5, z);
+                let d = sdf(shape, to_obj.transform_point3(world));
+                let band = band(z);
+                if d.abs() <= band {
+                    skipped += 1;
+                    continue;
+                }
+                let got = inside(ldi, i, j, z_f32) & 1 == 1;
+                assert_eq!(
+                    got,
+                    d < 0.0,
+                    "{what}: pixel ({i},{j}) depth {z}: sdf {d}, band {band}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(
+        checked > 10 * skipped.max(1),
+        "{what}: too few points checked ({checked} vs {skipped})"
+    );
+    (checked, skipped)
+}
+
+/// The closed models of `../shared/models` (the open ones are in
+/// [`open_models_are_thin_shells_out_of_the_parity_test`]).
+pub(crate) const CLOSED_MODELS: [&str; 9] = [
+    "bunny.obj",
+    "bunny_hr.obj",
+    "spot.obj",
+    "spot_remeshed_lowres.obj",
+    "armadillo.obj",
+    "armadillo_100k.obj",
+    "torus.obj",
+    "sphere.obj",
+    "cube.obj",
+];
+
 #[test]
 fn inside_classification_matches_analytic_shapes() {
     for (shape, size) in [
@@ -286,7 +346,6 @@ fn inside_classification_matches_analytic_shapes() {
             96,
         );
         let (g, ldi) = build(&s);
-        let to_obj = g.meshes[0].world_to_object;
         let tess = tessellation_error(&g, shape);
         // Snapping moves vertices by at most √2·2^-9 px laterally; f32 depths err by a few ulps
         // of the depth range. Points farther than this band from the surface must be exact.
@@ -294,37 +353,7 @@ fn inside_classification_matches_analytic_shapes() {
         let snap = 2f64.sqrt() * (1.0 / 512.0) * px;
         let depth_range = f64::from(g.slabs) * g.slab_distance;
         let band = 1.05 * tess + snap + 8.0 * f64::from(f32::EPSILON) * (depth_range + 2.0);
-        let mut checked = 0;
-        let mut skipped = 0;
-        for j in 0..ldi.height {
-            for i in 0..ldi.width {
-                for k in 0..40 {
-                    let z_rel = depth_range * (f64::from(k) + 0.37) / 40.0;
-                    let z_f32 = z_rel as f32;
-                    let world = g.camera.pixel_to_world(
-                        f64::from(i) + 0.5,
-                        f64::from(j) + 0.5,
-                        g.z_origin + f64::from(z_f32),
-                    );
-                    let d = sdf(shape, to_obj.transform_point3(world));
-                    if d.abs() <= band {
-                        skipped += 1;
-                        continue;
-                    }
-                    let got = inside(&ldi, i, j, z_f32) & 1 == 1;
-                    assert_eq!(
-                        got,
-                        d < 0.0,
-                        "{shape} pixel ({i},{j}) depth {z_rel}: sdf {d}, band {band}"
-                    );
-                    checked += 1;
-                }
-            }
-        }
-        assert!(
-            checked > 100 * skipped.max(1) / 10,
-            "{shape}: too few points checked ({checked} vs {skipped})"
-        );
+        let (checked, skipped) = check_inside_along_rays(&g, &ldi, shape, |_| band, shape);
         eprintln!(
             "{shape}: band {band:.2e} (tessellation {tess:.2e}), {checked} points checked, {skipped} in the band"
         );
@@ -359,17 +388,7 @@ fn every_closed_model_is_even_and_thread_independent() {
     let Some(dir) = support::models_dir() else {
         return;
     };
-    for name in [
-        "bunny.obj",
-        "bunny_hr.obj",
-        "spot.obj",
-        "spot_remeshed_lowres.obj",
-        "armadillo.obj",
-        "armadillo_100k.obj",
-        "torus.obj",
-        "sphere.obj",
-        "cube.obj",
-    ] {
+    for name in CLOSED_MODELS {
         let s = model_scene(&dir.join(name), 256);
         let ldi = assert_even(&s, name);
         let g = convshadow_io::build_geometry(&s).unwrap();

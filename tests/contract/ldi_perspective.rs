@@ -4,7 +4,7 @@
 //! ray (which checks the fragments' perspective depths against geometry computed here in f64),
 //! and the build is independent of the thread count.
 
-use crate::ldi_parity::{sdf, tessellation_error};
+use crate::ldi_parity::{CLOSED_MODELS, check_inside_along_rays, tessellation_error};
 use crate::support;
 
 use std::path::Path;
@@ -12,7 +12,6 @@ use std::path::Path;
 use convshadow::common::model::scene::Scene;
 use convshadow::common::prepare::geometry::SceneGeometry;
 use convshadow::cpu::ldi::{BuildLdi, Ldi};
-use convshadow::cpu::parity::inside;
 use glam::DVec3;
 use proptest::prelude::*;
 
@@ -28,31 +27,9 @@ struct View {
 /// A `width × height` scene seen through `view` whose meshes are `meshes` (TOML `[[mesh]]`
 /// tables, each naming material `m`).
 fn perspective_scene(meshes: &str, view: &View, width: u32, height: u32) -> Scene {
-    let v = |p: DVec3| format!("[{:e}, {:e}, {:e}]", p.x, p.y, p.z);
-    support::scene(
-        &format!(
-            r#"
-[image]
-width = {width}
-height = {height}
-[camera]
-projection = "perspective"
-eye = {}
-look_at = {}
-up = [0.0, 1.0, 0.0]
-fov_deg = {:e}
-[sweep]
-slabs = 32
-optimal_distance = 0.5
-{meshes}
-[material.m]
-"#,
-            v(view.eye),
-            v(view.look_at),
-            view.fov_deg
-        ),
-        Path::new("."),
-    )
+    let camera = (view.eye, view.look_at);
+    let text = support::perspective_scene_text((width, height), camera, view.fov_deg, "", meshes);
+    support::scene(&text, Path::new("."))
 }
 
 fn build(scene: &Scene) -> (SceneGeometry, Ldi) {
@@ -101,16 +78,16 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 64, .. ProptestConfig::default() })]
 
     /// Procedural closed shapes under random transforms and perspective cameras (fields of
-    /// view 10°–150°, the shape filling from a fifth of the view to beyond it): even
-    /// counts everywhere.
+    /// view 10°–150°, the shape filling from a third of the view to beyond it, at least 32 px
+    /// wide so that it covers pixels): even counts everywhere.
     #[test]
     fn procedural_shapes_are_even_in_perspective(
         shape in 0usize..3,
         rot in prop::array::uniform3(-180.0f64..180.0),
         dir in prop::array::uniform3(-1.0f64..1.0),
         fov in 10.0f64..150.0,
-        fill in 0.2f64..1.6,
-        width in 16u32..80,
+        fill in 0.35f64..1.6,
+        width in 32u32..80,
     ) {
         let dir = DVec3::from(dir);
         prop_assume!(dir.length() > 0.1);
@@ -143,47 +120,18 @@ fn inside_classification_matches_analytic_shapes_in_perspective() {
             let view = framing(DVec3::ZERO, 0.8, DVec3::new(0.2, -0.3, 1.0), fov, 0.9);
             let s = perspective_scene(&mesh, &view, 96, 80);
             let (g, ldi) = build(&s);
-            let to_obj = g.meshes[0].world_to_object;
             let tess = tessellation_error(&g, shape);
             let focal = g.camera.focal_px.unwrap();
-            let depth_range = f64::from(g.slabs) * g.slab_distance;
-            let (mut checked, mut skipped) = (0u32, 0u32);
-            for j in 0..ldi.height {
-                for i in 0..ldi.width {
-                    for k in 0..40 {
-                        let z_rel = depth_range * (f64::from(k) + 0.37) / 40.0;
-                        let z_f32 = z_rel as f32;
-                        let z = g.z_origin + f64::from(z_f32);
-                        let world =
-                            g.camera
-                                .pixel_to_world(f64::from(i) + 0.5, f64::from(j) + 0.5, z);
-                        // Snapping moves a vertex by ≤ √2·2^-9 px, a pixel spanning z / focal at
-                        // depth z; the f32 inverse-depth plane and `1/plane − origin` err by a
-                        // few ulps of z; a depth error moves the point along the ray by up to
-                        // its length per unit depth (≤ 1/cos of the half diagonal view, < 1.8
-                        // at 90°).
-                        let snap = 2f64.sqrt() / 512.0 * z / focal;
-                        let band = 1.05 * tess
-                            + 1.8 * (snap + 16.0 * f64::from(f32::EPSILON) * (z + g.z_origin));
-                        let d = sdf(shape, to_obj.transform_point3(world));
-                        if d.abs() <= band {
-                            skipped += 1;
-                            continue;
-                        }
-                        let got = inside(&ldi, i, j, z_f32) & 1 == 1;
-                        assert_eq!(
-                            got,
-                            d < 0.0,
-                            "{shape} fov {fov}: pixel ({i},{j}) depth {z}: sdf {d}, band {band}"
-                        );
-                        checked += 1;
-                    }
-                }
-            }
-            assert!(
-                checked > 10 * skipped.max(1),
-                "{shape} fov {fov}: too few points checked ({checked} vs {skipped})"
-            );
+            // Snapping moves a vertex by ≤ √2·2^-9 px, a pixel spanning z / focal at depth z;
+            // the f32 inverse-depth plane and `1/plane − origin` err by a few ulps of z; a depth
+            // error moves the point along the ray by up to its length per unit depth (≤ 1/cos of
+            // the half diagonal view, < 1.8 at 90°).
+            let band = |z: f64| {
+                let snap = 2f64.sqrt() / 512.0 * z / focal;
+                1.05 * tess + 1.8 * (snap + 16.0 * f64::from(f32::EPSILON) * (z + g.z_origin))
+            };
+            let what = format!("{shape} fov {fov}");
+            let (checked, skipped) = check_inside_along_rays(&g, &ldi, shape, band, &what);
             eprintln!(
                 "{shape} fov {fov}: tessellation {tess:.2e}, {checked} points checked, {skipped} in the band"
             );
@@ -196,17 +144,7 @@ fn every_closed_model_is_even_in_perspective() {
     let Some(dir) = support::models_dir() else {
         return;
     };
-    for name in [
-        "bunny.obj",
-        "bunny_hr.obj",
-        "spot.obj",
-        "spot_remeshed_lowres.obj",
-        "armadillo.obj",
-        "armadillo_100k.obj",
-        "torus.obj",
-        "sphere.obj",
-        "cube.obj",
-    ] {
+    for name in CLOSED_MODELS {
         let path = dir.join(name);
         let m = convshadow::io::obj::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
         let (lo, hi) = m.bounds();

@@ -267,7 +267,7 @@ fn gpu_ldi_equals_cpu_in_perspective() {
     // A ball on a floor running back, and (with ../shared/models) real models close up.
     let mut scenes = vec![(
         "ball on a floor".to_string(),
-        support::perspective_ball_scene(160, 96, "[0.0, 1.0, -5.0]", 60.0, ""),
+        support::perspective_ball_scene(160, 96, glam::DVec3::new(0.0, 1.0, -5.0), 60.0, ""),
     )];
     if let Some(models) = support::models_dir() {
         for name in ["bunny_hr.obj", "armadillo_100k.obj"] {
@@ -278,21 +278,13 @@ fn gpu_ldi_equals_cpu_in_perspective() {
             for fov in [30.0f64, 90.0] {
                 let eye = c - glam::DVec3::new(0.3, -0.2, 1.0).normalize() * r
                     / (0.5 * fov).to_radians().sin();
+                let mesh = format!(
+                    "[[mesh]]\nshape = \"obj\"\npath = \"{}\"\nmaterial = \"m\"",
+                    path.display()
+                );
                 scenes.push((
                     format!("{name} fov {fov}"),
-                    format!(
-                        "[image]\nwidth = 256\nheight = 192\n[camera]\nprojection = \"perspective\"\n\
-                         eye = [{}, {}, {}]\nlook_at = [{}, {}, {}]\nfov_deg = {fov}\n[sweep]\n\
-                         slabs = 32\noptimal_distance = 0.5\n[[mesh]]\nshape = \"obj\"\n\
-                         path = \"{}\"\nmaterial = \"m\"\n[material.m]\n",
-                        eye.x,
-                        eye.y,
-                        eye.z,
-                        c.x,
-                        c.y,
-                        c.z,
-                        path.display()
-                    ),
+                    support::perspective_scene_text((256, 192), (eye, c), fov, "", &mesh),
                 ));
             }
         }

@@ -5,6 +5,7 @@
 
 pub mod gpu;
 
+use glam::DVec3;
 use std::path::{Path, PathBuf};
 
 use convshadow::common::model::kernel::KERNEL_NAMES;
@@ -131,17 +132,19 @@ color = [0.8, 0.6, 0.4]
     )
 }
 
-/// A ball on a floor running back from it, seen by a `width × height` perspective camera at
-/// `eye` looking at the ball's centre (the origin) with a vertical field of view of `fov_deg`;
-/// `extra` adds lines to `[camera]`.
-#[allow(dead_code)] // the cli and gpu tests' only
-pub fn perspective_ball_scene(
-    width: u32,
-    height: u32,
-    eye: &str,
+/// The text of a `width × height` scene seen by a perspective camera at `eye` looking at
+/// `look_at` (world points, `[x, y, z]`) with a vertical field of view of `fov_deg` (`extra`:
+/// more `[camera]` lines), 32 slabs, whose meshes are `meshes` (`[[mesh]]` tables, each naming
+/// material `m`).
+#[allow(dead_code)] // the contract, cli and gpu tests' only
+pub fn perspective_scene_text(
+    (width, height): (u32, u32),
+    (eye, look_at): (DVec3, DVec3),
     fov_deg: f64,
     extra: &str,
+    meshes: &str,
 ) -> String {
+    let v = |p: DVec3| format!("[{:e}, {:e}, {:e}]", p.x, p.y, p.z);
     format!(
         r#"
 [image]
@@ -149,25 +152,36 @@ width = {width}
 height = {height}
 [camera]
 projection = "perspective"
-eye = {eye}
-look_at = [0.0, 0.0, 0.0]
-fov_deg = {fov_deg}
+eye = {}
+look_at = {}
+fov_deg = {fov_deg:e}
 {extra}
 [sweep]
 slabs = 32
 optimal_distance = 0.5
-[[mesh]]
-shape = "sphere"
-size = [1.0, 4]
-material = "m"
-[[mesh]]
-shape = "box"
-size = [6.0, 0.2, 20.0]
-translate = [0.0, -1.2, 8.0]
-material = "m"
+{meshes}
 [material.m]
-"#
+"#,
+        v(eye),
+        v(look_at)
     )
+}
+
+/// A ball on a floor running back from it, seen by a `width × height` perspective camera at
+/// `eye` looking at the ball's centre (the origin) with a vertical field of view of `fov_deg`;
+/// `extra` adds lines to `[camera]`.
+#[allow(dead_code)] // the cli and gpu tests' only
+pub fn perspective_ball_scene(
+    width: u32,
+    height: u32,
+    eye: DVec3,
+    fov_deg: f64,
+    extra: &str,
+) -> String {
+    let meshes = "[[mesh]]\nshape = \"sphere\"\nsize = [1.0, 4]\nmaterial = \"m\"\n\
+                  [[mesh]]\nshape = \"box\"\nsize = [6.0, 0.2, 20.0]\n\
+                  translate = [0.0, -1.2, 8.0]\nmaterial = \"m\"";
+    perspective_scene_text((width, height), (eye, DVec3::ZERO), fov_deg, extra, meshes)
 }
 
 /// A one-mesh scene around an OBJ file, camera framing a box of half-size `half`.

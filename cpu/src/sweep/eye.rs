@@ -85,6 +85,7 @@ pub(crate) fn eye_slab(
         plan.slab_front[slab as usize],
         plan.slab_back[slab as usize],
     );
+    let (cx, cy) = (view.width as f32 * 0.5, view.height as f32 * 0.5);
     state
         .next
         .par_chunks_mut(w)
@@ -97,10 +98,13 @@ pub(crate) fn eye_slab(
                 plan.jitter_slab_hash[slab as usize],
                 plan.hash_y(y as u32 + plan.guard.top),
             );
+            // The pixel centre's offset from the view axis, in image pixels.
+            let offset_y = y as f32 + 0.5 - cy;
             for x in 0..w {
                 let pixel = EyePixel {
                     x,
                     y,
+                    offset: [x as f32 + 0.5 - cx, offset_y],
                     jitter_row,
                     front,
                     back,
@@ -121,6 +125,8 @@ pub(crate) fn eye_slab(
 struct EyePixel {
     x: usize,
     y: usize,
+    /// The pixel centre's offset from the image centre (the view axis), in image pixels.
+    offset: [f32; 2],
     jitter_row: u32,
     front: f32,
     back: f32,
@@ -162,9 +168,8 @@ fn eye_pixel(
     );
     // The ray's point at view depth z_origin + z, in grid pixel coordinates.
     let scale = (view.z_origin + z) * view.zoom;
-    let (cx, cy) = (view.width as f32 * 0.5, view.height as f32 * 0.5);
-    let gx = view.axis[0] + (p.x as f32 + 0.5 - cx) * scale;
-    let gy = view.axis[1] + (p.y as f32 + 0.5 - cy) * scale;
+    let gx = view.axis[0] + p.offset[0] * scale;
+    let gy = view.axis[1] + p.offset[1] * scale;
     let skip_inside = if crossed != NO_CROSSING {
         1u32 << mesh
     } else {
