@@ -316,20 +316,6 @@ pub(crate) fn check_inside_along_rays(
     (checked, skipped)
 }
 
-/// The closed models of `../shared/models` (the open ones are in
-/// [`open_models_are_thin_shells_out_of_the_parity_test`]).
-pub(crate) const CLOSED_MODELS: [&str; 9] = [
-    "bunny.obj",
-    "bunny_hr.obj",
-    "spot.obj",
-    "spot_remeshed_lowres.obj",
-    "armadillo.obj",
-    "armadillo_100k.obj",
-    "torus.obj",
-    "sphere.obj",
-    "cube.obj",
-];
-
 #[test]
 fn inside_classification_matches_analytic_shapes() {
     for (shape, size) in [
@@ -388,7 +374,7 @@ fn every_closed_model_is_even_and_thread_independent() {
     let Some(dir) = support::models_dir() else {
         return;
     };
-    for name in CLOSED_MODELS {
+    for name in support::CLOSED_MODELS {
         let s = model_scene(&dir.join(name), 256);
         let ldi = assert_even(&s, name);
         let g = convshadow_io::build_geometry(&s).unwrap();

@@ -4,7 +4,7 @@
 //! ray (which checks the fragments' perspective depths against geometry computed here in f64),
 //! and the build is independent of the thread count.
 
-use crate::ldi_parity::{CLOSED_MODELS, check_inside_along_rays, tessellation_error};
+use crate::ldi_parity::{check_inside_along_rays, tessellation_error};
 use crate::support;
 
 use std::path::Path;
@@ -144,7 +144,7 @@ fn every_closed_model_is_even_in_perspective() {
     let Some(dir) = support::models_dir() else {
         return;
     };
-    for name in CLOSED_MODELS {
+    for name in support::CLOSED_MODELS {
         let path = dir.join(name);
         let m = convshadow::io::obj::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
         let (lo, hi) = m.bounds();

@@ -264,13 +264,13 @@ fn gpu_ldi_equals_cpu_in_perspective() {
     let Some(ctx) = gpu_common::gpu() else {
         return;
     };
-    // A ball on a floor running back, and (with ../shared/models) real models close up.
+    // A ball on a floor running back, and (with ../shared/models) every closed model close up.
     let mut scenes = vec![(
         "ball on a floor".to_string(),
         support::perspective_ball_scene(160, 96, glam::DVec3::new(0.0, 1.0, -5.0), 60.0, ""),
     )];
     if let Some(models) = support::models_dir() {
-        for name in ["bunny_hr.obj", "armadillo_100k.obj"] {
+        for name in support::CLOSED_MODELS {
             let path = models.join(name);
             let mesh = convshadow::io::obj::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
             let (lo, hi) = mesh.bounds();

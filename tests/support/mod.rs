@@ -132,6 +132,20 @@ color = [0.8, 0.6, 0.4]
     )
 }
 
+/// The closed models of `../shared/models` (their parity must be exact).
+#[allow(dead_code)] // the contract and gpu tests' only
+pub const CLOSED_MODELS: [&str; 9] = [
+    "bunny.obj",
+    "bunny_hr.obj",
+    "spot.obj",
+    "spot_remeshed_lowres.obj",
+    "armadillo.obj",
+    "armadillo_100k.obj",
+    "torus.obj",
+    "sphere.obj",
+    "cube.obj",
+];
+
 /// The text of a `width × height` scene seen by a perspective camera at `eye` looking at
 /// `look_at` (world points, `[x, y, z]`) with a vertical field of view of `fov_deg` (`extra`:
 /// more `[camera]` lines), 32 slabs, whose meshes are `meshes` (`[[mesh]]` tables, each naming
