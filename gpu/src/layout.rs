@@ -73,6 +73,25 @@ pub struct SlabParams {
     pub _pad2: u32,
 }
 
+/// The perspective camera's eye pass (`shaders/eye.wgsl`, uniform): the CPU's `EyeView` and
+/// the image centre it offsets pixels from.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct EyeParams {
+    /// Image width (eye pixels).
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Grid pixels per image pixel of offset, per unit of view depth (`EyeView::zoom`).
+    pub zoom: f32,
+    /// The sweep's origin as a view depth (`EyeView::z_origin`).
+    pub z_origin: f32,
+    /// Where the view axis meets the slab grid, grid pixel coordinates (`EyeView::axis`).
+    pub axis: [f32; 2],
+    /// The image centre, `(width · 0.5, height · 0.5)` in f32.
+    pub centre: [f32; 2],
+}
+
 /// Per-render constants of the sweep (uniform).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -398,6 +417,8 @@ pub mod slot {
         LEVEL_CUR = "level_cur", 33;
         HOLD = "hold", 34;
         SURFACE_HOLD = "surface_hold", 35;
+        EYE_PARAMS = "eye_params", 36;
+        GRID_CURSORS = "grid_cursors", 37;
     }
 }
 

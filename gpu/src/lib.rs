@@ -9,12 +9,14 @@
 //! - [`device`]: adapter choice (hardware first, software fallback), limits, the error type.
 //! - [`ldi`]: the layered depth image (coverage, counts, host prefix sum, fill, per-pixel sort).
 //! - [`sweep`]: the slab sweep (kernels, parity cursor, shading, compositing, attenuation).
+//! - [`eye`]: the perspective camera's eye pass, dispatched before each slab of the sweep.
 //! - [`shader`]: assembly of the WGSL modules from the stage files and their `#import`s.
 //! - `layout`: the `#[repr(C)]` structs every buffer holds, mirrored by
 //!   `shaders/shared/bindings.wgsl`, and the binding slots.
 
 mod buffers;
 pub mod device;
+pub mod eye;
 mod layout;
 pub mod ldi;
 pub mod shader;

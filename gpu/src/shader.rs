@@ -35,6 +35,7 @@ const FILES: &[(&str, &str)] = &[
     ("composite", include_str!("shaders/composite.wgsl")),
     ("sweep", include_str!("shaders/sweep.wgsl")),
     ("ldi", include_str!("shaders/ldi.wgsl")),
+    ("eye", include_str!("shaders/eye.wgsl")),
 ];
 
 /// The `shared/constants` module: the Rust constants the shaders use, as WGSL.
@@ -117,13 +118,18 @@ pub fn sweep_wgsl() -> String {
     assemble("sweep")
 }
 
+/// The WGSL of the perspective camera's eye pass (the stage files it imports, then the pass).
+pub fn eye_wgsl() -> String {
+    assemble("eye")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn every_import_is_expanded_once() {
-        for src in [ldi_wgsl(), sweep_wgsl()] {
+        for src in [ldi_wgsl(), sweep_wgsl(), eye_wgsl()] {
             assert!(!src.contains("#import"));
             assert_eq!(src.matches("struct Globals {").count(), 1);
             assert_eq!(src.matches("const MAX_LIGHT_CHANNELS: u32").count(), 1);

@@ -37,7 +37,7 @@ pub const MAX_TRIANGLES: usize = 1 << (32 - MESH_BITS);
 /// Slabs encoded per submission (progress and cancel are checked between submissions).
 const SLABS_PER_SUBMIT: u32 = 32;
 /// The sweep's workgroup edge (`@workgroup_size(8, 8)`).
-const TILE: u32 = 8;
+pub(crate) const TILE: u32 = 8;
 /// Storage buffers the `sweep_slab` entry point binds (the two light buffers and every table of
 /// [`slab_groups`], and the two level planes); checked against the adapter's per-stage limit before the pipeline is made
 /// (lavapipe allows 32), and against the WGSL by a test.
@@ -348,11 +348,11 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
 }
 
 /// The grid's pixel and light-word counts, refused where they exceed 32-bit indices.
-struct GridSize {
+pub(crate) struct GridSize {
     w: u32,
     h: u32,
     pixels: u64,
-    light_words: u64,
+    pub(crate) light_words: u64,
 }
 
 /// Sizes the grid of `plan`, refusing one whose indices do not fit in 32 bits.
@@ -375,35 +375,35 @@ fn grid_size(plan: &RenderPlan) -> Result<GridSize, GpuError> {
 }
 
 /// Every device buffer the sweep binds or copies from.
-struct SweepBuffers {
-    light_a: wgpu::Buffer,
-    light_b: wgpu::Buffer,
+pub(crate) struct SweepBuffers {
+    pub(crate) light_a: wgpu::Buffer,
+    pub(crate) light_b: wgpu::Buffer,
     level_a: wgpu::Buffer,
     level_b: wgpu::Buffer,
-    cursors: wgpu::Buffer,
+    pub(crate) cursors: wgpu::Buffer,
     accum: wgpu::Buffer,
     offsets: wgpu::Buffer,
     frag_depth: wgpu::Buffer,
     frag_meta: wgpu::Buffer,
-    slabs: wgpu::Buffer,
-    lights: wgpu::Buffer,
+    pub(crate) slabs: wgpu::Buffer,
+    pub(crate) lights: wgpu::Buffer,
     light_slabs: wgpu::Buffer,
     taps: wgpu::Buffer,
     level_table: wgpu::Buffer,
-    materials: wgpu::Buffer,
-    tf_entries: wgpu::Buffer,
-    octaves: wgpu::Buffer,
-    voxels: wgpu::Buffer,
-    meshes: wgpu::Buffer,
+    pub(crate) materials: wgpu::Buffer,
+    pub(crate) tf_entries: wgpu::Buffer,
+    pub(crate) octaves: wgpu::Buffer,
+    pub(crate) voxels: wgpu::Buffer,
+    pub(crate) meshes: wgpu::Buffer,
     normals: wgpu::Buffer,
-    light_colors: wgpu::Buffer,
+    pub(crate) light_colors: wgpu::Buffer,
     pre_front: wgpu::Buffer,
     hold: wgpu::Buffer,
     surface_hold: wgpu::Buffer,
     image: wgpu::Buffer,
     image_words: u64,
-    globals: wgpu::Buffer,
-    slab_param: wgpu::Buffer,
+    pub(crate) globals: wgpu::Buffer,
+    pub(crate) slab_param: wgpu::Buffer,
     all_params: wgpu::Buffer,
 }
 
@@ -592,18 +592,26 @@ fn slab_groups(
     [even, odd]
 }
 
+/// A dispatch run before each slab's (the perspective camera's eye pass), in the same order as
+/// the CPU's `before_slab`: its bind groups `[even, odd]` read the light buffer that slab reads.
+pub(crate) struct BeforeSlab {
+    pub(crate) pipeline: wgpu::ComputePipeline,
+    pub(crate) groups: [wgpu::BindGroup; 2],
+    pub(crate) workgroups: (u32, u32),
+}
+
 /// Dispatches every slab, [`SLABS_PER_SUBMIT`] per submission, checking cancel before each
 /// submission and reporting progress after it.
 fn dispatch_slabs(
     ctx: &GpuContext,
     plan: &RenderPlan,
     options: &SweepOptions<'_>,
-    b: &SweepBuffers,
-    slab_pipe: &wgpu::ComputePipeline,
-    groups: &[wgpu::BindGroup; 2],
-    workgroups: (u32, u32),
+    run: &GridSweep,
+    before_slab: Option<&BeforeSlab>,
 ) -> Result<(), GpuError> {
-    let [even, odd] = groups;
+    let (b, slab_pipe) = (&run.buffers, &run.slab_pipe);
+    let [even, odd] = &run.groups;
+    let workgroups = (run.grid.w.div_ceil(TILE), run.grid.h.div_ceil(TILE));
     let mut slab = 0;
     while slab < plan.slabs {
         if options
@@ -627,6 +635,11 @@ fn dispatch_slabs(
                 label: Some("slab"),
                 timestamp_writes: None,
             });
+            if let Some(before) = before_slab {
+                pass.set_pipeline(&before.pipeline);
+                pass.set_bind_group(0, &before.groups[k as usize % 2], &[]);
+                pass.dispatch_workgroups(before.workgroups.0, before.workgroups.1, 1);
+            }
             pass.set_pipeline(slab_pipe);
             pass.set_bind_group(0, if k % 2 == 0 { even } else { odd }, &[]);
             pass.dispatch_workgroups(workgroups.0, workgroups.1, 1);
@@ -670,6 +683,39 @@ fn dispatch_finish(
     ctx.queue.submit([encoder.finish()]);
 }
 
+/// Reads back an RGBA f32 image as its RGB image and its alpha.
+pub(crate) fn read_rgba(
+    ctx: &GpuContext,
+    rgba: &wgpu::Buffer,
+    words: u64,
+) -> Result<(Vec<f32>, Vec<f32>), GpuError> {
+    let rgba = read_back(ctx, rgba, words)?;
+    let image = rgba
+        .chunks_exact(4)
+        .flat_map(|p| p[..3].iter().map(|&v| f32::from_bits(v)))
+        .collect();
+    let alpha = rgba.chunks_exact(4).map(|p| f32::from_bits(p[3])).collect();
+    Ok((image, alpha))
+}
+
+/// Reads back the light buffer the last slab wrote, as floats.
+pub(crate) fn last_light(
+    ctx: &GpuContext,
+    plan: &RenderPlan,
+    b: &SweepBuffers,
+    light_words: u64,
+) -> Result<Vec<f32>, GpuError> {
+    let last = if plan.slabs % 2 == 1 {
+        &b.light_b
+    } else {
+        &b.light_a
+    };
+    Ok(read_back(ctx, last, light_words)?
+        .into_iter()
+        .map(f32::from_bits)
+        .collect())
+}
+
 /// Reads back the image, its alpha and the last slab's light buffer as floats.
 fn read_output(
     ctx: &GpuContext,
@@ -677,22 +723,11 @@ fn read_output(
     b: &SweepBuffers,
     light_words: u64,
 ) -> Result<SweepOutput, GpuError> {
-    let rgba = read_back(ctx, &b.image, b.image_words)?;
-    let image = rgba
-        .chunks_exact(4)
-        .flat_map(|p| p[..3].iter().map(|&v| f32::from_bits(v)))
-        .collect();
-    let alpha = rgba.chunks_exact(4).map(|p| f32::from_bits(p[3])).collect();
-    let last = if plan.slabs % 2 == 1 {
-        &b.light_b
-    } else {
-        &b.light_a
-    };
-    let light = read_back(ctx, last, light_words)?;
+    let (image, alpha) = read_rgba(ctx, &b.image, b.image_words)?;
     Ok(SweepOutput {
         image,
         alpha,
-        light: light.into_iter().map(f32::from_bits).collect(),
+        light: last_light(ctx, plan, b, light_words)?,
         // The GPU sweeps every slab (`SweepOptions::every_slab` permits, never asks, an early
         // finish): its image is the CPU's either way.
         slabs_swept: plan.slabs,
@@ -709,26 +744,64 @@ pub fn sweep(
     ldi: &Ldi,
     options: &SweepOptions<'_>,
 ) -> Result<SweepOutput, GpuError> {
-    let grid = grid_size(plan)?;
-    let tables = build_tables(plan, raster)?;
-    let per_stage = ctx.limits.max_storage_buffers_per_shader_stage;
-    if per_stage < SWEEP_STORAGE_BUFFERS {
-        return Err(GpuError::Unsupported(format!(
-            "the sweep binds {SWEEP_STORAGE_BUFFERS} storage buffers, the adapter allows \
-             {per_stage} per shader stage"
-        )));
+    let run = GridSweep::prepare(ctx, plan, raster, ldi, options)?;
+    run.dispatch(ctx, plan, options, None)?;
+    dispatch_finish(ctx, plan, &run.buffers, &run.finish_pipe);
+    read_output(ctx, plan, &run.buffers, run.grid.light_words)
+}
+
+/// The grid's sweep made ready on the device: its buffers (tables uploaded), pipelines and
+/// per-slab bind groups.
+pub(crate) struct GridSweep {
+    pub(crate) grid: GridSize,
+    pub(crate) buffers: SweepBuffers,
+    slab_pipe: wgpu::ComputePipeline,
+    finish_pipe: wgpu::ComputePipeline,
+    groups: [wgpu::BindGroup; 2],
+}
+
+impl GridSweep {
+    /// Checks the plan against the adapter, uploads everything and makes the pipelines.
+    pub(crate) fn prepare(
+        ctx: &GpuContext,
+        plan: &RenderPlan,
+        raster: &RasterSetup,
+        ldi: &Ldi,
+        options: &SweepOptions<'_>,
+    ) -> Result<GridSweep, GpuError> {
+        let grid = grid_size(plan)?;
+        let tables = build_tables(plan, raster)?;
+        let per_stage = ctx.limits.max_storage_buffers_per_shader_stage;
+        if per_stage < SWEEP_STORAGE_BUFFERS {
+            return Err(GpuError::Unsupported(format!(
+                "the sweep binds {SWEEP_STORAGE_BUFFERS} storage buffers, the adapter allows \
+                 {per_stage} per shader stage"
+            )));
+        }
+        check_size(ctx, "light", grid.light_words * 4)?;
+        check_size(ctx, "per-pixel colour", grid.pixels * 16)?;
+        let buffers = upload_buffers(ctx, plan, ldi, options, &tables, &grid)?;
+        let (slab_pipe, finish_pipe) = sweep_pipelines(ctx);
+        let groups = slab_groups(ctx, &slab_pipe, &buffers);
+        Ok(GridSweep {
+            grid,
+            buffers,
+            slab_pipe,
+            finish_pipe,
+            groups,
+        })
     }
-    check_size(ctx, "light", grid.light_words * 4)?;
-    check_size(ctx, "per-pixel colour", grid.pixels * 16)?;
-    let buffers = upload_buffers(ctx, plan, ldi, options, &tables, &grid)?;
-    let (slab_pipe, finish_pipe) = sweep_pipelines(ctx);
-    let groups = slab_groups(ctx, &slab_pipe, &buffers);
-    let workgroups = (grid.w.div_ceil(TILE), grid.h.div_ceil(TILE));
-    dispatch_slabs(
-        ctx, plan, options, &buffers, &slab_pipe, &groups, workgroups,
-    )?;
-    dispatch_finish(ctx, plan, &buffers, &finish_pipe);
-    read_output(ctx, plan, &buffers, grid.light_words)
+
+    /// Sweeps every slab, `before_slab` dispatched before each.
+    pub(crate) fn dispatch(
+        &self,
+        ctx: &GpuContext,
+        plan: &RenderPlan,
+        options: &SweepOptions<'_>,
+        before_slab: Option<&BeforeSlab>,
+    ) -> Result<(), GpuError> {
+        dispatch_slabs(ctx, plan, options, self, before_slab)
+    }
 }
 
 #[cfg(test)]

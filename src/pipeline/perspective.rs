@@ -7,32 +7,27 @@ use std::time::Instant;
 
 use convshadow_common::model::scene::{CameraSpec, MAX_IMAGE_SIDE, Projection, Scene, SlabSpec};
 use convshadow_common::prepare::geometry::SceneGeometry;
-use convshadow_cpu::ldi::{BuildLdi, Ldi};
-use convshadow_cpu::sweep::{ChunkCounts, CpuOptions, EyeView, SweepOptions, sweep_perspective};
+use convshadow_cpu::sweep::{
+    ChunkCounts, CpuOptions, EyeView, SweepOptions, SweepOutput, sweep_perspective,
+};
 use convshadow_io::image::RgbImage;
 
 use super::aov::{first_hit_depth_in, light_layers};
 use super::{
-    Aov, Backend, Engine, RenderError, RenderRequest, Rendered, check_cancel, image_fingerprint,
+    Aov, Engine, RenderError, RenderRequest, Rendered, check_cancel, image_fingerprint,
     plan_updates, refuse_open_meshes,
 };
 use convshadow_common::plan::RenderPlan;
 
 /// What the perspective sweep does not do yet, refused by name.
-fn refuse_unsupported(scene: &Scene, req: &RenderRequest<'_>) -> Result<(), RenderError> {
-    let unsupported = |what: &str| {
-        Err(RenderError::BadPlan(format!(
-            "{}: key `camera.projection`: a perspective camera on the sweep does not take {what} \
-             yet (docs/how-it-works.md, \"A perspective camera\"); `--backend reference` renders \
-             the scene with shadow rays",
-            scene.source
-        )))
-    };
-    if req.backend == Backend::Gpu {
-        return unsupported("the GPU backend");
-    }
+fn refuse_unsupported(scene: &Scene) -> Result<(), RenderError> {
     if scene.passes().back.is_some() {
-        return unsupported("lights travelling towards the viewer");
+        return Err(RenderError::BadPlan(format!(
+            "{}: key `camera.projection`: a perspective camera does not take lights travelling \
+             towards the viewer yet (docs/how-it-works.md, \"A perspective camera\"); an \
+             orthographic camera does",
+            scene.source
+        )));
     }
     Ok(())
 }
@@ -83,11 +78,11 @@ pub(super) fn render_perspective(
     scene: &Scene,
     req: &RenderRequest<'_>,
 ) -> Result<Rendered, RenderError> {
-    refuse_unsupported(scene, req)?;
+    refuse_unsupported(scene)?;
     let start = Instant::now();
     let eye = convshadow_io::build_geometry(scene)?;
     let grid = grid_scene(scene, &eye)?;
-    let engine = Engine::open(&grid, true, Backend::Cpu, req.threads, req.memory_budget)?;
+    let engine = Engine::open(&grid, true, req.backend, req.threads, req.memory_budget)?;
     let (geometry, fragment_budget) = engine.geometry(&grid, req.memory_budget)?;
     // `camera.near`: the grid's sweep starts where the eye's does, in the eye's slabs.
     let geometry = if let Projection::Perspective { near: Some(_), .. } = scene.camera.projection {
@@ -112,9 +107,7 @@ pub(super) fn render_perspective(
     }
     check_cancel(req.cancel)?;
     let ldi = engine.ldi(&geometry, fragment_budget)?;
-    let eye_ldi = engine
-        .pool
-        .install(|| Ldi::build(&eye.raster, fragment_budget))?;
+    let eye_ldi = engine.ldi(&eye, fragment_budget)?;
     check_cancel(req.cancel)?;
     let stats = engine.pool.install(|| eye_ldi.stats());
     refuse_open_meshes(scene, &eye, &stats, req.allow_open)?;
@@ -154,11 +147,21 @@ pub(super) fn render_perspective(
         skip_quiet: req.skip_quiet,
         chunk_counts: Some(&chunk_counts),
     };
-    let run = |plan: &RenderPlan, cpu: &CpuOptions<'_>| {
-        engine
-            .pool
-            .install(|| sweep_perspective(plan, &geometry.raster, &ldi, &view, &options, cpu))
-            .map_err(|_| RenderError::Interrupted)
+    let run = |plan: &RenderPlan, cpu: &CpuOptions<'_>| -> Result<SweepOutput, RenderError> {
+        match &engine.choice.gpu {
+            Some(ctx) => Ok(convshadow_gpu::eye::sweep_perspective(
+                ctx,
+                plan,
+                &geometry.raster,
+                &ldi,
+                &view,
+                &options,
+            )?),
+            None => engine
+                .pool
+                .install(|| sweep_perspective(plan, &geometry.raster, &ldi, &view, &options, cpu))
+                .map_err(|_| RenderError::Interrupted),
+        }
     };
     let out = run(&plan, &cpu)?;
     let seconds_sweep = t_sweep.elapsed().as_secs_f64();
@@ -197,12 +200,8 @@ pub(super) fn render_perspective(
         seconds_sweep,
         chunks: chunk_counts.snapshot(),
         seconds_total: start.elapsed().as_secs_f64(),
-        backend: "cpu",
-        adapter: None,
-        // `--backend auto` would have taken a GPU for an orthographic camera: say why not.
-        backend_note: (req.backend == Backend::Auto).then(|| {
-            "a perspective camera renders on the CPU (the GPU port of its eye pass is not built)"
-                .to_string()
-        }),
+        backend: engine.choice.name(),
+        adapter: engine.choice.adapter(),
+        backend_note: engine.choice.note,
     })
 }

@@ -200,7 +200,7 @@ fn a_too_small_memory_budget_is_refused_with_the_need() {
 }
 
 #[test]
-fn a_perspective_scene_builds_its_ldi_and_renders_on_the_cpu_sweep_and_the_reference() {
+fn a_perspective_scene_builds_its_ldi_and_renders_on_both_sweeps_and_the_reference() {
     let dir = support::temp_dir("perspective-cli");
     let scene = dir.join("persp.toml");
     std::fs::write(
@@ -215,8 +215,7 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_the_cpu_sweep_and_the_refer
         out.contains("0 odd pixels") && out.contains("guard band 0 px"),
         "{out}"
     );
-    // The CPU sweep renders it; the reference too; what the perspective sweep does not take yet
-    // is refused naming the key, nothing written.
+    // The CPU sweep renders it; the reference and the GPU backend too.
     let png = dir.join("p.png");
     let (code, _, err) = support::run_cli(&["render", s, "-o", png.to_str().unwrap()], &dir);
     assert_eq!(code, 0, "{err}");
@@ -238,7 +237,6 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_the_cpu_sweep_and_the_refer
         support::perspective_ball_scene(96, 64, DVec3::new(0.0, 1.0, -5.0), 50.0, "near = 1.0"),
     )
     .unwrap();
-    let refused = dir.join("refused.png");
     // `camera.near` renders (the slab grid starts there too).
     let (code, _, err) = support::run_cli(
         &[
@@ -250,7 +248,7 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_the_cpu_sweep_and_the_refer
         &dir,
     );
     assert_eq!(code, 0, "{err}");
-    // `--backend auto` renders it on the CPU, and says why.
+    // `--backend auto` renders it (on the CPU where the only adapter is software, and says so).
     let (code, _, err) = support::run_cli(
         &[
             "render",
@@ -263,8 +261,9 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_the_cpu_sweep_and_the_refer
         &dir,
     );
     assert_eq!(code, 0, "{err}");
-    assert!(err.contains("renders on the CPU"), "{err}");
-    // The GPU backend does not take a perspective camera yet: refused (or no adapter, 5).
+    // The GPU backend renders it too (tests/gpu/perspective.rs compares the bits), or says there
+    // is no adapter (5) and writes nothing.
+    let on_gpu = dir.join("gpu.png");
     let (code, _, err) = support::run_cli(
         &[
             "render",
@@ -272,14 +271,35 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_the_cpu_sweep_and_the_refer
             "--backend",
             "gpu",
             "-o",
+            on_gpu.to_str().unwrap(),
+        ],
+        &dir,
+    );
+    assert!(code == 0 || code == 5, "{err}");
+    assert_eq!(on_gpu.exists(), code == 0, "{err}");
+    // A light travelling towards the viewer is not taken yet: exit 3 naming the key, no output.
+    let back = dir.join("back.toml");
+    let back_text = support::perspective_ball_scene(32, 24, DVec3::new(0.0, 1.0, -5.0), 50.0, "");
+    std::fs::write(
+        &back,
+        format!("{back_text}[[light]]\ndirection = [0.2, -0.3, -1.0]\n"),
+    )
+    .unwrap();
+    let refused = dir.join("refused.png");
+    let (code, _, err) = support::run_cli(
+        &[
+            "render",
+            back.to_str().unwrap(),
+            "-o",
             refused.to_str().unwrap(),
         ],
         &dir,
     );
-    assert!(code == BAD_INPUT || code == 5, "{err}");
-    if code == BAD_INPUT {
-        assert!(err.contains("camera.projection"), "{err}");
-    }
+    assert_eq!(code, BAD_INPUT, "{err}");
+    assert!(
+        err.contains("camera.projection") && err.contains("towards the viewer"),
+        "{err}"
+    );
     assert!(!refused.exists(), "no output for a refused render");
     // Each projection's flags on the other are bad arguments (2).
     let (code, _, err) = support::run_cli(&["render", s, "--view-width", "3"], &dir);

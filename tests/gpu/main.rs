@@ -8,4 +8,5 @@
 mod support;
 
 mod ldi;
+mod perspective;
 mod render;

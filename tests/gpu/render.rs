@@ -15,7 +15,7 @@ use convshadow::io::metrics::compare;
 use convshadow::pipeline::{Backend, RenderRequest, Rendered, render};
 use convshadow_gpu::GpuContext;
 
-fn run(scene: &Scene, backend: Backend) -> Rendered {
+pub(crate) fn run(scene: &Scene, backend: Backend) -> Rendered {
     let req = RenderRequest {
         backend,
         threads: 2,
@@ -28,7 +28,7 @@ fn run(scene: &Scene, backend: Backend) -> Rendered {
 }
 
 /// Renders on both backends and checks the contract for the adapter; returns the CPU render.
-fn check(ctx: &GpuContext, scene: &Scene, what: &str) -> Rendered {
+pub(crate) fn check(ctx: &GpuContext, scene: &Scene, what: &str) -> Rendered {
     let cpu = run(scene, Backend::Cpu);
     let gpu = run(scene, Backend::Gpu);
     assert_eq!(cpu.backend, "cpu");
@@ -108,7 +108,7 @@ fn with_distance(scene: &Scene) -> Scene {
 /// from the iterated penumbra's (so the comparison is not of a path the mode skips), and the
 /// final light buffers hold one depth plane per light after its channels, some of it non-zero
 /// (occluders were recorded and read back from the device).
-fn check_distance(ctx: &GpuContext, scene: &Scene, what: &str) {
+pub(crate) fn check_distance(ctx: &GpuContext, scene: &Scene, what: &str) {
     let mut iterated = scene.clone();
     iterated.sweep.penumbra = Penumbra::Iterated;
     let iterated = run(&iterated, Backend::Cpu);
@@ -176,7 +176,12 @@ fn gpu_image_equals_cpu_for_every_kernel() {
 /// 4D, a 3D texture, specular highlights (Blinn–Phong and Ashikmin–Shirley, on opaque and
 /// translucent crossings), Lambert and flat surfaces, phase functions (forward and backward), no jitter, a guard band and a grey (1-channel) or
 /// coloured light buffer, a narrow light (mean carried in whole pixels).
-fn path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
+pub(crate) fn path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
+    support::scene(&path_scene_text(dir, monochrome, jitter), dir)
+}
+
+/// The text of [`path_scene`] (its 3D texture written into `dir`).
+pub(crate) fn path_scene_text(dir: &std::path::Path, monochrome: bool, jitter: bool) -> String {
     let dims = [5u32, 4, 3];
     let voxels: Vec<u8> = (0..60u32).map(|i| (i * 37 % 256) as u8).collect();
     std::fs::write(dir.join("tex.raw"), &voxels).unwrap();
@@ -185,7 +190,7 @@ fn path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
     } else {
         "[0.6, 0.4, 0.2]"
     };
-    let text = format!(
+    format!(
         r#"
 [image]
 width = 40
@@ -280,8 +285,7 @@ opacity = 1.0
 specular = {{ model = "ashikmin-shirley", exponent = 40 }}
 "#,
         dims[0], dims[1], dims[2]
-    );
-    support::scene(&text, dir)
+    )
 }
 
 #[test]

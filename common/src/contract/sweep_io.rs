@@ -5,6 +5,9 @@
 
 use std::sync::atomic::AtomicBool;
 
+use crate::contract::ldi::Ldi;
+use crate::prepare::raster::RasterSetup;
+
 /// Largest light count × channels handled per pixel (the CPU's stack arrays, the WGSL private
 /// array; uploaded into the shader source, never copied).
 pub const MAX_LIGHT_CHANNELS: usize = 48;
@@ -61,4 +64,25 @@ impl Default for SweepOptions<'_> {
             every_slab: false,
         }
     }
+}
+
+/// A perspective camera as the eye pass reads it (CPU `sweep_perspective`, GPU
+/// `sweep_perspective`): docs/how-it-works.md, "A perspective camera".
+pub struct EyeView<'a> {
+    /// The LDI along the eye's rays (the image's pixels, no guard band), depths relative to the
+    /// sweep's origin.
+    pub ldi: &'a Ldi,
+    /// Its rasterizer set-up (the crossed triangles' normals).
+    pub raster: &'a RasterSetup,
+    /// Image width and height.
+    pub width: u32,
+    /// See `width`.
+    pub height: u32,
+    /// Grid pixels per image pixel of offset from the centre, per unit of view depth:
+    /// `1 / (focal_px · pixel_size)`.
+    pub zoom: f32,
+    /// The sweep's origin as a view depth (the eye's depths are relative to it).
+    pub z_origin: f32,
+    /// Where the view axis meets the slab grid, in grid pixel coordinates (guard band included).
+    pub axis: [f32; 2],
 }

@@ -13,35 +13,14 @@
 
 use rayon::prelude::*;
 
+use convshadow_common::contract::sweep_io::EyeView;
 use convshadow_common::pixel::hash::row_hash;
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::prepare::raster::RasterSetup;
 
 use super::kit::{MAX_LIGHT_CHANNELS, light_block};
 use crate::composite::{composite, part_of_slab};
-use crate::ldi::Ldi;
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
 use crate::shading::{Surface, material_at, shade, shading_depth};
-
-/// A perspective camera as the eye pass reads it.
-pub struct EyeView<'a> {
-    /// The LDI along the eye's rays (the image's pixels, no guard band), depths relative to the
-    /// sweep's origin.
-    pub ldi: &'a Ldi,
-    /// Its rasterizer set-up (the crossed triangles' normals).
-    pub raster: &'a RasterSetup,
-    /// Image width and height.
-    pub width: u32,
-    /// See `width`.
-    pub height: u32,
-    /// Grid pixels per image pixel of offset from the centre, per unit of view depth:
-    /// `1 / (focal_px · pixel_size)`.
-    pub zoom: f32,
-    /// The sweep's origin as a view depth (the eye's depths are relative to it).
-    pub z_origin: f32,
-    /// Where the view axis meets the slab grid, in grid pixel coordinates (guard band included).
-    pub axis: [f32; 2],
-}
 
 /// The eye's per-pixel state: layer cursor, inside mask, composited colour and alpha.
 pub(crate) struct EyeState {

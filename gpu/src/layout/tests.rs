@@ -1,7 +1,7 @@
 use std::mem::{offset_of, size_of};
 
 use super::*;
-use crate::shader::{ldi_wgsl, sweep_wgsl};
+use crate::shader::{eye_wgsl, ldi_wgsl, sweep_wgsl};
 
 /// A struct's layout: name, size, and (member, offset) in declaration order.
 type Layout = (&'static str, usize, Vec<(&'static str, usize)>);
@@ -134,6 +134,14 @@ fn rust_layouts() -> Vec<Layout> {
             subpixel
         }),
         layout!(Cursor { next, inside }),
+        layout!(EyeParams {
+            width,
+            height,
+            zoom,
+            z_origin,
+            axis,
+            centre
+        }),
     ]
 }
 
@@ -187,7 +195,11 @@ fn mismatches(wgsl: &str, layouts: &[Layout], slots: &[(&str, u32)]) -> Vec<Stri
 
 #[test]
 fn rust_and_wgsl_layouts_agree() {
-    for (what, wgsl) in [("ldi", ldi_wgsl()), ("sweep", sweep_wgsl())] {
+    for (what, wgsl) in [
+        ("ldi", ldi_wgsl()),
+        ("sweep", sweep_wgsl()),
+        ("eye", eye_wgsl()),
+    ] {
         let bad = mismatches(&wgsl, &rust_layouts(), slot::ALL);
         assert!(bad.is_empty(), "{what} shader: {bad:#?}");
     }

@@ -211,3 +211,21 @@ struct Cursor {
 // where no surface is held).
 @group(0) @binding(34) var<storage, read_write> hold: array<u32>;
 @group(0) @binding(35) var<storage, read> surface_hold: array<u32>;
+
+// ---- The perspective camera's eye pass (eye.wgsl) ----
+// It binds the eye's LDI, cursors, colours and triangle normals at the sweep's slots (`offsets`,
+// `frag_depth`, `frag_meta`, `cursors`, `accum`, `normals`), so the stage files read them as
+// they read the grid's; the grid's light is `light_prev`, its cursors `grid_cursors`.
+
+struct EyeParams {
+    width: u32,
+    height: u32,
+    zoom: f32,      // grid pixels per image pixel of offset, per unit of view depth
+    z_origin: f32,  // the sweep's origin as a view depth
+    axis: vec2<f32>,   // where the view axis meets the grid (grid pixel coordinates)
+    centre: vec2<f32>, // the image centre (width · 0.5, height · 0.5)
+}
+
+@group(0) @binding(36) var<uniform> eye_params: EyeParams;
+// The grid's layer cursors at the slab's front (their inside masks).
+@group(0) @binding(37) var<storage, read> grid_cursors: array<Cursor>;

@@ -1,0 +1,184 @@
+//! The perspective camera's eye pass on the GPU (`shaders/eye.wgsl`), mirroring
+//! `convshadow_cpu::sweep::sweep_perspective`: the grid's sweep ([`crate::sweep`]) runs as for an
+//! orthographic camera, and before each slab's dispatch one more dispatch takes every image
+//! pixel's ray through that slab, reading the light buffer the slab reads.
+//!
+//! The eye's LDI, layer cursors, colours and triangle normals are bound at the sweep's slots, so
+//! the stage files (`parity.wgsl`, `shading.wgsl`, `composite.wgsl`) read them unchanged.
+
+use convshadow_common::contract::sweep_io::{EyeView, SweepOptions, SweepOutput};
+use convshadow_common::plan::RenderPlan;
+use convshadow_common::prepare::raster::RasterSetup;
+
+use crate::buffers::{bind, pipeline, uniform, upload, zeroed};
+use crate::device::{GpuContext, GpuError};
+use crate::layout::{Cursor, EyeParams, MESH_BITS, slot};
+use crate::shader::eye_wgsl;
+use crate::sweep::{BeforeSlab, GridSweep, TILE, last_light, read_rgba};
+use convshadow_common::contract::ldi::Ldi;
+
+/// The eye's device buffers.
+struct EyeBuffers {
+    params: wgpu::Buffer,
+    cursors: wgpu::Buffer,
+    accum: wgpu::Buffer,
+    offsets: wgpu::Buffer,
+    frag_depth: wgpu::Buffer,
+    frag_meta: wgpu::Buffer,
+    normals: wgpu::Buffer,
+    image: wgpu::Buffer,
+    image_words: u64,
+}
+
+/// Uploads the eye's LDI (cursors at each pixel's first fragment, nothing composited) and
+/// parameters.
+fn eye_buffers(ctx: &GpuContext, eye: &EyeView<'_>) -> Result<EyeBuffers, GpuError> {
+    let pixels = u64::from(eye.width) * u64::from(eye.height);
+    if pixels * 4 >= u64::from(u32::MAX) {
+        return Err(GpuError::Unsupported(format!(
+            "a {}x{} image exceeds 32-bit indices",
+            eye.width, eye.height
+        )));
+    }
+    let ldi = eye.ldi;
+    let cursors: Vec<Cursor> = ldi.offsets[..pixels as usize]
+        .iter()
+        .map(|&o| Cursor { next: o, inside: 0 })
+        .collect();
+    let meta: Vec<u32> = ldi
+        .mesh
+        .iter()
+        .zip(&ldi.triangle)
+        .map(|(&m, &t)| u32::from(m) | (t << MESH_BITS))
+        .collect();
+    let normals: Vec<[f32; 3]> = eye.raster.triangles.iter().map(|t| t.normal).collect();
+    let params = EyeParams {
+        width: eye.width,
+        height: eye.height,
+        zoom: eye.zoom,
+        z_origin: eye.z_origin,
+        axis: eye.axis,
+        centre: [eye.width as f32 * 0.5, eye.height as f32 * 0.5],
+    };
+    Ok(EyeBuffers {
+        params: uniform(ctx, "eye params", &params),
+        cursors: upload(ctx, "eye layer cursor", &cursors, false)?,
+        accum: zeroed(ctx, "eye per-pixel colour", pixels * 4)?,
+        offsets: upload(ctx, "eye LDI offset", &ldi.offsets, false)?,
+        frag_depth: upload(ctx, "eye fragment depth", &ldi.depth, false)?,
+        frag_meta: upload(ctx, "eye fragment meta", &meta, false)?,
+        normals: upload(ctx, "eye triangle normal", &normals, false)?,
+        image: zeroed(ctx, "image", pixels * 4)?,
+        image_words: pixels * 4,
+    })
+}
+
+/// The eye pass's per-slab dispatch: bind groups `[even, odd]` reading the grid's light buffer
+/// of that parity and its cursors.
+fn eye_slab_dispatch(
+    ctx: &GpuContext,
+    module: &wgpu::ShaderModule,
+    run: &GridSweep,
+    e: &EyeBuffers,
+    eye: &EyeView<'_>,
+) -> BeforeSlab {
+    let pipe = pipeline(ctx, module, "eye_slab");
+    let g = &run.buffers;
+    let group = |light_prev: &wgpu::Buffer| {
+        bind(
+            ctx,
+            &pipe,
+            &[
+                (slot::SLAB_PARAMS, &g.slab_param),
+                (slot::GLOBALS, &g.globals),
+                (slot::EYE_PARAMS, &e.params),
+                (slot::CURSORS, &e.cursors),
+                (slot::ACCUM, &e.accum),
+                (slot::OFFSETS, &e.offsets),
+                (slot::FRAG_DEPTH, &e.frag_depth),
+                (slot::FRAG_META, &e.frag_meta),
+                (slot::NORMALS, &e.normals),
+                (slot::SLABS, &g.slabs),
+                (slot::LIGHTS, &g.lights),
+                (slot::MATERIALS, &g.materials),
+                (slot::TF_ENTRIES, &g.tf_entries),
+                (slot::OCTAVES, &g.octaves),
+                (slot::VOXELS, &g.voxels),
+                (slot::MESHES, &g.meshes),
+                (slot::LIGHT_COLORS, &g.light_colors),
+                (slot::GRID_CURSORS, &g.cursors),
+                (slot::LIGHT_PREV, light_prev),
+            ],
+        )
+    };
+    // Slab k reads light_a when k is even (the sweep's ping-pong).
+    let groups = [group(&g.light_a), group(&g.light_b)];
+    BeforeSlab {
+        pipeline: pipe,
+        groups,
+        workgroups: (eye.width.div_ceil(TILE), eye.height.div_ceil(TILE)),
+    }
+}
+
+/// Adds the background to the eye's colours into its RGBA image.
+fn dispatch_eye_finish(
+    ctx: &GpuContext,
+    module: &wgpu::ShaderModule,
+    run: &GridSweep,
+    e: &EyeBuffers,
+    eye: &EyeView<'_>,
+) {
+    let pipe = pipeline(ctx, module, "eye_finish");
+    let group = bind(
+        ctx,
+        &pipe,
+        &[
+            (slot::GLOBALS, &run.buffers.globals),
+            (slot::EYE_PARAMS, &e.params),
+            (slot::ACCUM, &e.accum),
+            (slot::IMAGE, &e.image),
+        ],
+    );
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("eye finish"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&pipe);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(eye.width.div_ceil(TILE), eye.height.div_ceil(TILE), 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+}
+
+/// Runs the sweep on the grid of `plan` with the eye pass of `eye` before every slab: the same
+/// image (the eye's, `eye.width × eye.height`), alpha and final grid light as
+/// `convshadow_cpu::sweep::sweep_perspective` (bit for bit on lavapipe).
+pub fn sweep_perspective(
+    ctx: &GpuContext,
+    plan: &RenderPlan,
+    raster: &RasterSetup,
+    ldi: &Ldi,
+    eye: &EyeView<'_>,
+    options: &SweepOptions<'_>,
+) -> Result<SweepOutput, GpuError> {
+    let run = GridSweep::prepare(ctx, plan, raster, ldi, options)?;
+    let buffers = eye_buffers(ctx, eye)?;
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("eye.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(eye_wgsl().into()),
+        });
+    let before = eye_slab_dispatch(ctx, &module, &run, &buffers, eye);
+    run.dispatch(ctx, plan, options, Some(&before))?;
+    dispatch_eye_finish(ctx, &module, &run, &buffers, eye);
+    let (image, alpha) = read_rgba(ctx, &buffers.image, buffers.image_words)?;
+    Ok(SweepOutput {
+        image,
+        alpha,
+        light: last_light(ctx, plan, &run.buffers, run.grid.light_words)?,
+        slabs_swept: plan.slabs,
+    })
+}

@@ -1,0 +1,159 @@
+// The perspective camera's eye pass: mirrors cpu/src/sweep/eye.rs. Before each slab of the grid's
+// sweep (sweep.wgsl), one invocation per image pixel takes its ray's step through the slab: its
+// layer cursor over the eye's LDI (parity.wgsl), one shading point (shading.wgsl), the light read
+// bilinearly from the grid's incoming light where the ray meets the slab (a per-slab zoom), and
+// front-to-back compositing (composite.wgsl). The eye's LDI, cursors, colours and normals are
+// bound at the sweep's slots (shared/bindings.wgsl); `eye_finish` adds the background.
+
+#import shared/constants
+#import shared/bindings
+#import hash
+#import noise
+#import texture3d
+#import parity
+#import shading
+#import composite
+
+// Every light's channels read from the grid at one point (`MAX_LIGHT_CHANNELS` from the Rust side).
+var<private> iin: array<f32, MAX_LIGHT_CHANNELS>;
+
+@compute @workgroup_size(8, 8)
+fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let x = gid.x;
+    let y = gid.y;
+    let view = eye_params;
+    if x >= view.width || y >= view.height {
+        return;
+    }
+    let p = y * view.width + x;
+    let acc = accum[p];
+    if acc.w == 1.0 {
+        // Opaque: compositing adds (1 − 1)·α·c, exactly 0, so nothing later changes the pixel.
+        return;
+    }
+    let slab = slab_params.slab;
+    let faces = slabs[slab];
+    let front = faces.front;
+    let back = faces.back;
+    let state = cursors[p];
+    let adv = advance(state.next, offsets[p + 1u], state.inside, back);
+    cursors[p] = Cursor(adv.next, adv.inside);
+    let crossed = adv.first != NO_CROSSING;
+    var mesh = first_mesh(adv.inside);
+    if crossed {
+        mesh = frag_meta[adv.first] & MESH_MASK;
+    }
+    if mesh == NO_CROSSING {
+        return;
+    }
+    var z: f32;
+    if crossed {
+        z = frag_depth[adv.first];
+    } else if globals.jitter != 0u {
+        let jitter_row = row_hash(faces.jitter_hash, y);
+        z = front + unit_float(pixel_hash(jitter_row, x)) * globals.slab_distance;
+    } else {
+        z = front + 0.5 * globals.slab_distance;
+    }
+    // The ray's point at view depth z_origin + z, in grid pixel coordinates.
+    let scale = (view.z_origin + z) * view.zoom;
+    let gx = view.axis.x + ((f32(x) + 0.5) - view.centre.x) * scale;
+    let gy = view.axis.y + ((f32(y) + 0.5) - view.centre.y) * scale;
+    var skip_inside = 0u;
+    if crossed {
+        skip_inside = 1u << mesh;
+    }
+    read_grid_light(gx, gy, skip_inside);
+
+    let mi = meshes[mesh].material;
+    let m = materials[mi];
+    let part = slab_part(mesh, state.inside, adv.inside, adv.first, adv.next - 1u, front, back);
+    // Pre-integrated materials read their plain transfer function here (as on the CPU).
+    var value = 0.0;
+    if m.tf_len > 1u {
+        let xi = (gx - 0.5) - f32(globals.guard_left);
+        let yi = (gy - 0.5) - f32(globals.guard_top);
+        value = detail_value(m, to_detail(mesh, xi + 0.5, yi + 0.5, z));
+    }
+    var e = transfer(m, value);
+    let surface = crossed && (m.has_specular != SPEC_NONE || m.lambert != 0u);
+    var n = vec3<f32>(0.0, 0.0, 0.0);
+    if surface {
+        let o = normals[frag_meta[adv.first] >> MESH_BITS];
+        n = vec3<f32>(o[0], o[1], o[2]);
+    }
+    let alpha_at_surface = e.alpha;
+    let scaled = part_of_slab(e, part.x, part.y);
+    e = scaled.entry;
+    let shaded = shade(mi, e.color, alpha_at_surface, surface, n) * scaled.light;
+    accum[p] = composite(acc, shaded, e.alpha);
+}
+
+// Whether grid pixel (x, y) exists.
+fn in_grid(x: i32, y: i32) -> bool {
+    return x >= 0 && y >= 0 && x < i32(globals.grid_w) && y < i32(globals.grid_h);
+}
+
+// `read_light`: every light's channels into `iin`, bilinear in the grid's incoming light at grid
+// position (gx, gy) (pixel centres at +0.5; outside the grid 1), leaving out the neighbours inside
+// a mesh of `skip_inside` at the slab's front unless all four are.
+fn read_grid_light(gx: f32, gy: f32, skip_inside: u32) {
+    let fx = gx - 0.5;
+    let fy = gy - 0.5;
+    let x0f = floor(fx);
+    let y0f = floor(fy);
+    let ax = fx - x0f;
+    let ay = fy - y0f;
+    let x0 = i32(x0f);
+    let y0 = i32(y0f);
+    let xs = array<i32, 4>(x0, x0 + 1, x0, x0 + 1);
+    let ys = array<i32, 4>(y0, y0, y0 + 1, y0 + 1);
+    let corner = array<f32, 4>((1.0 - ax) * (1.0 - ay), ax * (1.0 - ay), (1.0 - ax) * ay, ax * ay);
+    let w = globals.grid_w;
+    var weight = corner;
+    for (var k = 0u; k < 4u; k++) {
+        if in_grid(xs[k], ys[k]) && (grid_cursors[u32(ys[k]) * w + u32(xs[k])].inside & skip_inside) != 0u {
+            weight[k] = 0.0;
+        }
+    }
+    let total = ((weight[0] + weight[1]) + weight[2]) + weight[3];
+    if total > 0.0 && skip_inside != 0u {
+        for (var k = 0u; k < 4u; k++) {
+            weight[k] = weight[k] / total;
+        }
+    } else {
+        weight = corner;
+    }
+    let ch = globals.channels;
+    for (var l = 0u; l < globals.lights; l++) {
+        for (var c = 0u; c < ch; c++) {
+            var sum = 0.0;
+            for (var k = 0u; k < 4u; k++) {
+                var v = 1.0;
+                if in_grid(xs[k], ys[k]) {
+                    v = light_prev[u32(ys[k]) * globals.row_len + (l * globals.planes + c) * w + u32(xs[k])];
+                }
+                sum = sum + weight[k] * v;
+            }
+            iin[l * ch + c] = sum;
+        }
+    }
+}
+
+// After the last slab: C += (1 − A)·background, RGBA f32 out (as sweep.wgsl `finish_image`).
+@compute @workgroup_size(8, 8)
+fn eye_finish(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let x = gid.x;
+    let y = gid.y;
+    if x >= eye_params.width || y >= eye_params.height {
+        return;
+    }
+    let p = y * eye_params.width + x;
+    let acc = accum[p];
+    let c = finish(acc);
+    let o = 4u * p;
+    image[o] = c.x;
+    image[o + 1u] = c.y;
+    image[o + 2u] = c.z;
+    image[o + 3u] = acc.w;
+}

@@ -1,0 +1,117 @@
+//! The perspective camera's eye pass on the GPU (`gpu/src/eye.rs`, `shaders/eye.wgsl`): on
+//! lavapipe the same image, alpha and final grid light bits as the CPU's
+//! `sweep_perspective` — every shader path (detail, textures, specular, phase functions, jitter,
+//! grey and coloured light), every kernel with both penumbra models, fov 30° and 90°, `near`,
+//! second-order media and a patterned light; on other adapters within docs/gpu.md's thresholds.
+
+use crate::render::{check, check_distance, path_scene_text, run};
+use crate::support;
+use crate::support::gpu as gpu_common;
+
+use convshadow::common::model::scene::{Media, PatternSpec, Penumbra, Scene};
+use convshadow::pipeline::Backend;
+use glam::DVec3;
+
+/// The orthographic camera of `path_scene_text` seen instead in perspective from in front and
+/// above, off the axis.
+fn perspective_path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
+    let text = path_scene_text(dir, monochrome, jitter);
+    let ortho = "[camera]\ndirection = [0.2, -0.3, 1.0]\nview_width = 5.0\n";
+    assert!(text.contains(ortho), "the shader-path scene's camera moved");
+    let text = text.replacen(
+        ortho,
+        "[camera]\nprojection = \"perspective\"\neye = [-1.5, 2.0, -7.0]\n\
+         look_at = [0.2, -0.2, 0.4]\nfov_deg = 48\n",
+        1,
+    );
+    let scene = support::scene(&text, dir);
+    assert!(scene.camera.is_perspective());
+    scene
+}
+
+#[test]
+fn gpu_perspective_image_equals_cpu_on_every_shader_path() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-perspective-paths");
+    for (monochrome, jitter) in [(false, true), (true, false)] {
+        let scene = perspective_path_scene(&dir, monochrome, jitter);
+        assert_eq!(scene.is_monochrome(), monochrome);
+        let what = format!("perspective shader paths, monochrome {monochrome}, jitter {jitter}");
+        check(&ctx, &scene, &what);
+        check_distance(&ctx, &scene, &what);
+    }
+    // Second-order media (a medium's part of its entry and exit slabs) and pre-integrated
+    // materials (read through their plain transfer function by the eye).
+    let mut scene = perspective_path_scene(&dir, false, true);
+    scene.sweep.media = Media::SecondOrder;
+    scene.sweep.preintegration = true;
+    scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+    check(
+        &ctx,
+        &scene,
+        "perspective, second-order media, pre-integration",
+    );
+}
+
+#[test]
+fn gpu_perspective_image_equals_cpu_for_every_kernel_and_both_penumbrae() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let text = support::perspective_ball_scene(40, 32, DVec3::new(1.0, 2.5, -6.0), 40.0, "");
+    let text = format!(
+        "{text}color = [0.9, 0.8, 0.7]\n[[light]]\ndirection = [0.3, -1.0, 0.5]\n\
+         variance = [0.02, 0.01]\nrotation_deg = 20.0\n"
+    );
+    let mut scene = support::scene(&text, &support::temp_dir("gpu-perspective-kernels"));
+    for kernel in support::kernels() {
+        scene.sweep.kernel = kernel.parse().unwrap();
+        scene.sweep.penumbra = Penumbra::Iterated;
+        scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+        check(&ctx, &scene, &format!("perspective ball, kernel {kernel}"));
+        if kernel != "box" {
+            let cpu = run(&scene, Backend::Cpu);
+            assert_eq!(cpu.image.width, 40, "the eye's image, not the grid's");
+            check_distance(&ctx, &scene, &format!("perspective ball, kernel {kernel}"));
+        }
+    }
+}
+
+#[test]
+fn gpu_perspective_image_equals_cpu_at_fov_30_and_90_with_near_and_a_pattern() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-perspective-near");
+    let (w, h) = (5u32, 4u32);
+    let data: Vec<f32> = (0..w * h * 3)
+        .map(|i| ((i * 41 + 7) % 89) as f32 / 88.0)
+        .collect();
+    convshadow::io::image::RgbImage {
+        width: w,
+        height: h,
+        data,
+    }
+    .save(&dir.join("gobo.png"))
+    .unwrap();
+    for fov in [30.0, 90.0] {
+        for near in ["", "near = 2.0"] {
+            let text =
+                support::perspective_ball_scene(36, 28, DVec3::new(-0.5, 1.5, -4.0), fov, near);
+            let mut scene = support::scene(&text, &dir);
+            scene.lights[0].pattern = Some(PatternSpec {
+                path: dir.join("gobo.png"),
+                size: [2.5, 1.9],
+                center: [0.3, -0.2],
+            });
+            scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+            check(
+                &ctx,
+                &scene,
+                &format!("perspective ball, fov {fov}, {near:?}, gobo"),
+            );
+        }
+    }
+}
