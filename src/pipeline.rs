@@ -231,7 +231,9 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     if scene.camera.is_perspective() {
         return perspective::render_perspective(scene, req);
     }
-    passes::render_passes(scene, &req.aovs, |pass, aovs| render_pass(pass, req, aovs))
+    passes::render_passes(scene, &req.aovs, passes::Mirror::Yes, |pass, aovs| {
+        render_pass(pass, req, aovs)
+    })
 }
 
 /// [`render`] of one pass: every light at the same end of the sweep, `aovs` instead of

@@ -59,6 +59,8 @@ fn eye_buffers(ctx: &GpuContext, eye: &EyeView<'_>) -> Result<EyeBuffers, GpuErr
         z_origin: eye.z_origin,
         axis: eye.axis,
         centre: [eye.width as f32 * 0.5, eye.height as f32 * 0.5],
+        turned_round: u32::from(eye.turned_round),
+        ..EyeParams::default()
     };
     Ok(EyeBuffers {
         params: uniform(ctx, "eye params", &params),

@@ -90,6 +90,15 @@ pub struct EyeParams {
     pub axis: [f32; 2],
     /// The image centre, `(width · 0.5, height · 0.5)` in f32.
     pub centre: [f32; 2],
+    /// 1 in a turned-round pass (`EyeView::turned_round`): x mirrored, depths turned, back to
+    /// front.
+    pub turned_round: u32,
+    /// Uniform structs are a multiple of 16 bytes.
+    pub _pad0: u32,
+    /// See `_pad0`.
+    pub _pad1: u32,
+    /// See `_pad0`.
+    pub _pad2: u32,
 }
 
 /// Per-render constants of the sweep (uniform).

@@ -131,17 +131,9 @@ fn gauss_legendre_16() -> Vec<(f64, f64)> {
 /// see the sheet first (or the sheet's penumbra lies off the measured range).
 pub fn expected_row(theta: f64, light: SheetLight) -> Vec<Option<f64>> {
     let f = view_direction(theta);
-    // The camera's axes (`frame` of the view direction and up = +y).
+    let right = right_of(f);
     let down = [0.0, -1.0, 0.0];
-    let right = [
-        down[1] * f[2] - down[2] * f[1],
-        down[2] * f[0] - down[0] * f[2],
-        down[0] * f[1] - down[1] * f[0],
-    ];
     let px = VIEW / f64::from(WIDTH);
-    let kappa = -(1.0 - OPACITY).ln();
-    let sigma = light.var_x().sqrt();
-    let nodes = gauss_legendre_16();
     (0..WIDTH)
         .map(|i| {
             let cx = (f64::from(i) + 0.5 - f64::from(WIDTH) / 2.0) * px;
@@ -151,32 +143,118 @@ pub fn expected_row(theta: f64, light: SheetLight) -> Vec<Option<f64>> {
                 right[1] * cx + down[1] * cy,
                 W + right[2] * cx,
             ];
-            let (s0, s1) = slab_hit(p, f, (-1.5, 1.5), (W - T / 2.0, W + T / 2.0))?;
-            if let Some((h0, _)) = slab_hit(p, f, (0.0, 3.0), (-H, H))
-                && h0 < s0
-            {
-                return None; // the half-plane hides the sheet
-            }
-            // Away from the sheet's ends (their own edges, 2 pixels) only.
-            let x_at = |s: f64| p[0] + s * f[0];
-            if x_at(s0).abs().max(x_at(s1).abs()) > 1.5 - 2.0 * px {
-                return None;
-            }
-            // ∫ κ e^{−κ(s − s0)} V ds over [s0, s1], in pieces of at most 0.005.
-            let pieces = ((s1 - s0) / 0.005).ceil().max(1.0) as usize;
-            let step = (s1 - s0) / pieces as f64;
-            let (mut num, mut den) = (0.0, 0.0);
-            for k in 0..pieces {
-                for &(u, w) in &nodes {
-                    let s = s0 + step * (k as f64 + u);
-                    let weight = w * step * kappa * (-kappa * (s - s0)).exp();
-                    num += weight * visibility(x_at(s), p[2] + s * f[2], sigma);
-                    den += weight;
-                }
-            }
-            Some(num / den)
+            expected_on_ray(p, f, 1.0, light)
         })
         .collect()
+}
+
+/// A perspective camera (`camera.projection = "perspective"`) at `eye` looking at `look_at`
+/// (up = +y), horizontal field of view `fov_x_deg` across [`WIDTH`] pixels: its scene (TOML), as
+/// [`scene_toml`]'s with the camera replaced, and its vertical `fov_deg` for [`HEIGHT`] pixels.
+pub fn perspective_scene_toml(
+    eye: [f64; 3],
+    look_at: [f64; 3],
+    fov_x_deg: f64,
+    light: SheetLight,
+    sweep: &str,
+) -> String {
+    let fov_y = perspective_fov_y(fov_x_deg);
+    let ortho = scene_toml(0.0, light, sweep);
+    let camera_start = ortho.find("[camera]").expect("a camera table");
+    let camera_end = ortho.find("[sweep]").expect("a sweep table");
+    format!(
+        "{}[camera]\nprojection = \"perspective\"\neye = {eye:?}\nlook_at = {look_at:?}\n\
+         fov_deg = {fov_y:?}\n{}",
+        &ortho[..camera_start],
+        &ortho[camera_end..]
+    )
+}
+
+/// The vertical field of view (degrees) of [`HEIGHT`] pixels whose [`WIDTH`] pixels span
+/// `fov_x_deg`.
+pub fn perspective_fov_y(fov_x_deg: f64) -> f64 {
+    let focal = 0.5 * f64::from(WIDTH) / (0.5 * fov_x_deg.to_radians()).tan();
+    2.0 * (0.5 * f64::from(HEIGHT) / focal).atan().to_degrees()
+}
+
+/// [`expected_row`] for the perspective camera of [`perspective_scene_toml`]: each pixel's ray
+/// from the eye through its centre, the sheet's opacity per unit of view depth (along the axis).
+pub fn expected_row_perspective(
+    eye: [f64; 3],
+    look_at: [f64; 3],
+    fov_x_deg: f64,
+    light: SheetLight,
+) -> Vec<Option<f64>> {
+    let d = [
+        look_at[0] - eye[0],
+        look_at[1] - eye[1],
+        look_at[2] - eye[2],
+    ];
+    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let f = [d[0] / n, d[1] / n, d[2] / n];
+    let right = right_of(f);
+    let down = [0.0, -1.0, 0.0];
+    let focal = 0.5 * f64::from(WIDTH) / (0.5 * fov_x_deg.to_radians()).tan();
+    (0..WIDTH)
+        .map(|i| {
+            let u = (f64::from(i) + 0.5 - f64::from(WIDTH) / 2.0) / focal;
+            let v = 0.5 / focal; // the row just below the centre
+            let r = [
+                f[0] + right[0] * u + down[0] * v,
+                f[1] + right[1] * u + down[1] * v,
+                f[2] + right[2] * u + down[2] * v,
+            ];
+            let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+            let r = [r[0] / len, r[1] / len, r[2] / len];
+            // View depth per unit of path along this ray.
+            let depth_rate = r[0] * f[0] + r[1] * f[1] + r[2] * f[2];
+            expected_on_ray(eye, r, depth_rate, light)
+        })
+        .collect()
+}
+
+/// The camera's right axis for view direction `f` and up = +y: down × f (`frame`).
+fn right_of(f: [f64; 3]) -> [f64; 3] {
+    let down = [0.0, -1.0, 0.0];
+    [
+        down[1] * f[2] - down[2] * f[1],
+        down[2] * f[0] - down[0] * f[2],
+        down[0] * f[1] - down[1] * f[0],
+    ]
+}
+
+/// The expected normalised value of the view ray `p + s·f` (unit `f`; the sheet's opacity is
+/// per unit of view depth, `depth_rate` of it per unit of s), or `None` where the ray does not
+/// see the sheet first or meets it within 2 pixels of its ends.
+fn expected_on_ray(p: [f64; 3], f: [f64; 3], depth_rate: f64, light: SheetLight) -> Option<f64> {
+    let px = VIEW / f64::from(WIDTH);
+    let kappa = -(1.0 - OPACITY).ln() * depth_rate;
+    let sigma = light.var_x().sqrt();
+    let (s0, s1) = slab_hit(p, f, (-1.5, 1.5), (W - T / 2.0, W + T / 2.0))?;
+    if let Some((h0, _)) = slab_hit(p, f, (0.0, 3.0), (-H, H))
+        && h0 < s0
+    {
+        return None; // the half-plane hides the sheet
+    }
+    // Away from the sheet's ends (their own edges, 2 pixels) only.
+    let x_at = |s: f64| p[0] + s * f[0];
+    if x_at(s0).abs().max(x_at(s1).abs()) > 1.5 - 2.0 * px {
+        return None;
+    }
+    // ∫ κ e^{−κ(s − s0)} V ds over [s0, s1], in pieces of at most 0.005.
+    let nodes = gauss_legendre_16();
+    let pieces = ((s1 - s0) / 0.005).ceil().max(1.0) as usize;
+    let step = (s1 - s0) / pieces as f64;
+    let (mut num, mut den) = (0.0, 0.0);
+    for k in 0..pieces {
+        for &(u, w) in &nodes {
+            let s = s0 + step * (k as f64 + u);
+            let weight = w * step * kappa * (-kappa * (s - s0)).exp();
+            num += weight * visibility(x_at(s), p[2] + s * f[2], sigma);
+            den += weight;
+        }
+    }
+    Some(num / den)
 }
 
 /// The profile's error: the RMSE of the two middle rows of `image` (RGB, [`WIDTH`] ×

@@ -6,13 +6,25 @@ use convshadow_common::model::scene::Scene;
 
 use super::{Aov, RenderError, Rendered, image_fingerprint};
 
+/// Whether the turned-round pass's image is mirrored back in x: an orthographic camera's is
+/// (the turned camera sees the image reversed), a perspective eye's is not (it keeps looking
+/// from the eye; only its light is swept from the far end).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Mirror {
+    /// Mirror the turned-round pass's image, alpha and layers back in x.
+    Yes,
+    /// Add them as they are.
+    No,
+}
+
 /// Renders `scene` with `render_pass` once per pass it needs: the front pass as it is, the
-/// turned-round pass (its image mirrored back in x) added to it. The requested layers go to
+/// turned-round pass (its image mirrored back in x where `mirror` says) added to it. The requested layers go to
 /// the pass that has their light (renumbered there, reported under the scene's numbers); the
 /// depth layer is the front pass's, refused when every light is in front of the viewer.
 pub fn render_passes(
     scene: &Scene,
     aovs: &[Aov],
+    mirror: Mirror,
     mut render_pass: impl FnMut(&Scene, &[Aov]) -> Result<Rendered, RenderError>,
 ) -> Result<Rendered, RenderError> {
     let passes = scene.passes();
@@ -41,11 +53,13 @@ pub fn render_passes(
         None => None,
     };
     let mut back = render_pass(back_scene, &pass_aovs[1])?;
-    let width = back.image.width as usize;
-    mirror_rows(&mut back.image.data, width, 3);
-    mirror_rows(&mut back.alpha, width, 1);
-    for (_, layer) in &mut back.light_layers {
-        mirror_rows(layer, width, 3);
+    if mirror == Mirror::Yes {
+        let width = back.image.width as usize;
+        mirror_rows(&mut back.image.data, width, 3);
+        mirror_rows(&mut back.alpha, width, 1);
+        for (_, layer) in &mut back.light_layers {
+            mirror_rows(layer, width, 3);
+        }
     }
     // Each layer under the scene's light number, in request order.
     let mut layers = [

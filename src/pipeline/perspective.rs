@@ -13,24 +13,12 @@ use convshadow_cpu::sweep::{
 use convshadow_io::image::RgbImage;
 
 use super::aov::{first_hit_depth_in, light_layers};
+use super::passes::{Mirror, render_passes};
 use super::{
     Aov, Engine, RenderError, RenderRequest, Rendered, check_cancel, image_fingerprint,
     plan_updates, refuse_open_meshes,
 };
 use convshadow_common::plan::RenderPlan;
-
-/// What the perspective sweep does not do yet, refused by name.
-fn refuse_unsupported(scene: &Scene) -> Result<(), RenderError> {
-    if scene.passes().back.is_some() {
-        return Err(RenderError::BadPlan(format!(
-            "{}: key `camera.projection`: a perspective camera does not take lights travelling \
-             towards the viewer yet (docs/how-it-works.md, \"A perspective camera\"); an \
-             orthographic camera does",
-            scene.source
-        )));
-    }
-    Ok(())
-}
 
 /// The orthographic scene whose sweep carries the light for `scene`'s perspective camera: the
 /// same view axis, `up` and pixel size (the footprint at the `look_at` distance), centred on the
@@ -73,25 +61,46 @@ fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, RenderError> 
     Ok(grid)
 }
 
-/// [`super::render`] for a perspective camera (one pass, the CPU).
+/// [`super::render`] for a perspective camera: the eye's geometry once, then a pass per end of
+/// the sweep (`passes::render_passes`; the lights travelling towards the viewer swept from the
+/// far end, their image the eye's, not mirrored).
 pub(super) fn render_perspective(
     scene: &Scene,
     req: &RenderRequest<'_>,
 ) -> Result<Rendered, RenderError> {
-    refuse_unsupported(scene)?;
-    let start = Instant::now();
     let eye = convshadow_io::build_geometry(scene)?;
-    let grid = grid_scene(scene, &eye)?;
+    render_passes(scene, &req.aovs, Mirror::No, |pass, aovs| {
+        render_perspective_pass(pass, &eye, req, aovs)
+    })
+}
+
+/// One pass of [`render_perspective`]: `pass` has its lights (and, turned round, its camera's
+/// direction reversed), `eye` the scene's eye.
+fn render_perspective_pass(
+    pass: &Scene,
+    eye: &SceneGeometry,
+    req: &RenderRequest<'_>,
+    aovs: &[Aov],
+) -> Result<Rendered, RenderError> {
+    let scene = pass;
+    let start = Instant::now();
+    let grid = grid_scene(scene, eye)?;
     let engine = Engine::open(&grid, true, req.backend, req.threads, req.memory_budget)?;
     let (geometry, fragment_budget) = engine.geometry(&grid, req.memory_budget)?;
-    // `camera.near`: the grid's sweep starts where the eye's does, in the eye's slabs.
-    let geometry = if let Projection::Perspective { near: Some(_), .. } = scene.camera.projection {
+    // `camera.near`: the grid's sweep starts where the eye's does, in the eye's slabs (the
+    // turned-round grid sweeps the meshes' own range from the far end).
+    let near = matches!(
+        scene.camera.projection,
+        Projection::Perspective { near: Some(_), .. }
+    );
+    let geometry = if near && !scene.turned_round {
         geometry.with_slabs(&grid, eye.z_origin, eye.slab_distance, eye.slabs)?
     } else {
         geometry
     };
-    if (geometry.z_origin, geometry.slab_distance, geometry.slabs)
-        != (eye.z_origin, eye.slab_distance, eye.slabs)
+    if !scene.turned_round
+        && (geometry.z_origin, geometry.slab_distance, geometry.slabs)
+            != (eye.z_origin, eye.slab_distance, eye.slabs)
     {
         return Err(RenderError::BadPlan(format!(
             "{}: the perspective view's light grid and its eye disagree on the slabs ({} slabs of \
@@ -107,10 +116,10 @@ pub(super) fn render_perspective(
     }
     check_cancel(req.cancel)?;
     let ldi = engine.ldi(&geometry, fragment_budget)?;
-    let eye_ldi = engine.ldi(&eye, fragment_budget)?;
+    let eye_ldi = engine.ldi(eye, fragment_budget)?;
     check_cancel(req.cancel)?;
     let stats = engine.pool.install(|| eye_ldi.stats());
-    refuse_open_meshes(scene, &eye, &stats, req.allow_open)?;
+    refuse_open_meshes(scene, eye, &stats, req.allow_open)?;
     let seconds_ldi = start.elapsed().as_secs_f64();
     let t_plan = Instant::now();
     let fragments = stats.fragments + engine.pool.install(|| ldi.stats()).fragments;
@@ -121,13 +130,30 @@ pub(super) fn render_perspective(
     check_cancel(req.cancel)?;
     let t_sweep = Instant::now();
     let cam = &eye.camera;
+    // Turned round: the eye's rays walked far to near at the turned grid's depths (`−z` from the
+    // eye), and its normals as the turned camera sees them (x and z reversed).
+    let turned = scene.turned_round.then(|| {
+        let z_eye = eye.z_origin;
+        let z_grid = geometry.z_origin;
+        let ldi = eye_ldi.turned_round(|d| (-(z_eye + f64::from(d)) - z_grid) as f32);
+        let mut raster = eye.raster.clone();
+        for t in &mut raster.triangles {
+            t.normal = [-t.normal[0], t.normal[1], -t.normal[2]];
+        }
+        (ldi, raster)
+    });
+    let (view_ldi, view_raster, z_origin) = match &turned {
+        Some((ldi, raster)) => (ldi, raster, -geometry.z_origin),
+        None => (&eye_ldi, &eye.raster, eye.z_origin),
+    };
     let view = EyeView {
-        ldi: &eye_ldi,
-        raster: &eye.raster,
+        ldi: view_ldi,
+        raster: view_raster,
         width: cam.width,
         height: cam.height,
         zoom: (1.0 / (cam.focal_px.expect("perspective") * cam.pixel_size)) as f32,
-        z_origin: eye.z_origin as f32,
+        z_origin: z_origin as f32,
+        turned_round: scene.turned_round,
         axis: [
             (plan.width / 2 + plan.guard.left) as f32,
             (plan.height / 2 + plan.guard.top) as f32,
@@ -168,12 +194,11 @@ pub(super) fn render_perspective(
     // The extra layers, as `super::render_pass` makes them: one more sweep per light layer on
     // the plan with the other lights and the background black; the depth from the eye's LDI.
     let mut plan = plan;
-    let light_layers = light_layers(&mut plan, &req.aovs, req.cancel, |plan| {
+    let light_layers = light_layers(&mut plan, aovs, req.cancel, |plan| {
         Ok(run(plan, &CpuOptions::default())?.image)
     })?;
     let image = (cam.width as usize, cam.height as usize);
-    let depth = req
-        .aovs
+    let depth = aovs
         .contains(&Aov::Depth)
         .then(|| first_hit_depth_in(&eye_ldi, (0, 0), image, eye.z_origin));
     Ok(Rendered {
@@ -189,7 +214,11 @@ pub(super) fn render_perspective(
         light_layers,
         ldi: stats,
         ldi_hash: eye_ldi.fingerprint(),
-        turned_round_lights: 0,
+        turned_round_lights: if plan.turned_round {
+            plan.lights.len()
+        } else {
+            0
+        },
         updates: plan_updates(&plan),
         plan,
         light: out.light,

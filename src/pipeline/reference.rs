@@ -10,7 +10,7 @@ use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_io::image::RgbImage;
 use convshadow_reference::{Reference, ReferenceOptions};
 
-use super::passes::render_passes;
+use super::passes::{Mirror, render_passes};
 use super::{
     Aov, LightColors, MemoryNeed, RenderError, Rendered, check_cancel, first_hit_depth,
     image_fingerprint, refuse_open_meshes, thread_pool,
@@ -33,15 +33,16 @@ pub fn render_reference(
     cancel: Option<&AtomicBool>,
 ) -> Result<Rendered, RenderError> {
     if scene.camera.is_perspective() && scene.passes().back.is_some() {
-        // The second pass turns the camera round, which a perspective eye cannot do.
+        // The tracer sends its shadow rays towards depth 0 only (docs/ARCHITECTURE.md).
         return Err(RenderError::BadPlan(format!(
-            "{}: key `camera.projection`: a perspective camera takes lights from behind the \
-             viewer only (travelling less than 90° from the view); a light travelling towards \
-             the viewer needs the second pass from the far end, which is orthographic",
+            "{}: key `camera.projection`: with a perspective camera the shadow-ray reference \
+             takes lights from behind the viewer only (travelling less than 90° from the view) \
+             yet, not a light travelling towards the viewer; the sweep (`--backend cpu` or \
+             `gpu`) renders it",
             scene.source
         )));
     }
-    render_passes(scene, aovs, |pass, aovs| {
+    render_passes(scene, aovs, Mirror::Yes, |pass, aovs| {
         reference_pass(pass, threads, samples, budget, allow_open, aovs, cancel)
     })
 }

@@ -88,22 +88,44 @@ fn perspective_sweep_from_camera_near_matches_the_closed_form_too() {
 
 #[test]
 fn perspective_light_layers_add_up_to_the_image_and_depth_is_the_view_depth() {
-    let mut s = scene(60.0, "");
-    s.lights.push(s.lights[0].clone());
+    // Lights from behind the eye and towards it (two passes), each layer a light alone.
+    // A third light travels towards the eye: its layer comes from the turned-round pass, and
+    // lights the receiver, made translucent, through it.
+    let edge = scene_toml(60.0, "");
+    let receiver = "[material.receiver]\n";
+    assert!(edge.contains(receiver));
+    let text = format!(
+        "{}\n[[light]]\ndirection = [0.2, -0.4, -1.0]\ncolor = [0.3, 0.6, 0.9]\n",
+        edge.replacen(receiver, "[material.receiver]\nopacity = 0.5\n", 1)
+    );
+    let mut s = Scene::parse(&text, "perspective-edge.toml", Path::new(".")).expect("scene");
+    s.lights.insert(1, s.lights[0].clone());
     s.lights[1].color = [0.5, 0.25, 0.125];
+    assert!(s.lights[2].toward_viewer);
     let req = RenderRequest {
         aovs: vec![
             convshadow::pipeline::Aov::Light(1),
             convshadow::pipeline::Aov::Depth,
+            convshadow::pipeline::Aov::Light(2),
             convshadow::pipeline::Aov::Light(0),
         ],
         ..RenderRequest::default()
     };
     let r = render(&s, &req).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(r.light_layers.len(), 2);
-    let sum: Vec<f32> = (r.light_layers[0].1.iter().zip(&r.light_layers[1].1))
-        .map(|(a, b)| a + b)
-        .collect();
+    assert_eq!(r.turned_round_lights, 1);
+    assert_eq!(r.light_layers.len(), 3);
+    let back = &r.light_layers[1].1;
+    assert!(
+        back.iter().any(|&v| v > 0.01),
+        "the light towards the eye lights something"
+    );
+    let sum: Vec<f32> = (r.light_layers[0]
+        .1
+        .iter()
+        .zip(back)
+        .zip(&r.light_layers[2].1))
+    .map(|((a, b), c)| a + b + c)
+    .collect();
     let worst = sum
         .iter()
         .zip(&r.image.data)
@@ -164,4 +186,64 @@ fn the_perspective_gallery_scene_stays_near_the_shadow_ray_reference() {
     let rmse = (sum / n).sqrt();
     eprintln!("perspective/floor.toml at 128 × 80: RMSE {rmse:.4} against the reference");
     assert!(rmse <= 0.05, "RMSE {rmse:.4}");
+}
+
+/// A light travelling towards a perspective eye (the turned-round pass): the half-plane behind a
+/// translucent sheet, both perpendicular to the light, the eye beyond the sheet on the light's
+/// axis looking back along it (180° from the light's travel; each ray at up to half the field
+/// of view off that), against the closed form along every pixel's ray
+/// (`half_plane_sheet::expected_row_perspective`). Horizontal fields of view of 30° and 90°,
+/// isotropic and rotated anisotropic lights, both penumbra models (measured: distance
+/// 1.2e-3–1.6e-3, iterated 9.5e-3–1.15e-2, as with an orthographic camera); the scalar and SIMD
+/// paths give the same bits.
+#[test]
+fn perspective_sweep_with_a_light_towards_the_eye_matches_the_closed_form() {
+    use convshadow::reference::half_plane_sheet::{
+        SheetLight, VIEW, W, expected_row_perspective, perspective_scene_toml, profile_rmse,
+    };
+    let mut failures = Vec::new();
+    for fov_x in [30.0f64, 90.0] {
+        // The view spans VIEW across at the sheet.
+        let distance = 0.5 * VIEW / (0.5 * fov_x.to_radians()).tan();
+        let (eye, look_at) = ([0.0, 0.0, W + distance], [0.0, 0.0, W]);
+        for light in [SheetLight::ISOTROPIC, SheetLight::ROTATED] {
+            let expected = expected_row_perspective(eye, look_at, fov_x, light);
+            for penumbra in ["distance", "iterated"] {
+                // The iterated penumbra is right at the half-plane's distance to the sheet.
+                let sweep = format!("penumbra = \"{penumbra}\"\noptimal_distance = {W}");
+                let text = perspective_scene_toml(eye, look_at, fov_x, light, &sweep);
+                let s = Scene::parse(&text, "back-light.toml", Path::new("."))
+                    .unwrap_or_else(|e| panic!("{e}\n{text}"));
+                assert!(s.passes().front.is_none() && s.passes().back.is_some());
+                let rendered = |path: CpuPath| {
+                    let req = RenderRequest {
+                        path,
+                        ..RenderRequest::default()
+                    };
+                    render(&s, &req).unwrap_or_else(|e| panic!("{e}"))
+                };
+                let simd = rendered(CpuPath::Simd);
+                assert_eq!(simd.turned_round_lights, 1);
+                let (rmse, n) = profile_rmse(&simd.image.data, &expected)
+                    .unwrap_or_else(|e| panic!("fov {fov_x}: {e}"));
+                eprintln!(
+                    "light towards the eye, fov {fov_x}°, {light:?}, {penumbra}: RMSE {rmse:.2e} \
+                     over {n} penumbra pixels"
+                );
+                // The distance penumbra: the issue's 5e-3. The iterated one is right only at
+                // its optimal distance and off by 9.6e-3 (isotropic) and 1.17e-2 (rotated) in
+                // this set-up with an orthographic camera at 180° too (measured when written):
+                // a guard at 1.5e-2.
+                let bound = if penumbra == "distance" { 5e-3 } else { 1.5e-2 };
+                if rmse > bound {
+                    failures.push(format!("fov {fov_x}, {light:?}, {penumbra}: {rmse:.2e}"));
+                }
+                if penumbra == "distance" {
+                    let scalar = rendered(CpuPath::Scalar);
+                    assert_eq!(scalar.image_hash, simd.image_hash, "scalar and SIMD paths");
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
 }

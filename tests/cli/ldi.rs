@@ -277,7 +277,8 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_both_sweeps_and_the_referen
     );
     assert!(code == 0 || code == 5, "{err}");
     assert_eq!(on_gpu.exists(), code == 0, "{err}");
-    // A light travelling towards the viewer is not taken yet: exit 3 naming the key, no output.
+    // A light travelling towards the viewer: the sweep renders it (a second pass from the far
+    // end); the reference does not take it in perspective yet: exit 3 naming the key, no output.
     let back = dir.join("back.toml");
     let back_text = support::perspective_ball_scene(32, 24, DVec3::new(0.0, 1.0, -5.0), 50.0, "");
     std::fs::write(
@@ -285,11 +286,24 @@ fn a_perspective_scene_builds_its_ldi_and_renders_on_both_sweeps_and_the_referen
         format!("{back_text}[[light]]\ndirection = [0.2, -0.3, -1.0]\n"),
     )
     .unwrap();
+    let (code, out, err) = support::run_cli(
+        &[
+            "render",
+            back.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+        ],
+        &dir,
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("from the far end"), "{out}");
     let refused = dir.join("refused.png");
     let (code, _, err) = support::run_cli(
         &[
             "render",
             back.to_str().unwrap(),
+            "--backend",
+            "reference",
             "-o",
             refused.to_str().unwrap(),
         ],

@@ -2,7 +2,8 @@
 //! lavapipe the same image, alpha and final grid light bits as the CPU's
 //! `sweep_perspective` — every shader path (detail, textures, specular, phase functions, jitter,
 //! grey and coloured light), every kernel with both penumbra models, fov 30° and 90°, `near`,
-//! second-order media and a patterned light; on other adapters within docs/gpu.md's thresholds.
+//! second-order media, a patterned light and lights travelling towards the eye (the
+//! turned-round pass); on other adapters within docs/gpu.md's thresholds.
 
 use crate::render::{check, check_distance, path_scene_text, run};
 use crate::support;
@@ -10,23 +11,28 @@ use crate::support::gpu as gpu_common;
 
 use convshadow::common::model::scene::{Media, PatternSpec, Penumbra, Scene};
 use convshadow::pipeline::Backend;
+use convshadow::reference::half_plane_sheet::{SheetLight, W, perspective_scene_toml};
 use glam::DVec3;
 
 /// The orthographic camera of `path_scene_text` seen instead in perspective from in front and
 /// above, off the axis.
 fn perspective_path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
+    let scene = support::scene(&perspective_path_scene_text(dir, monochrome, jitter), dir);
+    assert!(scene.camera.is_perspective());
+    scene
+}
+
+/// The text of [`perspective_path_scene`].
+fn perspective_path_scene_text(dir: &std::path::Path, monochrome: bool, jitter: bool) -> String {
     let text = path_scene_text(dir, monochrome, jitter);
     let ortho = "[camera]\ndirection = [0.2, -0.3, 1.0]\nview_width = 5.0\n";
     assert!(text.contains(ortho), "the shader-path scene's camera moved");
-    let text = text.replacen(
+    text.replacen(
         ortho,
         "[camera]\nprojection = \"perspective\"\neye = [-1.5, 2.0, -7.0]\n\
          look_at = [0.2, -0.2, 0.4]\nfov_deg = 48\n",
         1,
-    );
-    let scene = support::scene(&text, dir);
-    assert!(scene.camera.is_perspective());
-    scene
+    )
 }
 
 #[test]
@@ -113,5 +119,45 @@ fn gpu_perspective_image_equals_cpu_at_fov_30_and_90_with_near_and_a_pattern() {
                 &format!("perspective ball, fov {fov}, {near:?}, gobo"),
             );
         }
+    }
+}
+
+#[test]
+fn gpu_perspective_image_equals_cpu_with_lights_towards_the_eye() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    // The shader-path scene with a fourth light travelling towards the eye (its own pass from
+    // the far end, added to the front pass's image), and the half-plane and sheet lit only
+    // from behind them (the turned-round pass alone).
+    let dir = support::temp_dir("gpu-perspective-back");
+    for (monochrome, jitter) in [(false, true), (true, false)] {
+        let text = perspective_path_scene_text(&dir, monochrome, jitter);
+        let text = format!(
+            "{text}\n[[light]]\ncolor = [0.7, 0.9, 0.5]\ndirection = [0.3, -0.2, -1.0]\n\
+             variance = [0.01, 0.02]\n"
+        );
+        let scene = support::scene(&text, &dir);
+        let passes = scene.passes();
+        assert!(passes.front.is_some() && passes.back.is_some());
+        let what = format!("perspective, a light towards the eye, monochrome {monochrome}");
+        let cpu = check(&ctx, &scene, &what);
+        assert_eq!(cpu.turned_round_lights, 1);
+        check_distance(&ctx, &scene, &what);
+    }
+    let (eye, look_at) = ([0.0, 0.0, W + 1.0], [0.0, 0.0, W]);
+    for penumbra in ["distance", "iterated"] {
+        let sweep = format!("penumbra = \"{penumbra}\"\noptimal_distance = {W}");
+        let text = perspective_scene_toml(eye, look_at, 90.0, SheetLight::ROTATED, &sweep);
+        let mut scene = support::scene(&text, &dir);
+        // The thin sheet takes out 4.5 % of what it passes: a bright light makes it visible.
+        scene.lights[0].color = [20.0; 3];
+        scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+        assert!(scene.passes().front.is_none());
+        check(
+            &ctx,
+            &scene,
+            &format!("perspective sheet lit from behind, {penumbra}"),
+        );
     }
 }

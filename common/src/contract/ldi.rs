@@ -101,6 +101,31 @@ pub struct Ldi {
     pub parity_meshes: u32,
 }
 
+impl Ldi {
+    /// The LDI seen from its far end: each pixel's fragments in reverse order, each depth `d`
+    /// replaced by `depth(d)` (a decreasing map, so every list stays sorted), the pixels where
+    /// they are. A perspective camera's turned-round pass walks its rays far to near with it.
+    pub fn turned_round(&self, depth: impl Fn(f32) -> f32) -> Ldi {
+        let mut out = Ldi {
+            width: self.width,
+            height: self.height,
+            offsets: self.offsets.clone(),
+            depth: Vec::with_capacity(self.depth.len()),
+            triangle: Vec::with_capacity(self.triangle.len()),
+            mesh: Vec::with_capacity(self.mesh.len()),
+            parity_meshes: self.parity_meshes,
+        };
+        for span in self.offsets.windows(2) {
+            for f in (span[0] as usize..span[1] as usize).rev() {
+                out.depth.push(depth(self.depth[f]));
+                out.triangle.push(self.triangle[f]);
+                out.mesh.push(self.mesh[f]);
+            }
+        }
+        out
+    }
+}
+
 /// Summary numbers of an LDI.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct LdiStats {

@@ -81,8 +81,14 @@ pub struct EyeView<'a> {
     /// Grid pixels per image pixel of offset from the centre, per unit of view depth:
     /// `1 / (focal_px · pixel_size)`.
     pub zoom: f32,
-    /// The sweep's origin as a view depth (the eye's depths are relative to it).
+    /// The sweep's origin as a view depth (the eye's depths are relative to it); in a
+    /// turned-round pass, minus the turned grid's origin (a view depth is then `z_origin − z`).
     pub z_origin: f32,
     /// Where the view axis meets the slab grid, in grid pixel coordinates (guard band included).
     pub axis: [f32; 2],
+    /// The pass of the lights travelling towards the viewer: the grid is swept from the far end
+    /// (its camera turned round, x mirrored), `ldi` holds each ray's fragments far to near at
+    /// the turned grid's depths ([`Ldi::turned_round`]), `raster`'s normals are the turned
+    /// camera's, and each ray composites back to front.
+    pub turned_round: bool,
 }

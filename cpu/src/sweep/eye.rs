@@ -77,13 +77,19 @@ pub(crate) fn eye_slab(
                 plan.jitter_slab_hash[slab as usize],
                 plan.hash_y(y as u32 + plan.guard.top),
             );
-            // The pixel centre's offset from the view axis, in image pixels.
+            // The pixel centre's offset from the view axis, in image pixels (in a turned-round
+            // pass x is mirrored: the turned grid's x axis is the image's reversed).
             let offset_y = y as f32 + 0.5 - cy;
             for x in 0..w {
+                let offset_x = if view.turned_round {
+                    cx - (x as f32 + 0.5)
+                } else {
+                    x as f32 + 0.5 - cx
+                };
                 let pixel = EyePixel {
                     x,
                     y,
-                    offset: [x as f32 + 0.5 - cx, offset_y],
+                    offset: [offset_x, offset_y],
                     jitter_row,
                     front,
                     back,
@@ -120,9 +126,9 @@ fn eye_pixel(
     (next, inside): (&mut u32, &mut u32),
     (color, alpha): (&mut [f32; 3], &mut f32),
 ) {
-    if *alpha == 1.0 {
+    if *alpha == 1.0 && !view.turned_round {
         // Opaque: compositing adds (1 − 1)·α·c, exactly 0 (the early finish's argument), so
-        // nothing later changes this pixel's bits.
+        // nothing later changes this pixel's bits. (Back to front, nearer slabs still do.)
         return;
     }
     let ldi = view.ldi;
@@ -145,8 +151,14 @@ fn eye_pixel(
         p.jitter_row,
         p.x + plan.guard.left as usize,
     );
-    // The ray's point at view depth z_origin + z, in grid pixel coordinates.
-    let scale = (view.z_origin + z) * view.zoom;
+    // The ray's point at view depth z_origin + z (turned round: z_origin − z), in grid pixel
+    // coordinates.
+    let view_depth = if view.turned_round {
+        view.z_origin - z
+    } else {
+        view.z_origin + z
+    };
+    let scale = view_depth * view.zoom;
     let gx = view.axis[0] + p.offset[0] * scale;
     let gy = view.axis[1] + p.offset[1] * scale;
     let skip_inside = if crossed != NO_CROSSING {

@@ -140,7 +140,11 @@ fn rust_layouts() -> Vec<Layout> {
             zoom,
             z_origin,
             axis,
-            centre
+            centre,
+            turned_round,
+            _pad0,
+            _pad1,
+            _pad2
         }),
     ]
 }

@@ -27,8 +27,10 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let p = y * view.width + x;
     let acc = accum[p];
-    if acc.w == 1.0 {
-        // Opaque: compositing adds (1 − 1)·α·c, exactly 0, so nothing later changes the pixel.
+    let turned = view.turned_round != 0u;
+    if acc.w == 1.0 && !turned {
+        // Opaque: compositing adds (1 − 1)·α·c, exactly 0, so nothing later changes the pixel
+        // (back to front, nearer slabs still do).
         return;
     }
     let slab = slab_params.slab;
@@ -55,9 +57,16 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     } else {
         z = front + 0.5 * globals.slab_distance;
     }
-    // The ray's point at view depth z_origin + z, in grid pixel coordinates.
-    let scale = (view.z_origin + z) * view.zoom;
-    let gx = view.axis.x + ((f32(x) + 0.5) - view.centre.x) * scale;
+    // The ray's point at view depth z_origin + z (turned round: z_origin − z, x mirrored), in
+    // grid pixel coordinates.
+    var view_depth = view.z_origin + z;
+    var offset_x = (f32(x) + 0.5) - view.centre.x;
+    if turned {
+        view_depth = view.z_origin - z;
+        offset_x = view.centre.x - (f32(x) + 0.5);
+    }
+    let scale = view_depth * view.zoom;
+    let gx = view.axis.x + offset_x * scale;
     let gy = view.axis.y + ((f32(y) + 0.5) - view.centre.y) * scale;
     var skip_inside = 0u;
     if crossed {

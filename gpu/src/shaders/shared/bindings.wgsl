@@ -224,6 +224,10 @@ struct EyeParams {
     z_origin: f32,  // the sweep's origin as a view depth
     axis: vec2<f32>,   // where the view axis meets the grid (grid pixel coordinates)
     centre: vec2<f32>, // the image centre (width · 0.5, height · 0.5)
+    turned_round: u32, // 1: the far end's pass (x mirrored, depth z_origin − z, back to front)
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(36) var<uniform> eye_params: EyeParams;
