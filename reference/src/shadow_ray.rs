@@ -68,8 +68,10 @@ use convshadow_common::model::scene::{MaterialSpec, Scene};
 use convshadow_common::pixel::hash::{mix32, row_hash};
 
 mod geometry;
+mod turned_eye;
 
 use geometry::{Start, Tri, add, intersect, sub, to_detail_f64};
+pub use turned_eye::TurnedEye;
 
 use crate::light_samples::{fine_strata, inverse_normal_cdf, samples_side};
 use convshadow_common::plan::{DEFAULT_REFERENCE_LENGTH, RenderPlan};
@@ -178,6 +180,8 @@ pub struct Reference<'a> {
     /// Cholesky-like factor (R·diag(σ)) in grid px per world depth.
     lights: Vec<([f64; 2], [[f64; 2]; 2])>,
     step: f64,
+    /// A perspective eye's rays, where the tracer works on its turned-round slab grid.
+    eye: Option<TurnedEye<'a>>,
 }
 
 impl<'a> Reference<'a> {
@@ -275,7 +279,17 @@ impl<'a> Reference<'a> {
             mesh_material: scene.meshes.iter().map(|m| m.material).collect(),
             lights,
             step: if step > 0.0 { step } else { e / 8.0 },
+            eye: None,
         }
+    }
+
+    /// The reference on a turned-round slab grid (the geometry and plan given to
+    /// [`Reference::new`]) seen by a perspective eye: the view LDI given to
+    /// [`Reference::render`] is then the eye's, each pixel's fragments far to near at the grid's
+    /// depths, and the image the eye's.
+    pub fn with_turned_eye(mut self, eye: TurnedEye<'a>) -> Reference<'a> {
+        self.eye = Some(eye);
+        self
     }
 
     /// Candidate triangles whose bins the screen segment from `a` to `b` passes.
@@ -505,6 +519,10 @@ impl<'a> Reference<'a> {
     /// the one whose plane at (x, y) is nearest `z`, if within a slab thickness. Returns that
     /// depth, computed in f64 on the unsnapped triangle, and the triangle's index.
     fn surface_point(&self, mesh: u32, x: f64, y: f64, z: f64) -> Option<(f64, u32)> {
+        if let Some(eye) = &self.eye {
+            let (origin, dir) = eye.line(x, y);
+            return self.surface_point_on_line(mesh, origin, dir, z);
+        }
         if let Some(focal) = self.geometry.camera.focal_px {
             return self.surface_point_on_ray(mesh, x, y, z, focal);
         }
@@ -558,6 +576,18 @@ impl<'a> Reference<'a> {
         // per unit of its parameter.
         let origin = [cx, cy, -self.geometry.z_origin];
         let dir = [(x - cx) / s, (y - cy) / s, 1.0];
+        self.surface_point_on_line(mesh, origin, dir, z)
+    }
+
+    /// The hit of the line `origin + t·dir` (`dir` of depth component 1) on mesh `mesh` nearest
+    /// relative depth `z`, if within a slab thickness: its depth and triangle.
+    fn surface_point_on_line(
+        &self,
+        mesh: u32,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        z: f64,
+    ) -> Option<(f64, u32)> {
         let e = self.geometry.slab_distance;
         let at = |zr: f64| {
             let t = zr - origin[2];
@@ -586,6 +616,9 @@ impl<'a> Reference<'a> {
     /// Where pixel centre (x, y)'s view ray is at relative depth `z`, in the tracer's slab-grid
     /// coordinates: (x, y) for an orthographic camera (`Camera::pixel_to_grid`).
     fn view_point(&self, x: f64, y: f64, z: f64) -> [f64; 3] {
+        if let Some(eye) = &self.eye {
+            return eye.point(x, y, z);
+        }
         let g = self.geometry;
         let (gx, gy) = g.camera.pixel_to_grid(x, y, g.z_origin + z);
         [gx, gy, z]
@@ -643,9 +676,26 @@ impl<'a> Reference<'a> {
     pub fn render_with_alpha(&self, ldi: &Ldi, options: &ReferenceOptions) -> (Vec<f32>, Vec<f32>) {
         let plan = self.plan;
         let k = samples_side(options.samples);
-        let (iw, ih) = (plan.width as usize, plan.height as usize);
-        let (left, top) = (plan.guard.left as usize, plan.guard.top as usize);
-        let w = plan.grid_width as usize;
+        // The image and where its pixels sit in the view LDI (the grid's, or a turned eye's own).
+        let (iw, ih, left, top, w) = match &self.eye {
+            Some(eye) => (
+                eye.width as usize,
+                eye.height as usize,
+                0,
+                0,
+                eye.width as usize,
+            ),
+            None => (
+                plan.width as usize,
+                plan.height as usize,
+                plan.guard.left as usize,
+                plan.guard.top as usize,
+                plan.grid_width as usize,
+            ),
+        };
+        // Hashes are keyed by image pixel (`RenderPlan::hash_x`), as in the sweep.
+        let (hash_left, hash_top) = (plan.guard.left as usize, plan.guard.top as usize);
+        let normals = self.eye.map_or(&self.geometry.raster, |eye| eye.raster);
         let ch = plan.channels as usize;
         let lights = plan.lights.len();
         let mut image = vec![0.0f32; iw * ih * 3];
@@ -680,18 +730,22 @@ impl<'a> Reference<'a> {
                         if !plan.turned_round && 1.0 - alpha < TRANSPARENCY_CUTOFF {
                             break;
                         }
-                        let jitter_row =
-                            row_hash(plan.jitter_slab_hash[slab as usize], plan.hash_y(y as u32));
-                        let z = shading_depth(plan, ldi, crossed, front, jitter_row, x);
+                        let jitter_row = row_hash(
+                            plan.jitter_slab_hash[slab as usize],
+                            plan.hash_y((iy + hash_top) as u32),
+                        );
+                        let z =
+                            shading_depth(plan, ldi, crossed, front, jitter_row, ix + hash_left);
                         let (cx, cy) = (ix as f64 + 0.5, iy as f64 + 0.5);
                         // The detail where the view ray is (the plan's slab-grid pixel, whose
                         // centre is +0.5: `detail_at`); an orthographic camera's own pixel.
-                        let (dx, dy) = if self.geometry.camera.focal_px.is_some() {
-                            let [gx, gy, _] = self.view_point(cx, cy, f64::from(z));
-                            ((gx - 0.5) as f32, (gy - 0.5) as f32)
-                        } else {
-                            (ix as f32, iy as f32)
-                        };
+                        let (dx, dy) =
+                            if self.geometry.camera.focal_px.is_some() || self.eye.is_some() {
+                                let [gx, gy, _] = self.view_point(cx, cy, f64::from(z));
+                                ((gx - 0.5) as f32, (gy - 0.5) as f32)
+                            } else {
+                                (ix as f32, iy as f32)
+                            };
                         let mut tf = material_at(plan, mesh, dx, dy, z);
                         // The sweep's view samples: a medium's entry and exit slabs by the part
                         // inside (the light needs no such factor: it is traced).
@@ -749,8 +803,7 @@ impl<'a> Reference<'a> {
                         // crossing, with the crossed triangle's normal.
                         let has_surface = material.specular.is_some() || material.lambert;
                         let surface = (crossed != NO_CROSSING && has_surface).then(|| Surface {
-                            normal: self.geometry.raster.triangles
-                                [ldi.triangle[crossed as usize] as usize]
+                            normal: normals.triangles[ldi.triangle[crossed as usize] as usize]
                                 .normal,
                             lanes: true,
                             alpha: tf.alpha,

@@ -5,8 +5,10 @@
 
 use std::time::Instant;
 
+use convshadow_common::contract::ldi::Ldi;
 use convshadow_common::model::scene::{CameraSpec, MAX_IMAGE_SIDE, Projection, Scene, SlabSpec};
 use convshadow_common::prepare::geometry::SceneGeometry;
+use convshadow_common::prepare::raster::RasterSetup;
 use convshadow_cpu::sweep::{
     ChunkCounts, CpuOptions, EyeView, SweepOptions, SweepOutput, sweep_perspective,
 };
@@ -24,7 +26,7 @@ use convshadow_common::plan::RenderPlan;
 /// same view axis, `up` and pixel size (the footprint at the `look_at` distance), centred on the
 /// eye (so every view depth is the eye's bit for bit), `eye`'s slab count, and a grid that holds
 /// every vertex within the frustum, symmetric about the axis.
-fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, RenderError> {
+pub(super) fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, RenderError> {
     let cam = &eye.camera;
     let focal = cam.focal_px.expect("a perspective camera");
     let (w, h) = (f64::from(cam.width), f64::from(cam.height));
@@ -59,6 +61,34 @@ fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, RenderError> 
     grid.image.height = gh as u32;
     grid.sweep.slabs = SlabSpec::Count(eye.slabs);
     Ok(grid)
+}
+
+/// The eye's rays on the slab grid of `plan`: grid pixels per image pixel of offset per unit of
+/// view depth (`1 / (focal · pixel_size)`), and where the view axis meets the grid's image (its
+/// centre: the grid is symmetric about the axis), in its image pixels (the guard band not
+/// counted: the sweep's buffers add it, the reference's tracer works without it).
+pub(super) fn eye_on_grid(eye: &SceneGeometry, plan: &RenderPlan) -> (f64, [f64; 2]) {
+    let cam = &eye.camera;
+    let zoom = 1.0 / (cam.focal_px.expect("a perspective camera") * cam.pixel_size);
+    let axis = [f64::from(plan.width / 2), f64::from(plan.height / 2)];
+    (zoom, axis)
+}
+
+/// The eye's LDI and rasterizer set-up as a turned-round pass walks them: each ray's fragments
+/// far to near at the turned grid's relative depths (`−z` from the eye, less `grid`'s origin),
+/// the normals as the turned camera sees them (x and z reversed).
+pub(super) fn turned_eye(
+    eye: &SceneGeometry,
+    eye_ldi: &Ldi,
+    grid: &SceneGeometry,
+) -> (Ldi, RasterSetup) {
+    let (z_eye, z_grid) = (eye.z_origin, grid.z_origin);
+    let ldi = eye_ldi.turned_round(|d| (-(z_eye + f64::from(d)) - z_grid) as f32);
+    let mut raster = eye.raster.clone();
+    for t in &mut raster.triangles {
+        t.normal = [-t.normal[0], t.normal[1], -t.normal[2]];
+    }
+    (ldi, raster)
 }
 
 /// [`super::render`] for a perspective camera: the eye's geometry once, then a pass per end of
@@ -130,33 +160,25 @@ fn render_perspective_pass(
     check_cancel(req.cancel)?;
     let t_sweep = Instant::now();
     let cam = &eye.camera;
-    // Turned round: the eye's rays walked far to near at the turned grid's depths (`−z` from the
-    // eye), and its normals as the turned camera sees them (x and z reversed).
-    let turned = scene.turned_round.then(|| {
-        let z_eye = eye.z_origin;
-        let z_grid = geometry.z_origin;
-        let ldi = eye_ldi.turned_round(|d| (-(z_eye + f64::from(d)) - z_grid) as f32);
-        let mut raster = eye.raster.clone();
-        for t in &mut raster.triangles {
-            t.normal = [-t.normal[0], t.normal[1], -t.normal[2]];
-        }
-        (ldi, raster)
-    });
+    let turned = scene
+        .turned_round
+        .then(|| turned_eye(eye, &eye_ldi, &geometry));
     let (view_ldi, view_raster, z_origin) = match &turned {
         Some((ldi, raster)) => (ldi, raster, -geometry.z_origin),
         None => (&eye_ldi, &eye.raster, eye.z_origin),
     };
+    let (zoom, axis) = eye_on_grid(eye, &plan);
     let view = EyeView {
         ldi: view_ldi,
         raster: view_raster,
         width: cam.width,
         height: cam.height,
-        zoom: (1.0 / (cam.focal_px.expect("perspective") * cam.pixel_size)) as f32,
+        zoom: zoom as f32,
         z_origin: z_origin as f32,
         turned_round: scene.turned_round,
         axis: [
-            (plan.width / 2 + plan.guard.left) as f32,
-            (plan.height / 2 + plan.guard.top) as f32,
+            (axis[0] + f64::from(plan.guard.left)) as f32,
+            (axis[1] + f64::from(plan.guard.top)) as f32,
         ],
     };
     // A light's pattern (gobo) is its initial light buffer, the same for every layer's sweep.
