@@ -286,8 +286,8 @@ fn perspective_reference_with_a_light_towards_the_eye_matches_the_closed_form() 
 
 /// A floor running back from a perspective eye, a ball on it, lit only by a light travelling
 /// towards the eye (a rim light from above and beyond): the sweep against the shadow-ray
-/// reference, which shows the bands accuracy.md §2f describes on the floor (the error measured
-/// and held, not the target).
+/// reference (accuracy.md §2f: the floor is a surface the far end's sweep leaves its mesh
+/// through, read one slab back along the light).
 #[test]
 fn a_perspective_floor_lit_towards_the_eye_against_the_reference() {
     let text = support::perspective_ball_scene(96, 64, glam::DVec3::new(0.0, 2.0, -6.0), 45.0, "");
@@ -321,7 +321,7 @@ fn a_perspective_floor_lit_towards_the_eye_against_the_reference() {
         mean > 0.05,
         "the rim light lights the floor (mean {mean:.4})"
     );
-    // Measured 0.162 (mean 0.117) when written: the floor in bands where the reference lights
-    // it evenly (accuracy.md §2f); held to +25 %.
-    assert!(rmse <= 0.2, "RMSE {rmse:.4}");
+    // Measured 0.0138 (mean 0.117) when written; 0.162, the floor in bands, before the eye read
+    // a crossed surface one slab back along the light (accuracy.md §2f). Held to +25 %.
+    assert!(rmse <= 0.0175, "RMSE {rmse:.4}");
 }

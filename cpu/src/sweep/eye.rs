@@ -166,7 +166,11 @@ fn eye_pixel(
     } else {
         0
     };
-    let iin = read_light(plan, grid, gx, gy, skip_inside);
+    // Turned round, a crossed surface is read where each light's ray through it crossed the
+    // plane one slab before this slab's front (see `read_light`).
+    let back_along_light = (view.turned_round && crossed != NO_CROSSING)
+        .then_some((z - p.front) * plan.inv_slab_distance + 1.0);
+    let iin = read_light(plan, grid, (gx, gy), skip_inside, back_along_light);
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
     let (xi, yi) = (
         gx - 0.5 - plan.guard.left as f32,
@@ -197,13 +201,42 @@ fn eye_pixel(
 /// Every light's channels read bilinearly from the grid's outgoing light at grid position
 /// (gx, gy) (pixel centres at +0.5; outside the grid the unoccluded light, 1), leaving out the
 /// neighbours inside any mesh of `skip_inside` at the slab's front unless all four are.
+///
+/// `back_along_light`: each light is read `s` slabs of its drift back along its ray instead, at
+/// `(gx, gy) − s·drift`. A turned-round pass reads a crossed surface so, `s` = its place in the
+/// slab + 1: the surface the eye sees is one the far end's sweep *leaves* its mesh through, and
+/// the grid around it at the slab's front is still the mesh's inside; where the light reaches
+/// the surface, its ray one slab further back is outside (a one-slab bias, as a shadow map's).
 fn read_light(
     plan: &RenderPlan,
     grid: &GridLight<'_>,
-    gx: f32,
-    gy: f32,
+    (gx, gy): (f32, f32),
     skip_inside: u32,
+    back_along_light: Option<f32>,
 ) -> [f32; MAX_LIGHT_CHANNELS] {
+    let mut out = [0.0f32; MAX_LIGHT_CHANNELS];
+    for l in 0..plan.lights.len() {
+        let at = match back_along_light {
+            Some(s) => {
+                let d = plan.lights[l].drift;
+                (gx - s * d[0], gy - s * d[1])
+            }
+            None => (gx, gy),
+        };
+        read_one_light(plan, grid, l, at, skip_inside, &mut out);
+    }
+    out
+}
+
+/// Light `l`'s channels of [`read_light`] at grid position (gx, gy), into `out`.
+fn read_one_light(
+    plan: &RenderPlan,
+    grid: &GridLight<'_>,
+    l: usize,
+    (gx, gy): (f32, f32),
+    skip_inside: u32,
+    out: &mut [f32; MAX_LIGHT_CHANNELS],
+) {
     let (w, h) = (plan.grid_width as i64, plan.grid_height as i64);
     let (fx, fy) = (gx - 0.5, gy - 0.5);
     let (x0, y0) = (fx.floor(), fy.floor());
@@ -231,21 +264,17 @@ fn read_light(
         plan.planes_per_light(),
         plan.light_row_len(),
     );
-    let mut out = [0.0f32; MAX_LIGHT_CHANNELS];
-    for l in 0..plan.lights.len() {
-        for c in 0..ch {
-            let mut sum = 0.0f32;
-            for (k, &(x, y, _)) in corners.iter().enumerate() {
-                let v = if in_grid(x, y) {
-                    let at = y as usize * row_len + light_block(plan, l) + x as usize * planes;
-                    grid.light[at + c]
-                } else {
-                    1.0
-                };
-                sum += weight[k] * v;
-            }
-            out[l * ch + c] = sum;
+    for c in 0..ch {
+        let mut sum = 0.0f32;
+        for (k, &(x, y, _)) in corners.iter().enumerate() {
+            let v = if in_grid(x, y) {
+                let at = y as usize * row_len + light_block(plan, l) + x as usize * planes;
+                grid.light[at + c]
+            } else {
+                1.0
+            };
+            sum += weight[k] * v;
         }
+        out[l * ch + c] = sum;
     }
-    out
 }

@@ -72,7 +72,20 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     if crossed {
         skip_inside = 1u << mesh;
     }
-    read_grid_light(gx, gy, skip_inside);
+    // Turned round, a crossed surface is read one slab further back along each light's ray
+    // (cpu/src/sweep/eye.rs `read_light`); `back` < 0: at the point itself.
+    var back_along_light = -1.0;
+    if turned && crossed {
+        back_along_light = (z - front) * globals.inv_slab_distance + 1.0;
+    }
+    for (var l = 0u; l < globals.lights; l++) {
+        var at = vec2<f32>(gx, gy);
+        if back_along_light >= 0.0 {
+            let d = lights[l].drift;
+            at = vec2<f32>(gx - back_along_light * d[0], gy - back_along_light * d[1]);
+        }
+        read_grid_light(l, at.x, at.y, skip_inside);
+    }
 
     let mi = meshes[mesh].material;
     let m = materials[mi];
@@ -103,10 +116,10 @@ fn in_grid(x: i32, y: i32) -> bool {
     return x >= 0 && y >= 0 && x < i32(globals.grid_w) && y < i32(globals.grid_h);
 }
 
-// `read_light`: every light's channels into `iin`, bilinear in the grid's incoming light at grid
+// `read_one_light`: light l's channels into `iin`, bilinear in the grid's incoming light at grid
 // position (gx, gy) (pixel centres at +0.5; outside the grid 1), leaving out the neighbours inside
 // a mesh of `skip_inside` at the slab's front unless all four are.
-fn read_grid_light(gx: f32, gy: f32, skip_inside: u32) {
+fn read_grid_light(l: u32, gx: f32, gy: f32, skip_inside: u32) {
     let fx = gx - 0.5;
     let fy = gy - 0.5;
     let x0f = floor(fx);
@@ -134,18 +147,16 @@ fn read_grid_light(gx: f32, gy: f32, skip_inside: u32) {
         weight = corner;
     }
     let ch = globals.channels;
-    for (var l = 0u; l < globals.lights; l++) {
-        for (var c = 0u; c < ch; c++) {
-            var sum = 0.0;
-            for (var k = 0u; k < 4u; k++) {
-                var v = 1.0;
-                if in_grid(xs[k], ys[k]) {
-                    v = light_prev[u32(ys[k]) * globals.row_len + (l * globals.planes + c) * w + u32(xs[k])];
-                }
-                sum = sum + weight[k] * v;
+    for (var c = 0u; c < ch; c++) {
+        var sum = 0.0;
+        for (var k = 0u; k < 4u; k++) {
+            var v = 1.0;
+            if in_grid(xs[k], ys[k]) {
+                v = light_prev[u32(ys[k]) * globals.row_len + (l * globals.planes + c) * w + u32(xs[k])];
             }
-            iin[l * ch + c] = sum;
+            sum = sum + weight[k] * v;
         }
+        iin[l * ch + c] = sum;
     }
 }
 
