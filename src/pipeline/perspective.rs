@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use convshadow_common::contract::ldi::Ldi;
+use convshadow_common::contract::ldi::{BYTES_PER_FRAGMENT, Ldi};
 use convshadow_common::model::scene::{CameraSpec, MAX_IMAGE_SIDE, Projection, Scene, SlabSpec};
 use convshadow_common::prepare::geometry::SceneGeometry;
 use convshadow_common::prepare::raster::RasterSetup;
@@ -15,9 +15,10 @@ use convshadow_cpu::sweep::{
 use convshadow_io::image::RgbImage;
 
 use super::aov::{first_hit_depth_in, light_layers};
+use super::budget::LDI_BYTES_PER_PIXEL;
 use super::passes::{Mirror, render_passes};
 use super::{
-    Aov, Engine, RenderError, RenderRequest, Rendered, check_cancel, image_fingerprint,
+    Aov, Backend, Engine, RenderError, RenderRequest, Rendered, check_cancel, image_fingerprint,
     plan_updates, refuse_open_meshes,
 };
 use convshadow_common::plan::RenderPlan;
@@ -61,6 +62,43 @@ pub(super) fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, Re
     grid.image.height = gh as u32;
     grid.sweep.slabs = SlabSpec::Count(eye.slabs);
     Ok(grid)
+}
+
+/// The bytes the eye adds to its slab grid's need before any fragment (`budget::MemoryNeed` counts
+/// the grid's): its LDI's per-pixel arrays, its per-pixel state (cursor, inside bits, colour,
+/// alpha), its image as floats, 8-bit and encoded, and on the GPU its device buffers (cursors,
+/// colours, LDI offsets, the RGBA image and its read-back copy).
+fn eye_need(eye: &SceneGeometry, backend: Backend) -> u64 {
+    let pixels = u64::from(eye.camera.width) * u64::from(eye.camera.height);
+    let host = LDI_BYTES_PER_PIXEL + (4 + 4 + 12 + 4) + (12 + 4 + 3 + 3);
+    let device = if backend == Backend::Gpu {
+        8 + 16 + 4 + 16 + 16
+    } else {
+        0
+    };
+    (host + device) * pixels
+}
+
+/// The fragment budget the grid's need left, less the eye's need ([`eye_need`]); refused when the
+/// eye does not fit.
+fn within_budget_after_eye(
+    scene: &Scene,
+    eye: &SceneGeometry,
+    fragment_budget: u64,
+    backend: Backend,
+) -> Result<u64, RenderError> {
+    let need = eye_need(eye, backend);
+    fragment_budget.checked_sub(need).ok_or_else(|| {
+        RenderError::OutOfMemory(format!(
+            "{}: the perspective view's {} × {} image needs {} MiB more (its LDI arrays, per-pixel \
+             state and output) than the memory budget leaves beside its light grid; lower \
+             image.width/image.height or raise --max-memory",
+            scene.source,
+            eye.camera.width,
+            eye.camera.height,
+            (need - fragment_budget).div_ceil(1 << 20)
+        ))
+    })
 }
 
 /// The eye's rays on the slab grid of `plan`: grid pixels per image pixel of offset per unit of
@@ -117,6 +155,8 @@ fn render_perspective_pass(
     let grid = grid_scene(scene, eye)?;
     let engine = Engine::open(&grid, true, req.backend, req.threads, req.memory_budget)?;
     let (geometry, fragment_budget) = engine.geometry(&grid, req.memory_budget)?;
+    let fragment_budget =
+        within_budget_after_eye(scene, eye, fragment_budget, engine.choice.opened())?;
     // `camera.near`: the grid's sweep starts where the eye's does, in the eye's slabs (the
     // turned-round grid sweeps the meshes' own range from the far end).
     let near = matches!(
@@ -145,8 +185,10 @@ fn render_perspective_pass(
         )));
     }
     check_cancel(req.cancel)?;
-    let ldi = engine.ldi(&geometry, fragment_budget)?;
+    // Both LDIs' fragments within the one budget: the eye's first, the grid's in what it left.
     let eye_ldi = engine.ldi(eye, fragment_budget)?;
+    let eye_bytes = eye_ldi.depth.len() as u64 * BYTES_PER_FRAGMENT;
+    let ldi = engine.ldi(&geometry, fragment_budget.saturating_sub(eye_bytes))?;
     check_cancel(req.cancel)?;
     let stats = engine.pool.install(|| eye_ldi.stats());
     refuse_open_meshes(scene, eye, &stats, req.allow_open)?;

@@ -177,6 +177,45 @@ fn ldi_hash_from_the_cli_is_the_same_for_1_2_3_8_threads() {
     assert!(hashes.windows(2).all(|w| w[0] == w[1]), "{hashes:?}");
 }
 
+/// A perspective eye's own memory (its LDI arrays, per-pixel state and image: 58 bytes a pixel on
+/// the CPU) counts beside its light grid: a 2000 × 2000 view of a small ball (a grid of a few
+/// hundred pixels a side) needs 221 MiB for the eye alone, refused within 100 MiB (exit 4, no
+/// output) and rendered within 400.
+#[test]
+fn a_perspective_eye_counts_in_the_memory_budget() {
+    let dir = support::temp_dir("perspective-budget");
+    let scene = dir.join("eye.toml");
+    let text = support::perspective_scene_text(
+        (2000, 2000),
+        (DVec3::new(0.0, 0.0, -10.0), DVec3::ZERO),
+        40.0,
+        "",
+        "[[mesh]]\nshape = \"sphere\"\nsize = [0.2, 2]\nmaterial = \"m\"",
+    );
+    std::fs::write(&scene, text.replace("slabs = 32", "slabs = 8")).unwrap();
+    let png = dir.join("eye.png");
+    let render = |mib: &str| {
+        support::run_cli(
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "--max-memory",
+                mib,
+                "-o",
+                png.to_str().unwrap(),
+            ],
+            &dir,
+        )
+    };
+    let (code, _, err) = render("100");
+    assert_eq!(code, 4, "{err}");
+    assert!(err.contains("2000 × 2000 image needs"), "{err}");
+    assert!(!png.exists(), "no output for a refused render");
+    let (code, _, err) = render("400");
+    assert_eq!(code, 0, "{err}");
+    assert!(png.exists());
+}
+
 #[test]
 fn a_too_small_memory_budget_is_refused_with_the_need() {
     let dir = support::temp_dir("ldi-budget");
