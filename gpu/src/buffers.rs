@@ -166,3 +166,25 @@ pub fn bind(
         entries: &entries,
     })
 }
+
+/// Submits one compute pass (`label`) that dispatches `pipeline` with bind group `group` over
+/// `workgroups` (x, y) workgroups.
+pub fn dispatch_once(
+    ctx: &GpuContext,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    group: &wgpu::BindGroup,
+    workgroups: (u32, u32),
+) {
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups(workgroups.0, workgroups.1, 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+}

@@ -10,7 +10,7 @@ use convshadow_common::contract::sweep_io::{EyeView, SweepOptions, SweepOutput};
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::prepare::raster::RasterSetup;
 
-use crate::buffers::{bind, pipeline, uniform, upload, zeroed};
+use crate::buffers::{bind, dispatch_once, pipeline, uniform, upload, zeroed};
 use crate::device::{GpuContext, GpuError};
 use crate::layout::{Cursor, EyeParams, MESH_BITS, slot};
 use crate::shader::eye_wgsl;
@@ -141,17 +141,8 @@ fn dispatch_eye_finish(
             (slot::IMAGE, &e.image),
         ],
     );
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("eye finish"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&pipe);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(eye.width.div_ceil(TILE), eye.height.div_ceil(TILE), 1);
-    }
-    ctx.queue.submit([encoder.finish()]);
+    let workgroups = (eye.width.div_ceil(TILE), eye.height.div_ceil(TILE));
+    dispatch_once(ctx, "eye finish", &pipe, &group, workgroups);
 }
 
 /// Runs the sweep on the grid of `plan` with the eye pass of `eye` before every slab: the same

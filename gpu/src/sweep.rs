@@ -22,7 +22,9 @@ use convshadow_common::plan::{
 };
 use convshadow_common::prepare::raster::RasterSetup;
 
-use crate::buffers::{bind, check_size, pipeline, read_back, uniform, upload, wait, zeroed};
+use crate::buffers::{
+    bind, check_size, dispatch_once, pipeline, read_back, uniform, upload, wait, zeroed,
+};
 use crate::device::{GpuContext, GpuError};
 use crate::layout::{
     Cursor, DETAIL_FBM, DETAIL_NONE, DETAIL_PERLIN, DETAIL_RIDGED, DETAIL_TURBULENCE, Globals,
@@ -670,17 +672,8 @@ fn dispatch_finish(
             (slot::IMAGE, &b.image),
         ],
     );
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("finish"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(finish_pipe);
-        pass.set_bind_group(0, &finish_group, &[]);
-        pass.dispatch_workgroups(plan.width.div_ceil(TILE), plan.height.div_ceil(TILE), 1);
-    }
-    ctx.queue.submit([encoder.finish()]);
+    let workgroups = (plan.width.div_ceil(TILE), plan.height.div_ceil(TILE));
+    dispatch_once(ctx, "finish", finish_pipe, &finish_group, workgroups);
 }
 
 /// Reads back an RGBA f32 image as its RGB image and its alpha.

@@ -233,8 +233,14 @@ def test_a_perspective_scene_renders_on_the_sweep_and_the_reference_like_the_com
     run = cli("render", path, "-o", tmp_path / "x.exr", "-q")
     assert run.returncode == 0
     assert bits(read_exr(tmp_path / "x.exr")).tolist() == bits(image).tolist()
-    # What the perspective sweep does not take yet is refused as on the command line.
+    # A light travelling towards the eye (a second pass from the far end): the command line's bits.
     back_light = PERSPECTIVE + "[[light]]\ndirection = [0.0, 0.0, -1.0]\n"
+    image, stats = convshadow.render(back_light)
+    path.write_text(back_light)
+    run = cli("render", path, "-o", tmp_path / "back.exr", "-q")
+    assert run.returncode == 0
+    assert bits(read_exr(tmp_path / "back.exr")).tolist() == bits(image).tolist()
+    # A bad perspective camera is refused as on the command line.
     with pytest.raises(convshadow.Error) as info:
-        convshadow.render(back_light)
-    assert info.value.exit_code == 3 and "towards the viewer" in info.value.message
+        convshadow.render(PERSPECTIVE.replace("fov_deg =", "fov_deg = 200.0 #"))
+    assert info.value.exit_code == 3 and "fov_deg" in info.value.message

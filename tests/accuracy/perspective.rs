@@ -153,18 +153,30 @@ fn perspective_light_layers_add_up_to_the_image_and_depth_is_the_view_depth() {
 
 #[test]
 fn perspective_sweep_is_the_same_bits_on_both_paths_and_any_thread_count() {
-    let s = scene(60.0, "");
-    let image = |path: CpuPath, threads: usize| {
-        let req = RenderRequest {
-            path,
-            threads,
-            ..RenderRequest::default()
+    // The edge scene, and the same with a second light travelling towards the eye (its
+    // turned-round pass added to the image).
+    let back = format!(
+        "{}\n[[light]]\ndirection = [0.2, -0.4, -1.0]\ncolor = [0.3, 0.6, 0.9]\n",
+        scene_toml(60.0, "").replacen(
+            "[material.receiver]\n",
+            "[material.receiver]\nopacity = 0.5\n",
+            1
+        )
+    );
+    let back = Scene::parse(&back, "perspective-edge.toml", Path::new(".")).expect("scene");
+    for s in [scene(60.0, ""), back] {
+        let image = |path: CpuPath, threads: usize| {
+            let req = RenderRequest {
+                path,
+                threads,
+                ..RenderRequest::default()
+            };
+            render(&s, &req).expect("render").image_hash
         };
-        render(&s, &req).expect("render").image_hash
-    };
-    let simd = image(CpuPath::Simd, 1);
-    assert_eq!(image(CpuPath::Scalar, 1), simd, "scalar and SIMD paths");
-    assert_eq!(image(CpuPath::Simd, 3), simd, "3 threads");
+        let simd = image(CpuPath::Simd, 1);
+        assert_eq!(image(CpuPath::Scalar, 1), simd, "scalar and SIMD paths");
+        assert_eq!(image(CpuPath::Simd, 3), simd, "3 threads");
+    }
 }
 
 #[test]

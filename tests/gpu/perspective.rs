@@ -91,24 +91,14 @@ fn gpu_perspective_image_equals_cpu_at_fov_30_and_90_with_near_and_a_pattern() {
         return;
     };
     let dir = support::temp_dir("gpu-perspective-near");
-    let (w, h) = (5u32, 4u32);
-    let data: Vec<f32> = (0..w * h * 3)
-        .map(|i| ((i * 41 + 7) % 89) as f32 / 88.0)
-        .collect();
-    convshadow::io::image::RgbImage {
-        width: w,
-        height: h,
-        data,
-    }
-    .save(&dir.join("gobo.png"))
-    .unwrap();
+    let gobo = gpu_common::write_gobo(&dir, (5, 4), (41, 7, 89));
     for fov in [30.0, 90.0] {
         for near in ["", "near = 2.0"] {
             let text =
                 support::perspective_ball_scene(36, 28, DVec3::new(-0.5, 1.5, -4.0), fov, near);
             let mut scene = support::scene(&text, &dir);
             scene.lights[0].pattern = Some(PatternSpec {
-                path: dir.join("gobo.png"),
+                path: gobo.clone(),
                 size: [2.5, 1.9],
                 center: [0.3, -0.2],
             });
@@ -160,4 +150,20 @@ fn gpu_perspective_image_equals_cpu_with_lights_towards_the_eye() {
             &format!("perspective sheet lit from behind, {penumbra}"),
         );
     }
+}
+
+#[test]
+fn gpu_perspective_gallery_scene_equals_cpu() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    // scenes/perspective/floor.toml, small (its lights: a key from above, a fill along the view).
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/perspective/floor.toml");
+    let mut scene = convshadow_io::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    scene.image.width = 64;
+    scene.image.height = 40;
+    scene.sweep.slabs = convshadow::common::model::scene::SlabSpec::Count(48);
+    scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+    check(&ctx, &scene, "scenes/perspective/floor.toml");
 }

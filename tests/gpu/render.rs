@@ -411,20 +411,10 @@ fn gpu_image_equals_cpu_with_a_patterned_light() {
     let dir = support::temp_dir("gpu-pattern");
     // A coloured 7×5 pattern (non-grey, so three light channels), smaller than the view, with
     // texels that do not align with pixels: bilinear samples, clamped edges.
-    let (w, h) = (7u32, 5u32);
-    let data: Vec<f32> = (0..w * h * 3)
-        .map(|i| ((i * 53 + 11) % 97) as f32 / 96.0)
-        .collect();
-    convshadow::io::image::RgbImage {
-        width: w,
-        height: h,
-        data,
-    }
-    .save(&dir.join("gobo.png"))
-    .unwrap();
+    let gobo = gpu_common::write_gobo(&dir, (7, 5), (53, 11, 97));
     let mut scene = path_scene(&dir, true, true);
     scene.lights[0].pattern = Some(convshadow::common::model::scene::PatternSpec {
-        path: dir.join("gobo.png"),
+        path: gobo,
         size: [3.1, 2.3],
         center: [0.4, -0.3],
     });
@@ -724,20 +714,10 @@ fn gpu_image_equals_cpu_with_a_patterned_light_and_the_distance_penumbra() {
         return;
     };
     let dir = support::temp_dir("gpu-pattern-distance");
-    let (w, h) = (5u32, 4u32);
-    let data: Vec<f32> = (0..w * h * 3)
-        .map(|i| ((i * 41 + 7) % 89) as f32 / 88.0)
-        .collect();
-    convshadow::io::image::RgbImage {
-        width: w,
-        height: h,
-        data,
-    }
-    .save(&dir.join("gobo.png"))
-    .unwrap();
+    let gobo = gpu_common::write_gobo(&dir, (5, 4), (41, 7, 89));
     let mut scene = path_scene(&dir, true, true);
     scene.lights[1].pattern = Some(convshadow::common::model::scene::PatternSpec {
-        path: dir.join("gobo.png"),
+        path: gobo,
         size: [2.7, 3.3],
         center: [-0.2, 0.5],
     });

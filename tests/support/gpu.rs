@@ -54,3 +54,24 @@ pub fn shrink(scene: &mut Scene, size: u32, slabs: u32) {
     scene.sweep.slabs = SlabSpec::Count(slabs);
     scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
 }
+
+/// Writes a coloured `w × h` pattern (gobo) image `gobo.png` into `dir`, value `((i·a + b) mod m)
+/// / (m − 1)` at float i, texels that align with no pixel grid; returns its path.
+pub fn write_gobo(
+    dir: &Path,
+    (w, h): (u32, u32),
+    (a, b, m): (u32, u32, u32),
+) -> std::path::PathBuf {
+    let data: Vec<f32> = (0..w * h * 3)
+        .map(|i| ((i * a + b) % m) as f32 / (m - 1) as f32)
+        .collect();
+    let path = dir.join("gobo.png");
+    convshadow::io::image::RgbImage {
+        width: w,
+        height: h,
+        data,
+    }
+    .save(&path)
+    .unwrap();
+    path
+}

@@ -20,6 +20,28 @@ fn composite(acc: vec4<f32>, c: vec3<f32>, a: f32) -> vec4<f32> {
     return vec4<f32>(acc.x + t * c.x, acc.y + t * c.y, acc.z + t * c.z, acc.w + t);
 }
 
+// Steps 3 and 4 for one shading point of material `mi` (header `m`): its entry `e0` scaled to the
+// part of the slab inside the medium (`part`, parity.wgsl `slab_part`), shaded with the light in
+// `iin` — at a crossing of fragment `first`, with its triangle's normal, the highlight and where
+// opaque the Lambert cosine — and composited into `acc`. Returns the new (C, A) and the scaled
+// entry (its attenuation goes into the light buffers). The grid's sweep and the eye pass share it.
+struct Sample {
+    acc: vec4<f32>,
+    entry: TfEntry,
+}
+
+fn shade_sample(acc: vec4<f32>, mi: u32, m: MaterialHeader, e0: TfEntry, part: vec2<f32>, crossed: bool, first: u32) -> Sample {
+    let surface = crossed && (m.has_specular != SPEC_NONE || m.lambert != 0u);
+    var n = vec3<f32>(0.0, 0.0, 0.0);
+    if surface {
+        let o = normals[frag_meta[first] >> MESH_BITS];
+        n = vec3<f32>(o[0], o[1], o[2]);
+    }
+    let scaled = part_of_slab(e0, part.x, part.y);
+    let shaded = shade(mi, scaled.entry.color, e0.alpha, surface, n) * scaled.light;
+    return Sample(composite(acc, shaded, scaled.entry.alpha), scaled.entry);
+}
+
 // `attenuate`: Iin·attenuation, flushed to zero below FLUSH_BELOW.
 // `taken_out`: what a fraction f of a slab takes out where the whole slab takes out s,
 // f·s·(1 + (1 − f)·s/2) (cpu/src/composite.rs).

@@ -97,18 +97,8 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         let yi = (gy - 0.5) - f32(globals.guard_top);
         value = detail_value(m, to_detail(mesh, xi + 0.5, yi + 0.5, z));
     }
-    var e = transfer(m, value);
-    let surface = crossed && (m.has_specular != SPEC_NONE || m.lambert != 0u);
-    var n = vec3<f32>(0.0, 0.0, 0.0);
-    if surface {
-        let o = normals[frag_meta[adv.first] >> MESH_BITS];
-        n = vec3<f32>(o[0], o[1], o[2]);
-    }
-    let alpha_at_surface = e.alpha;
-    let scaled = part_of_slab(e, part.x, part.y);
-    e = scaled.entry;
-    let shaded = shade(mi, e.color, alpha_at_surface, surface, n) * scaled.light;
-    accum[p] = composite(acc, shaded, e.alpha);
+    let e = transfer(m, value);
+    accum[p] = shade_sample(acc, mi, m, e, part, crossed, adv.first).acc;
 }
 
 // Whether grid pixel (x, y) exists.

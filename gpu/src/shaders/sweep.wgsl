@@ -141,20 +141,10 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             e = transfer(m, value);
         }
-        // A crossed surface (its triangle's normal) gets the highlight and, where opaque, the
-        // Lambert cosine.
-        let surface = crossed && (m.has_specular != SPEC_NONE || m.lambert != 0u);
-        var n = vec3<f32>(0.0, 0.0, 0.0);
-        if surface {
-            let o = normals[frag_meta[adv.first] >> MESH_BITS];
-            n = vec3<f32>(o[0], o[1], o[2]);
-        }
-        let alpha_at_surface = e.alpha;
-        let scaled = part_of_slab(e, part.x, part.y);
-        e = scaled.entry;
-        let shaded = shade(mi, e.color, alpha_at_surface, surface, n) * scaled.light;
-        accum[p] = composite(accum[p], shaded, e.alpha);
-        attenuation = e.attenuation;
+        // Shaded (a crossed surface with its triangle's normal) and composited.
+        let sample = shade_sample(accum[p], mi, m, e, part, crossed, adv.first);
+        accum[p] = sample.acc;
+        attenuation = sample.entry.attenuation;
     }
     if exact {
         iin = kept;
