@@ -12,9 +12,11 @@ use convshadow_common::prepare::raster::RasterSetup;
 
 use crate::buffers::{bind, dispatch_once, pipeline, uniform, upload, zeroed};
 use crate::device::{GpuContext, GpuError};
-use crate::layout::{Cursor, EyeParams, MESH_BITS, slot};
+use crate::layout::{EyeParams, slot};
 use crate::shader::eye_wgsl;
-use crate::sweep::{BeforeSlab, GridSweep, TILE, last_light, read_rgba};
+use crate::sweep::{
+    BeforeSlab, GridSweep, TILE, first_cursors, fragment_meta, last_light, read_rgba,
+};
 use convshadow_common::contract::ldi::Ldi;
 
 /// The eye's device buffers.
@@ -41,16 +43,6 @@ fn eye_buffers(ctx: &GpuContext, eye: &EyeView<'_>) -> Result<EyeBuffers, GpuErr
         )));
     }
     let ldi = eye.ldi;
-    let cursors: Vec<Cursor> = ldi.offsets[..pixels as usize]
-        .iter()
-        .map(|&o| Cursor { next: o, inside: 0 })
-        .collect();
-    let meta: Vec<u32> = ldi
-        .mesh
-        .iter()
-        .zip(&ldi.triangle)
-        .map(|(&m, &t)| u32::from(m) | (t << MESH_BITS))
-        .collect();
     let normals: Vec<[f32; 3]> = eye.raster.triangles.iter().map(|t| t.normal).collect();
     let params = EyeParams {
         width: eye.width,
@@ -64,11 +56,11 @@ fn eye_buffers(ctx: &GpuContext, eye: &EyeView<'_>) -> Result<EyeBuffers, GpuErr
     };
     Ok(EyeBuffers {
         params: uniform(ctx, "eye params", &params),
-        cursors: upload(ctx, "eye layer cursor", &cursors, false)?,
+        cursors: upload(ctx, "eye layer cursor", &first_cursors(ldi, pixels), false)?,
         accum: zeroed(ctx, "eye per-pixel colour", pixels * 4)?,
         offsets: upload(ctx, "eye LDI offset", &ldi.offsets, false)?,
         frag_depth: upload(ctx, "eye fragment depth", &ldi.depth, false)?,
-        frag_meta: upload(ctx, "eye fragment meta", &meta, false)?,
+        frag_meta: upload(ctx, "eye fragment meta", &fragment_meta(ldi), false)?,
         normals: upload(ctx, "eye triangle normal", &normals, false)?,
         image: zeroed(ctx, "image", pixels * 4)?,
         image_words: pixels * 4,

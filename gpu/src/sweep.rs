@@ -409,6 +409,24 @@ pub(crate) struct SweepBuffers {
     all_params: wgpu::Buffer,
 }
 
+/// Each of the first `pixels` pixels' layer cursor before the first slab: at its first fragment,
+/// inside nothing.
+pub(crate) fn first_cursors(ldi: &Ldi, pixels: u64) -> Vec<Cursor> {
+    ldi.offsets[..pixels as usize]
+        .iter()
+        .map(|&o| Cursor { next: o, inside: 0 })
+        .collect()
+}
+
+/// Every fragment's meta word, `mesh | triangle << MESH_BITS`.
+pub(crate) fn fragment_meta(ldi: &Ldi) -> Vec<u32> {
+    ldi.mesh
+        .iter()
+        .zip(&ldi.triangle)
+        .map(|(&m, &t)| u32::from(m) | (t << MESH_BITS))
+        .collect()
+}
+
 /// Uploads the light, LDI and plan tables and creates the image and uniform buffers.
 fn upload_buffers(
     ctx: &GpuContext,
@@ -436,22 +454,11 @@ fn upload_buffers(
     let level_a = upload(ctx, "level plane", &levels, false)?;
     let level_b = zeroed(ctx, "level plane", levels.len() as u64)?;
     drop(levels);
-    let cursors: Vec<Cursor> = ldi.offsets[..pixels as usize]
-        .iter()
-        .map(|&o| Cursor { next: o, inside: 0 })
-        .collect();
-    let cursors = upload(ctx, "layer cursor", &cursors, false)?;
+    let cursors = upload(ctx, "layer cursor", &first_cursors(ldi, pixels), false)?;
     let accum = zeroed(ctx, "per-pixel colour", pixels * 4)?;
     let offsets = upload(ctx, "LDI offset", &ldi.offsets, false)?;
     let frag_depth = upload(ctx, "fragment depth", &ldi.depth, false)?;
-    let meta: Vec<u32> = ldi
-        .mesh
-        .iter()
-        .zip(&ldi.triangle)
-        .map(|(&m, &t)| u32::from(m) | (t << MESH_BITS))
-        .collect();
-    let frag_meta = upload(ctx, "fragment meta", &meta, false)?;
-    drop(meta);
+    let frag_meta = upload(ctx, "fragment meta", &fragment_meta(ldi), false)?;
     let slabs = upload(ctx, "slab", &tables.slabs, false)?;
     let lights = upload(ctx, "light header", &tables.lights, false)?;
     let light_slabs = upload(ctx, "light slab", &tables.light_slabs, false)?;
