@@ -379,3 +379,78 @@ fn a_checkerboard_pattern_loses_contrast_as_the_gaussian_transfer_function_predi
         }
     }
 }
+
+/// A pattern on a light travelling towards the viewer (its turned-round pass starts from the
+/// scene's far end, whose camera x is the scene camera's reversed): a 64 × 1 pattern, black left
+/// of camera x = 0.25 and white right of it, a hard light straight at the camera, seen on a
+/// translucent sheet that takes no light out. The sheet's profile is the pattern where `center`
+/// puts it, in the scene camera's space: dark left of the line, lit right of it — an orthographic
+/// camera (the line between columns 39 and 40) and a perspective eye (the line where its rays
+/// meet the sheet at camera x 0.25), on the sweep and on the reference.
+#[test]
+fn a_pattern_on_a_light_towards_the_viewer_lands_where_its_center_says() {
+    let dir = support::temp_dir("pattern-back");
+    let texels: Vec<u8> = (0..64u32).map(|x| if x < 32 { 0 } else { 255 }).collect();
+    save_gray_png(&dir.join("half.png"), 64, 1, texels).unwrap();
+    let light_and_sheet = "[[light]]\ndirection = [0.0, 0.0, -1.0]\nvariance = [0.0, 0.0]\n\
+        pattern = { path = \"half.png\", size = [1.0, 4.0], center = [0.25, 0.0] }\n\
+        [[mesh]]\nshape = \"box\"\nsize = [4.0, 4.0, 0.05]\nmaterial = \"sheet\"\n\
+        [material.sheet]\nopacity = 0.9\ntransport = [1.0, 1.0, 1.0]\n";
+    let ortho = format!(
+        "[image]\nwidth = 64\nheight = 8\n[camera]\ndirection = [0.0, 0.0, 1.0]\n\
+         view_width = 2.0\n[sweep]\nslabs = 8\n{light_and_sheet}"
+    );
+    // The eye 5 in front of the sheet: camera x 0.25 on it is 0.25·f/5 px right of the centre.
+    let (fov, height) = (4.0f64, 8u32);
+    let focal = 0.5 * f64::from(height) / (0.5 * fov.to_radians()).tan();
+    let perspective = format!(
+        "[image]\nwidth = 64\nheight = {height}\n[camera]\nprojection = \"perspective\"\n\
+         eye = [0.0, 0.0, -5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_deg = {fov}\n\
+         [sweep]\nslabs = 8\n{light_and_sheet}"
+    );
+    let line_px = |ortho: bool| {
+        if ortho {
+            0.25 / (2.0 / 64.0) + 32.0
+        } else {
+            32.0 + 0.25 * focal / 5.0
+        }
+    };
+    for (text, is_ortho) in [(ortho, true), (perspective, false)] {
+        let scene = support::scene(&text, &dir);
+        assert!(scene.lights[0].toward_viewer);
+        let line = line_px(is_ortho);
+        let sweep = convshadow::pipeline::render(&scene, &Default::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let reference =
+            convshadow::pipeline::render_reference(&scene, 0, 4, u64::MAX / 4, false, &[], None)
+                .unwrap_or_else(|e| panic!("{e}"));
+        for (what, image) in [
+            ("sweep", &sweep.image.data),
+            ("reference", &reference.image.data),
+        ] {
+            let row = 4usize;
+            let value = |i: usize| f64::from(image[3 * (row * 64 + i)]);
+            let lit = value(60);
+            assert!(
+                lit > 0.01,
+                "{what}, orthographic {is_ortho}: the sheet is lit ({lit})"
+            );
+            for i in 0..64usize {
+                let centre = i as f64 + 0.5;
+                let v = value(i) / lit;
+                // Beyond the pattern's bilinear ramp (one texel, 1/64 world) and a pixel.
+                if centre < line - 1.5 {
+                    assert!(
+                        v < 0.02,
+                        "{what}, orthographic {is_ortho}: column {i} is {v}"
+                    );
+                } else if centre > line + 1.5 {
+                    assert!(
+                        v > 0.98,
+                        "{what}, orthographic {is_ortho}: column {i} is {v}"
+                    );
+                }
+            }
+        }
+    }
+}

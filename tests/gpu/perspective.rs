@@ -135,6 +135,21 @@ fn gpu_perspective_image_equals_cpu_with_lights_towards_the_eye() {
         assert_eq!(cpu.turned_round_lights, 1);
         check_distance(&ctx, &scene, &what);
     }
+    // A pattern on the light towards the eye (the far end's initial light buffer).
+    let gobo = gpu_common::write_gobo(&dir, (6, 5), (29, 3, 83));
+    let text = perspective_path_scene_text(&dir, false, true);
+    let text = format!(
+        "{text}\n[[light]]\ndirection = [0.3, -0.2, -1.0]\nvariance = [0.01, 0.02]\n\
+         pattern = {{ path = {:?}, size = [3.0, 2.5], center = [0.4, -0.3] }}\n",
+        gobo.to_str().unwrap()
+    );
+    let scene = support::scene(&text, &dir);
+    assert!(scene.lights[3].toward_viewer && scene.lights[3].pattern.is_some());
+    check(
+        &ctx,
+        &scene,
+        "perspective, a patterned light towards the eye",
+    );
     let (eye, look_at) = ([0.0, 0.0, W + 1.0], [0.0, 0.0, W]);
     for penumbra in ["distance", "iterated"] {
         let sweep = format!("penumbra = \"{penumbra}\"\noptimal_distance = {W}");

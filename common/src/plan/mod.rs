@@ -518,6 +518,9 @@ impl RenderPlan {
                 })?;
             let (tw, th) = (f64::from(pattern.width), f64::from(pattern.height));
             let (left, top) = (f64::from(self.guard.left), f64::from(self.guard.top));
+            // A turned-round pass's camera x is the scene camera's reversed; `center` is the
+            // scene camera's.
+            let x_sign = if scene.turned_round { -1.0 } else { 1.0 };
             for y in 0..h {
                 // Camera-space y of the grid pixel centre, from the view's centre.
                 let cy = (y as f64 - top + 0.5 - f64::from(self.height) * 0.5) * self.pixel_size;
@@ -525,8 +528,9 @@ impl RenderPlan {
                 for c in 0..ch {
                     let row = &mut buf[y * row_len + self.light_plane(l, c) * w..][..w];
                     for (x, v) in row.iter_mut().enumerate() {
-                        let cx =
-                            (x as f64 - left + 0.5 - f64::from(self.width) * 0.5) * self.pixel_size;
+                        let cx = x_sign
+                            * ((x as f64 - left + 0.5 - f64::from(self.width) * 0.5)
+                                * self.pixel_size);
                         let tx = ((cx - p.center[0]) / p.size[0] + 0.5) * tw;
                         let s = pattern.sample(tx, ty, c) as f32;
                         *v = if s < FLUSH_BELOW { 0.0 } else { s };

@@ -100,15 +100,6 @@ impl Validator<'_> {
                 ),
             )
         })?;
-        if on_slabs.toward_viewer && light.pattern.is_some() {
-            return Err(self.err(
-                format!("light[{i}].pattern"),
-                format!(
-                    "the light travels towards the viewer{after}; a pattern is supported only \
-                     on lights from behind the viewer (less than 90° from the view direction) yet"
-                ),
-            ));
-        }
         light.toward_viewer = on_slabs.toward_viewer;
         light.tilt_deg = on_slabs.tilt_deg;
         light.variance = on_slabs.variance;

@@ -362,11 +362,6 @@ fn bad_light_kinds_and_directions_name_the_key() {
         "90.0° to the view direction",
     );
     expect_err(
-        &light("direction = [0.0, 0.0, -1.0]\npattern = { path = \"g.png\", size = [1.0, 1.0] }"),
-        "light[0].pattern",
-        "towards the viewer",
-    );
-    expect_err(
         &light("kind = \"point\""),
         "light[0].kind",
         "point lights are not supported yet",
