@@ -34,7 +34,11 @@ struct EyeBuffers {
 
 /// Uploads the eye's LDI (cursors at each pixel's first fragment, nothing composited) and
 /// parameters.
-fn eye_buffers(ctx: &GpuContext, eye: &EyeView<'_>) -> Result<EyeBuffers, GpuError> {
+fn eye_buffers(
+    ctx: &GpuContext,
+    plan: &RenderPlan,
+    eye: &EyeView<'_>,
+) -> Result<EyeBuffers, GpuError> {
     let pixels = u64::from(eye.width) * u64::from(eye.height);
     if pixels * 4 >= u64::from(u32::MAX) {
         return Err(GpuError::Unsupported(format!(
@@ -52,6 +56,7 @@ fn eye_buffers(ctx: &GpuContext, eye: &EyeView<'_>) -> Result<EyeBuffers, GpuErr
         axis: eye.axis,
         centre: [eye.width as f32 * 0.5, eye.height as f32 * 0.5],
         turned_round: u32::from(eye.turned_round),
+        pixel_size: plan.pixel_size as f32,
         ..EyeParams::default()
     };
     Ok(EyeBuffers {
@@ -101,6 +106,8 @@ fn eye_slab_dispatch(
                 (slot::MESHES, &g.meshes),
                 (slot::LIGHT_COLORS, &g.light_colors),
                 (slot::GRID_CURSORS, &g.cursors),
+                (slot::GRID_OFFSETS, &g.offsets),
+                (slot::GRID_FRAG_META, &g.frag_meta),
                 (slot::LIGHT_PREV, light_prev),
             ],
         )
@@ -149,7 +156,7 @@ pub fn sweep_perspective(
     options: &SweepOptions<'_>,
 ) -> Result<SweepOutput, GpuError> {
     let run = GridSweep::prepare(ctx, plan, raster, ldi, options)?;
-    let buffers = eye_buffers(ctx, eye)?;
+    let buffers = eye_buffers(ctx, plan, eye)?;
     let module = ctx
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {

@@ -93,11 +93,12 @@ pub struct EyeParams {
     /// 1 in a turned-round pass (`EyeView::turned_round`): x mirrored, depths turned, back to
     /// front.
     pub turned_round: u32,
+    /// The grid's pixel size in world units (`RenderPlan::pixel_size` in f32): a light's travel
+    /// per slab is (drift · pixel size, slab distance).
+    pub pixel_size: f32,
     /// Uniform structs are a multiple of 16 bytes.
-    pub _pad0: u32,
-    /// See `_pad0`.
     pub _pad1: u32,
-    /// See `_pad0`.
+    /// See `_pad1`.
     pub _pad2: u32,
 }
 
@@ -428,6 +429,8 @@ pub mod slot {
         SURFACE_HOLD = "surface_hold", 35;
         EYE_PARAMS = "eye_params", 36;
         GRID_CURSORS = "grid_cursors", 37;
+        GRID_OFFSETS = "grid_offsets", 38;
+        GRID_FRAG_META = "grid_frag_meta", 39;
     }
 }
 

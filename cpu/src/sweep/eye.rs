@@ -19,6 +19,7 @@ use convshadow_common::plan::RenderPlan;
 
 use super::kit::{MAX_LIGHT_CHANNELS, light_block};
 use crate::composite::{composite, part_of_slab};
+use crate::ldi::Ldi;
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
 use crate::shading::{Surface, material_at, shade, shading_depth};
 
@@ -45,10 +46,51 @@ impl EyeState {
 }
 
 /// The grid as the previous slab left it: its outgoing light (pixel-interleaved rows, as the
-/// sweep keeps it) and every grid pixel's inside mask at this slab's front.
+/// sweep keeps it), every grid pixel's inside mask and layer cursor at this slab's front, and
+/// its LDI (which thin shells a pixel has crossed).
 pub(crate) struct GridLight<'a> {
     pub(crate) light: &'a [f32],
     pub(crate) inside: &'a [u32],
+    pub(crate) ldi: &'a Ldi,
+    pub(crate) next: &'a [u32],
+}
+
+impl GridLight<'_> {
+    /// Whether grid pixel `p` is already past the crossed mesh of `skip` at the slab's front:
+    /// inside it (a closed mesh), or through one of its fragments (an open mesh, a thin shell,
+    /// whose crossing toggles no inside bit).
+    fn past(&self, p: usize, skip: Skip) -> bool {
+        match skip {
+            Skip::None => false,
+            Skip::Inside(bits) => self.inside[p] & bits != 0,
+            Skip::Shell { mesh, lit_past } => {
+                (self.ldi.offsets[p]..self.next[p])
+                    .any(|f| u32::from(self.ldi.mesh[f as usize]) == mesh)
+                    != lit_past
+            }
+        }
+    }
+}
+
+/// Which grid pixels a read leaves out: none, those inside the meshes of a mask, or those on the
+/// side of a thin shell the light does not come from: through it, or (`lit_past`, the light
+/// crossing the shell the other way from the grid's rays) not yet through it.
+#[derive(Clone, Copy)]
+enum Skip {
+    None,
+    Inside(u32),
+    Shell { mesh: u32, lit_past: bool },
+}
+
+/// Whether light `l` reaches a thin shell of normal `n` (the view's camera frame) from the side
+/// the grid's rays reach after crossing it: its travel `(drift·pixel size, slab distance)` and
+/// the grid's `(0, 0, 1)` cross the shell's plane in opposite directions.
+fn lit_past(plan: &RenderPlan, l: usize, n: [f32; 3]) -> bool {
+    let d = plan.lights[l].drift;
+    let ps = plan.pixel_size as f32;
+    let (tx, ty) = (d[0] * ps, d[1] * ps);
+    let travel = (n[0] * tx + n[1] * ty) + n[2] * plan.slab_distance;
+    (travel > 0.0) != (n[2] > 0.0)
 }
 
 /// Slab `slab` for every image pixel (rows in parallel).
@@ -161,16 +203,25 @@ fn eye_pixel(
     let scale = view_depth * view.zoom;
     let gx = view.axis[0] + p.offset[0] * scale;
     let gy = view.axis[1] + p.offset[1] * scale;
-    let skip_inside = if crossed != NO_CROSSING {
-        1u32 << mesh
+    // At a crossing, the light arriving at the surface: not the light of grid pixels already
+    // past it.
+    let skip = if crossed == NO_CROSSING {
+        Skip::None
+    } else if ldi.parity_meshes & (1 << mesh) != 0 {
+        Skip::Inside(1 << mesh)
     } else {
-        0
+        Skip::Shell {
+            mesh,
+            lit_past: false,
+        }
     };
+    let normal = (crossed != NO_CROSSING)
+        .then(|| view.raster.triangles[ldi.triangle[crossed as usize] as usize].normal);
     // Turned round, a crossed surface is read where each light's ray through it crossed the
     // plane one slab before this slab's front (see `read_light`).
     let back_along_light = (view.turned_round && crossed != NO_CROSSING)
         .then_some((z - p.front) * plan.inv_slab_distance + 1.0);
-    let iin = read_light(plan, grid, (gx, gy), skip_inside, back_along_light);
+    let iin = read_light(plan, grid, (gx, gy), (skip, normal), back_along_light);
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
     let (xi, yi) = (
         gx - 0.5 - plan.guard.left as f32,
@@ -200,7 +251,8 @@ fn eye_pixel(
 
 /// Every light's channels read bilinearly from the grid's outgoing light at grid position
 /// (gx, gy) (pixel centres at +0.5; outside the grid the unoccluded light, 1), leaving out the
-/// neighbours inside any mesh of `skip_inside` at the slab's front unless all four are.
+/// neighbours on the crossed surface's far side from the light at the slab's front (`skip`, the
+/// crossed triangle's `normal`: [`GridLight::past`]) unless all four are.
 ///
 /// `back_along_light`: each light is read `s` slabs of its drift back along its ray instead, at
 /// `(gx, gy) − s·drift`. A turned-round pass reads a crossed surface so, `s` = its place in the
@@ -211,11 +263,19 @@ fn read_light(
     plan: &RenderPlan,
     grid: &GridLight<'_>,
     (gx, gy): (f32, f32),
-    skip_inside: u32,
+    (skip, normal): (Skip, Option<[f32; 3]>),
     back_along_light: Option<f32>,
 ) -> [f32; MAX_LIGHT_CHANNELS] {
     let mut out = [0.0f32; MAX_LIGHT_CHANNELS];
     for l in 0..plan.lights.len() {
+        // A shell's side is the light's own.
+        let skip = match (skip, normal) {
+            (Skip::Shell { mesh, .. }, Some(n)) => Skip::Shell {
+                mesh,
+                lit_past: lit_past(plan, l, n),
+            },
+            _ => skip,
+        };
         let at = match back_along_light {
             Some(s) => {
                 let d = plan.lights[l].drift;
@@ -223,7 +283,7 @@ fn read_light(
             }
             None => (gx, gy),
         };
-        read_one_light(plan, grid, l, at, skip_inside, &mut out);
+        read_one_light(plan, grid, l, at, skip, &mut out);
     }
     out
 }
@@ -234,7 +294,7 @@ fn read_one_light(
     grid: &GridLight<'_>,
     l: usize,
     (gx, gy): (f32, f32),
-    skip_inside: u32,
+    skip: Skip,
     out: &mut [f32; MAX_LIGHT_CHANNELS],
 ) {
     let (w, h) = (plan.grid_width as i64, plan.grid_height as i64);
@@ -249,12 +309,11 @@ fn read_one_light(
         (x0 + 1, y0 + 1, ax * ay),
     ];
     let in_grid = |x: i64, y: i64| x >= 0 && y >= 0 && x < w && y < h;
-    let skipped =
-        |x: i64, y: i64| in_grid(x, y) && grid.inside[(y * w + x) as usize] & skip_inside != 0;
+    let skipped = |x: i64, y: i64| in_grid(x, y) && grid.past((y * w + x) as usize, skip);
     // The weights of the neighbours read: all four, or those outside the crossed mesh.
     let mut weight = corners.map(|(x, y, a)| if skipped(x, y) { 0.0 } else { a });
     let total = ((weight[0] + weight[1]) + weight[2]) + weight[3];
-    if total > 0.0 && skip_inside != 0 {
+    if total > 0.0 && !matches!(skip, Skip::None) {
         weight = weight.map(|a| a / total);
     } else {
         weight = corners.map(|c| c.2);

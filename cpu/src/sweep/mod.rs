@@ -445,6 +445,8 @@ pub fn sweep_perspective(
         let grid = GridLight {
             light: &state.prev,
             inside: &state.inside,
+            ldi,
+            next: &state.next,
         };
         eye::eye_slab(plan, eye, &grid, slab, &mut view);
     })?;

@@ -142,7 +142,7 @@ fn rust_layouts() -> Vec<Layout> {
             axis,
             centre,
             turned_round,
-            _pad0,
+            pixel_size,
             _pad1,
             _pad2
         }),

@@ -68,9 +68,14 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     let scale = view_depth * view.zoom;
     let gx = view.axis.x + offset_x * scale;
     let gy = view.axis.y + ((f32(y) + 0.5) - view.centre.y) * scale;
-    var skip_inside = 0u;
+    // At a crossing, the light arriving at the surface: not the light of grid pixels already
+    // past it (inside a closed mesh; through a thin shell).
+    var skip = SKIP_NONE;
     if crossed {
-        skip_inside = 1u << mesh;
+        skip = SKIP_SHELL;
+        if (globals.parity_meshes & (1u << mesh)) != 0u {
+            skip = SKIP_INSIDE;
+        }
     }
     // Turned round, a crossed surface is read one slab further back along each light's ray
     // (cpu/src/sweep/eye.rs `read_light`); `back` < 0: at the point itself.
@@ -78,13 +83,23 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     if turned && crossed {
         back_along_light = (z - front) * globals.inv_slab_distance + 1.0;
     }
+    var n = vec3<f32>(0.0, 0.0, 0.0);
+    if crossed {
+        let o = normals[frag_meta[adv.first] >> MESH_BITS];
+        n = vec3<f32>(o[0], o[1], o[2]);
+    }
     for (var l = 0u; l < globals.lights; l++) {
+        // A shell's side is the light's own.
+        var skip_l = skip;
+        if skip == SKIP_SHELL && lit_past(l, n) {
+            skip_l = SKIP_SHELL_LIT_PAST;
+        }
         var at = vec2<f32>(gx, gy);
         if back_along_light >= 0.0 {
             let d = lights[l].drift;
             at = vec2<f32>(gx - back_along_light * d[0], gy - back_along_light * d[1]);
         }
-        read_grid_light(l, at.x, at.y, skip_inside);
+        read_grid_light(l, at.x, at.y, skip_l, mesh);
     }
 
     let mi = meshes[mesh].material;
@@ -101,15 +116,50 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     accum[p] = shade_sample(acc, mi, m, e, part, crossed, adv.first).acc;
 }
 
+const SKIP_NONE: u32 = 0u;
+const SKIP_INSIDE: u32 = 1u;
+const SKIP_SHELL: u32 = 2u;
+const SKIP_SHELL_LIT_PAST: u32 = 3u;
+
+// `lit_past`: whether light l reaches a thin shell of normal n from the side the grid's rays
+// reach after crossing it (its travel and the grid's (0, 0, 1) cross the plane oppositely).
+fn lit_past(l: u32, n: vec3<f32>) -> bool {
+    let d = lights[l].drift;
+    let ps = eye_params.pixel_size;
+    let tx = d[0] * ps;
+    let ty = d[1] * ps;
+    let travel = (n.x * tx + n.y * ty) + n.z * globals.slab_distance;
+    return (travel > 0.0) != (n.z > 0.0);
+}
+
+// `GridLight::past`: whether a read leaves grid pixel q out at the slab's front (`skip`
+// SKIP_INSIDE: inside mesh `mesh`; SKIP_SHELL: through one of its fragments, a thin shell;
+// SKIP_SHELL_LIT_PAST: not yet through it).
+fn past(q: u32, skip: u32, mesh: u32) -> bool {
+    if skip == SKIP_INSIDE {
+        return (grid_cursors[q].inside & (1u << mesh)) != 0u;
+    }
+    if skip == SKIP_SHELL || skip == SKIP_SHELL_LIT_PAST {
+        var through = false;
+        for (var f = grid_offsets[q]; f < grid_cursors[q].next; f++) {
+            if (grid_frag_meta[f] & MESH_MASK) == mesh {
+                through = true;
+            }
+        }
+        return through != (skip == SKIP_SHELL_LIT_PAST);
+    }
+    return false;
+}
+
 // Whether grid pixel (x, y) exists.
 fn in_grid(x: i32, y: i32) -> bool {
     return x >= 0 && y >= 0 && x < i32(globals.grid_w) && y < i32(globals.grid_h);
 }
 
 // `read_one_light`: light l's channels into `iin`, bilinear in the grid's incoming light at grid
-// position (gx, gy) (pixel centres at +0.5; outside the grid 1), leaving out the neighbours inside
-// a mesh of `skip_inside` at the slab's front unless all four are.
-fn read_grid_light(l: u32, gx: f32, gy: f32, skip_inside: u32) {
+// position (gx, gy) (pixel centres at +0.5; outside the grid 1), leaving out the neighbours
+// already past the crossed mesh at the slab's front (`past`) unless all four are.
+fn read_grid_light(l: u32, gx: f32, gy: f32, skip: u32, mesh: u32) {
     let fx = gx - 0.5;
     let fy = gy - 0.5;
     let x0f = floor(fx);
@@ -124,12 +174,12 @@ fn read_grid_light(l: u32, gx: f32, gy: f32, skip_inside: u32) {
     let w = globals.grid_w;
     var weight = corner;
     for (var k = 0u; k < 4u; k++) {
-        if in_grid(xs[k], ys[k]) && (grid_cursors[u32(ys[k]) * w + u32(xs[k])].inside & skip_inside) != 0u {
+        if in_grid(xs[k], ys[k]) && past(u32(ys[k]) * w + u32(xs[k]), skip, mesh) {
             weight[k] = 0.0;
         }
     }
     let total = ((weight[0] + weight[1]) + weight[2]) + weight[3];
-    if total > 0.0 && skip_inside != 0u {
+    if total > 0.0 && skip != SKIP_NONE {
         for (var k = 0u; k < 4u; k++) {
             weight[k] = weight[k] / total;
         }

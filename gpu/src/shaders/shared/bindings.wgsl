@@ -225,11 +225,14 @@ struct EyeParams {
     axis: vec2<f32>,   // where the view axis meets the grid (grid pixel coordinates)
     centre: vec2<f32>, // the image centre (width · 0.5, height · 0.5)
     turned_round: u32, // 1: the far end's pass (x mirrored, depth z_origin − z, back to front)
-    _pad0: u32,
+    pixel_size: f32,   // the grid's pixel size (world units): a light's travel per slab is (drift · pixel_size, slab_distance)
     _pad1: u32,
     _pad2: u32,
 }
 
 @group(0) @binding(36) var<uniform> eye_params: EyeParams;
-// The grid's layer cursors at the slab's front (their inside masks).
+// The grid's layer cursors at the slab's front (their inside masks), and its LDI's offsets and
+// fragment meta (which thin shells a grid pixel has crossed).
 @group(0) @binding(37) var<storage, read> grid_cursors: array<Cursor>;
+@group(0) @binding(38) var<storage, read> grid_offsets: array<u32>;
+@group(0) @binding(39) var<storage, read> grid_frag_meta: array<u32>;
