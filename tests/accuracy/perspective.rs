@@ -338,25 +338,6 @@ fn a_perspective_floor_lit_towards_the_eye_against_the_reference() {
     assert!(rmse <= 0.0175, "RMSE {rmse:.4}");
 }
 
-/// The text of a perspective view of a translucent open square (a thin shell) tilted 60° under
-/// a translucent ball, lit by the `[[light]]` tables `lights`; the square's OBJ is written into
-/// `dir`.
-fn shell_scene_text(dir: &Path, lights: &str) -> String {
-    std::fs::write(
-        dir.join("square.obj"),
-        "v -1.5 -1.5 0\nv 1.5 -1.5 0\nv 1.5 1.5 0\nv -1.5 1.5 0\nf 1 2 3\nf 1 3 4\n",
-    )
-    .unwrap();
-    format!(
-        "[image]\nwidth = 48\nheight = 32\n[camera]\nprojection = \"perspective\"\n\
-         eye = [0.0, 1.0, -5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_deg = 40\n[sweep]\nslabs = 48\n\
-         [[mesh]]\nshape = \"obj\"\npath = \"square.obj\"\nrotate_deg = [60.0, 0.0, 0.0]\n\
-         material = \"m\"\n[[mesh]]\nshape = \"sphere\"\nsize = [0.5, 3]\n\
-         translate = [0.0, 0.5, 1.0]\nmaterial = \"g\"\n[material.m]\nopacity = 0.4\n\
-         [material.g]\nopacity = 0.6\ntransport = [0.8, 0.5, 0.2]\n{lights}"
-    )
-}
-
 /// A thin shell seen in perspective reads the light arriving at it from the light's side of it:
 /// grid pixels already through the shell (or, where the light crosses it the other way from the
 /// grid's rays, not yet through it) are left out of the read, as a closed mesh's inside is.
@@ -373,7 +354,7 @@ fn a_thin_shell_in_perspective_reads_the_light_from_the_lights_side() {
             0.0175,
         ),
     ] {
-        let text = shell_scene_text(&dir, &format!("[[light]]\n{light}\n"));
+        let text = support::perspective_shell_scene_text(&dir, &format!("[[light]]\n{light}\n"));
         let s = support::scene(&text, &dir);
         let req = RenderRequest {
             allow_open: true,

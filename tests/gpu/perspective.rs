@@ -192,20 +192,12 @@ fn gpu_perspective_image_equals_cpu_with_a_thin_shell() {
     // leaves out the grid pixels on the shell's far side from each light (through it, for the
     // light from behind the eye; not yet through it, for the light towards the eye from above).
     let dir = support::temp_dir("gpu-perspective-shell");
-    std::fs::write(
-        dir.join("square.obj"),
-        "v -1.5 -1.5 0\nv 1.5 -1.5 0\nv 1.5 1.5 0\nv -1.5 1.5 0\nf 1 2 3\nf 1 3 4\n",
-    )
-    .unwrap();
-    let text = "[image]\nwidth = 48\nheight = 32\n[camera]\nprojection = \"perspective\"\n\
-        eye = [0.0, 1.0, -5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_deg = 40\n[sweep]\nslabs = 48\n\
-        [[mesh]]\nshape = \"obj\"\npath = \"square.obj\"\nrotate_deg = [60.0, 0.0, 0.0]\n\
-        material = \"m\"\n[[mesh]]\nshape = \"sphere\"\nsize = [0.5, 3]\n\
-        translate = [0.0, 0.5, 1.0]\nmaterial = \"g\"\n[material.m]\nopacity = 0.4\n\
-        [material.g]\nopacity = 0.6\ntransport = [0.8, 0.5, 0.2]\n\
-        [[light]]\ndirection = [0.1, -0.3, 1.0]\n\
-        [[light]]\ndirection = [0.1, -1.2, -1.0]\nvariance = [0.01, 0.01]\n";
-    let scene = support::scene(text, &dir);
+    let text = support::perspective_shell_scene_text(
+        &dir,
+        "[[light]]\ndirection = [0.1, -0.3, 1.0]\n\
+         [[light]]\ndirection = [0.1, -1.2, -1.0]\nvariance = [0.01, 0.01]\n",
+    );
+    let scene = support::scene(&text, &dir);
     let g = convshadow_io::build_geometry(&scene).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(g.shell_meshes(), vec![0], "the square is a shell");
     check(

@@ -198,6 +198,26 @@ pub fn perspective_ball_scene(
     perspective_scene_text((width, height), (eye, DVec3::ZERO), fov_deg, extra, meshes)
 }
 
+/// The text of a perspective view of a translucent open square (a thin shell) tilted 60° under
+/// a translucent ball, lit by the `[[light]]` tables `lights`; the square's OBJ is written into
+/// `dir`.
+#[allow(dead_code)] // the accuracy and gpu tests' only
+pub fn perspective_shell_scene_text(dir: &Path, lights: &str) -> String {
+    std::fs::write(
+        dir.join("square.obj"),
+        "v -1.5 -1.5 0\nv 1.5 -1.5 0\nv 1.5 1.5 0\nv -1.5 1.5 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    format!(
+        "[image]\nwidth = 48\nheight = 32\n[camera]\nprojection = \"perspective\"\n\
+         eye = [0.0, 1.0, -5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_deg = 40\n[sweep]\nslabs = 48\n\
+         [[mesh]]\nshape = \"obj\"\npath = \"square.obj\"\nrotate_deg = [60.0, 0.0, 0.0]\n\
+         material = \"m\"\n[[mesh]]\nshape = \"sphere\"\nsize = [0.5, 3]\n\
+         translate = [0.0, 0.5, 1.0]\nmaterial = \"g\"\n[material.m]\nopacity = 0.4\n\
+         [material.g]\nopacity = 0.6\ntransport = [0.8, 0.5, 0.2]\n{lights}"
+    )
+}
+
 /// A one-mesh scene around an OBJ file, camera framing a box of half-size `half`.
 pub fn obj_scene(path: &Path, width: u32, view_width: f64) -> String {
     format!(
