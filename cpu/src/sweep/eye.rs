@@ -267,7 +267,14 @@ fn read_light(
     back_along_light: Option<f32>,
 ) -> [f32; MAX_LIGHT_CHANNELS] {
     let mut out = [0.0f32; MAX_LIGHT_CHANNELS];
+    let per_light = back_along_light.is_some() || matches!(skip, Skip::Shell { .. });
+    // Every light read at the same place: one set of corners and weights.
+    let shared = (!per_light).then(|| Bilinear::at(plan, grid, (gx, gy), skip));
     for l in 0..plan.lights.len() {
+        if let Some(read) = &shared {
+            read.sum(plan, grid, l, &mut out);
+            continue;
+        }
         // A shell's side is the light's own.
         let skip = match (skip, normal) {
             (Skip::Shell { mesh, .. }, Some(n)) => Skip::Shell {
@@ -283,57 +290,77 @@ fn read_light(
             }
             None => (gx, gy),
         };
-        read_one_light(plan, grid, l, at, skip, &mut out);
+        Bilinear::at(plan, grid, at, skip).sum(plan, grid, l, &mut out);
     }
     out
 }
 
-/// Light `l`'s channels of [`read_light`] at grid position (gx, gy), into `out`.
-fn read_one_light(
-    plan: &RenderPlan,
-    grid: &GridLight<'_>,
-    l: usize,
-    (gx, gy): (f32, f32),
-    skip: Skip,
-    out: &mut [f32; MAX_LIGHT_CHANNELS],
-) {
-    let (w, h) = (plan.grid_width as i64, plan.grid_height as i64);
-    let (fx, fy) = (gx - 0.5, gy - 0.5);
-    let (x0, y0) = (fx.floor(), fy.floor());
-    let (ax, ay) = (fx - x0, fy - y0);
-    let (x0, y0) = (x0 as i64, y0 as i64);
-    let corners = [
-        (x0, y0, (1.0 - ax) * (1.0 - ay)),
-        (x0 + 1, y0, ax * (1.0 - ay)),
-        (x0, y0 + 1, (1.0 - ax) * ay),
-        (x0 + 1, y0 + 1, ax * ay),
-    ];
-    let in_grid = |x: i64, y: i64| x >= 0 && y >= 0 && x < w && y < h;
-    let skipped = |x: i64, y: i64| in_grid(x, y) && grid.past((y * w + x) as usize, skip);
-    // The weights of the neighbours read: all four, or those outside the crossed mesh.
-    let mut weight = corners.map(|(x, y, a)| if skipped(x, y) { 0.0 } else { a });
-    let total = ((weight[0] + weight[1]) + weight[2]) + weight[3];
-    if total > 0.0 && !matches!(skip, Skip::None) {
-        weight = weight.map(|a| a / total);
-    } else {
-        weight = corners.map(|c| c.2);
-    }
-    let (ch, planes, row_len) = (
-        plan.channels as usize,
-        plan.planes_per_light(),
-        plan.light_row_len(),
-    );
-    for c in 0..ch {
-        let mut sum = 0.0f32;
-        for (k, &(x, y, _)) in corners.iter().enumerate() {
-            let v = if in_grid(x, y) {
-                let at = y as usize * row_len + light_block(plan, l) + x as usize * planes;
-                grid.light[at + c]
+/// A bilinear read of the grid at one position: its four corners (grid pixel x, y) and their
+/// weights, those already past the crossed mesh left out.
+struct Bilinear {
+    corners: [(i64, i64); 4],
+    weight: [f32; 4],
+}
+
+impl Bilinear {
+    /// The read at grid position (gx, gy) (pixel centres at +0.5), leaving out the corners
+    /// [`GridLight::past`] `skip` unless all four are.
+    fn at(plan: &RenderPlan, grid: &GridLight<'_>, (gx, gy): (f32, f32), skip: Skip) -> Bilinear {
+        let w = plan.grid_width as i64;
+        let (fx, fy) = (gx - 0.5, gy - 0.5);
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (ax, ay) = (fx - x0, fy - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let corners = [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)];
+        let bilinear = [
+            (1.0 - ax) * (1.0 - ay),
+            ax * (1.0 - ay),
+            (1.0 - ax) * ay,
+            ax * ay,
+        ];
+        let skipped =
+            |(x, y): (i64, i64)| in_grid(plan, x, y) && grid.past((y * w + x) as usize, skip);
+        // The weights of the neighbours read: all four, or those on the light's side.
+        let mut weight = [0, 1, 2, 3].map(|k| {
+            if skipped(corners[k]) {
+                0.0
             } else {
-                1.0
-            };
-            sum += weight[k] * v;
+                bilinear[k]
+            }
+        });
+        let total = ((weight[0] + weight[1]) + weight[2]) + weight[3];
+        if total > 0.0 && !matches!(skip, Skip::None) {
+            weight = weight.map(|a| a / total);
+        } else {
+            weight = bilinear;
         }
-        out[l * ch + c] = sum;
+        Bilinear { corners, weight }
     }
+
+    /// Light `l`'s channels of this read into `out` (outside the grid the unoccluded light, 1).
+    fn sum(&self, plan: &RenderPlan, grid: &GridLight<'_>, l: usize, out: &mut [f32]) {
+        let (ch, planes, row_len) = (
+            plan.channels as usize,
+            plan.planes_per_light(),
+            plan.light_row_len(),
+        );
+        for c in 0..ch {
+            let mut sum = 0.0f32;
+            for (k, &(x, y)) in self.corners.iter().enumerate() {
+                let v = if in_grid(plan, x, y) {
+                    let at = y as usize * row_len + light_block(plan, l) + x as usize * planes;
+                    grid.light[at + c]
+                } else {
+                    1.0
+                };
+                sum += self.weight[k] * v;
+            }
+            out[l * ch + c] = sum;
+        }
+    }
+}
+
+/// Whether grid pixel (x, y) exists.
+fn in_grid(plan: &RenderPlan, x: i64, y: i64) -> bool {
+    x >= 0 && y >= 0 && x < i64::from(plan.grid_width) && y < i64::from(plan.grid_height)
 }
