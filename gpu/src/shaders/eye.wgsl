@@ -48,15 +48,7 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     if mesh == NO_CROSSING {
         return;
     }
-    var z: f32;
-    if crossed {
-        z = frag_depth[adv.first];
-    } else if globals.jitter != 0u {
-        let jitter_row = row_hash(faces.jitter_hash, y);
-        z = front + unit_float(pixel_hash(jitter_row, x)) * globals.slab_distance;
-    } else {
-        z = front + 0.5 * globals.slab_distance;
-    }
+    let z = shading_depth(crossed, adv.first, faces, x, y);
     // The ray's point at view depth z_origin + z (turned round: z_origin − z, x mirrored), in
     // grid pixel coordinates.
     var view_depth = view.z_origin + z;

@@ -21,6 +21,20 @@ fn tf_entry(i: u32) -> TfEntry {
     );
 }
 
+// `shading_depth`: the depth of a slab's one shading point in pixel (hx, hy) (image pixels, the
+// hashes' keys): the crossing `first` where one was crossed, else the slab's front plus the
+// hashed jitter, else the slab's centre.
+fn shading_depth(crossed: bool, first: u32, faces: Slab, hx: u32, hy: u32) -> f32 {
+    if crossed {
+        return frag_depth[first];
+    }
+    if globals.jitter != 0u {
+        let jitter_row = row_hash(faces.jitter_hash, hy);
+        return faces.front + unit_float(pixel_hash(jitter_row, hx)) * globals.slab_distance;
+    }
+    return faces.front + 0.5 * globals.slab_distance;
+}
+
 // `detail_value`: procedural detail, else the 3D texture, else 0.
 fn detail_value(m: MaterialHeader, p: vec3<f32>) -> f32 {
     if m.detail_kind != DETAIL_NONE {

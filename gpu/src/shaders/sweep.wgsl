@@ -109,15 +109,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     // 3. Shading at one point, if inside a mesh or a surface was crossed; 4. composite.
     var attenuation = vec3<f32>(1.0, 1.0, 1.0);
     if mesh != NO_CROSSING {
-        var z: f32;
-        if crossed {
-            z = frag_depth[adv.first];
-        } else if globals.jitter != 0u {
-            let jitter_row = row_hash(faces.jitter_hash, hy);
-            z = front + unit_float(pixel_hash(jitter_row, hx)) * globals.slab_distance;
-        } else {
-            z = front + 0.5 * globals.slab_distance;
-        }
+        let z = shading_depth(crossed, adv.first, faces, hx, hy);
         let mi = meshes[mesh].material;
         let m = materials[mi];
         let xi = f32(i32(x) - i32(globals.guard_left)) + 0.5;
