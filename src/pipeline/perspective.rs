@@ -229,7 +229,7 @@ fn render_perspective_pass(
         progress: req.progress,
         cancel: req.cancel,
         initial_light: initial_light.as_deref(),
-        every_slab: true,
+        every_slab: req.every_slab,
     };
     let chunk_counts = ChunkCounts::default();
     let cpu = CpuOptions {

@@ -14,6 +14,7 @@ mod early_finish;
 mod golden_hashes;
 mod ldi_parity;
 mod ldi_perspective;
+mod perspective_sweep;
 mod reliability_props;
 mod rules;
 mod simd_quiet;

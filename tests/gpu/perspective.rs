@@ -5,35 +5,14 @@
 //! second-order media, a patterned light and lights travelling towards the eye (the
 //! turned-round pass); on other adapters within docs/gpu.md's thresholds.
 
-use crate::render::{check, check_distance, path_scene_text, run};
+use crate::render::{check, check_distance, run};
 use crate::support;
 use crate::support::gpu as gpu_common;
 
-use convshadow::common::model::scene::{Media, PatternSpec, Penumbra, Scene};
+use convshadow::common::model::scene::{Media, PatternSpec, Penumbra};
 use convshadow::pipeline::Backend;
 use convshadow::reference::half_plane_sheet::{SheetLight, W, perspective_scene_toml};
 use glam::DVec3;
-
-/// The orthographic camera of `path_scene_text` seen instead in perspective from in front and
-/// above, off the axis.
-fn perspective_path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
-    let scene = support::scene(&perspective_path_scene_text(dir, monochrome, jitter), dir);
-    assert!(scene.camera.is_perspective());
-    scene
-}
-
-/// The text of [`perspective_path_scene`].
-fn perspective_path_scene_text(dir: &std::path::Path, monochrome: bool, jitter: bool) -> String {
-    let text = path_scene_text(dir, monochrome, jitter);
-    let ortho = "[camera]\ndirection = [0.2, -0.3, 1.0]\nview_width = 5.0\n";
-    assert!(text.contains(ortho), "the shader-path scene's camera moved");
-    text.replacen(
-        ortho,
-        "[camera]\nprojection = \"perspective\"\neye = [-1.5, 2.0, -7.0]\n\
-         look_at = [0.2, -0.2, 0.4]\nfov_deg = 48\n",
-        1,
-    )
-}
 
 #[test]
 fn gpu_perspective_image_equals_cpu_on_every_shader_path() {
@@ -42,7 +21,7 @@ fn gpu_perspective_image_equals_cpu_on_every_shader_path() {
     };
     let dir = support::temp_dir("gpu-perspective-paths");
     for (monochrome, jitter) in [(false, true), (true, false)] {
-        let scene = perspective_path_scene(&dir, monochrome, jitter);
+        let scene = support::perspective_path_scene(&dir, monochrome, jitter);
         assert_eq!(scene.is_monochrome(), monochrome);
         let what = format!("perspective shader paths, monochrome {monochrome}, jitter {jitter}");
         check(&ctx, &scene, &what);
@@ -50,7 +29,7 @@ fn gpu_perspective_image_equals_cpu_on_every_shader_path() {
     }
     // Second-order media (a medium's part of its entry and exit slabs) and pre-integrated
     // materials (read through their plain transfer function by the eye).
-    let mut scene = perspective_path_scene(&dir, false, true);
+    let mut scene = support::perspective_path_scene(&dir, false, true);
     scene.sweep.media = Media::SecondOrder;
     scene.sweep.preintegration = true;
     scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
@@ -122,7 +101,7 @@ fn gpu_perspective_image_equals_cpu_with_lights_towards_the_eye() {
     // from behind them (the turned-round pass alone).
     let dir = support::temp_dir("gpu-perspective-back");
     for (monochrome, jitter) in [(false, true), (true, false)] {
-        let text = perspective_path_scene_text(&dir, monochrome, jitter);
+        let text = support::perspective_path_scene_text(&dir, monochrome, jitter);
         let text = format!(
             "{text}\n[[light]]\ncolor = [0.7, 0.9, 0.5]\ndirection = [0.3, -0.2, -1.0]\n\
              variance = [0.01, 0.02]\n"
@@ -137,7 +116,7 @@ fn gpu_perspective_image_equals_cpu_with_lights_towards_the_eye() {
     }
     // A pattern on the light towards the eye (the far end's initial light buffer).
     let gobo = gpu_common::write_gobo(&dir, (6, 5), (29, 3, 83));
-    let text = perspective_path_scene_text(&dir, false, true);
+    let text = support::perspective_path_scene_text(&dir, false, true);
     let text = format!(
         "{text}\n[[light]]\ndirection = [0.3, -0.2, -1.0]\nvariance = [0.01, 0.02]\n\
          pattern = {{ path = {:?}, size = [3.0, 2.5], center = [0.4, -0.3] }}\n",

@@ -273,3 +273,139 @@ pub fn exr_with(dir: &Path, name: &str, at: f32) {
     .save(&dir.join(name))
     .unwrap();
 }
+
+/// A scene that reaches the shader paths the example scenes may not (the GPU tests'
+/// `render::path_scene`: every detail kind in 3D and 4D, a 3D texture, both highlights on opaque
+/// and translucent crossings, Lambert and flat surfaces, phase functions, a guard band, grey or
+/// coloured light): its text, its 3D texture written into `dir`.
+pub fn path_scene_text(dir: &std::path::Path, monochrome: bool, jitter: bool) -> String {
+    let dims = [5u32, 4, 3];
+    let voxels: Vec<u8> = (0..60u32).map(|i| (i * 37 % 256) as u8).collect();
+    std::fs::write(dir.join("tex.raw"), &voxels).unwrap();
+    let transport = if monochrome {
+        "[0.3, 0.3, 0.3]"
+    } else {
+        "[0.6, 0.4, 0.2]"
+    };
+    format!(
+        r#"
+[image]
+width = 40
+height = 36
+background = [0.1, 0.2, 0.3]
+[camera]
+direction = [0.2, -0.3, 1.0]
+view_width = 5.0
+[sweep]
+slabs = 20
+optimal_distance = 0.7
+jitter = {jitter}
+seed = 99
+guard_band = 3
+[[light]]
+color = [1.0, 0.8, 0.6]
+tilt_deg = [-35.0, 20.0]
+variance = [0.03, 0.005]
+rotation_deg = 30.0
+[[light]]
+color = [0.3, 0.4, 0.9]
+tilt_deg = [10.0, -5.0]
+variance = [0.0, 0.0]
+[[light]]
+color = [0.2, 0.2, 0.2]
+tilt_deg = [60.0, 0.0]
+variance = [0.08, 0.08]
+[[mesh]]
+shape = "sphere"
+size = [0.7, 3]
+translate = [-1.1, -0.9, 0.0]
+material = "perlin4"
+[[mesh]]
+shape = "torus"
+size = [0.6, 0.25, 24]
+translate = [0.9, -0.9, 0.2]
+rotate_deg = [50.0, 10.0, 0.0]
+material = "ridged"
+[[mesh]]
+shape = "box"
+size = [1.0, 1.0, 1.0]
+translate = [-1.0, 1.0, 0.3]
+rotate_deg = [20.0, 30.0, 0.0]
+material = "tex"
+[[mesh]]
+shape = "sphere"
+size = [0.6, 2]
+translate = [1.0, 1.0, -0.2]
+material = "turb"
+[[mesh]]
+shape = "box"
+size = [6.0, 6.0, 0.3]
+translate = [0.0, 0.0, 1.5]
+material = "wall"
+[[mesh]]
+shape = "sphere"
+size = [0.4, 3]
+translate = [0.0, 0.0, -0.6]
+material = "glossy"
+[material.perlin4]
+detail = {{ kind = "perlin", frequency = 2.0, time = 0.37 }}
+gradient = [[0.0, 0.9, 0.2, 0.1, 0.0], [1.0, 1.0, 0.9, 0.5, 0.9]]
+transport = {transport}
+reference_length = 0.05
+[material.ridged]
+detail = {{ kind = "ridged", frequency = 1.5, octaves = 3, time = -2.5 }}
+gradient = [[0.0, 0.2, 0.9, 0.2, 0.0], [0.6, 0.5, 0.9, 0.5, 0.4], [1.0, 1.0, 1.0, 1.0, 1.0]]
+transport = {transport}
+reference_length = 0.05
+specular = {{ model = "ashikmin-shirley", exponent = 17, f0 = 0.3, strength = 0.8 }}
+phase = {{ g = 0.5 }}
+[material.tex]
+texture = {{ path = "tex.raw", dims = [{}, {}, {}], type = "u8" }}
+gradient = [[0.0, 1.0, 1.0, 1.0, 0.0], [1.0, 0.9, 0.6, 0.3, 1.0]]
+transport = {transport}
+reference_length = 0.05
+[material.turb]
+detail = {{ kind = "turbulence", frequency = 3.0, octaves = 4, lacunarity = 2.3, gain = 0.6 }}
+gradient = [[0.0, 0.1, 0.1, 0.1, 0.1], [1.0, 0.9, 0.9, 0.9, 0.8]]
+transport = {transport}
+reference_length = 0.05
+specular = {{ strength = 0.5, exponent = 4 }}
+phase = {{ g = -0.4 }}
+surface = "flat"
+[material.wall]
+color = [0.8, 0.8, 0.75]
+opacity = 1.0
+specular = {{ strength = 0.2, exponent = 64 }}
+[material.glossy]
+color = [0.7, 0.3, 0.2]
+opacity = 1.0
+specular = {{ model = "ashikmin-shirley", exponent = 40 }}
+"#,
+        dims[0], dims[1], dims[2]
+    )
+}
+
+/// The orthographic camera of `path_scene_text` seen instead in perspective from in front and
+/// above, off the axis.
+pub fn perspective_path_scene(dir: &std::path::Path, monochrome: bool, jitter: bool) -> Scene {
+    let scene = scene(&perspective_path_scene_text(dir, monochrome, jitter), dir);
+    assert!(scene.camera.is_perspective());
+    scene
+}
+
+/// The text of [`perspective_path_scene`].
+pub fn perspective_path_scene_text(
+    dir: &std::path::Path,
+    monochrome: bool,
+    jitter: bool,
+) -> String {
+    let text = path_scene_text(dir, monochrome, jitter);
+    let ortho = "[camera]\ndirection = [0.2, -0.3, 1.0]\nview_width = 5.0\n";
+    assert!(text.contains(ortho), "the shader-path scene's camera moved");
+    text.replacen(
+        ortho,
+        "[camera]\nprojection = \"perspective\"\neye = [-1.5, 2.0, -7.0]\n\
+         look_at = [0.2, -0.2, 0.4]\nfov_deg = 48\n",
+        1,
+    )
+}

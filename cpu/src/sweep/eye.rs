@@ -8,20 +8,32 @@
 //! At a crossed surface the read leaves out grid pixels that were already inside the crossed
 //! mesh at the slab's front (their light is the mesh's inside, not the light arriving at its
 //! surface), the weights of the others renormalised; where every neighbour is inside, the plain
-//! bilinear read. One code path (plain `f32`, one pixel): the same bits on `--path scalar` and
-//! `simd`, at any thread count (a pixel reads only the previous slab's grid and its own state).
+//! bilinear read.
+//!
+//! Two paths, one set of stage functions. `--path scalar` takes each pixel through its step on
+//! the 1-lane instances ([`eye_sample`], [`material_at`], [`eye_shade`]). `--path simd` first
+//! takes a row's cursors (skipping each run of [`WAKE_RUN`] pixels whose [`EyeState::wake`]
+//! says none can act in the slab), then shades the row's samples eight at a time on the 8-lane
+//! instances, those of one mesh together ([`shade_in_lanes`]): the same IEEE operations per lane,
+//! so the same bits, at any thread count (a pixel reads only the previous slab's grid and its
+//! own state).
+
+use std::cell::RefCell;
 
 use rayon::prelude::*;
+use wide::f32x8;
 
 use convshadow_common::contract::sweep_io::EyeView;
 use convshadow_common::pixel::hash::row_hash;
+use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::RenderPlan;
 
 use super::kit::{MAX_LIGHT_CHANNELS, light_block};
 use crate::composite::{composite, part_of_slab};
 use crate::ldi::Ldi;
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
-use crate::shading::{Surface, material_at, shade, shading_depth};
+use crate::shading::{Surface, TfLanes, material_at, shade, shading_depth};
+use convshadow_common::pixel::lane::MAX_LANES;
 
 /// The eye's per-pixel state: layer cursor, inside mask, composited colour and alpha.
 pub(crate) struct EyeState {
@@ -30,18 +42,53 @@ pub(crate) struct EyeState {
     /// Per pixel `[r, g, b]`.
     pub(crate) color: Vec<[f32; 3]>,
     pub(crate) alpha: Vec<f32>,
+    /// Per run of [`WAKE_RUN`] pixels of a row (row by row), the lowest [`wake`] of its pixels:
+    /// a slab whose back face is not beyond it shades none of them and moves no cursor, so the
+    /// batched path skips the run without reading the LDI.
+    wake: Vec<f32>,
 }
+
+/// The pixels of a row one [`EyeState::wake`] summarises.
+const WAKE_RUN: usize = 8;
 
 impl EyeState {
     /// Before the first slab: each cursor at its pixel's first fragment, nothing composited.
     pub(crate) fn new(view: &EyeView<'_>) -> EyeState {
         let n = (view.width * view.height) as usize;
-        EyeState {
+        let mut state = EyeState {
             next: view.ldi.offsets[..n].to_vec(),
             inside: vec![0; n],
             color: vec![[0.0; 3]; n],
             alpha: vec![0.0; n],
+            wake: Vec::new(),
+        };
+        let w = view.width as usize;
+        for y in 0..view.height as usize {
+            for x0 in (0..w).step_by(WAKE_RUN) {
+                let run = (y * w + x0)..(y * w + (x0 + WAKE_RUN).min(w));
+                let wake = run
+                    .map(|p| wake(view, p, state.next[p], state.inside[p], state.alpha[p]))
+                    .fold(f32::INFINITY, f32::min);
+                state.wake.push(wake);
+            }
         }
+        state
+    }
+}
+
+/// The back face a slab must pass before eye pixel `p` (row-major) next does anything in
+/// [`eye_sample`]: −∞ inside a mesh, else its next fragment's depth (a crossing needs a depth
+/// `< back`), +∞ with none left or, front to back, once opaque.
+/// (`next`, `inside`, `alpha`: its cursor, inside mask and alpha.)
+fn wake(view: &EyeView<'_>, p: usize, next: u32, inside: u32, alpha: f32) -> f32 {
+    if alpha == 1.0 && !view.turned_round {
+        f32::INFINITY
+    } else if inside != 0 {
+        f32::NEG_INFINITY
+    } else if next < view.ldi.offsets[p + 1] {
+        view.ldi.depth[next as usize]
+    } else {
+        f32::INFINITY
     }
 }
 
@@ -99,6 +146,7 @@ pub(crate) fn eye_slab(
     view: &EyeView<'_>,
     grid: &GridLight<'_>,
     slab: u32,
+    batched: bool,
     state: &mut EyeState,
 ) {
     let w = view.width as usize;
@@ -107,14 +155,16 @@ pub(crate) fn eye_slab(
         plan.slab_back[slab as usize],
     );
     let (cx, cy) = (view.width as f32 * 0.5, view.height as f32 * 0.5);
+    let runs = w.div_ceil(WAKE_RUN);
     state
         .next
         .par_chunks_mut(w)
         .zip(state.inside.par_chunks_mut(w))
         .zip(state.color.par_chunks_mut(w))
         .zip(state.alpha.par_chunks_mut(w))
+        .zip(state.wake.par_chunks_mut(runs))
         .enumerate()
-        .for_each(|(y, (((next, inside), color), alpha))| {
+        .for_each(|(y, ((((next, inside), color), alpha), wakes))| {
             let jitter_row = row_hash(
                 plan.jitter_slab_hash[slab as usize],
                 plan.hash_y(y as u32 + plan.guard.top),
@@ -122,30 +172,149 @@ pub(crate) fn eye_slab(
             // The pixel centre's offset from the view axis, in image pixels (in a turned-round
             // pass x is mirrored: the turned grid's x axis is the image's reversed).
             let offset_y = y as f32 + 0.5 - cy;
-            for x in 0..w {
-                let offset_x = if view.turned_round {
-                    cx - (x as f32 + 0.5)
-                } else {
-                    x as f32 + 0.5 - cx
-                };
-                let pixel = EyePixel {
-                    x,
-                    y,
-                    offset: [offset_x, offset_y],
-                    jitter_row,
-                    front,
-                    back,
-                };
-                eye_pixel(
-                    plan,
-                    view,
-                    grid,
-                    &pixel,
-                    (&mut next[x], &mut inside[x]),
-                    (&mut color[x], &mut alpha[x]),
-                );
+            let pixel = |x: usize| EyePixel {
+                x,
+                y,
+                offset: [
+                    if view.turned_round {
+                        cx - (x as f32 + 0.5)
+                    } else {
+                        x as f32 + 0.5 - cx
+                    },
+                    offset_y,
+                ],
+                jitter_row,
+                front,
+                back,
+            };
+            if !batched {
+                for x in 0..w {
+                    let cursor = (&mut next[x], &mut inside[x]);
+                    if let Some(sample) = eye_sample(plan, view, &pixel(x), cursor, alpha[x]) {
+                        let [xi, yi, z] = sample.at;
+                        let tf = material_at(plan, sample.mesh, xi, yi, z);
+                        eye_shade(plan, grid, &sample, tf, (&mut color[x], &mut alpha[x]));
+                    }
+                }
+                return;
             }
+            ROW_SAMPLES.with_borrow_mut(|samples| {
+                samples.clear();
+                // The runs some pixel of which may act in this slab.
+                let awake = |r: usize| back > wakes[r];
+                for x in (0..runs)
+                    .filter(|&r| awake(r))
+                    .flat_map(|r| run_pixels(r, w))
+                {
+                    let cursor = (&mut next[x], &mut inside[x]);
+                    samples.extend(eye_sample(plan, view, &pixel(x), cursor, alpha[x]));
+                }
+                shade_in_lanes(plan, grid, samples, (&mut *color, &mut *alpha));
+                for (r, run_wake) in wakes.iter_mut().enumerate() {
+                    if back <= *run_wake {
+                        continue;
+                    }
+                    *run_wake = run_pixels(r, w)
+                        .map(|x| wake(view, y * w + x, next[x], inside[x], alpha[x]))
+                        .fold(f32::INFINITY, f32::min);
+                }
+            });
         });
+}
+
+/// The pixels of a row's run `r` of [`WAKE_RUN`] (a row `w` wide).
+fn run_pixels(r: usize, w: usize) -> std::ops::Range<usize> {
+    r * WAKE_RUN..((r + 1) * WAKE_RUN).min(w)
+}
+
+thread_local! {
+    /// A row's eye samples between their cursors and their shading (each worker's own).
+    static ROW_SAMPLES: RefCell<Vec<EyeSample>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Every sample of `samples` (a row's) shaded and composited into its pixel (`color`, `alpha`,
+/// indexed by column) as [`eye_shade`] does one by one, eight at a time on the SIMD lanes: the
+/// samples of one mesh together, each lane's light read on its own ([`read_light`]), the rest —
+/// material, part of the slab, shading, compositing — the lane type's operations, which are
+/// the scalar ones lane by lane (so the same bits).
+fn shade_in_lanes(
+    plan: &RenderPlan,
+    grid: &GridLight<'_>,
+    samples: &[EyeSample],
+    (color, alpha): (&mut [[f32; 3]], &mut [f32]),
+) {
+    let mut order: Vec<usize> = (0..samples.len()).collect();
+    order.sort_by_key(|&i| samples[i].mesh);
+    for run in order.chunk_by(|&a, &b| samples[a].mesh == samples[b].mesh) {
+        for lanes in run.chunks(8) {
+            shade_lanes(plan, grid, samples, lanes, (&mut *color, &mut *alpha));
+        }
+    }
+}
+
+/// Up to eight samples of one mesh (`samples[lanes[i]]`) on the lanes of [`shade_in_lanes`];
+/// unused lanes repeat the first sample and are neither composited nor stored.
+fn shade_lanes(
+    plan: &RenderPlan,
+    grid: &GridLight<'_>,
+    samples: &[EyeSample],
+    lanes: &[usize],
+    (color, alpha): (&mut [[f32; 3]], &mut [f32]),
+) {
+    let sample = |i: usize| &samples[lanes.get(i).copied().unwrap_or(lanes[0])];
+    let per_lane =
+        |f: &dyn Fn(&EyeSample) -> f32| f32x8::from(std::array::from_fn(|i| f(sample(i))));
+    let mesh = sample(0).mesh;
+    let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
+    let [x, y, z] = [0, 1, 2].map(|k| per_lane(&|s| s.at[k]));
+    let mut tf = material_at(plan, mesh, x, y, z);
+    // Each lane's light, read as the scalar stage reads it.
+    let n = plan.lights.len() * plan.channels as usize;
+    let mut iin = [[0.0f32; 8]; MAX_LIGHT_CHANNELS];
+    for (i, &k) in lanes.iter().enumerate() {
+        let s = &samples[k];
+        let read = read_light(
+            plan,
+            grid,
+            s.read_at,
+            (s.skip, s.normal),
+            s.back_along_light,
+        );
+        for (k, v) in read[..n].iter().enumerate() {
+            iin[k][i] = *v;
+        }
+    }
+    let iin: [f32x8; MAX_LIGHT_CHANNELS] = std::array::from_fn(|k| f32x8::from(iin[k]));
+    let in_use: [bool; MAX_LANES] = std::array::from_fn(|i| i < lanes.len());
+    let surface_lanes: [bool; MAX_LANES] = std::array::from_fn(|i| {
+        i < lanes.len() && sample(i).normal.is_some() && sample(i).shades_surface
+    });
+    let surface = surface_lanes.iter().any(|&b| b).then(|| Surface {
+        normal: [0, 1, 2].map(|k| per_lane(&|s| s.normal.map_or(0.0, |nv| nv[k]))),
+        lanes: f32x8::m_from(&surface_lanes),
+        alpha: tf.alpha,
+    });
+    let part = per_lane(&|s| s.part);
+    let lit_from = per_lane(&|s| s.lit_from);
+    let light = part_of_slab(&mut tf, part, lit_from);
+    let shaded = shade(plan, material, tf.color, &iin[..n], surface.as_ref());
+    let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
+    let at = |i: usize| sample(i).x;
+    let mut c =
+        [0, 1, 2].map(|k| f32x8::from(std::array::from_fn::<f32, 8, _>(|i| color[at(i)][k])));
+    let mut a = f32x8::from(std::array::from_fn::<f32, 8, _>(|i| alpha[at(i)]));
+    composite(
+        &mut c,
+        &mut a,
+        shaded,
+        tf.alpha,
+        f32x8::m_from(&in_use),
+        plan.turned_round,
+    );
+    for i in 0..lanes.len() {
+        color[at(i)] = [0, 1, 2].map(|k| c[k].lane(i));
+        alpha[at(i)] = a.lane(i);
+    }
 }
 
 /// Where one eye pixel is in the sweep.
@@ -159,19 +328,44 @@ struct EyePixel {
     back: f32,
 }
 
-/// One image pixel through one slab: cursor, shading point, light read, composite.
-fn eye_pixel(
+/// One eye sample after its cursor, before its material (read by [`material_at`], one by one or
+/// in lanes), its light read and its shading ([`eye_shade`]).
+struct EyeSample {
+    /// The image pixel's column.
+    x: usize,
+    /// The mesh shaded.
+    mesh: u32,
+    /// Where the material is read: image-pixel x, y (of the grid's image) and relative depth.
+    at: [f32; 3],
+    /// The part of the slab inside the medium and the depth its light is taken at
+    /// ([`slab_part`]).
+    part: f32,
+    lit_from: f32,
+    /// The crossed triangle's normal, at a crossing.
+    normal: Option<[f32; 3]>,
+    /// Whether the crossed surface takes a highlight or the Lambert term.
+    shades_surface: bool,
+    /// Where the grid's light is read ([`read_light`]): the ray's grid position, the grid
+    /// pixels left out, and how many slabs back along each light.
+    read_at: (f32, f32),
+    skip: Skip,
+    back_along_light: Option<f32>,
+}
+
+/// One image pixel through one slab up to its material read: cursor, shading point, where the
+/// light is read;
+/// `None` where nothing is shaded (an opaque pixel of a front-to-back pass, or no mesh).
+fn eye_sample(
     plan: &RenderPlan,
     view: &EyeView<'_>,
-    grid: &GridLight<'_>,
     p: &EyePixel,
     (next, inside): (&mut u32, &mut u32),
-    (color, alpha): (&mut [f32; 3], &mut f32),
-) {
-    if *alpha == 1.0 && !view.turned_round {
+    alpha: f32,
+) -> Option<EyeSample> {
+    if alpha == 1.0 && !view.turned_round {
         // Opaque: compositing adds (1 − 1)·α·c, exactly 0 (the early finish's argument), so
         // nothing later changes this pixel's bits. (Back to front, nearer slabs still do.)
-        return;
+        return None;
     }
     let ldi = view.ldi;
     let end = ldi.offsets[p.y * view.width as usize + p.x + 1];
@@ -180,10 +374,7 @@ fn eye_pixel(
     let mesh = if crossed != NO_CROSSING {
         u32::from(ldi.mesh[crossed as usize])
     } else {
-        match first_mesh(*inside) {
-            Some(m) => m,
-            None => return,
-        }
+        first_mesh(*inside)?
     };
     let z = shading_depth(
         plan,
@@ -221,7 +412,6 @@ fn eye_pixel(
     // plane one slab before this slab's front (see `read_light`).
     let back_along_light = (view.turned_round && crossed != NO_CROSSING)
         .then_some((z - p.front) * plan.inv_slab_distance + 1.0);
-    let iin = read_light(plan, grid, (gx, gy), (skip, normal), back_along_light);
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
     let (xi, yi) = (
         gx - 0.5 - plan.guard.left as f32,
@@ -235,14 +425,48 @@ fn eye_pixel(
         (p.front, p.back),
         plan.inv_slab_distance,
     );
-    let mut tf = material_at(plan, mesh, xi, yi, z);
-    let surface = (crossed != NO_CROSSING && (material.specular.is_some() || material.lambert))
-        .then(|| Surface {
-            normal: view.raster.triangles[ldi.triangle[crossed as usize] as usize].normal,
+    let shades_surface = material.specular.is_some() || material.lambert;
+    Some(EyeSample {
+        x: p.x,
+        mesh,
+        at: [xi, yi, z],
+        part,
+        lit_from,
+        normal,
+        shades_surface,
+        read_at: (gx, gy),
+        skip,
+        back_along_light,
+    })
+}
+
+/// The rest of an eye sample's step with its transfer-function entry `tf`: the light read from
+/// `grid`, the part of the slab inside the medium, shading, compositing into the pixel's `color`
+/// and `alpha`.
+fn eye_shade(
+    plan: &RenderPlan,
+    grid: &GridLight<'_>,
+    sample: &EyeSample,
+    mut tf: TfLanes<f32>,
+    (color, alpha): (&mut [f32; 3], &mut f32),
+) {
+    let material = &plan.materials[plan.mesh_material[sample.mesh as usize] as usize];
+    let iin = read_light(
+        plan,
+        grid,
+        sample.read_at,
+        (sample.skip, sample.normal),
+        sample.back_along_light,
+    );
+    let surface = sample
+        .normal
+        .filter(|_| sample.shades_surface)
+        .map(|normal| Surface {
+            normal,
             lanes: true,
             alpha: tf.alpha,
         });
-    let light = part_of_slab(&mut tf, part, lit_from);
+    let light = part_of_slab(&mut tf, sample.part, sample.lit_from);
     let n = plan.lights.len() * plan.channels as usize;
     let shaded = shade(plan, material, tf.color, &iin[..n], surface.as_ref());
     let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
@@ -295,10 +519,12 @@ fn read_light(
     out
 }
 
-/// A bilinear read of the grid at one position: its four corners (grid pixel x, y) and their
-/// weights, those already past the crossed mesh left out.
+/// A bilinear read of the grid at one position: its four corners and their weights, those
+/// already past the crossed mesh left out.
 struct Bilinear {
-    corners: [(i64, i64); 4],
+    /// Each corner's first light value in the grid's light rows (its pixel's offset in a
+    /// light's block), `None` beyond the grid.
+    corners: [Option<usize>; 4],
     weight: [f32; 4],
 }
 
@@ -334,26 +560,21 @@ impl Bilinear {
         } else {
             weight = bilinear;
         }
+        let (row_len, planes) = (plan.light_row_len(), plan.planes_per_light());
+        let corners = corners
+            .map(|(x, y)| in_grid(plan, x, y).then(|| y as usize * row_len + x as usize * planes));
         Bilinear { corners, weight }
     }
 
     /// Light `l`'s channels of this read into `out` (outside the grid the unoccluded light, 1).
     fn sum(&self, plan: &RenderPlan, grid: &GridLight<'_>, l: usize, out: &mut [f32]) {
-        let (ch, planes, row_len) = (
-            plan.channels as usize,
-            plan.planes_per_light(),
-            plan.light_row_len(),
-        );
+        let ch = plan.channels as usize;
+        let block = light_block(plan, l);
         for c in 0..ch {
             let mut sum = 0.0f32;
-            for (k, &(x, y)) in self.corners.iter().enumerate() {
-                let v = if in_grid(plan, x, y) {
-                    let at = y as usize * row_len + light_block(plan, l) + x as usize * planes;
-                    grid.light[at + c]
-                } else {
-                    1.0
-                };
-                sum += self.weight[k] * v;
+            for (corner, w) in self.corners.iter().zip(self.weight) {
+                let v = corner.map_or(1.0, |at| grid.light[at + block + c]);
+                sum += w * v;
             }
             out[l * ch + c] = sum;
         }

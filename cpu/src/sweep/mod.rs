@@ -414,7 +414,7 @@ pub fn sweep_with(
     options: &SweepOptions<'_>,
     cpu: &CpuOptions<'_>,
 ) -> Result<SweepOutput, SweepError> {
-    let (state, slabs_swept) = drive(plan, raster, ldi, options, cpu, |_, _| {})?;
+    let (state, slabs_swept) = drive(plan, raster, ldi, options, cpu, |_, _| false)?;
     let (image, alpha) = finish_image(plan, &state.color, &state.alpha);
     Ok(SweepOutput {
         image,
@@ -425,9 +425,10 @@ pub fn sweep_with(
 }
 
 /// The sweep for a perspective camera (`eye`): the light swept on the slab grid of `plan`,
-/// `raster` and `ldi` (every slab: the early finish watches the grid, not the eye), and before
-/// each slab the eye's rays take their step through it (`eye::eye_slab`). The image is the
-/// eye's, `eye.width × eye.height`.
+/// `raster` and `ldi`, and before each slab the eye's rays take their step through it
+/// (`eye::eye_slab`). The image is the eye's, `eye.width × eye.height`. The early finish
+/// watches the eye's pixels, not the grid's: once every one is opaque (front to back) the sweep
+/// stops, unless `options.every_slab` asks for the grid's light after the last slab.
 pub fn sweep_perspective(
     plan: &RenderPlan,
     raster: &RasterSetup,
@@ -441,14 +442,28 @@ pub fn sweep_perspective(
         every_slab: true,
         ..*options
     };
+    let (w, h) = (eye.width as usize, eye.height as usize);
+    let mut opaque = OpaqueImage::of_image(w, (0, 0), w, h);
     let (state, slabs_swept) = drive(plan, raster, ldi, &every_slab, cpu, |slab, state| {
+        if !options.every_slab && !plan.turned_round && slab > 0 && opaque.is_final(&view.alpha) {
+            // No later slab can change an eye pixel's bits (see `OpaqueImage`).
+            return true;
+        }
         let grid = GridLight {
             light: &state.prev,
             inside: &state.inside,
             ldi,
             next: &state.next,
         };
-        eye::eye_slab(plan, eye, &grid, slab, &mut view);
+        eye::eye_slab(
+            plan,
+            eye,
+            &grid,
+            slab,
+            cpu.path == SweepPath::Simd,
+            &mut view,
+        );
+        false
     })?;
     let n = (eye.width * eye.height) as usize;
     let mut image = vec![0.0f32; n * 3];
@@ -466,14 +481,15 @@ pub fn sweep_perspective(
 }
 
 /// The slab loop of [`sweep_with`] and [`sweep_perspective`]: `before_slab(k, state)` runs before
-/// slab k is swept. Returns the state after the last slab swept and how many were.
+/// slab k is swept, and stops the loop there if it returns true. Returns the state after the
+/// last slab swept and how many were.
 fn drive(
     plan: &RenderPlan,
     raster: &RasterSetup,
     ldi: &Ldi,
     options: &SweepOptions<'_>,
     cpu: &CpuOptions<'_>,
-    mut before_slab: impl FnMut(u32, &PixelState),
+    mut before_slab: impl FnMut(u32, &PixelState) -> bool,
 ) -> Result<(PixelState, u32), SweepError> {
     let ch = plan.channels as usize;
     let lights = plan.lights.len();
@@ -526,7 +542,11 @@ fn drive(
             back: plan.slab_back[slab as usize],
             front: plan.slab_front[slab as usize],
         };
-        before_slab(slab, &state);
+        if before_slab(slab, &state) {
+            slabs_swept = slab;
+            (options.progress)(plan.slabs - 1);
+            break;
+        }
         let lanes = simd.then(|| SimdSlab::new(plan, &columns, slab));
         sweep_slab(
             &ctx,
