@@ -261,48 +261,55 @@ fn shade_lanes(
     lanes: &[usize],
     (color, alpha): (&mut [[f32; 3]], &mut [f32]),
 ) {
-    let sample = |i: usize| &samples[lanes.get(i).copied().unwrap_or(lanes[0])];
-    let per_lane =
-        |f: &dyn Fn(&EyeSample) -> f32| f32x8::from(std::array::from_fn(|i| f(sample(i))));
-    let mesh = sample(0).mesh;
-    let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
-    let [x, y, z] = [0, 1, 2].map(|k| per_lane(&|s| s.at[k]));
-    let mut tf = material_at(plan, mesh, x, y, z);
-    // Each lane's light, read as the scalar stage reads it.
+    // Every lane's inputs (unused lanes repeat the first sample), and its light, read as the
+    // scalar stage reads it.
     let n = plan.lights.len() * plan.channels as usize;
+    let mut at = [[0.0f32; 8]; 3];
+    let mut normal = [[0.0f32; 8]; 3];
+    let (mut part, mut lit_from, mut pixel) = ([0.0f32; 8], [0.0f32; 8], [0usize; 8]);
+    let mut surface_lanes = [false; MAX_LANES];
     let mut iin = [[0.0f32; 8]; MAX_LIGHT_CHANNELS];
-    for (i, &k) in lanes.iter().enumerate() {
-        let s = &samples[k];
-        let read = read_light(
-            plan,
-            grid,
-            s.read_at,
-            (s.skip, s.normal),
-            s.back_along_light,
-        );
-        for (k, v) in read[..n].iter().enumerate() {
-            iin[k][i] = *v;
+    for i in 0..8 {
+        let s = &samples[lanes.get(i).copied().unwrap_or(lanes[0])];
+        for k in 0..3 {
+            at[k][i] = s.at[k];
+            normal[k][i] = s.normal.map_or(0.0, |nv| nv[k]);
+        }
+        (part[i], lit_from[i], pixel[i]) = (s.part, s.lit_from, s.x);
+        if i < lanes.len() {
+            surface_lanes[i] = s.normal.is_some() && s.shades_surface;
+            let read = read_light(
+                plan,
+                grid,
+                s.read_at,
+                (s.skip, s.normal),
+                s.back_along_light,
+            );
+            for (k, v) in read[..n].iter().enumerate() {
+                iin[k][i] = *v;
+            }
         }
     }
-    let iin: [f32x8; MAX_LIGHT_CHANNELS] = std::array::from_fn(|k| f32x8::from(iin[k]));
+    let mesh = samples[lanes[0]].mesh;
+    let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
+    let [x, y, z] = at.map(f32x8::from);
+    let mut tf = material_at(plan, mesh, x, y, z);
+    let mut iin_lanes = [f32x8::ZERO; MAX_LIGHT_CHANNELS];
+    for (lane, v) in iin_lanes.iter_mut().zip(&iin[..n]) {
+        *lane = f32x8::from(*v);
+    }
     let in_use: [bool; MAX_LANES] = std::array::from_fn(|i| i < lanes.len());
-    let surface_lanes: [bool; MAX_LANES] = std::array::from_fn(|i| {
-        i < lanes.len() && sample(i).normal.is_some() && sample(i).shades_surface
-    });
     let surface = surface_lanes.iter().any(|&b| b).then(|| Surface {
-        normal: [0, 1, 2].map(|k| per_lane(&|s| s.normal.map_or(0.0, |nv| nv[k]))),
+        normal: normal.map(f32x8::from),
         lanes: f32x8::m_from(&surface_lanes),
         alpha: tf.alpha,
     });
-    let part = per_lane(&|s| s.part);
-    let lit_from = per_lane(&|s| s.lit_from);
+    let (part, lit_from) = (f32x8::from(part), f32x8::from(lit_from));
     let light = part_of_slab(&mut tf, part, lit_from);
-    let shaded = shade(plan, material, tf.color, &iin[..n], surface.as_ref());
+    let shaded = shade(plan, material, tf.color, &iin_lanes[..n], surface.as_ref());
     let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
-    let at = |i: usize| sample(i).x;
-    let mut c =
-        [0, 1, 2].map(|k| f32x8::from(std::array::from_fn::<f32, 8, _>(|i| color[at(i)][k])));
-    let mut a = f32x8::from(std::array::from_fn::<f32, 8, _>(|i| alpha[at(i)]));
+    let mut c = [0, 1, 2].map(|k| f32x8::from(pixel.map(|x| color[x][k])));
+    let mut a = f32x8::from(pixel.map(|x| alpha[x]));
     composite(
         &mut c,
         &mut a,
@@ -311,9 +318,9 @@ fn shade_lanes(
         f32x8::m_from(&in_use),
         plan.turned_round,
     );
-    for i in 0..lanes.len() {
-        color[at(i)] = [0, 1, 2].map(|k| c[k].lane(i));
-        alpha[at(i)] = a.lane(i);
+    for (i, &x) in pixel.iter().enumerate().take(lanes.len()) {
+        color[x] = [0, 1, 2].map(|k| c[k].lane(i));
+        alpha[x] = a.lane(i);
     }
 }
 
@@ -547,19 +554,23 @@ impl Bilinear {
         let skipped =
             |(x, y): (i64, i64)| in_grid(plan, x, y) && grid.past((y * w + x) as usize, skip);
         // The weights of the neighbours read: all four, or those on the light's side.
-        let mut weight = [0, 1, 2, 3].map(|k| {
-            if skipped(corners[k]) {
-                0.0
-            } else {
-                bilinear[k]
-            }
-        });
-        let total = ((weight[0] + weight[1]) + weight[2]) + weight[3];
-        if total > 0.0 && !matches!(skip, Skip::None) {
-            weight = weight.map(|a| a / total);
+        let weight = if matches!(skip, Skip::None) {
+            bilinear
         } else {
-            weight = bilinear;
-        }
+            let weight = [0, 1, 2, 3].map(|k| {
+                if skipped(corners[k]) {
+                    0.0
+                } else {
+                    bilinear[k]
+                }
+            });
+            let total = ((weight[0] + weight[1]) + weight[2]) + weight[3];
+            if total > 0.0 {
+                weight.map(|a| a / total)
+            } else {
+                bilinear
+            }
+        };
         let (row_len, planes) = (plan.light_row_len(), plan.planes_per_light());
         let corners = corners
             .map(|(x, y)| in_grid(plan, x, y).then(|| y as usize * row_len + x as usize * planes));
