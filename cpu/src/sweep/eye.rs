@@ -21,7 +21,7 @@
 use std::cell::RefCell;
 
 use rayon::prelude::*;
-use wide::f32x8;
+use wide::{f32x8, u32x8};
 
 use convshadow_common::contract::sweep_io::EyeView;
 use convshadow_common::pixel::hash::row_hash;
@@ -269,6 +269,12 @@ fn shade_lanes(
     let (mut part, mut lit_from, mut pixel) = ([0.0f32; 8], [0.0f32; 8], [0usize; 8]);
     let mut surface_lanes = [false; MAX_LANES];
     let mut iin = [[0.0f32; 8]; MAX_LIGHT_CHANNELS];
+    // The lanes whose lights are all read at one place (no crossing read per light): their
+    // bilinear reads' corners and weights, summed below on the lanes.
+    let mut shared = [false; MAX_LANES];
+    let mut corner = [[0u32; 8]; 4];
+    let mut in_grid = [[false; MAX_LANES]; 4];
+    let mut weight = [[0.0f32; 8]; 4];
     for i in 0..8 {
         let s = &samples[lanes.get(i).copied().unwrap_or(lanes[0])];
         for k in 0..3 {
@@ -276,18 +282,30 @@ fn shade_lanes(
             normal[k][i] = s.normal.map_or(0.0, |nv| nv[k]);
         }
         (part[i], lit_from[i], pixel[i]) = (s.part, s.lit_from, s.x);
-        if i < lanes.len() {
-            surface_lanes[i] = s.normal.is_some() && s.shades_surface;
-            let read = read_light(
-                plan,
-                grid,
-                s.read_at,
-                (s.skip, s.normal),
-                s.back_along_light,
-            );
-            for (k, v) in read[..n].iter().enumerate() {
-                iin[k][i] = *v;
+        if i >= lanes.len() {
+            continue;
+        }
+        surface_lanes[i] = s.normal.is_some() && s.shades_surface;
+        if !reads_per_light(s.skip, s.back_along_light) {
+            shared[i] = true;
+            let read = Bilinear::at(plan, grid, s.read_at, s.skip);
+            for k in 0..4 {
+                weight[k][i] = read.weight[k];
+                if let Some(offset) = read.corners[k] {
+                    (corner[k][i], in_grid[k][i]) = (offset as u32, true);
+                }
             }
+            continue;
+        }
+        let read = read_light(
+            plan,
+            grid,
+            s.read_at,
+            (s.skip, s.normal),
+            s.back_along_light,
+        );
+        for (k, v) in read[..n].iter().enumerate() {
+            iin[k][i] = *v;
         }
     }
     let mesh = samples[lanes[0]].mesh;
@@ -297,6 +315,25 @@ fn shade_lanes(
     let mut iin_lanes = [f32x8::ZERO; MAX_LIGHT_CHANNELS];
     for (lane, v) in iin_lanes.iter_mut().zip(&iin[..n]) {
         *lane = f32x8::from(*v);
+    }
+    if shared.iter().any(|&b| b) {
+        // `Bilinear::sum` on the lanes: corner by corner from 0, outside the grid 1.
+        let ch = plan.channels as usize;
+        let (one, shared) = (f32x8::ONE, f32x8::m_from(&shared));
+        let (weight, corner) = (weight.map(f32x8::from), corner.map(u32x8::from));
+        let in_grid = in_grid.map(|m| f32x8::m_from(&m));
+        for l in 0..plan.lights.len() {
+            for c in 0..ch {
+                let at = u32x8::splat((light_block(plan, l) + c) as u32);
+                let mut sum = f32x8::ZERO;
+                for k in 0..4 {
+                    let v = f32x8::gather(grid.light, corner[k] + at);
+                    sum += weight[k] * f32x8::select(in_grid[k], v, one);
+                }
+                let lane = &mut iin_lanes[l * ch + c];
+                *lane = f32x8::select(shared, sum, *lane);
+            }
+        }
     }
     let in_use: [bool; MAX_LANES] = std::array::from_fn(|i| i < lanes.len());
     let surface = surface_lanes.iter().any(|&b| b).then(|| Surface {
@@ -498,7 +535,7 @@ fn read_light(
     back_along_light: Option<f32>,
 ) -> [f32; MAX_LIGHT_CHANNELS] {
     let mut out = [0.0f32; MAX_LIGHT_CHANNELS];
-    let per_light = back_along_light.is_some() || matches!(skip, Skip::Shell { .. });
+    let per_light = reads_per_light(skip, back_along_light);
     // Every light read at the same place: one set of corners and weights.
     let shared = (!per_light).then(|| Bilinear::at(plan, grid, (gx, gy), skip));
     for l in 0..plan.lights.len() {
@@ -524,6 +561,12 @@ fn read_light(
         Bilinear::at(plan, grid, at, skip).sum(plan, grid, l, &mut out);
     }
     out
+}
+
+/// Whether each light is read at its own place or with its own grid pixels left out (a
+/// turned-round pass's crossing, a thin shell's), not all with one [`Bilinear`] read.
+fn reads_per_light(skip: Skip, back_along_light: Option<f32>) -> bool {
+    back_along_light.is_some() || matches!(skip, Skip::Shell { .. })
 }
 
 /// A bilinear read of the grid at one position: its four corners and their weights, those
