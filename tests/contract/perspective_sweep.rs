@@ -99,6 +99,11 @@ fn perspective_images_are_the_same_bits_on_both_paths_any_thread_count_and_early
             support::perspective_path_scene(&dir, monochrome, jitter),
         ));
     }
+    // Pre-integrated materials: the detail on the slab's faces along each ray.
+    let mut pre = support::perspective_path_scene(&dir, false, true);
+    pre.sweep.preintegration = true;
+    pre.revalidate().unwrap_or_else(|e| panic!("{e}"));
+    scenes.push(("shader paths, pre-integrated", pre));
     let text = support::perspective_path_scene_text(&dir, false, true);
     scenes.push((
         "shader paths, a light towards the eye",

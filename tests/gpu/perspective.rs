@@ -28,7 +28,7 @@ fn gpu_perspective_image_equals_cpu_on_every_shader_path() {
         check_distance(&ctx, &scene, &what);
     }
     // Second-order media (a medium's part of its entry and exit slabs) and pre-integrated
-    // materials (read through their plain transfer function by the eye).
+    // materials (the eye reads their detail on the slab's faces along its ray).
     let mut scene = support::perspective_path_scene(&dir, false, true);
     scene.sweep.media = Media::SecondOrder;
     scene.sweep.preintegration = true;

@@ -11,7 +11,7 @@
 //! bilinear read.
 //!
 //! Two paths, one set of stage functions. `--path scalar` takes each pixel through its step on
-//! the 1-lane instances ([`eye_sample`], [`material_at`], [`eye_shade`]). `--path simd` first
+//! the 1-lane instances ([`eye_sample`], [`sample_entry`], [`eye_shade`]). `--path simd` first
 //! takes a row's cursors (skipping each run of [`WAKE_RUN`] pixels whose [`EyeState::wake`]
 //! says none can act in the slab), then shades the row's samples eight at a time on the 8-lane
 //! instances, those of one mesh together ([`shade_in_lanes`]): the same IEEE operations per lane,
@@ -32,7 +32,9 @@ use super::kit::{MAX_LIGHT_CHANNELS, light_block};
 use crate::composite::{composite, part_of_slab};
 use crate::ldi::Ldi;
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
-use crate::shading::{Surface, TfLanes, material_at, shade, shading_depth};
+use crate::shading::{
+    Surface, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
+};
 use convshadow_common::pixel::lane::MAX_LANES;
 
 /// The eye's per-pixel state: layer cursor, inside mask, composited colour and alpha.
@@ -191,8 +193,7 @@ pub(crate) fn eye_slab(
                 for x in 0..w {
                     let cursor = (&mut next[x], &mut inside[x]);
                     if let Some(sample) = eye_sample(plan, view, &pixel(x), cursor, alpha[x]) {
-                        let [xi, yi, z] = sample.at;
-                        let tf = material_at(plan, sample.mesh, xi, yi, z);
+                        let tf = sample_entry(plan, sample.mesh, sample.at, sample.faces);
                         eye_shade(plan, grid, &sample, tf, (&mut color[x], &mut alpha[x]));
                     }
                 }
@@ -311,7 +312,17 @@ fn shade_lanes(
     let mesh = samples[lanes[0]].mesh;
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
     let [x, y, z] = at.map(f32x8::from);
-    let mut tf = material_at(plan, mesh, x, y, z);
+    let faces = samples[lanes[0]].faces.map(|_| {
+        [0, 1].map(|f| {
+            [0, 1, 2].map(|k| {
+                f32x8::from(std::array::from_fn::<f32, 8, _>(|i| {
+                    let s = &samples[lanes.get(i).copied().unwrap_or(lanes[0])];
+                    s.faces.map_or(0.0, |faces| faces[f][k])
+                }))
+            })
+        })
+    });
+    let mut tf = sample_entry(plan, mesh, [x, y, z], faces);
     let mut iin_lanes = [f32x8::ZERO; MAX_LIGHT_CHANNELS];
     for (lane, v) in iin_lanes.iter_mut().zip(&iin[..n]) {
         *lane = f32x8::from(*v);
@@ -361,6 +372,42 @@ fn shade_lanes(
     }
 }
 
+/// The transfer-function entry of a sample of mesh `mesh` read at `at` (per lane): the
+/// material's table at the detail there ([`material_at`]), or for a pre-integrated material the
+/// pre-integration table at the detail on the slab's two faces `faces` (`pre_transfer`, as the
+/// grid's sweep reads it).
+fn sample_entry<L: Lane>(
+    plan: &RenderPlan,
+    mesh: u32,
+    [x, y, z]: [L; 3],
+    faces: Option<[[L; 3]; 2]>,
+) -> TfLanes<L> {
+    let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
+    match (&material.pre, faces) {
+        (Some(table), Some([f, b])) => pre_transfer(
+            table,
+            detail_at(plan, mesh, f[0], f[1], f[2]),
+            detail_at(plan, mesh, b[0], b[1], b[2]),
+        ),
+        _ => material_at(plan, mesh, x, y, z),
+    }
+}
+
+/// Where the ray of eye pixel `p` meets view depth `z_origin + z` (turned round: `z_origin −
+/// z`), in grid pixel coordinates.
+fn ray_on_grid(view: &EyeView<'_>, p: &EyePixel, z: f32) -> (f32, f32) {
+    let view_depth = if view.turned_round {
+        view.z_origin - z
+    } else {
+        view.z_origin + z
+    };
+    let scale = view_depth * view.zoom;
+    (
+        view.axis[0] + p.offset[0] * scale,
+        view.axis[1] + p.offset[1] * scale,
+    )
+}
+
 /// Where one eye pixel is in the sweep.
 struct EyePixel {
     x: usize,
@@ -381,6 +428,9 @@ struct EyeSample {
     mesh: u32,
     /// Where the material is read: image-pixel x, y (of the grid's image) and relative depth.
     at: [f32; 3],
+    /// A pre-integrated material's two reads ([`sample_entry`]): the ray's points on the slab's
+    /// front face (or at the crossing) and back face, as `at`.
+    faces: Option<[[f32; 3]; 2]>,
     /// The part of the slab inside the medium and the depth its light is taken at
     /// ([`slab_part`]).
     part: f32,
@@ -428,16 +478,7 @@ fn eye_sample(
         p.jitter_row,
         p.x + plan.guard.left as usize,
     );
-    // The ray's point at view depth z_origin + z (turned round: z_origin − z), in grid pixel
-    // coordinates.
-    let view_depth = if view.turned_round {
-        view.z_origin - z
-    } else {
-        view.z_origin + z
-    };
-    let scale = view_depth * view.zoom;
-    let gx = view.axis[0] + p.offset[0] * scale;
-    let gy = view.axis[1] + p.offset[1] * scale;
+    let (gx, gy) = ray_on_grid(view, p, z);
     // At a crossing, the light arriving at the surface: not the light of grid pixels already
     // past it.
     let skip = if crossed == NO_CROSSING {
@@ -457,11 +498,16 @@ fn eye_sample(
     let back_along_light = (view.turned_round && crossed != NO_CROSSING)
         .then_some((z - p.front) * plan.inv_slab_distance + 1.0);
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
-    let (xi, yi) = (
-        gx - 0.5 - plan.guard.left as f32,
-        gy - 0.5 - plan.guard.top as f32,
-    );
-    let (part, lit_from) = slab_part(
+    // Where the ray is, in the image pixels of the grid's image (the material's coordinates).
+    let image_at = |z: f32| {
+        let (gx, gy) = ray_on_grid(view, p, z);
+        [
+            gx - 0.5 - plan.guard.left as f32,
+            gy - 0.5 - plan.guard.top as f32,
+            z,
+        ]
+    };
+    let (part, mut lit_from) = slab_part(
         ldi,
         (mesh, plan.second_order_media),
         (before, *inside),
@@ -469,11 +515,26 @@ fn eye_sample(
         (p.front, p.back),
         plan.inv_slab_distance,
     );
+    // Pre-integrated: the detail on the slab's faces along the ray (at a crossing, from the
+    // crossing: the grid's `preintegrated`); the entry has the light's decay inside the slab in
+    // its colour.
+    let faces = material.pre.is_some().then(|| {
+        let front = if crossed == NO_CROSSING { p.front } else { z };
+        [image_at(front), image_at(p.back)]
+    });
+    if faces.is_some() {
+        lit_from = 0.0;
+    }
     let shades_surface = material.specular.is_some() || material.lambert;
     Some(EyeSample {
         x: p.x,
         mesh,
-        at: [xi, yi, z],
+        at: [
+            gx - 0.5 - plan.guard.left as f32,
+            gy - 0.5 - plan.guard.top as f32,
+            z,
+        ],
+        faces,
         part,
         lit_from,
         normal,

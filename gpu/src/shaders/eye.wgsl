@@ -49,17 +49,9 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let z = shading_depth(crossed, adv.first, faces, x, y);
-    // The ray's point at view depth z_origin + z (turned round: z_origin − z, x mirrored), in
-    // grid pixel coordinates.
-    var view_depth = view.z_origin + z;
-    var offset_x = (f32(x) + 0.5) - view.centre.x;
-    if turned {
-        view_depth = view.z_origin - z;
-        offset_x = view.centre.x - (f32(x) + 0.5);
-    }
-    let scale = view_depth * view.zoom;
-    let gx = view.axis.x + offset_x * scale;
-    let gy = view.axis.y + ((f32(y) + 0.5) - view.centre.y) * scale;
+    let g = ray_on_grid(x, y, z);
+    let gx = g.x;
+    let gy = g.y;
     // At a crossing, the light arriving at the surface: not the light of grid pixels already
     // past it (inside a closed mesh; through a thin shell).
     var skip = SKIP_NONE;
@@ -96,16 +88,48 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
 
     let mi = meshes[mesh].material;
     let m = materials[mi];
-    let part = slab_part(mesh, state.inside, adv.inside, adv.first, adv.next - 1u, front, back);
-    // Pre-integrated materials read their plain transfer function here (as on the CPU).
-    var value = 0.0;
-    if m.tf_len > 1u {
-        let xi = (gx - 0.5) - f32(globals.guard_left);
-        let yi = (gy - 0.5) - f32(globals.guard_top);
-        value = detail_value(m, to_detail(mesh, xi + 0.5, yi + 0.5, z));
+    var part = slab_part(mesh, state.inside, adv.inside, adv.first, adv.next - 1u, front, back);
+    var e: TfEntry;
+    if m.pre != NO_PRE {
+        // Pre-integrated: the detail on the slab's faces along the ray (at a crossing, from the
+        // crossing); the entry has the light's decay inside the slab in its colour.
+        part.y = 0.0;
+        var zf = front;
+        if crossed {
+            zf = z;
+        }
+        e = pre_transfer(m.pre, detail_on_ray(mesh, m, x, y, zf), detail_on_ray(mesh, m, x, y, back));
+    } else {
+        var value = 0.0;
+        if m.tf_len > 1u {
+            value = detail_on_ray(mesh, m, x, y, z);
+        }
+        e = transfer(m, value);
     }
-    let e = transfer(m, value);
     accum[p] = shade_sample(acc, mi, m, e, part, crossed, adv.first).acc;
+}
+
+// `ray_on_grid`: where eye pixel (x, y)'s ray meets view depth z_origin + z (turned round:
+// z_origin − z, x mirrored), in grid pixel coordinates.
+fn ray_on_grid(x: u32, y: u32, z: f32) -> vec2<f32> {
+    let view = eye_params;
+    var view_depth = view.z_origin + z;
+    var offset_x = (f32(x) + 0.5) - view.centre.x;
+    if view.turned_round != 0u {
+        view_depth = view.z_origin - z;
+        offset_x = view.centre.x - (f32(x) + 0.5);
+    }
+    let scale = view_depth * view.zoom;
+    return vec2<f32>(view.axis.x + offset_x * scale, view.axis.y + ((f32(y) + 0.5) - view.centre.y) * scale);
+}
+
+// The detail of mesh `mesh` (material `m`) where eye pixel (x, y)'s ray meets depth z (the
+// CPU's `detail_at` at the grid image's pixel coordinates of that point).
+fn detail_on_ray(mesh: u32, m: MaterialHeader, x: u32, y: u32, z: f32) -> f32 {
+    let g = ray_on_grid(x, y, z);
+    let xi = (g.x - 0.5) - f32(globals.guard_left);
+    let yi = (g.y - 0.5) - f32(globals.guard_top);
+    return detail_value(m, to_detail(mesh, xi + 0.5, yi + 0.5, z));
 }
 
 const SKIP_NONE: u32 = 0u;
