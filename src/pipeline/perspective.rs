@@ -66,11 +66,13 @@ pub(super) fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, Re
 
 /// The bytes the eye adds to its slab grid's need before any fragment (`budget::MemoryNeed` counts
 /// the grid's): its LDI's per-pixel arrays, its per-pixel state (cursor, inside bits, colour,
-/// alpha), its image as floats, 8-bit and encoded, and on the GPU its device buffers (cursors,
-/// colours, LDI offsets, the RGBA image and its read-back copy).
+/// alpha, and a byte for each run of 8 pixels' 4-byte wake, rounded up), its image as floats,
+/// 8-bit and encoded, and on the GPU its device buffers (cursors, colours, LDI offsets, the RGBA
+/// image and its read-back copy). (A row's samples between cursor and shading, about 100 bytes
+/// per pixel of one row per thread, are left out: rows, not the image.)
 fn eye_need(eye: &SceneGeometry, backend: Backend) -> u64 {
     let pixels = u64::from(eye.camera.width) * u64::from(eye.camera.height);
-    let host = LDI_BYTES_PER_PIXEL + (4 + 4 + 12 + 4) + (12 + 4 + 3 + 3);
+    let host = LDI_BYTES_PER_PIXEL + (4 + 4 + 12 + 4 + 1) + (12 + 4 + 3 + 3);
     let device = if backend == Backend::Gpu {
         8 + 16 + 4 + 16 + 16
     } else {

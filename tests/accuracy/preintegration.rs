@@ -16,8 +16,36 @@ use convshadow::pipeline::{CpuPath, RenderRequest, render};
 
 /// `scenes/narrowband.toml` at `size`² pixels, `slabs` slabs, pre-integration on or off.
 fn narrowband(size: u32, slabs: u32, pre: bool, media: Media) -> Scene {
+    narrowband_seen(|text| text, size, slabs, pre, media)
+}
+
+/// [`narrowband`] seen in perspective: the eye 6 in front of the box's centre, the view 3.2
+/// wide there (so the box fills about as much of it as the orthographic view).
+fn narrowband_perspective(size: u32, slabs: u32, pre: bool) -> Scene {
+    let camera = |text: String| {
+        let ortho = "[camera]\ndirection = [0.0, 0.0, 1.0]\nview_width = 3.2\n";
+        assert!(text.contains(ortho), "narrowband.toml's camera moved");
+        let fov = 2.0 * (1.6f64 / 6.0).atan().to_degrees();
+        let camera = format!(
+            "[camera]\nprojection = \"perspective\"\neye = [0.0, 0.0, -6.2]\n\
+             look_at = [0.0, 0.0, -0.2]\nfov_deg = {fov}\n"
+        );
+        text.replacen(ortho, &camera, 1)
+    };
+    narrowband_seen(camera, size, slabs, pre, Media::SecondOrder)
+}
+
+/// `scenes/narrowband.toml`'s text changed by `edit`, at `size`² pixels, `slabs` slabs,
+/// pre-integration on or off, `media`.
+fn narrowband_seen(
+    edit: impl Fn(String) -> String,
+    size: u32,
+    slabs: u32,
+    pre: bool,
+    media: Media,
+) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/narrowband.toml");
-    let text = std::fs::read_to_string(&path).unwrap();
+    let text = edit(std::fs::read_to_string(&path).unwrap());
     let mut scene = Scene::parse(&text, "narrowband.toml", path.parent().unwrap())
         .unwrap_or_else(|e| panic!("{e}"));
     scene.image.width = size;
@@ -25,29 +53,6 @@ fn narrowband(size: u32, slabs: u32, pre: bool, media: Media) -> Scene {
     scene.sweep.slabs = SlabSpec::Count(slabs);
     scene.sweep.preintegration = pre;
     scene.sweep.media = media;
-    scene.revalidate().unwrap();
-    scene
-}
-
-/// [`narrowband`] seen in perspective: the eye 6 in front of the box's centre, the view 3.2
-/// wide there (so the box fills about as much of it as the orthographic view).
-fn narrowband_perspective(size: u32, slabs: u32, pre: bool) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/narrowband.toml");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let ortho = "[camera]\ndirection = [0.0, 0.0, 1.0]\nview_width = 3.2\n";
-    assert!(text.contains(ortho), "narrowband.toml's camera moved");
-    let fov = 2.0 * (1.6f64 / 6.0).atan().to_degrees();
-    let camera = format!(
-        "[camera]\nprojection = \"perspective\"\neye = [0.0, 0.0, -6.2]\n\
-         look_at = [0.0, 0.0, -0.2]\nfov_deg = {fov}\n"
-    );
-    let text = text.replacen(ortho, &camera, 1);
-    let mut scene = Scene::parse(&text, "narrowband-perspective.toml", path.parent().unwrap())
-        .unwrap_or_else(|e| panic!("{e}"));
-    scene.image.width = size;
-    scene.image.height = size;
-    scene.sweep.slabs = SlabSpec::Count(slabs);
-    scene.sweep.preintegration = pre;
     scene.revalidate().unwrap();
     scene
 }

@@ -298,13 +298,7 @@ fn shade_lanes(
             }
             continue;
         }
-        let read = read_light(
-            plan,
-            grid,
-            s.read_at,
-            (s.skip, s.normal),
-            s.back_along_light,
-        );
+        let read = s.light(plan, grid);
         for (k, v) in read[..n].iter().enumerate() {
             iin[k][i] = *v;
         }
@@ -446,6 +440,14 @@ struct EyeSample {
     back_along_light: Option<f32>,
 }
 
+impl EyeSample {
+    /// Every light's channels read from `grid` for this sample ([`read_light`]).
+    fn light(&self, plan: &RenderPlan, grid: &GridLight<'_>) -> [f32; MAX_LIGHT_CHANNELS] {
+        let crossing = (self.skip, self.normal);
+        read_light(plan, grid, self.read_at, crossing, self.back_along_light)
+    }
+}
+
 /// One image pixel through one slab up to its material read: cursor, shading point, where the
 /// light is read;
 /// `None` where nothing is shaded (an opaque pixel of a front-to-back pass, or no mesh).
@@ -556,13 +558,7 @@ fn eye_shade(
     (color, alpha): (&mut [f32; 3], &mut f32),
 ) {
     let material = &plan.materials[plan.mesh_material[sample.mesh as usize] as usize];
-    let iin = read_light(
-        plan,
-        grid,
-        sample.read_at,
-        (sample.skip, sample.normal),
-        sample.back_along_light,
-    );
+    let iin = sample.light(plan, grid);
     let surface = sample
         .normal
         .filter(|_| sample.shades_surface)
