@@ -235,9 +235,10 @@ thread_local! {
 
 /// Every sample of `samples` (a row's) shaded and composited into its pixel (`color`, `alpha`,
 /// indexed by column) as [`eye_shade`] does one by one, eight at a time on the SIMD lanes: the
-/// samples of one mesh together, each lane's light read on its own ([`read_light`]), the rest —
-/// material, part of the slab, shading, compositing — the lane type's operations, which are
-/// the scalar ones lane by lane (so the same bits).
+/// samples of one mesh together; each lane's bilinear corners and weights found on its own
+/// ([`Bilinear::at`]; a read per light, [`read_light`], where the lights read at different
+/// places), the rest — the sums of the reads, material, part of the slab, shading, compositing —
+/// the lane type's operations, which are the scalar ones lane by lane (so the same bits).
 fn shade_in_lanes(
     plan: &RenderPlan,
     grid: &GridLight<'_>,
