@@ -277,6 +277,8 @@ fn shade_lanes(
     let mut corner = [[0u32; 8]; 4];
     let mut in_grid = [[false; MAX_LANES]; 4];
     let mut weight = [[0.0f32; 8]; 4];
+    // The lanes' gathers index with u32: a light buffer beyond that reads one lane at a time.
+    let lane_indices = u32::try_from(grid.light.len()).is_ok();
     for i in 0..8 {
         let s = &samples[lanes.get(i).copied().unwrap_or(lanes[0])];
         for k in 0..3 {
@@ -288,7 +290,7 @@ fn shade_lanes(
             continue;
         }
         surface_lanes[i] = s.normal.is_some() && s.shades_surface;
-        if !reads_per_light(s.skip, s.back_along_light) {
+        if lane_indices && !reads_per_light(s.skip, s.back_along_light) {
             shared[i] = true;
             let read = Bilinear::at(plan, grid, s.read_at, s.skip);
             for k in 0..4 {
