@@ -5,9 +5,39 @@
 //! instance, the SIMD path's chunks the 8-lane one.
 
 use convshadow_common::pixel::lane::Lane;
-use convshadow_common::plan::FLUSH_BELOW;
+use convshadow_common::plan::{FLUSH_BELOW, MaterialPlan, RenderPlan};
 
-use crate::shading::TfLanes;
+use crate::shading::{Surface, TfLanes, shade};
+
+/// One slab's sample of `material` with entry `tf` shaded and composited into (`color`, `alpha`)
+/// in the lanes of `lanes` (composite.wgsl `shade_sample`): `tf` scaled to the part of the slab
+/// inside the medium (`inside`, `lit_from`: [`part_of_slab`], which leaves `tf` as the slab's
+/// scaled entry, its attenuation for the light buffers), shaded with the incoming light `iin` —
+/// at crossed surfaces (`surface`: the normals and the lanes that crossed one) with the highlight
+/// and, where opaque, the Lambert cosine, judged by the entry's opacity before scaling —, times
+/// the light inside the slab, composited. The grid's sweep (both paths) and the eye pass share it.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn shade_sample<L: Lane>(
+    plan: &RenderPlan,
+    material: &MaterialPlan,
+    tf: &mut TfLanes<L>,
+    (inside, lit_from): (L, L),
+    iin: &[L],
+    surface: Option<([L; 3], L::M)>,
+    (color, alpha): (&mut [L; 3], &mut L),
+    lanes: L::M,
+) {
+    let surface = surface.map(|(normal, lanes)| Surface {
+        normal,
+        lanes,
+        alpha: tf.alpha,
+    });
+    let light = part_of_slab(tf, inside, lit_from);
+    let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
+    let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
+    composite(color, alpha, shaded, tf.alpha, lanes, plan.turned_round);
+}
 
 /// Front to back, `C += (1 − A)·α·c`, `A += (1 − A)·α`, in that order; with `back_to_front`
 /// (a turned-round pass, the viewer at the sweep's far end) `C = α·c + (1 − α)·C`,

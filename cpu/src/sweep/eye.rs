@@ -29,12 +29,10 @@ use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::RenderPlan;
 
 use super::kit::{MAX_LIGHT_CHANNELS, light_block};
-use crate::composite::{composite, part_of_slab};
+use crate::composite::shade_sample;
 use crate::ldi::Ldi;
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
-use crate::shading::{
-    Surface, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
-};
+use crate::shading::{TfLanes, detail_at, material_at, pre_transfer, shading_depth};
 use convshadow_common::pixel::lane::MAX_LANES;
 
 /// The eye's per-pixel state: layer cursor, inside mask, composited colour and alpha.
@@ -267,6 +265,7 @@ fn shade_lanes(
     // scalar stage reads it.
     let n = plan.lights.len() * plan.channels as usize;
     let mut at = [[0.0f32; 8]; 3];
+    let mut faces = [[[0.0f32; 8]; 3]; 2];
     let mut normal = [[0.0f32; 8]; 3];
     let (mut part, mut lit_from, mut pixel) = ([0.0f32; 8], [0.0f32; 8], [0usize; 8]);
     let mut surface_lanes = [false; MAX_LANES];
@@ -284,6 +283,9 @@ fn shade_lanes(
         for k in 0..3 {
             at[k][i] = s.at[k];
             normal[k][i] = s.normal.map_or(0.0, |nv| nv[k]);
+            for (f, face) in faces.iter_mut().enumerate() {
+                face[k][i] = s.faces.map_or(0.0, |v| v[f][k]);
+            }
         }
         (part[i], lit_from[i], pixel[i]) = (s.part, s.lit_from, s.x);
         if i >= lanes.len() {
@@ -309,16 +311,10 @@ fn shade_lanes(
     let mesh = samples[lanes[0]].mesh;
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
     let [x, y, z] = at.map(f32x8::from);
-    let faces = samples[lanes[0]].faces.map(|_| {
-        [0, 1].map(|f| {
-            [0, 1, 2].map(|k| {
-                f32x8::from(std::array::from_fn::<f32, 8, _>(|i| {
-                    let s = &samples[lanes.get(i).copied().unwrap_or(lanes[0])];
-                    s.faces.map_or(0.0, |faces| faces[f][k])
-                }))
-            })
-        })
-    });
+    // One mesh, one material: every lane pre-integrated or none.
+    let faces = samples[lanes[0]]
+        .faces
+        .map(|_| faces.map(|f| f.map(f32x8::from)));
     let mut tf = sample_entry(plan, mesh, [x, y, z], faces);
     let mut iin_lanes = [f32x8::ZERO; MAX_LIGHT_CHANNELS];
     for (lane, v) in iin_lanes.iter_mut().zip(&iin[..n]) {
@@ -344,24 +340,24 @@ fn shade_lanes(
         }
     }
     let in_use: [bool; MAX_LANES] = std::array::from_fn(|i| i < lanes.len());
-    let surface = surface_lanes.iter().any(|&b| b).then(|| Surface {
-        normal: normal.map(f32x8::from),
-        lanes: f32x8::m_from(&surface_lanes),
-        alpha: tf.alpha,
-    });
-    let (part, lit_from) = (f32x8::from(part), f32x8::from(lit_from));
-    let light = part_of_slab(&mut tf, part, lit_from);
-    let shaded = shade(plan, material, tf.color, &iin_lanes[..n], surface.as_ref());
-    let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
+    let surface = surface_lanes
+        .iter()
+        .any(|&b| b)
+        .then(|| (normal.map(f32x8::from), f32x8::m_from(&surface_lanes)));
+    let part = (f32x8::from(part), f32x8::from(lit_from));
     let mut c = [0, 1, 2].map(|k| f32x8::from(pixel.map(|x| color[x][k])));
     let mut a = f32x8::from(pixel.map(|x| alpha[x]));
-    composite(
-        &mut c,
-        &mut a,
-        shaded,
-        tf.alpha,
-        f32x8::m_from(&in_use),
-        plan.turned_round,
+    let (target, lanes_in_use) = ((&mut c, &mut a), f32x8::m_from(&in_use));
+    let iin = &iin_lanes[..n];
+    shade_sample(
+        plan,
+        material,
+        &mut tf,
+        part,
+        iin,
+        surface,
+        target,
+        lanes_in_use,
     );
     for (i, &x) in pixel.iter().enumerate().take(lanes.len()) {
         color[x] = [0, 1, 2].map(|k| c[k].lane(i));
@@ -388,6 +384,16 @@ fn sample_entry<L: Lane>(
         ),
         _ => material_at(plan, mesh, x, y, z),
     }
+}
+
+/// Grid position (gx, gy) at relative depth `z` in the coordinates the material is read in: the
+/// grid's image pixels (the guard band taken off, pixel corners at integers), and `z`.
+fn on_image(plan: &RenderPlan, (gx, gy): (f32, f32), z: f32) -> [f32; 3] {
+    [
+        gx - 0.5 - plan.guard.left as f32,
+        gy - 0.5 - plan.guard.top as f32,
+        z,
+    ]
 }
 
 /// Where the ray of eye pixel `p` meets view depth `z_origin + z` (turned round: `z_origin −
@@ -504,14 +510,7 @@ fn eye_sample(
         .then_some((z - p.front) * plan.inv_slab_distance + 1.0);
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
     // Where the ray is, in the image pixels of the grid's image (the material's coordinates).
-    let image_at = |z: f32| {
-        let (gx, gy) = ray_on_grid(view, p, z);
-        [
-            gx - 0.5 - plan.guard.left as f32,
-            gy - 0.5 - plan.guard.top as f32,
-            z,
-        ]
-    };
+    let image_at = |z: f32| on_image(plan, ray_on_grid(view, p, z), z);
     let (part, mut lit_from) = slab_part(
         ldi,
         (mesh, plan.second_order_media),
@@ -534,11 +533,7 @@ fn eye_sample(
     Some(EyeSample {
         x: p.x,
         mesh,
-        at: [
-            gx - 0.5 - plan.guard.left as f32,
-            gy - 0.5 - plan.guard.top as f32,
-            z,
-        ],
+        at: on_image(plan, (gx, gy), z),
         faces,
         part,
         lit_from,
@@ -562,19 +557,20 @@ fn eye_shade(
 ) {
     let material = &plan.materials[plan.mesh_material[sample.mesh as usize] as usize];
     let iin = sample.light(plan, grid);
-    let surface = sample
-        .normal
-        .filter(|_| sample.shades_surface)
-        .map(|normal| Surface {
-            normal,
-            lanes: true,
-            alpha: tf.alpha,
-        });
-    let light = part_of_slab(&mut tf, sample.part, sample.lit_from);
     let n = plan.lights.len() * plan.channels as usize;
-    let shaded = shade(plan, material, tf.color, &iin[..n], surface.as_ref());
-    let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
-    composite(color, alpha, shaded, tf.alpha, true, plan.turned_round);
+    let surface = sample.normal.filter(|_| sample.shades_surface);
+    let part = (sample.part, sample.lit_from);
+    let surface = surface.map(|normal| (normal, true));
+    shade_sample(
+        plan,
+        material,
+        &mut tf,
+        part,
+        &iin[..n],
+        surface,
+        (color, alpha),
+        true,
+    );
 }
 
 /// Every light's channels read bilinearly from the grid's outgoing light at grid position

@@ -32,12 +32,10 @@ use super::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowContext, RowState, SlabContext, level_plane, light_block,
     light_planes,
 };
-use crate::composite::{Held, attenuate, composite, deepen, hold_step, owned_depth, part_of_slab};
+use crate::composite::{Held, attenuate, deepen, hold_step, owned_depth, shade_sample};
 use crate::kernels::{LightPlanes, TapOrigin, distance_row, gather, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
-use crate::shading::{
-    Surface, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
-};
+use crate::shading::{TfLanes, detail_at, material_at, pre_transfer, shading_depth};
 use crate::subpixel::{exact_shift, removal_depth, shifted_gather};
 
 /// The light a pixel gathered in step 1: every light's channels and (distance penumbra) its
@@ -326,24 +324,19 @@ pub(crate) fn shade_and_composite(
     let surface = (crossed != NO_CROSSING && (material.specular.is_some() || material.lambert))
         .then(|| {
             let triangle = ctx.ldi.triangle[crossed as usize] as usize;
-            Surface {
-                normal: ctx.raster.triangles[triangle].normal,
-                lanes: true,
-                alpha: tf.alpha,
-            }
+            (ctx.raster.triangles[triangle].normal, true)
         });
-    let light = part_of_slab(&mut tf, inside, lit_from);
-    let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
-    let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
     let w = plan.grid_width as usize;
     let mut color = [state.color[x], state.color[w + x], state.color[2 * w + x]];
-    composite(
-        &mut color,
-        &mut state.alpha[x],
-        shaded,
-        tf.alpha,
+    shade_sample(
+        plan,
+        material,
+        &mut tf,
+        (inside, lit_from),
+        iin,
+        surface,
+        (&mut color, &mut state.alpha[x]),
         true,
-        plan.turned_round,
     );
     [state.color[x], state.color[w + x], state.color[2 * w + x]] = color;
     tf.attenuation

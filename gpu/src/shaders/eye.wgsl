@@ -102,7 +102,7 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     } else {
         var value = 0.0;
         if m.tf_len > 1u {
-            value = detail_on_ray(mesh, m, x, y, z);
+            value = detail_at_grid(mesh, m, g, z);
         }
         e = transfer(m, value);
     }
@@ -126,7 +126,12 @@ fn ray_on_grid(x: u32, y: u32, z: f32) -> vec2<f32> {
 // The detail of mesh `mesh` (material `m`) where eye pixel (x, y)'s ray meets depth z (the
 // CPU's `detail_at` at the grid image's pixel coordinates of that point).
 fn detail_on_ray(mesh: u32, m: MaterialHeader, x: u32, y: u32, z: f32) -> f32 {
-    let g = ray_on_grid(x, y, z);
+    return detail_at_grid(mesh, m, ray_on_grid(x, y, z), z);
+}
+
+// The detail of mesh `mesh` (material `m`) at grid position g and depth z (`on_image` then
+// `detail_at` on the CPU).
+fn detail_at_grid(mesh: u32, m: MaterialHeader, g: vec2<f32>, z: f32) -> f32 {
     let xi = (g.x - 0.5) - f32(globals.guard_left);
     let yi = (g.y - 0.5) - f32(globals.guard_top);
     return detail_value(m, to_detail(mesh, xi + 0.5, yi + 0.5, z));

@@ -21,12 +21,10 @@ use super::gather::{gather_inside, gather_lanes, store_pixels};
 use super::levels::{distance_rows, level_rows, phases};
 use super::per_lane::{LaneRows, gather_per_lane};
 use super::quiet::{ChunkState, Values};
-use crate::composite::{Held, attenuate, composite, deepen, owned_depth, part_of_slab};
+use crate::composite::{Held, attenuate, deepen, owned_depth, shade_sample};
 use crate::kernels::{LightPlanes, TapOrigin, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
-use crate::shading::{
-    Surface, TfLanes, detail_at, material_at, pre_transfer, shade, shading_depth,
-};
+use crate::shading::{TfLanes, detail_at, material_at, pre_transfer, shading_depth};
 use crate::subpixel::removal_depth;
 use crate::sweep::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, level_plane,
@@ -799,29 +797,20 @@ fn shade_chunk<L: Layout>(
                 normal[k][i] = nv[k];
             }
         }
-        Some(Surface {
-            normal: [
-                L::load(&normal[0], 0),
-                L::load(&normal[1], 0),
-                L::load(&normal[2], 0),
-            ],
-            lanes: L::m_from(&is_crossed),
-            alpha: tf.alpha,
-        })
+        let normal = [0, 1, 2].map(|k| L::load(&normal[k], 0));
+        Some((normal, L::m_from(&is_crossed)))
     } else {
         None
     };
-    let light = part_of_slab(&mut tf, L::load(&insides, 0), lit_from);
-    let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
-    let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
-
     let mut color = [
         L::load(state.color, x0),
         L::load(state.color, w + x0),
         L::load(state.color, 2 * w + x0),
     ];
-    let (mut alpha, over) = (L::load(state.alpha, x0), plan.turned_round);
-    composite(&mut color, &mut alpha, shaded, tf.alpha, active, over);
+    let mut alpha = L::load(state.alpha, x0);
+    let part = (L::load(&insides, 0), lit_from);
+    let target = (&mut color, &mut alpha);
+    shade_sample(plan, material, &mut tf, part, iin, surface, target, active);
     for (k, v) in color.iter().enumerate() {
         v.store(state.color, k * w + x0);
     }
