@@ -304,7 +304,62 @@ pub fn shade<L: Lane>(
     iin: &[L],
     surface: Option<&Surface<L>>,
 ) -> [L; 3] {
-    let ch = plan.channels as usize;
+    let terms = |l: usize| LightTerms::of(plan, material, l);
+    let lights = material.light_color.len();
+    shade_with(
+        plan.channels as usize,
+        lights,
+        terms,
+        material,
+        color,
+        iin,
+        surface,
+    )
+}
+
+/// What the shading takes of light `l` at a shading point: for a directional light its plan's
+/// constants ([`shade`]); for a point light, those of the direction to it from the point
+/// (the shadow-ray reference's point lights).
+#[derive(Clone, Copy, Debug)]
+pub struct LightTerms {
+    /// The light's colour times the material's phase function (`MaterialPlan::light_color`).
+    pub light_color: [f32; 3],
+    /// The bare colour, for the specular term.
+    pub color: [f32; 3],
+    /// Unit direction towards the light, as `LightPlan::to_light`.
+    pub to_light: [f32; 3],
+    /// Blinn–Phong half vector, as `LightPlan::half_vector`.
+    pub half_vector: [f32; 3],
+    /// Ashikmin–Shirley's Fresnel constants, as `LightPlan::fresnel`.
+    pub fresnel: [f32; 2],
+}
+
+impl LightTerms {
+    /// The plan's terms of directional light `l` for `material`.
+    #[inline(always)]
+    pub fn of(plan: &RenderPlan, material: &MaterialPlan, l: usize) -> LightTerms {
+        let light = &plan.lights[l];
+        LightTerms {
+            light_color: material.light_color[l],
+            color: light.color,
+            to_light: light.to_light,
+            half_vector: light.half_vector,
+            fresnel: light.fresnel,
+        }
+    }
+}
+
+/// [`shade`] with each light's terms given by `terms` (`lights` of them, `ch` channels).
+#[inline(always)]
+pub fn shade_with<L: Lane>(
+    ch: usize,
+    lights: usize,
+    terms: impl Fn(usize) -> LightTerms,
+    material: &MaterialPlan,
+    color: [L; 3],
+    iin: &[L],
+    surface: Option<&Surface<L>>,
+) -> [L; 3] {
     let one = L::splat(1.0);
     let f = surface.map(|sf| facing(sf.normal));
     // The lanes whose Lambert cosine applies: crossed, and opaque (alpha < 1 keeps 1).
@@ -313,9 +368,11 @@ pub fn shade<L: Lane>(
         _ => None,
     };
     let mut sum = [L::splat(0.0); 3];
-    for (l, lc) in material.light_color.iter().enumerate() {
+    for l in 0..lights {
+        let light = terms(l);
+        let lc = light.light_color;
         let cos = diffuse.map(|(sf, f, translucent)| {
-            let d = lambert(f, plan.lights[l].to_light);
+            let d = lambert(f, light.to_light);
             L::select(sf.lanes, L::select(translucent, one, d), one)
         });
         for (c, s) in sum.iter_mut().enumerate() {
@@ -326,7 +383,8 @@ pub fn shade<L: Lane>(
     }
     let mut out = [color[0] * sum[0], color[1] * sum[1], color[2] * sum[2]];
     if let (Some(sf), Some(f), Some(sp)) = (surface, f, material.specular.as_ref()) {
-        for (l, light) in plan.lights.iter().enumerate() {
+        for l in 0..lights {
+            let light = terms(l);
             let w = match sp.model {
                 SpecularModel::BlinnPhong => {
                     blinn_phong(f, light.half_vector, sp.scale, sp.exponent)

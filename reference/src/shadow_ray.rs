@@ -62,15 +62,33 @@
 //!   perspective one (view depths along each pixel's ray). Highlights keep the view direction
 //!   of the image centre.
 //!
+//! - **Point and spot lights** (`shadow_ray/point.rs`): shadow rays of finite length to `M`
+//!   points of the light's 3D Gaussian, the falloff `1/|X − P|²` and the spot's cone of the
+//!   light's centre, and the shading's light direction per shading point (`shade_with`).
+//!
 //! It is slow — every shading point marches `lights × M` rays — and meant for small images.
 
 use convshadow_common::model::scene::{MaterialSpec, Scene};
 use convshadow_common::pixel::hash::{mix32, row_hash};
 
 mod geometry;
+mod point;
+mod transmittance;
 mod turned_eye;
 
-use geometry::{Start, Tri, add, intersect, sub, to_detail_f64};
+use geometry::{Start, Tri, add, intersect, sub};
+
+/// How a light's shadow rays are drawn.
+#[derive(Clone, Copy, Debug)]
+enum LightSource {
+    /// A directional light: its mean direction offset per unit depth (grid px per world depth)
+    /// and the Cholesky-like factor (R·diag(σ)) in grid px per world depth.
+    Directional([f64; 2], [[f64; 2]; 2]),
+    /// A point or spot light.
+    Point(PointSource),
+}
+use point::PointSource;
+pub use point::closed_mesh_holding;
 pub use turned_eye::TurnedEye;
 
 use crate::light_samples::{fine_strata, inverse_normal_cdf, samples_side};
@@ -81,7 +99,7 @@ use rayon::prelude::*;
 use convshadow_cpu::composite::{composite, finish, part_of_slab};
 use convshadow_cpu::ldi::Ldi;
 use convshadow_cpu::parity::{NO_CROSSING, advance, first_mesh, slab_part};
-use convshadow_cpu::shading::{Surface, detail_value, material_at, shade, shading_depth};
+use convshadow_cpu::shading::{LightTerms, Surface, material_at, shade_with, shading_depth};
 
 /// Optical depth beyond which a shadow ray is treated as fully blocked (e^-40 ≈ 4e-18).
 const OPAQUE_DEPTH: f64 = 40.0;
@@ -176,9 +194,10 @@ pub struct Reference<'a> {
     bin_dims: [usize; 2],
     media: Vec<Medium>,
     mesh_material: Vec<usize>,
-    /// Per light: mean direction offset per unit depth (grid px per world depth) and the
-    /// Cholesky-like factor (R·diag(σ)) in grid px per world depth.
-    lights: Vec<([f64; 2], [[f64; 2]; 2])>,
+    /// Per light, how its shadow rays are drawn.
+    lights: Vec<LightSource>,
+    /// Per material, its phase function's asymmetry g (a point light's phase is per point).
+    phase_g: Vec<f64>,
     step: f64,
     /// A perspective eye's rays, where the tracer works on its turned-round slab grid.
     eye: Option<TurnedEye<'a>>,
@@ -261,11 +280,14 @@ impl<'a> Reference<'a> {
             .lights
             .iter()
             .map(|l| {
+                if let Some(point) = &l.point {
+                    return LightSource::Point(PointSource::new(point, cam, geometry.z_origin));
+                }
                 let mu = l.tilt_deg.map(|t| t.to_radians().tan() / px);
                 let (s, c) = l.rotation_deg.to_radians().sin_cos();
                 let (sx, sy) = (l.variance[0].sqrt() / px, l.variance[1].sqrt() / px);
                 // δ = R·(sx z1, sy z2), R = [[c, −s], [s, c]].
-                (mu, [[c * sx, -s * sy], [s * sx, c * sy]])
+                LightSource::Directional(mu, [[c * sx, -s * sy], [s * sx, c * sy]])
             })
             .collect();
         Reference {
@@ -278,6 +300,7 @@ impl<'a> Reference<'a> {
             media,
             mesh_material: scene.meshes.iter().map(|m| m.material).collect(),
             lights,
+            phase_g: scene.materials.iter().map(|m| m.phase_g).collect(),
             step: if step > 0.0 { step } else { e / 8.0 },
             eye: None,
         }
@@ -323,142 +346,6 @@ impl<'a> Reference<'a> {
         out.dedup();
     }
 
-    /// Transmittance per channel from point `p` (grid px x, y; relative depth z) towards the
-    /// light along direction offset `dir` (grid px per unit depth): the product over the media
-    /// the ray crosses before reaching `p`.
-    fn transmittance(
-        &self,
-        p: [f64; 3],
-        dir: [f64; 2],
-        start: Start,
-        scratch: &mut Scratch,
-    ) -> [f64; 3] {
-        // The ray towards the light: q(u) = p + u·(dir, −1), u ∈ (0, p.z]; q(p.z) is at depth 0,
-        // in front of every vertex, so it is outside every mesh.
-        let end = [p[0] + p[2] * dir[0], p[1] + p[2] * dir[1]];
-        self.candidates([p[0], p[1]], end, &mut scratch.tris);
-        let d = [dir[0], dir[1], -1.0];
-        scratch.hits.clear();
-        // The surface the ray starts on is not crossed (`start.skip`), and crossings closer than
-        // `start.tol` are the same surface met again through rounding (a neighbouring triangle
-        // at a shared edge, a coincident face): see [`Start`].
-        let tol = start.tol;
-        for &i in &scratch.tris {
-            if i == start.skip {
-                continue;
-            }
-            let t = &self.tris[i as usize];
-            if let Some(u) = intersect(p, d, t)
-                && u > tol
-                && u < p[2] + tol
-            {
-                scratch.hits.push((u, t.mesh));
-            }
-        }
-        // From the light side (largest u) towards p, toggling inside bits.
-        scratch
-            .hits
-            .sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        let mut inside = 0u32;
-        let mut optical = [0.0f64; 3];
-        for k in 0..scratch.hits.len() {
-            if optical.iter().all(|&o| o > OPAQUE_DEPTH) {
-                // Transmittance below e^-40 (4e-18) on every channel: nothing measurable is left.
-                return [0.0; 3];
-            }
-            let (u_far, mesh) = scratch.hits[k];
-            if self.geometry.raster.parity_meshes & (1 << mesh) == 0 {
-                // An open mesh is a thin shell: one slab of its material at the crossing.
-                self.cross_shell(&mut optical, p, dir, mesh as usize, u_far);
-            } else {
-                inside ^= 1 << mesh;
-            }
-            let u_near = if k + 1 < scratch.hits.len() {
-                scratch.hits[k + 1].0
-            } else {
-                0.0
-            };
-            if inside == 0 || u_far <= u_near {
-                continue;
-            }
-            let mesh = inside.trailing_zeros() as usize;
-            let m = self.mesh_material[mesh];
-            let od = self.optical_depth(p, dir, mesh, m, u_near, u_far);
-            let tau = self.media[m].transport;
-            for (o, t) in optical.iter_mut().zip(tau) {
-                // Transport 1 lets the channel through whatever the optical depth (also ∞).
-                if t < 1.0 {
-                    *o += od * (1.0 - t);
-                }
-            }
-        }
-        optical.map(|o| (-o).exp())
-    }
-
-    /// Adds to `optical` (per channel) the crossing at `u` of the ray from `p` through the thin
-    /// shell `mesh` (an open mesh, docs/scene-format.md "Open meshes"): one reference length of
-    /// its material at the crossing's detail value, `1 − α·(1 − τ)` with `α = 1 − e^(−κ·e_ref)`,
-    /// the material's opacity there.
-    fn cross_shell(&self, optical: &mut [f64; 3], p: [f64; 3], dir: [f64; 2], mesh: usize, u: f64) {
-        let medium = &self.media[self.mesh_material[mesh]];
-        let kappa = if self.is_constant(mesh) {
-            medium.kappa(0.0)
-        } else {
-            self.kappa_at(mesh, [p[0] + u * dir[0], p[1] + u * dir[1], p[2] - u])
-        };
-        let alpha = -(-kappa * medium.reference_length).exp_m1();
-        for (o, t) in optical.iter_mut().zip(medium.transport) {
-            if t < 1.0 {
-                // −ln(1 − α(1 − τ)): infinite where the shell takes out all of the channel.
-                *o -= (-alpha * (1.0 - t)).ln_1p();
-            }
-        }
-    }
-
-    /// Whether mesh `mesh`'s medium is the same everywhere (no gradient, or no detail to read
-    /// it at): its κ is `kappa(0)`.
-    fn is_constant(&self, mesh: usize) -> bool {
-        let material = &self.plan.materials[self.plan.mesh_material[mesh] as usize];
-        self.media[self.mesh_material[mesh]].stops.is_empty()
-            || (material.detail.is_none() && material.texture.is_none())
-    }
-
-    /// κ of mesh `mesh`'s medium at point `q` (grid px x, y; relative depth z): its detail
-    /// value there through the gradient.
-    fn kappa_at(&self, mesh: usize, q: [f64; 3]) -> f64 {
-        let material = &self.plan.materials[self.plan.mesh_material[mesh] as usize];
-        let v = detail_value(material, to_detail_f64(&self.plan.mesh_to_detail[mesh], q));
-        self.media[self.mesh_material[mesh]].kappa(f64::from(v))
-    }
-
-    /// ∫κ over u ∈ [u0, u1] of the ray from `p` in mesh `mesh` of material `m`.
-    fn optical_depth(
-        &self,
-        p: [f64; 3],
-        dir: [f64; 2],
-        mesh: usize,
-        m: usize,
-        u0: f64,
-        u1: f64,
-    ) -> f64 {
-        let len = u1 - u0;
-        if self.is_constant(mesh) {
-            let k = self.media[m].kappa(0.0);
-            return if k.is_infinite() { k } else { k * len };
-        }
-        let n = (len / self.step).ceil().max(1.0) as usize;
-        let h = len / n as f64;
-        let mut sum = 0.0;
-        for i in 0..n {
-            let u = u0 + (i as f64 + 0.5) * h;
-            sum += self.kappa_at(mesh, [p[0] + u * dir[0], p[1] + u * dir[1], p[2] - u]);
-            if sum.is_infinite() {
-                return sum;
-            }
-        }
-        sum * h
-    }
-
     /// The light arriving at `p` (grid px, relative depth) from light `l`, per channel: the mean
     /// transmittance over `k²` multi-jittered directions (see [`Reference::render`]); `stream`
     /// decorrelates the jitter. `p` is taken as exact: crossings within 2^-30 (relative) of it
@@ -479,8 +366,13 @@ impl<'a> Reference<'a> {
         stream: u32,
         scratch: &mut Scratch,
     ) -> [f64; 3] {
-        let (mu, f) = self.lights[l];
         let base = mix32(mix32(mix32(seed ^ k.wrapping_mul(0x2c1b_3c6d)) ^ stream) ^ l as u32);
+        let (mu, f) = match self.lights[l] {
+            LightSource::Directional(mu, f) => (mu, f),
+            LightSource::Point(light) => {
+                return self.point_light_at(&light, p, start, (k, base), scratch);
+            }
+        };
         let m = k * k;
         let inv_m = 1.0 / f64::from(m);
         let mut acc = [0.0f64; 3];
@@ -496,7 +388,7 @@ impl<'a> Reference<'a> {
                     mu[0] + f[0][0] * z1 + f[0][1] * z2,
                     mu[1] + f[1][0] * z1 + f[1][1] * z2,
                 ];
-                let mut t = self.transmittance(p, dir, start, scratch);
+                let mut t = self.transmittance(p, [dir[0], dir[1], -1.0], p[2], start, scratch);
                 if self.plan.initial_light.is_some() {
                     // A patterned light: the ray leaves the scene through the first slab plane
                     // (depth 0) at p + p.z·dir, where the pattern gives the light's value.
@@ -809,7 +701,22 @@ impl<'a> Reference<'a> {
                             alpha: tf.alpha,
                         });
                         let iin = &iin[..lights * ch];
-                        let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
+                        // A point light's shading terms are those of the direction to it from
+                        // this sample; a directional light's are the plan's.
+                        let g = self.phase_g[self.mesh_material[mesh as usize]];
+                        let terms = |l: usize| match &self.lights[l] {
+                            LightSource::Point(light) => light.terms(pos, plan.lights[l].color, g),
+                            LightSource::Directional(..) => LightTerms::of(plan, material, l),
+                        };
+                        let shaded = shade_with(
+                            ch,
+                            lights,
+                            terms,
+                            material,
+                            tf.color,
+                            iin,
+                            surface.as_ref(),
+                        );
                         composite(
                             &mut color,
                             &mut alpha,

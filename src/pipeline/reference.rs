@@ -6,12 +6,12 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use convshadow_common::contract::ldi::LdiStats;
-use convshadow_common::model::scene::Scene;
+use convshadow_common::model::scene::{Scene, SceneError};
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::prepare::geometry::SceneGeometry;
 use convshadow_cpu::ldi::{BuildLdi, Ldi};
 use convshadow_io::image::RgbImage;
-use convshadow_reference::shadow_ray::TurnedEye;
+use convshadow_reference::shadow_ray::{TurnedEye, closed_mesh_holding};
 use convshadow_reference::{Reference, ReferenceOptions};
 
 use super::passes::{Mirror, render_passes};
@@ -48,6 +48,7 @@ pub fn render_reference(
     aovs: &[Aov],
     cancel: Option<&AtomicBool>,
 ) -> Result<Rendered, RenderError> {
+    refuse_lights_inside_meshes(scene)?;
     let run = ReferenceRun {
         threads,
         samples,
@@ -68,6 +69,30 @@ pub fn render_reference(
     render_passes(scene, aovs, Mirror::Yes, |pass, aovs| {
         reference_pass(pass, run, aovs)
     })
+}
+
+/// A point or spot light inside a closed mesh is refused, naming the light and the mesh (exit code
+/// 3): the mesh's inside would surround the light, and a shadow ray's inside test counts
+/// crossings from the light's end, where every point must be outside.
+fn refuse_lights_inside_meshes(scene: &Scene) -> Result<(), RenderError> {
+    if scene.lights.iter().all(|l| l.point.is_none()) {
+        return Ok(());
+    }
+    let geometry = convshadow_io::build_geometry(scene)?;
+    for (i, light) in scene.lights.iter().enumerate() {
+        let Some(point) = &light.point else { continue };
+        if let Some(m) = closed_mesh_holding(&geometry, point.position) {
+            return Err(RenderError::Scene(SceneError {
+                file: scene.source.clone(),
+                key: format!("light[{i}].position"),
+                message: format!(
+                    "the light is inside closed mesh[{m}]: a point or spot light must lie \
+                     outside every closed mesh (its inside would surround the light)"
+                ),
+            }));
+        }
+    }
+    Ok(())
 }
 
 /// [`render_reference`] of one pass (every light at the same end of the sweep).

@@ -19,6 +19,7 @@ mod open_meshes;
 mod patterned_light;
 mod perspective;
 mod phase_function;
+mod point_lights;
 mod preintegration;
 mod reference_convergence;
 mod several_depths;

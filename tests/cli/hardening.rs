@@ -514,3 +514,57 @@ fn stats_carry_the_version_that_wrote_them() {
         assert_eq!(read(name)["version"], env!("CARGO_PKG_VERSION"), "{name}");
     }
 }
+
+#[test]
+fn bad_point_and_spot_lights_exit_3_without_an_output_file() {
+    let dir = support::temp_dir("h-point-lights");
+    let base = support::lone_box_scene(16, 8);
+    // The lone box's directional light, replaced whole.
+    const LIGHT: &str = "[[light]]\ntilt_deg = [20.0, 10.0]\nvariance = [0.02, 0.02]";
+    let point =
+        |rest: &str| format!("[[light]]\nkind = \"point\"\nposition = [0.0, 0.0, -2.0]\n{rest}");
+    for (name, light, backend, words) in [
+        ("negative radius", point("radius = -1.0"), "cpu", vec!["light[0].radius", "from 0"]),
+        (
+            "cone of 90°",
+            "[[light]]\nkind = \"spot\"\nposition = [0.0, 0.0, -2.0]\ndirection = [0.0, 0.0, 1.0]\ncone_deg = 90.0".to_string(),
+            "cpu",
+            vec!["light[0].cone_deg", "0 to 89"],
+        ),
+        ("zero spot axis", "[[light]]\nkind = \"spot\"\nposition = [0.0, 0.0, -2.0]\ndirection = [0.0, 0.0, 0.0]\ncone_deg = 20.0".to_string(), "cpu", vec!["light[0].direction"]),
+        ("tilt on a point light", point("tilt_deg = [10.0, 0.0]"), "reference", vec!["light[0].tilt_deg", "directional"]),
+        ("the sweep", point(""), "cpu", vec!["light[0].kind", "--backend reference"]),
+        (
+            "inside the box",
+            "[[light]]\nkind = \"point\"\nposition = [0.0, 0.0, 0.0]".to_string(),
+            "reference",
+            vec!["light[0].position", "inside closed mesh[0]"],
+        ),
+    ] {
+        let text = base.replacen(LIGHT, &light, 1);
+        assert_ne!(text, base, "{name}: the edit applies");
+        std::fs::write(dir.join("t.toml"), text).unwrap();
+        let r = cli(&dir, &["render", "t.toml", "--backend", backend, "-o", "a.png", "-q"]);
+        refused(name, &r, BAD_INPUT, &words);
+        assert!(!dir.join("a.png").exists(), "{name}: no output file");
+    }
+    // A point light outside the box renders with the reference.
+    let text = base.replacen(LIGHT, &point("radius = 0.05"), 1);
+    std::fs::write(dir.join("t.toml"), text).unwrap();
+    let r = cli(
+        &dir,
+        &[
+            "render",
+            "t.toml",
+            "--backend",
+            "reference",
+            "--reference-samples",
+            "4",
+            "-o",
+            "a.png",
+            "-q",
+        ],
+    );
+    assert_eq!(r.0, 0, "{}", r.2);
+    assert!(dir.join("a.png").exists());
+}

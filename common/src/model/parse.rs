@@ -33,8 +33,7 @@ impl Scene {
         let raw = toml::Deserializer::parse(text)
             .and_then(|d| RawScene::deserialize(tables::Tables(d)))
             .map_err(|e| {
-                // A point or spot light's own keys (`position`, `radius`, …) are unknown to a
-                // directional light: say the kind is not supported, not that its keys are unknown.
+                // A light of an unknown kind may have keys of its own: name the kind, not them.
                 unsupported_light_kind(&validator, text)
                     .unwrap_or_else(|| toml_error(source, text, &e))
             })?;
@@ -191,6 +190,11 @@ struct RawLight {
     variance: Option<[f64; 2]>,
     rotation_deg: Option<f64>,
     pattern: Option<RawPattern>,
+    #[serde(default, deserialize_with = "exact")]
+    position: Option<[f64; 3]>,
+    radius: Option<f64>,
+    cone_deg: Option<f64>,
+    falloff_deg: Option<f64>,
 }
 
 #[derive(Deserialize, Debug)]

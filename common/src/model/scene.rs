@@ -14,6 +14,9 @@ use crate::model::display::Tonemap;
 use crate::model::kernel::KernelSpec;
 use glam::DVec3;
 
+mod point;
+pub use point::{PointLight, SpotCone};
+
 /// Largest accepted image width or height in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// Largest accepted |exposure| in stops (2^64 is far past any useful brightening).
@@ -468,6 +471,10 @@ pub struct LightSpec {
     /// swept in the scene's turned-round pass ([`Scene::passes`]), and `tilt_deg`, `variance`
     /// and `rotation_deg` are those the turned-round camera sees.
     pub toward_viewer: bool,
+    /// A point or spot light (`kind = "point" | "spot"`): its place, size and cone. Its tilt is
+    /// then 0 and its variance 0 (they describe directional lights only); only the shadow-ray
+    /// reference renders it so far.
+    pub point: Option<PointLight>,
 }
 
 /// A light's pattern (`[[light]] pattern = { path, size, center }`).

@@ -270,6 +270,7 @@ mod tests {
             rotation_deg: 0.0,
             pattern: None,
             toward_viewer: false,
+            point: None,
         }
     }
 

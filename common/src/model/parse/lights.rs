@@ -1,26 +1,172 @@
-//! Validation of what makes a light world-space (`[[light]] kind`, `direction`, `up`): the light
-//! kinds this renderer sweeps, and a world-space light placed on the camera's slab plane.
+//! Validation of what makes a light world-space (`[[light]] kind`, `direction`, `up`, and a
+//! point or spot light's `position`, `radius`, `cone_deg`, `falloff_deg`): the light kinds, and a
+//! world-space light placed on the camera's slab plane.
 
 use glam::DVec3;
 
+use super::RawLight;
 use super::validate::Validator;
-use crate::model::scene::{CameraSpec, LightSpec, SceneError, WorldLight};
+use crate::model::scene::{
+    CameraSpec, LightSpec, MAX_WORLD, PointLight, SceneError, SpotCone, WorldLight,
+};
+
+/// What `[[light]] kind` names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum LightKind {
+    /// A distant Gaussian light (the default).
+    Directional,
+    /// A light at a place, shining every way.
+    Point,
+    /// A point light shining into a cone.
+    Spot,
+}
 
 impl Validator<'_> {
-    /// `light[i].kind`: `"directional"` (the default). Point and spot lights (issue 41) are
-    /// refused by name until the sweep has them.
-    pub(super) fn light_kind(&self, i: usize, kind: Option<&str>) -> Result<(), SceneError> {
+    /// `light[i].kind`: `"directional"` (the default), `"point"` or `"spot"`.
+    pub(super) fn light_kind(&self, i: usize, kind: Option<&str>) -> Result<LightKind, SceneError> {
         match kind {
-            None | Some("directional") => Ok(()),
-            Some(k @ ("point" | "spot")) => Err(self.err(
-                format!("light[{i}].kind"),
-                format!("{k} lights are not supported yet: only \"directional\" lights are"),
-            )),
+            None | Some("directional") => Ok(LightKind::Directional),
+            Some("point") => Ok(LightKind::Point),
+            Some("spot") => Ok(LightKind::Spot),
             Some(k) => Err(self.err(
                 format!("light[{i}].kind"),
                 format!("expected \"directional\", \"point\" or \"spot\", got {k:?}"),
             )),
         }
+    }
+
+    /// Light i's place, size and cone, for a point or spot light: `position` (required),
+    /// `radius` (default 0, at most 1e9), and for a spot `direction` (required, its axis),
+    /// `cone_deg` (required, 0–89) and `falloff_deg` (default 0, 0–90). A directional light's
+    /// keys are refused by name on these kinds, and these kinds' keys on a directional light.
+    pub(super) fn point_light(
+        &self,
+        i: usize,
+        kind: LightKind,
+        raw: &RawLight,
+    ) -> Result<Option<PointLight>, SceneError> {
+        let key = |k: &str| format!("light[{i}].{k}");
+        if kind == LightKind::Directional {
+            let theirs = [
+                ("position", raw.position.is_some()),
+                ("radius", raw.radius.is_some()),
+                ("cone_deg", raw.cone_deg.is_some()),
+                ("falloff_deg", raw.falloff_deg.is_some()),
+            ];
+            if let Some((k, _)) = theirs.iter().find(|(_, given)| *given) {
+                return Err(self.err(
+                    key(k),
+                    "only applies to point and spot lights (`kind = \"point\"` or \"spot\"`)",
+                ));
+            }
+            return Ok(None);
+        }
+        let name = if kind == LightKind::Spot {
+            "spot"
+        } else {
+            "point"
+        };
+        let directional = [
+            ("tilt_deg", raw.tilt_deg.is_some()),
+            ("variance", raw.variance.is_some()),
+            ("rotation_deg", raw.rotation_deg.is_some()),
+            ("up", raw.up.is_some()),
+            (
+                "direction",
+                raw.direction.is_some() && kind == LightKind::Point,
+            ),
+        ];
+        if let Some((k, _)) = directional.iter().find(|(_, given)| *given) {
+            return Err(self.err(
+                key(k),
+                format!(
+                    "only applies to directional lights: a {name} light's place is `position`, \
+                     its size `radius`{}",
+                    if kind == LightKind::Spot {
+                        ", its axis `direction`"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+        }
+        if raw.pattern.is_some() {
+            return Err(self.err(
+                key("pattern"),
+                format!(
+                    "patterns on {name} lights are not supported yet (directional lights only)"
+                ),
+            ));
+        }
+        let position = raw.position.ok_or_else(|| {
+            self.err(
+                key("position"),
+                format!("expected `position = [x, y, z]`: where the {name} light is (world units)"),
+            )
+        })?;
+        let position = self.bounded3(&key("position"), position, MAX_WORLD)?;
+        let radius = self.finite(&key("radius"), raw.radius.unwrap_or(0.0))?;
+        if !(0.0..=MAX_WORLD).contains(&radius) {
+            return Err(self.err(
+                key("radius"),
+                format!("expected a radius from 0 to {MAX_WORLD:e} (world units), got {radius}"),
+            ));
+        }
+        let spot = match kind {
+            LightKind::Spot => {
+                let direction = raw.direction.ok_or_else(|| {
+                    self.err(
+                        key("direction"),
+                        "expected `direction = [x, y, z]`: the world direction the spot points",
+                    )
+                })?;
+                let direction = self.unit_vector(&key("direction"), direction)?;
+                let cone_deg = raw.cone_deg.ok_or_else(|| {
+                    self.err(
+                        key("cone_deg"),
+                        "expected `cone_deg`: the half-angle of full intensity, 0 to 89 degrees",
+                    )
+                })?;
+                let cone_deg = self.finite(&key("cone_deg"), cone_deg)?;
+                if !(0.0..=89.0).contains(&cone_deg) {
+                    return Err(self.err(
+                        key("cone_deg"),
+                        format!("expected a half-angle from 0 to 89 degrees, got {cone_deg}"),
+                    ));
+                }
+                let falloff_deg =
+                    self.finite(&key("falloff_deg"), raw.falloff_deg.unwrap_or(0.0))?;
+                if !(0.0..=90.0).contains(&falloff_deg) {
+                    return Err(self.err(
+                        key("falloff_deg"),
+                        format!("expected a half-angle from 0 to 90 degrees, got {falloff_deg}"),
+                    ));
+                }
+                Some(SpotCone {
+                    direction,
+                    cone_deg,
+                    falloff_deg,
+                })
+            }
+            _ => {
+                for (k, given) in [
+                    ("cone_deg", raw.cone_deg.is_some()),
+                    ("falloff_deg", raw.falloff_deg.is_some()),
+                ] {
+                    if given {
+                        return Err(
+                            self.err(key(k), "only applies to spot lights (`kind = \"spot\"`)")
+                        );
+                    }
+                }
+                None
+            }
+        };
+        Ok(Some(PointLight {
+            position,
+            radius,
+            spot,
+        }))
     }
 
     /// Light i's `tilt_deg` (default [0, 0]), each |ω| < 90; refused beside a `direction`.

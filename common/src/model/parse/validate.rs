@@ -215,6 +215,7 @@ impl Validator<'_> {
                 rotation_deg: 0.0,
                 pattern: None,
                 toward_viewer: false,
+                point: None,
             });
         }
 
@@ -364,7 +365,8 @@ impl Validator<'_> {
     ) -> Result<LightSpec, SceneError> {
         let key = |k: &str| format!("light[{i}].{k}");
         let color = self.color(&key("color"), raw.color.unwrap_or([1.0; 3]))?;
-        self.light_kind(i, raw.kind.as_deref())?;
+        let kind = self.light_kind(i, raw.kind.as_deref())?;
+        let point = self.point_light(i, kind, &raw)?;
         let tilt = self.light_tilt(i, raw.tilt_deg, raw.direction.is_some())?;
         let variance = raw.variance.unwrap_or([0.0; 2]);
         for (j, v) in variance.iter().enumerate() {
@@ -416,7 +418,11 @@ impl Validator<'_> {
             variance,
             rotation_deg,
             toward_viewer: false,
+            point,
         };
+        if point.is_some() {
+            return Ok(light);
+        }
         if let Some(direction) = raw.direction {
             let world = self.world_light(i, direction, raw.up, variance, rotation_deg)?;
             self.place_light(i, &mut light, world, camera, "")?;

@@ -361,27 +361,11 @@ fn bad_light_kinds_and_directions_name_the_key() {
         "light[0].direction",
         "90.0° to the view direction",
     );
-    expect_err(
-        &light("kind = \"point\""),
-        "light[0].kind",
-        "point lights are not supported yet",
-    );
-    // With the point light's own keys, the kind is what is named, not the unknown keys.
-    expect_err(
-        &light("kind = \"point\"\nposition = [0.0, 1.0, -2.0]\nradius = 0.1"),
-        "light[0].kind",
-        "point lights are not supported yet",
-    );
-    expect_err(
-        &light("kind = \"spot\"\nposition = [0.0, 1.0, -2.0]\ncone_deg = 20.0"),
-        "light[0].kind",
-        "spot lights are not supported yet",
-    );
-    // A directional light's unknown key is still named as one.
+    // A point light's key on a directional light is named as such.
     expect_err(
         &light("position = [0.0, 1.0, -2.0]"),
         "light[0].position",
-        "unknown field",
+        "only applies to point and spot lights",
     );
     expect_err(
         &light("kind = \"laser\""),
@@ -389,6 +373,117 @@ fn bad_light_kinds_and_directions_name_the_key() {
         "expected \"directional\"",
     );
     assert!(parse(&light("kind = \"directional\"")).is_ok());
+}
+
+#[test]
+fn point_and_spot_lights_keep_their_place_size_and_cone() {
+    let light = |l: &str| parse(&format!("{MINIMAL}\n[[light]]\n{l}\n")).unwrap();
+    let s = light("kind = \"point\"\nposition = [0.0, 1.0, -2.0]\nradius = 0.1");
+    let p = s.lights[0].point.expect("a point light");
+    assert_eq!(
+        (p.position, p.radius, p.spot),
+        ([0.0, 1.0, -2.0], 0.1, None)
+    );
+    // Tilt and spread are a directional light's: 0 on a point light.
+    assert_eq!(
+        (s.lights[0].tilt_deg, s.lights[0].variance),
+        ([0.0; 2], [0.0; 2])
+    );
+    assert_eq!(
+        light("kind = \"point\"\nposition = [1.0, 2.0, 3.0]").lights[0]
+            .point
+            .unwrap()
+            .radius,
+        0.0
+    );
+    let s = light(
+        "kind = \"spot\"\nposition = [0.0, 2.0, 0.0]\ndirection = [0.0, -2.0, 0.0]\ncone_deg = 20.0\nfalloff_deg = 5.0",
+    );
+    let spot = s.lights[0].point.unwrap().spot.expect("a spot");
+    assert_eq!(
+        (spot.direction, spot.cone_deg, spot.falloff_deg),
+        ([0.0, -1.0, 0.0], 20.0, 5.0)
+    );
+}
+
+#[test]
+fn bad_point_and_spot_lights_name_the_key() {
+    let light = |l: &str| format!("{MINIMAL}\n[[light]]\n{l}\n");
+    let point = |l: &str| {
+        light(&format!(
+            "kind = \"point\"\nposition = [0.0, 1.0, -2.0]\n{l}"
+        ))
+    };
+    let spot = |l: &str| {
+        light(&format!(
+            "kind = \"spot\"\nposition = [0.0, 1.0, -2.0]\ndirection = [0.0, 0.0, 1.0]\n{l}"
+        ))
+    };
+    expect_err(
+        &light("kind = \"point\""),
+        "light[0].position",
+        "expected `position",
+    );
+    expect_err(
+        &light("kind = \"point\"\nposition = [0.0, nan, 1.0]"),
+        "light[0].position[1]",
+        "finite",
+    );
+    expect_err(&point("radius = -0.5"), "light[0].radius", "from 0");
+    expect_err(&point("radius = inf"), "light[0].radius", "finite");
+    expect_err(
+        &point("tilt_deg = [10.0, 0.0]"),
+        "light[0].tilt_deg",
+        "only applies to directional",
+    );
+    expect_err(
+        &point("variance = [0.1, 0.1]"),
+        "light[0].variance",
+        "only applies to directional",
+    );
+    expect_err(
+        &point("direction = [0.0, 0.0, 1.0]"),
+        "light[0].direction",
+        "only applies to directional",
+    );
+    expect_err(
+        &point("cone_deg = 20.0"),
+        "light[0].cone_deg",
+        "only applies to spot lights",
+    );
+    expect_err(
+        &point("pattern = { path = \"g.png\", size = [1.0, 1.0] }"),
+        "light[0].pattern",
+        "not supported yet",
+    );
+    expect_err(&spot(""), "light[0].cone_deg", "expected `cone_deg`");
+    expect_err(
+        &spot("cone_deg = 90.0"),
+        "light[0].cone_deg",
+        "from 0 to 89",
+    );
+    expect_err(
+        &spot("cone_deg = -1.0"),
+        "light[0].cone_deg",
+        "from 0 to 89",
+    );
+    expect_err(
+        &spot("cone_deg = 20.0\nfalloff_deg = 91.0"),
+        "light[0].falloff_deg",
+        "from 0 to 90",
+    );
+    expect_err(
+        &light("kind = \"spot\"\nposition = [0.0, 1.0, -2.0]\ncone_deg = 20.0"),
+        "light[0].direction",
+        "expected `direction",
+    );
+    expect_err(
+        &light(
+            "kind = \"spot\"\nposition = [0.0, 1.0, -2.0]\ndirection = [0.0, 0.0, 0.0]\ncone_deg = 20.0",
+        ),
+        "light[0].direction",
+        "",
+    );
 }
 
 #[test]

@@ -1,0 +1,87 @@
+//! Point and spot lights (`[[light]] kind = "point" | "spot"`): a light at a place, whose rays
+//! diverge from it (issue 41). Rendered by the shadow-ray reference; the convolution sweep
+//! refuses them by name until it has them (docs/how-it-works.md, "Point and spot lights").
+
+use glam::DVec3;
+
+/// A point light, or a spot light (with [`PointLight::spot`]), as the scene gives it in world
+/// space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    /// World position of the light's centre.
+    pub position: [f64; 3],
+    /// Standard deviation (world units) of the isotropic 3D Gaussian the light spreads over
+    /// around `position`; 0 = a hard point light.
+    pub radius: f64,
+    /// The cone a spot light emits into; `None` for a point light (every direction).
+    pub spot: Option<SpotCone>,
+}
+
+/// A spot light's cone: full intensity within `cone_deg` of its axis, fading smoothly to 0 over
+/// the further `falloff_deg`, nothing beyond.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotCone {
+    /// The world direction of the axis (unit): where the spot points.
+    pub direction: [f64; 3],
+    /// Half-angle of full intensity, degrees (0–89).
+    pub cone_deg: f64,
+    /// The further half-angle over which the intensity fades to 0, degrees (0–90; 0 = a hard
+    /// edge).
+    pub falloff_deg: f64,
+}
+
+impl SpotCone {
+    /// The cone's factor for light leaving the light's centre along `to_point` (any length, not
+    /// zero): 1 within `cone_deg` of the axis, `1 − smoothstep` over the falloff
+    /// (`3s² − 2s³`, s the fraction of the falloff passed), 0 beyond.
+    pub fn factor(&self, to_point: DVec3) -> f64 {
+        let cos = to_point
+            .normalize()
+            .dot(DVec3::from(self.direction))
+            .clamp(-1.0, 1.0);
+        let angle = cos.acos().to_degrees();
+        if angle <= self.cone_deg {
+            return 1.0;
+        }
+        if self.falloff_deg == 0.0 || angle >= self.cone_deg + self.falloff_deg {
+            return 0.0;
+        }
+        let s = (angle - self.cone_deg) / self.falloff_deg;
+        1.0 - s * s * (3.0 - 2.0 * s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_spot_is_full_inside_its_cone_half_way_down_its_falloff_and_dark_beyond() {
+        let spot = SpotCone {
+            direction: [0.0, 0.0, 1.0],
+            cone_deg: 20.0,
+            falloff_deg: 10.0,
+        };
+        let at = |deg: f64| {
+            let a = deg.to_radians();
+            spot.factor(DVec3::new(a.sin(), 0.0, a.cos()) * 3.0)
+        };
+        assert_eq!(at(0.0), 1.0);
+        assert_eq!(at(19.9), 1.0);
+        // Half-way through the falloff the smoothstep is exactly 1/2.
+        assert!((at(25.0) - 0.5).abs() < 1e-9, "{}", at(25.0));
+        assert!(at(22.0) > at(24.0) && at(26.0) > at(28.0));
+        assert_eq!(at(30.1), 0.0);
+        assert_eq!(at(120.0), 0.0);
+        let hard = SpotCone {
+            falloff_deg: 0.0,
+            ..spot
+        };
+        let dir = |deg: f64| {
+            let a = f64::to_radians(deg);
+            DVec3::new(0.0, a.sin(), a.cos())
+        };
+        assert_eq!(hard.factor(dir(19.99)), 1.0);
+        assert_eq!(hard.factor(dir(20.01)), 0.0);
+    }
+}
