@@ -79,7 +79,7 @@ mod turned_eye;
 use geometry::{Start, Tri, add, intersect, sub};
 
 /// How a light's shadow rays are drawn.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 enum LightSource {
     /// A directional light: its mean direction offset per unit depth (grid px per world depth)
     /// and the Cholesky-like factor (R·diag(σ)) in grid px per world depth.
@@ -279,9 +279,19 @@ impl<'a> Reference<'a> {
         let lights = scene
             .lights
             .iter()
-            .map(|l| {
+            .enumerate()
+            .map(|(i, l)| {
                 if let Some(point) = &l.point {
-                    return LightSource::Point(PointSource::new(point, cam, geometry.z_origin));
+                    let pattern = l
+                        .pattern
+                        .as_ref()
+                        .zip(plan.spot_patterns.get(i).and_then(Option::as_ref));
+                    return LightSource::Point(PointSource::new(
+                        point,
+                        pattern,
+                        cam,
+                        geometry.z_origin,
+                    ));
                 }
                 let mu = l.tilt_deg.map(|t| t.to_radians().tan() / px);
                 let (s, c) = l.rotation_deg.to_radians().sin_cos();
@@ -367,10 +377,10 @@ impl<'a> Reference<'a> {
         scratch: &mut Scratch,
     ) -> [f64; 3] {
         let base = mix32(mix32(mix32(seed ^ k.wrapping_mul(0x2c1b_3c6d)) ^ stream) ^ l as u32);
-        let (mu, f) = match self.lights[l] {
-            LightSource::Directional(mu, f) => (mu, f),
+        let (mu, f) = match &self.lights[l] {
+            LightSource::Directional(mu, f) => (*mu, *f),
             LightSource::Point(light) => {
-                return self.point_light_at(&light, p, start, (k, base), scratch);
+                return self.point_light_at(light, p, start, (k, base), scratch);
             }
         };
         let m = k * k;

@@ -264,3 +264,65 @@ fn a_point_light_inside_a_closed_mesh_is_refused_and_the_sweep_names_the_backend
     // The same light outside the mesh renders with the reference.
     render_reference(&scene, 1, 4, 1 << 30, false, &[], None).unwrap();
 }
+
+#[test]
+fn a_spot_lights_gobo_lands_where_it_projects_through_the_cone() {
+    // A 2 × 1 gobo, black then white along the spot's right axis (world −x, as the camera's),
+    // 0.4 wide on the plane at unit distance, centred 0.1 right of the axis: on that plane it is
+    // black up to a = 0 (the black texel's centre, clamped beyond), rises linearly to the white
+    // texel's centre at a = 0.2 and stays white beyond; on the wall 3 from the spot, at 3·a.
+    let dir = crate::support::temp_dir("spot_gobo");
+    convshadow::io::image::save_gray_png(&dir.join("gobo.png"), 2, 1, vec![0, 255]).unwrap();
+    let text = r#"
+[image]
+width = 128
+height = 4
+background = [0.0, 0.0, 0.0]
+[camera]
+direction = [0.0, 0.0, 1.0]
+view_width = 4.0
+[sweep]
+slabs = 8
+[[light]]
+kind = "spot"
+position = [0.0, 0.0, -2.0]
+direction = [0.0, 0.0, 1.0]
+up = [0.0, 1.0, 0.0]
+cone_deg = 60.0
+pattern = { path = "gobo.png", size = [0.4, 0.4], center = [0.1, 0.0] }
+[[mesh]]
+shape = "box"
+size = [8.0, 8.0, 0.02]
+translate = [0.0, 0.0, 1.01]
+material = "wall"
+[material.wall]
+color = [1.0, 1.0, 1.0]
+"#;
+    let scene = Scene::parse(text, "gobo", &dir).unwrap();
+    let r = render_reference(&scene, 1, 4, 1 << 30, false, &[], None).unwrap();
+    let px = 4.0 / 128.0;
+    let row = 1usize;
+    let y = (row as f64 + 0.5 - 2.0) * px;
+    let mut half: Option<f64> = None;
+    let mut before = (f64::NAN, f64::NAN);
+    for i in 0..128usize {
+        // The image's right is world −x, as the spot's right: `a` is the image x over 3.
+        let x = (i as f64 + 0.5 - 64.0) * px;
+        let d2 = x * x + y * y + 9.0;
+        let lit = f64::from(r.image.data[3 * (row * 128 + i)]) * d2 / (3.0 / d2.sqrt());
+        let a = x / 3.0;
+        let want = (a / 0.2).clamp(0.0, 1.0);
+        assert!((lit - want).abs() < 1e-4, "pixel {i}: {lit} vs {want}");
+        if before.1 < 0.5 && lit >= 0.5 {
+            // The half-way crossing, linearly between the two pixel centres.
+            half = Some(before.0 + (0.5 - before.1) / (lit - before.1) * (x - before.0));
+        }
+        before = (x, lit);
+    }
+    // The gobo's half-way line projects to 3·0.1 = 0.3 from the axis: within half a pixel.
+    let half = half.expect("a crossing");
+    assert!(
+        (half - 0.3).abs() <= 0.5 * px,
+        "crossing at {half}, projected 0.3"
+    );
+}

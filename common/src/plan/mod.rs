@@ -15,14 +15,16 @@ use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
 
 use crate::contract::files::PlanFiles;
-use crate::model::scene::{Media, Penumbra, Scene};
+use crate::model::scene::{LightSpec, Media, Penumbra, Scene};
 use crate::pixel::hash::{JITTER_STREAM, slab_hash};
 use crate::pixel::texture3d::TextureError;
 use crate::plan::kernel::{
     KernelMoments, KernelTable, TableGuard, build_distance_table, build_table,
 };
+use crate::plan::pattern::Pattern;
 use crate::prepare::geometry::SceneGeometry;
 use crate::prepare::guard::GuardBand;
+use std::sync::Arc;
 
 pub use material::{
     DEFAULT_REFERENCE_LENGTH, MaterialPlan, PI_MIN_STEPS, PI_SIZE, PI_STEPS_PER_UNIT, Passes,
@@ -184,6 +186,10 @@ pub struct RenderPlan {
     /// The light buffer before the first slab (`[row][light][channel][x]`, the sweep's input),
     /// when a light has a pattern; `None`: every light starts at 1.
     pub initial_light: Option<Vec<f32>>,
+    /// Per light, a spot light's pattern (a gobo projected through its cone, read where the
+    /// light arrives, not a light buffer: only the shadow-ray reference renders spot lights);
+    /// empty when no spot light has one.
+    pub spot_patterns: Vec<Option<Arc<Pattern>>>,
     /// Pre-integrated compositing (`sweep.preintegration`): materials with a
     /// [`MaterialPlan::pre`] table are shaded from their detail at the slab's faces, and the
     /// sweep keeps one more float per pixel (the next slab's front value).
@@ -390,6 +396,7 @@ impl RenderPlan {
             background: scene.image.background,
             pixel_size: px,
             initial_light: None,
+            spot_patterns: Vec::new(),
             preintegration: scene.sweep.preintegration,
             surface_hold: Vec::new(),
             subpixel_meshes: Vec::new(),
@@ -498,13 +505,45 @@ impl RenderPlan {
         if scene.lights.iter().all(|l| l.pattern.is_none()) {
             return Ok(self);
         }
+        let spot_pattern = |l: usize, spec: &LightSpec| {
+            let p = spec.pattern.as_ref()?;
+            spec.point?;
+            Some(
+                files
+                    .patterns
+                    .get(l)
+                    .and_then(Option::as_ref)
+                    .ok_or_else(|| PlanError {
+                        scene: scene.source.clone(),
+                        what: format!("key `light[{l}].pattern.path`"),
+                        source: TextureError::NotRead {
+                            path: p.path.clone(),
+                        },
+                    }),
+            )
+        };
+        for (l, spec) in scene.lights.iter().enumerate() {
+            if let Some(pattern) = spot_pattern(l, spec) {
+                self.spot_patterns.resize(scene.lights.len(), None);
+                self.spot_patterns[l] = Some(Arc::new(pattern?.clone()));
+            }
+        }
+        if scene
+            .lights
+            .iter()
+            .all(|l| l.pattern.is_none() || l.point.is_some())
+        {
+            return Ok(self);
+        }
         let w = self.grid_width as usize;
         let h = self.grid_height as usize;
         let ch = self.channels as usize;
         let row_len = self.light_row_len();
         let mut buf = self.unlit_light_buffer();
         for (l, spec) in scene.lights.iter().enumerate() {
-            let Some(p) = &spec.pattern else { continue };
+            let Some(p) = spec.pattern.as_ref().filter(|_| spec.point.is_none()) else {
+                continue;
+            };
             let pattern = files
                 .patterns
                 .get(l)

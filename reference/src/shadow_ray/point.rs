@@ -10,7 +10,10 @@
 //! shape, as the sweep's kernels convolve it). The media attenuate per unit depth along every
 //! shadow ray, as for directional lights (the model's opacities are per slab).
 
-use convshadow_common::model::scene::{PointLight, SpotCone};
+use std::sync::Arc;
+
+use convshadow_common::model::scene::{PatternSpec, PointLight, SpotCone, frame};
+use convshadow_common::plan::pattern::Pattern;
 use convshadow_common::plan::{fresnel_terms, henyey_greenstein};
 use convshadow_common::prepare::camera::Camera;
 use convshadow_common::prepare::geometry::SceneGeometry;
@@ -24,7 +27,7 @@ use convshadow_common::pixel::hash::mix32;
 
 /// A point or spot light where the tracer works (slab-grid coordinates: x, y in grid pixels,
 /// z in world depth relative to the first slab plane).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(super) struct PointSource {
     /// The light's centre, grid coordinates.
     pub(super) center: [f64; 3],
@@ -35,22 +38,57 @@ pub(super) struct PointSource {
     pixel_size: f64,
     /// The spot's cone with its axis in camera space (x right, y down, z along the view).
     spot: Option<SpotCone>,
+    /// A spot's pattern and where it lies on the plane at unit distance along the axis.
+    pattern: Option<SpotPattern>,
+}
+
+/// A spot light's pattern (gobo): the image on the plane at unit distance along the spot's axis,
+/// in the spot's own frame, `size` and `center` in units of that plane (tangents of the angle
+/// from the axis).
+#[derive(Clone, Debug)]
+struct SpotPattern {
+    /// The spot's own right and down axes, camera space.
+    right: DVec3,
+    /// See `right`.
+    down: DVec3,
+    /// The image's extent on the unit plane.
+    size: [f64; 2],
+    /// The image's centre on the unit plane, along right and down.
+    center: [f64; 2],
+    /// The image.
+    image: Arc<Pattern>,
 }
 
 impl PointSource {
-    /// `light` seen by `camera`, with grid depths relative to `z_origin`.
-    pub(super) fn new(light: &PointLight, camera: &Camera, z_origin: f64) -> PointSource {
+    /// `light` (with its pattern's placement `spec` and image, a spot's) seen by `camera`,
+    /// with grid depths relative to `z_origin`.
+    pub(super) fn new(
+        light: &PointLight,
+        pattern: Option<(&PatternSpec, &Arc<Pattern>)>,
+        camera: &Camera,
+        z_origin: f64,
+    ) -> PointSource {
         let c = camera.to_grid(DVec3::from(light.position));
         let px = camera.pixel_size;
-        let spot = light.spot.map(|s| {
-            let d = DVec3::from(s.direction);
-            SpotCone {
-                direction: [
-                    d.dot(camera.right),
-                    d.dot(camera.down),
-                    d.dot(camera.forward),
-                ],
-                ..s
+        let to_camera = |d: DVec3| {
+            DVec3::new(
+                d.dot(camera.right),
+                d.dot(camera.down),
+                d.dot(camera.forward),
+            )
+        };
+        let spot = light.spot.map(|s| SpotCone {
+            direction: to_camera(DVec3::from(s.direction)).to_array(),
+            ..s
+        });
+        let pattern = light.spot.zip(pattern).map(|(s, (spec, image))| {
+            let [right, down, _] = frame(DVec3::from(s.direction), DVec3::from(s.up));
+            SpotPattern {
+                right: to_camera(right),
+                down: to_camera(down),
+                size: spec.size,
+                center: spec.center,
+                image: Arc::clone(image),
             }
         });
         PointSource {
@@ -58,6 +96,7 @@ impl PointSource {
             sigma: [light.radius / px, light.radius / px, light.radius],
             pixel_size: px,
             spot,
+            pattern,
         }
     }
 
@@ -72,15 +111,36 @@ impl PointSource {
         DVec3::new(d[0] * self.pixel_size, d[1] * self.pixel_size, d[2])
     }
 
-    /// The factor the light's centre gives the light arriving at `p`: the cone (1 for a point
-    /// light) over the squared distance, `cone(X − P) / |X − P|²` (0 at the centre itself).
-    pub(super) fn falloff(&self, p: [f64; 3]) -> f64 {
+    /// The factor the light's centre gives the light arriving at `p`, per channel: the cone
+    /// (1 for a point light) times a spot's pattern over the squared distance,
+    /// `cone(X − P)·pattern(X − P) / |X − P|²` (0 at the centre itself).
+    pub(super) fn falloff(&self, p: [f64; 3]) -> [f64; 3] {
         let d = self.toward_center(p);
         let d2 = d.length_squared();
         if d2 == 0.0 {
-            return 0.0;
+            return [0.0; 3];
         }
-        self.spot.map_or(1.0, |s| s.factor(-d)) / d2
+        let cone = self.spot.map_or(1.0, |s| s.factor(-d)) / d2;
+        let Some(pattern) = &self.pattern else {
+            return [cone; 3];
+        };
+        // Where the ray from the centre through X meets the unit plane along the axis: none at
+        // 90° or more from the axis.
+        let out = -d;
+        let along = out.dot(DVec3::from(
+            self.spot.map_or([0.0, 0.0, 1.0], |s| s.direction),
+        ));
+        if along <= 0.0 {
+            return [0.0; 3];
+        }
+        let (a, b) = (
+            out.dot(pattern.right) / along,
+            out.dot(pattern.down) / along,
+        );
+        let img = &pattern.image;
+        let tx = ((a - pattern.center[0]) / pattern.size[0] + 0.5) * f64::from(img.width);
+        let ty = ((b - pattern.center[1]) / pattern.size[1] + 0.5) * f64::from(img.height);
+        std::array::from_fn(|c| cone * img.sample(tx, ty, c))
     }
 
     /// The shading's terms of this light at grid point `p` (a front-to-back pass: the viewer
@@ -166,7 +226,7 @@ impl Reference<'_> {
             }
         }
         let falloff = light.falloff(p);
-        acc.map(|v| v / f64::from(m) * falloff)
+        std::array::from_fn(|c| acc[c] / f64::from(m) * falloff[c])
     }
 }
 

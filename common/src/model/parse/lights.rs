@@ -70,7 +70,7 @@ impl Validator<'_> {
             ("tilt_deg", raw.tilt_deg.is_some()),
             ("variance", raw.variance.is_some()),
             ("rotation_deg", raw.rotation_deg.is_some()),
-            ("up", raw.up.is_some()),
+            ("up", raw.up.is_some() && kind == LightKind::Point),
             (
                 "direction",
                 raw.direction.is_some() && kind == LightKind::Point,
@@ -90,12 +90,10 @@ impl Validator<'_> {
                 ),
             ));
         }
-        if raw.pattern.is_some() {
+        if raw.pattern.is_some() && kind == LightKind::Point {
             return Err(self.err(
                 key("pattern"),
-                format!(
-                    "patterns on {name} lights are not supported yet (directional lights only)"
-                ),
+                "only applies to directional and spot lights: a point light shines every way",
             ));
         }
         let position = raw.position.ok_or_else(|| {
@@ -121,6 +119,8 @@ impl Validator<'_> {
                     )
                 })?;
                 let direction = self.unit_vector(&key("direction"), direction)?;
+                // The spot's own frame, chosen as a directional light's (`world_light`).
+                let up = self.world_light(i, direction, raw.up, [0.0; 2], 0.0)?.up;
                 let cone_deg = raw.cone_deg.ok_or_else(|| {
                     self.err(
                         key("cone_deg"),
@@ -144,6 +144,7 @@ impl Validator<'_> {
                 }
                 Some(SpotCone {
                     direction,
+                    up,
                     cone_deg,
                     falloff_deg,
                 })

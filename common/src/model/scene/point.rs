@@ -23,6 +23,10 @@ pub struct PointLight {
 pub struct SpotCone {
     /// The world direction of the axis (unit): where the spot points.
     pub direction: [f64; 3],
+    /// The world direction the spot's own frame's "up" follows (unit, not parallel to the
+    /// axis): its pattern's rows run down against it (`frame(direction, up)`, as a directional
+    /// light's and the camera's).
+    pub up: [f64; 3],
     /// Half-angle of full intensity, degrees (0–89).
     pub cone_deg: f64,
     /// The further half-angle over which the intensity fades to 0, degrees (0–90; 0 = a hard
@@ -59,6 +63,7 @@ mod tests {
     fn a_spot_is_full_inside_its_cone_half_way_down_its_falloff_and_dark_beyond() {
         let spot = SpotCone {
             direction: [0.0, 0.0, 1.0],
+            up: [0.0, 1.0, 0.0],
             cone_deg: 20.0,
             falloff_deg: 10.0,
         };

@@ -454,9 +454,19 @@ fn bad_point_and_spot_lights_name_the_key() {
     expect_err(
         &point("pattern = { path = \"g.png\", size = [1.0, 1.0] }"),
         "light[0].pattern",
-        "not supported yet",
+        "only applies to directional and spot lights",
     );
     expect_err(&spot(""), "light[0].cone_deg", "expected `cone_deg`");
+    expect_err(
+        &spot("cone_deg = 20.0\nup = [0.0, 0.0, 2.0]"),
+        "light[0].up",
+        "not parallel",
+    );
+    expect_err(
+        &point("up = [0.0, 1.0, 0.0]"),
+        "light[0].up",
+        "only applies to directional",
+    );
     expect_err(
         &spot("cone_deg = 90.0"),
         "light[0].cone_deg",
