@@ -240,7 +240,8 @@ fn detached<T: Send>(
 /// newline or `=`), TOML text, or a dict of the TOML's tables. The keyword arguments mean what
 /// the command line's flags of the same name mean: `width`, `height`, `slabs` (int or "auto"),
 /// `kernel`, `penumbra`, `surface`, `guard_band` ("auto" or int), `seed`,
-/// `variance_compensation`, `preintegration`, `media`, `subpixel_shadows`, `threads` (0: one per core), `backend` ("cpu",
+/// `variance_compensation`, `preintegration`, `media`, `subpixel_shadows`, `light_resolution`,
+/// `threads` (0: one per core), `backend` ("cpu",
 /// "gpu", "auto", "reference"), `path` ("simd", "scalar"), `reference_samples`, `max_memory`
 /// (MiB), `allow_open`. `progress=True` shows the CLI's progress bar on a terminal's stderr.
 ///
@@ -250,7 +251,8 @@ fn detached<T: Send>(
 #[pyo3(signature = (
     scene = None, *, width = None, height = None, slabs = None, kernel = None, penumbra = None,
     surface = None, guard_band = None, seed = None, variance_compensation = None,
-    preintegration = None, media = None, subpixel_shadows = None, threads = 0, backend = "cpu", path = "simd", reference_samples = None,
+    preintegration = None, media = None, subpixel_shadows = None, light_resolution = None,
+    threads = 0, backend = "cpu", path = "simd", reference_samples = None,
     max_memory = None, allow_open = false, progress = false
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -269,6 +271,7 @@ fn render<'py>(
     preintegration: Option<bool>,
     media: Option<String>,
     subpixel_shadows: Option<bool>,
+    light_resolution: Option<f64>,
     threads: usize,
     backend: &str,
     path: &str,
@@ -313,6 +316,7 @@ fn render<'py>(
                 .map(|m| m.parse::<Media>().map_err(|e| bad("media", e)))
                 .transpose()?,
             subpixel_shadows,
+            light_resolution,
         },
         threads: overrides::parse_threads(&threads.to_string()).map_err(|e| bad("threads", e))?,
         backend,

@@ -244,3 +244,27 @@ def test_a_perspective_scene_renders_on_the_sweep_and_the_reference_like_the_com
     with pytest.raises(convshadow.Error) as info:
         convshadow.render(PERSPECTIVE.replace("fov_deg =", "fov_deg = 200.0 #"))
     assert info.value.exit_code == 3 and "fov_deg" in info.value.message
+
+
+def test_light_resolution_and_point_lights_follow_the_command_line(cli, tmp_path):
+    # A coarser light grid for a perspective camera: the command line's bits.
+    image, _ = convshadow.render(PERSPECTIVE, light_resolution=0.5)
+    path = tmp_path / "persp.toml"
+    path.write_text(PERSPECTIVE)
+    run = cli("render", path, "--light-resolution", "0.5", "-o", tmp_path / "half.exr", "-q")
+    assert run.returncode == 0
+    assert bits(read_exr(tmp_path / "half.exr")).tolist() == bits(image).tolist()
+    assert bits(image).tolist() != bits(convshadow.render(PERSPECTIVE)[0]).tolist()
+    # An orthographic camera's light buffers are its pixels: refused as an argument.
+    ortho = PERSPECTIVE.replace('projection = "perspective"', "view_width = 3.0").replace(
+        "eye =", "#").replace("look_at =", "#").replace("fov_deg =", "#")
+    with pytest.raises(convshadow.Error) as info:
+        convshadow.render(ortho, light_resolution=2.0)
+    assert info.value.exit_code == 2 and "light_resolution" in info.value.message
+    # A point light: the reference renders it, the sweep refuses it naming the backend.
+    point = PERSPECTIVE + '[[light]]\nkind = "point"\nposition = [0.0, 3.0, -3.0]\nradius = 0.1\n'
+    image, _ = convshadow.render(point, backend="reference", reference_samples=4)
+    assert np.isfinite(image).all() and (image > 0).any()
+    with pytest.raises(convshadow.Error) as info:
+        convshadow.render(point)
+    assert info.value.exit_code == 3 and "--backend reference" in info.value.message

@@ -48,6 +48,12 @@ pub fn sigma(fov_deg: f64) -> f64 {
 
 /// The scene's text at vertical field of view `fov_deg`, `sweep` added to `[sweep]`.
 pub fn scene_toml(fov_deg: f64, sweep: &str) -> String {
+    scene_toml_with_edge(fov_deg, sweep, 0.0)
+}
+
+/// [`scene_toml`] with the half-plane's edge at world x = `edge` (0: on a boundary of the grid's
+/// pixels; `k / grid_pixel` puts it k of those pixels across).
+pub fn scene_toml_with_edge(fov_deg: f64, sweep: &str, edge: f64) -> String {
     let look = look_at(fov_deg);
     format!(
         r#"
@@ -73,7 +79,7 @@ material = "receiver"
 [[mesh]]
 shape = "box"
 size = [3.0, 6.0, {t:e}]
-translate = [1.5, 0.0, {c:e}]
+translate = [{x:e}, 0.0, {c:e}]
 material = "plate"
 [material.receiver]
 surface = "flat"
@@ -90,6 +96,7 @@ color = [0.0, 0.0, 0.0]
         r = RECEIVER + 0.1,
         t = PLATE.1 - PLATE.0,
         c = 0.5 * (PLATE.0 + PLATE.1),
+        x = 1.5 + edge,
     )
 }
 
@@ -97,6 +104,11 @@ color = [0.0, 0.0, 0.0]
 /// (z = RECEIVER), if it does within the face and not through the plate; the test's own camera
 /// (right-handed, y down).
 pub fn receiver_point(fov_deg: f64, i: u32, j: u32) -> Option<DVec3> {
+    receiver_point_with_edge(fov_deg, i, j, 0.0)
+}
+
+/// [`receiver_point`] with the half-plane's edge at world x = `edge`.
+pub fn receiver_point_with_edge(fov_deg: f64, i: u32, j: u32, edge: f64) -> Option<DVec3> {
     let forward = (look_at(fov_deg) - EYE).normalize();
     let up = DVec3::Y;
     let down = -(up - forward * up.dot(forward)).normalize();
@@ -110,11 +122,11 @@ pub fn receiver_point(fov_deg: f64, i: u32, j: u32) -> Option<DVec3> {
     // Away from the plate's ends (|y| = 3), where light passes round them: the closed form is
     // a half-plane's.
     let on_receiver = hit.x.abs() < 2.9 && hit.y.abs() < 2.0;
-    // The plate (x in [0, 3], |y| ≤ 3) seen before the receiver: the ray is inside it at one of
-    // its faces (the ray is a straight line, the plate convex and thin).
+    // The plate (x in [edge, edge + 3], |y| ≤ 3) seen before the receiver: the ray is inside it
+    // at one of its faces (the ray is a straight line, the plate convex and thin).
     let through_plate = [PLATE.0, PLATE.1].iter().any(|&z| {
         let p = at(z);
-        p.x >= -1e-9 && p.x <= 3.0 && p.y.abs() <= 3.0
+        p.x - edge >= -1e-9 && p.x - edge <= 3.0 && p.y.abs() <= 3.0
     });
     (on_receiver && !through_plate).then_some(hit)
 }
@@ -134,6 +146,11 @@ pub fn visibility(x: f64, sigma: f64) -> f64 {
 /// seen at `fov`: `(rmse, band, line)`; `Err` when too few pixels were compared (more than 2000
 /// receiver pixels, 100 in the band and 50 rows with a shadow line are wanted).
 pub fn measure(fov: f64, image: &[f32]) -> Result<(f64, f64, f64), String> {
+    measure_with_edge(fov, image, 0.0)
+}
+
+/// [`measure`] with the half-plane's edge at world x = `edge` (the closed form moved with it).
+pub fn measure_with_edge(fov: f64, image: &[f32], edge: f64) -> Result<(f64, f64, f64), String> {
     let value = |i: u32, j: u32| f64::from(image[3 * (j * WIDTH + i) as usize]);
     let (mut sum, mut n, mut band_sum, mut band_n) = (0.0, 0u32, 0.0, 0u32);
     let mut worst_line: f64 = 0.0;
@@ -141,12 +158,13 @@ pub fn measure(fov: f64, image: &[f32]) -> Result<(f64, f64, f64), String> {
     for j in 0..HEIGHT {
         let mut row: Vec<(u32, f64, f64)> = Vec::new();
         for i in 0..WIDTH {
-            if let Some(p) = receiver_point(fov, i, j) {
-                let (got, want) = (value(i, j), visibility(p.x, sigma(fov)));
+            if let Some(p) = receiver_point_with_edge(fov, i, j, edge) {
+                let x = p.x - edge;
+                let (got, want) = (value(i, j), visibility(x, sigma(fov)));
                 let d = got - want;
                 sum += d * d;
                 n += 1;
-                if p.x.abs() < 4.0 * RECEIVER * sigma(fov) {
+                if x.abs() < 4.0 * RECEIVER * sigma(fov) {
                     band_sum += d * d;
                     band_n += 1;
                 }

@@ -24,9 +24,10 @@ use super::{
 use convshadow_common::plan::RenderPlan;
 
 /// The orthographic scene whose sweep carries the light for `scene`'s perspective camera: the
-/// same view axis, `up` and pixel size (the footprint at the `look_at` distance), centred on the
-/// eye (so every view depth is the eye's bit for bit), `eye`'s slab count, and a grid that holds
-/// every vertex within the frustum, symmetric about the axis.
+/// same view axis and `up`, cells of the eye's pixel size (the footprint at the `look_at`
+/// distance) over `sweep.light_resolution`, centred on the eye (so every view depth is the eye's
+/// bit for bit), `eye`'s slab count, and a grid that holds every vertex within the frustum,
+/// symmetric about the axis.
 pub(super) fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, RenderError> {
     let cam = &eye.camera;
     let focal = cam.focal_px.expect("a perspective camera");
@@ -43,18 +44,22 @@ pub(super) fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, Re
     // Nothing beyond the frustum at the farthest depth can shadow what the eye sees, but through
     // the guard band the grid adds for the lights' reach.
     let frustum = z_max / (focal * cam.pixel_size);
-    let side = |half: f64, image: f64| 2.0 * (half.min(0.5 * image * frustum) + 2.0).ceil();
+    // Half-widths in the grid's cells (eye pixels times the light resolution).
+    let cells = scene.sweep.light_resolution;
+    let cell = cam.pixel_size / cells;
+    let side = |half: f64, image: f64| 2.0 * (half.min(0.5 * image * frustum) * cells + 2.0).ceil();
     let (gw, gh) = (side(half_x, w), side(half_y, h));
     if gw > f64::from(MAX_IMAGE_SIDE) || gh > f64::from(MAX_IMAGE_SIDE) {
         return Err(RenderError::OutOfMemory(format!(
             "{}: the perspective view's light grid would be {gw} × {gh} pixels, more than \
-             {MAX_IMAGE_SIDE} a side; narrow camera.fov_deg or the scene's depth",
+             {MAX_IMAGE_SIDE} a side; narrow camera.fov_deg or the scene's depth, or lower \
+             sweep.light_resolution",
             scene.source
         )));
     }
     let mut grid = scene.clone();
     grid.camera = CameraSpec {
-        view_width: gw * cam.pixel_size,
+        view_width: gw * cell,
         projection: Projection::Orthographic,
         ..scene.camera.clone()
     };
@@ -104,12 +109,17 @@ fn within_budget_after_eye(
 }
 
 /// The eye's rays on the slab grid of `plan`: grid pixels per image pixel of offset per unit of
-/// view depth (`1 / (focal · pixel_size)`), and where the view axis meets the grid's image (its
+/// view depth (`light_resolution / (focal · pixel_size)`: the grid's cells are the eye's pixel
+/// at `look_at` over the light resolution), and where the view axis meets the grid's image (its
 /// centre: the grid is symmetric about the axis), in its image pixels (the guard band not
 /// counted: the sweep's buffers add it, the reference's tracer works without it).
-pub(super) fn eye_on_grid(eye: &SceneGeometry, plan: &RenderPlan) -> (f64, [f64; 2]) {
+pub(super) fn eye_on_grid(
+    eye: &SceneGeometry,
+    plan: &RenderPlan,
+    light_resolution: f64,
+) -> (f64, [f64; 2]) {
     let cam = &eye.camera;
-    let zoom = 1.0 / (cam.focal_px.expect("a perspective camera") * cam.pixel_size);
+    let zoom = light_resolution / (cam.focal_px.expect("a perspective camera") * cam.pixel_size);
     let axis = [f64::from(plan.width / 2), f64::from(plan.height / 2)];
     (zoom, axis)
 }
@@ -211,7 +221,7 @@ fn render_perspective_pass(
         Some((ldi, raster)) => (ldi, raster, -geometry.z_origin),
         None => (&eye_ldi, &eye.raster, eye.z_origin),
     };
-    let (zoom, axis) = eye_on_grid(eye, &plan);
+    let (zoom, axis) = eye_on_grid(eye, &plan, pass.sweep.light_resolution);
     let view = EyeView {
         ldi: view_ldi,
         raster: view_raster,

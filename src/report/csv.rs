@@ -5,14 +5,14 @@ use super::row::Row;
 /// The header line of `report.csv`.
 pub const CSV_HEADER: &str = "family,kernel,penumbra,slabs,variance_level,variance,tilt_deg,distance_over_d1,\
 compensation,preintegration,width,height,time_ms,rmse_correct,rmse_iterated,isoline_err_px,width_err_correct_px,\
-width_err_iterated_px,width_px,rmse_reference,reference_self_err,view_angle_deg,fov_deg,note";
+width_err_iterated_px,width_px,rmse_reference,reference_self_err,view_angle_deg,fov_deg,light_resolution,note";
 
 impl Row {
     /// The row as one CSV line (no newline).
     pub fn csv(&self) -> String {
         let o = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.6}"));
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{},{},{},{},{},{},{},{},{},{},\"{}\"",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{},{},{},{},{},{},{},{},{},{},{},\"{}\"",
             self.family,
             self.kernel,
             self.penumbra,
@@ -36,6 +36,7 @@ impl Row {
             o(self.reference_self_err),
             o(self.view_angle_deg),
             o(self.fov_deg),
+            o(self.light_resolution),
             self.note.replace('"', "'"),
         )
     }

@@ -90,19 +90,24 @@ fn perspective_table(md: &mut String, rows: &[Row]) {
          light swept on the slab grid, the eye's rays reading it (how-it-works.md, \"A \
          perspective camera\"). RMSE over the receiver against the closed form where each \
          pixel's ray meets it; the half-shadow line's largest offset from the projected \
-         geometric line. Issue 42 asks ≤ 5·10⁻³ and 0.5 px.\n"
+         geometric line. Issue 42 asks ≤ 5·10⁻³ and 0.5 px. The light resolution \
+         (`sweep.light_resolution`) is the light grid's cells per eye pixel: a speed-against-error \
+         axis, shown with the edge on the default grid's pixel boundaries and 0.3 of its pixels \
+         off them (where the grid's LDI quantises it, issue 46).\n"
     );
     let _ = writeln!(
         md,
-        "| fov | penumbra | slabs | time ms | RMSE vs correct | line offset px |"
+        "| fov | penumbra | light resolution | edge | slabs | time ms | RMSE vs correct | line offset px |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
     for r in &rows {
         let _ = writeln!(
             md,
-            "| {}° | {} | {} | {} | {} | {} |",
+            "| {}° | {} | {} | {} | {} | {} | {} | {} |",
             r.fov_deg.unwrap_or(f64::NAN),
             r.penumbra,
+            r.light_resolution.unwrap_or(f64::NAN),
+            r.variance_level,
             r.slabs,
             fmt(r.time_ms),
             fmt(r.rmse_correct.unwrap_or(f64::NAN)),

@@ -51,6 +51,9 @@ pub struct Row {
     pub view_angle_deg: Option<f64>,
     /// A perspective camera's vertical field of view (degrees; `perspective`).
     pub fov_deg: Option<f64>,
+    /// A perspective camera's light grid cells per eye pixel (`sweep.light_resolution`;
+    /// `perspective`).
+    pub light_resolution: Option<f64>,
     /// Why cells are empty.
     pub note: String,
 }

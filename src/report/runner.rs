@@ -67,6 +67,7 @@ pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
         reference_self_err: None,
         view_angle_deg: None,
         fov_deg: None,
+        light_resolution: None,
         note: if note.is_empty() {
             "analytic case: closed-form references, no shadow-ray reference needed".into()
         } else {
@@ -166,6 +167,7 @@ fn disk_row(setup: &DiskSetup, level: &str, r: &DiskReference) -> Row {
         reference_self_err: None,
         view_angle_deg: None,
         fov_deg: None,
+        light_resolution: None,
         note: "analytic case (numerical f64 disk convolution); isoline error = mean unsigned \
                displacement (symmetric-difference area / perimeter); widths = area between the \
                0.1 and 0.9 levels / perimeter"
@@ -517,14 +519,26 @@ fn direction_cases(cases: &mut Cases<'_>) -> Result<(), String> {
     Ok(())
 }
 
-/// The perspective family: field of view × penumbra model (`ellipse2`), the same in the quick
-/// and the full report.
+/// The perspective family: field of view × penumbra model (`ellipse2`), then with the distance
+/// penumbra the light grid's resolution × the edge on and off the default grid's pixel
+/// boundaries (a speed-against-error axis); the same in the quick and the full report.
 fn perspective_cases(cases: &mut Cases<'_>) -> Result<(), String> {
     for fov in perspective::FIELDS_OF_VIEW {
         for penumbra in cases.options.penumbras() {
             cases.next += 1;
             if cases.want(cases.next - 1) {
-                cases.push(perspective::perspective_row(fov, penumbra)?);
+                cases.push(perspective::perspective_row(fov, penumbra, 1.0, 0.0)?);
+            }
+        }
+        for (resolution, off) in perspective::LIGHT_RESOLUTIONS {
+            cases.next += 1;
+            if cases.want(cases.next - 1) {
+                cases.push(perspective::perspective_row(
+                    fov,
+                    Penumbra::Distance,
+                    resolution,
+                    off,
+                )?);
             }
         }
     }

@@ -372,3 +372,45 @@ fn a_thin_shell_in_perspective_reads_the_light_from_the_lights_side() {
         assert!(rmse <= bound, "{light:?}: RMSE {rmse:.4}");
     }
 }
+
+/// `sweep.light_resolution`: the light grid's cells per eye pixel at `look_at` (issue 41 item 3,
+/// a speed-against-error axis). With the edge between the grid's pixel centres (0.3 and 0.7 of a
+/// pixel of the default grid off a boundary, off the finer grids' boundaries too) the grid's LDI
+/// quantises it (issue 46); a finer grid quantises it less. Measured 2026-12-06 (RMSE over the
+/// receiver, fov 30° / 90°): s = 0.5: 1.1e-2–4.2e-2; 1: 9.0e-3–1.9e-2; 2: 6.2e-3–1.2e-2;
+/// 4: 1.7e-3–3.2e-3, the half-shadow line within 0.06 px.
+#[test]
+fn a_finer_light_grid_sharpens_an_edge_off_its_pixel_boundaries() {
+    use convshadow::reference::perspective_edge::{
+        grid_pixel, measure_with_edge, scene_toml_with_edge,
+    };
+    for fov in [30.0, 90.0] {
+        for off in [0.3, 0.7] {
+            let edge = off / grid_pixel(fov);
+            let rmse_at = |s: f64| {
+                let text = scene_toml_with_edge(fov, &format!("light_resolution = {s:?}"), edge);
+                let scene = Scene::parse(&text, "edge.toml", Path::new(".")).unwrap();
+                let r = render(&scene, &RenderRequest::default()).unwrap();
+                let (rmse, band, line) = measure_with_edge(fov, &r.image.data, edge).unwrap();
+                eprintln!(
+                    "fov {fov}, edge {off} px off, light_resolution {s}: RMSE {rmse:.2e} \
+                     (band {band:.2e}), line within {line:.3} px"
+                );
+                (rmse, line)
+            };
+            let [half, one, two, four] = [0.5, 1.0, 2.0, 4.0].map(rmse_at);
+            assert!(
+                four.0 < two.0 && two.0 < one.0 && one.0 <= half.0,
+                "fov {fov}, {off}: {half:?} {one:?} {two:?} {four:?}"
+            );
+            assert!(
+                four.0 <= 5e-3 && four.1 <= 0.1,
+                "fov {fov}, {off}: {four:?}"
+            );
+            assert!(
+                one.1 <= 0.5 && two.1 <= 0.5,
+                "fov {fov}, {off}: {one:?} {two:?}"
+            );
+        }
+    }
+}

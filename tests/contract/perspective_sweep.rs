@@ -109,6 +109,13 @@ fn perspective_images_are_the_same_bits_on_both_paths_any_thread_count_and_early
         "shader paths, a light towards the eye",
         support::scene(&format!("{text}\n{towards_eye}"), &dir),
     ));
+    // Light grids finer and coarser than the eye's pixels (`sweep.light_resolution`).
+    for s in [0.5, 2.5] {
+        let mut scene = walled_scene(&format!("{from_behind}{towards_eye}"));
+        scene.sweep.light_resolution = s;
+        scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+        scenes.push(("walled, another light resolution", scene));
+    }
     for (what, scene) in &scenes {
         let reference = run(scene, CpuPath::Scalar, 1, true);
         for (path, threads, every_slab) in [

@@ -92,6 +92,30 @@ fn gpu_perspective_image_equals_cpu_at_fov_30_and_90_with_near_and_a_pattern() {
 }
 
 #[test]
+fn gpu_perspective_image_equals_cpu_at_other_light_resolutions() {
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-perspective-light-resolution");
+    for (s, toward) in [(0.5, false), (2.0, false), (1.5, true)] {
+        let text = support::perspective_ball_scene(36, 28, DVec3::new(-0.5, 1.5, -4.0), 50.0, "");
+        // A soft light from behind the eye, and one travelling towards it: the turned-round
+        // pass's grid too.
+        let mut text =
+            format!("{text}[[light]]\ntilt_deg = [10.0, 5.0]\nvariance = [0.02, 0.01]\n");
+        if toward {
+            text.push_str("[[light]]\ndirection = [0.2, -0.3, -1.0]\nvariance = [0.01, 0.01]\n");
+        }
+        let mut scene = support::scene(&text, &dir);
+        scene.sweep.light_resolution = s;
+        scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+        let what = format!("perspective ball, light_resolution {s}, towards the eye {toward}");
+        check(&ctx, &scene, &what);
+        check_distance(&ctx, &scene, &what);
+    }
+}
+
+#[test]
 fn gpu_perspective_image_equals_cpu_with_lights_towards_the_eye() {
     let Some(ctx) = gpu_common::gpu() else {
         return;

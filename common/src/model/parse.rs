@@ -172,6 +172,7 @@ struct RawSweep {
     preintegration: Option<bool>,
     media: Option<String>,
     subpixel_shadows: Option<bool>,
+    light_resolution: Option<f64>,
 }
 
 #[derive(Deserialize, Debug)]

@@ -104,6 +104,7 @@ pub(super) fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Res
         preintegration: args.preintegration,
         media: args.media,
         subpixel_shadows: args.subpixel_shadows,
+        light_resolution: args.light_resolution,
     };
     overrides.apply(scene).map_err(|e| match e {
         OverrideError::Kernel(e) => Failure::new(exit::BAD_ARGUMENTS, format!("--kernel: {e}")),

@@ -376,6 +376,51 @@ fn bad_light_kinds_and_directions_name_the_key() {
 }
 
 #[test]
+fn light_resolution_is_a_perspective_cameras_and_in_range() {
+    let with = |camera: &str, r: &str| {
+        format!(
+            "[image]\nwidth = 8\nheight = 8\n[camera]\n{camera}\n[sweep]\nslabs = 4\n{r}\n[[mesh]]\nshape = \"box\"\nsize = [1.0, 1.0, 1.0]\nmaterial = \"m\"\n[material.m]\n"
+        )
+    };
+    let persp = "projection = \"perspective\"\neye = [0.0, 0.0, -4.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_deg = 40.0";
+    assert_eq!(
+        parse(&with(persp, "light_resolution = 2.5"))
+            .unwrap()
+            .sweep
+            .light_resolution,
+        2.5
+    );
+    assert_eq!(parse(&with(persp, "")).unwrap().sweep.light_resolution, 1.0);
+    assert_eq!(
+        parse(&with("view_width = 2.0", "light_resolution = 1.0"))
+            .unwrap()
+            .sweep
+            .light_resolution,
+        1.0
+    );
+    expect_err(
+        &with(persp, "light_resolution = 17.0"),
+        "sweep.light_resolution",
+        "1.6e1",
+    );
+    expect_err(
+        &with(persp, "light_resolution = 0.0"),
+        "sweep.light_resolution",
+        "",
+    );
+    expect_err(
+        &with(persp, "light_resolution = nan"),
+        "sweep.light_resolution",
+        "finite",
+    );
+    expect_err(
+        &with("view_width = 2.0", "light_resolution = 2.0"),
+        "sweep.light_resolution",
+        "only applies to a perspective camera",
+    );
+}
+
+#[test]
 fn point_and_spot_lights_keep_their_place_size_and_cone() {
     let light = |l: &str| parse(&format!("{MINIMAL}\n[[light]]\n{l}\n")).unwrap();
     let s = light("kind = \"point\"\nposition = [0.0, 1.0, -2.0]\nradius = 0.1");
