@@ -14,6 +14,24 @@ pub(crate) fn fine_strata(base: u32, k: u32, a: u32, b: u32) -> (u32, u32) {
     (a * k + permute(b, k, col), b * k + permute(a, k, row))
 }
 
+/// The multi-jittered Gaussian sample of coarse cell (a, b) of a k×k grid seeded by `base`: a
+/// standard normal deviate per axis, through the inverse normal CDF of the cell's fine strata
+/// ([`fine_strata`]) jittered by the integer hash; and that hash, for more jitter.
+pub(crate) fn gaussian_pair(base: u32, k: u32, a: u32, b: u32) -> ([f64; 2], u32) {
+    let inv_m = 1.0 / f64::from(k * k);
+    let h = mix32(base ^ (a * k + b).wrapping_mul(0x9e37_79b9));
+    let j1 = (f64::from(h >> 8) + 0.5) / 16_777_216.0;
+    let j2 = (f64::from(mix32(h) >> 8) + 0.5) / 16_777_216.0;
+    let (fx, fy) = fine_strata(base, k, a, b);
+    (
+        [
+            inverse_normal_cdf((f64::from(fx) + j1) * inv_m),
+            inverse_normal_cdf((f64::from(fy) + j2) * inv_m),
+        ],
+        h,
+    )
+}
+
 /// Kensler's hashed permutation of `0..l` (A. Kensler, "Correlated Multi-Jittered Sampling",
 /// Pixar technical memo 13-01, 2013): a bijection of the next power of two, cycle-walked into
 /// `0..l`; `p` selects the permutation. Integer-only, so the samples are the same everywhere.

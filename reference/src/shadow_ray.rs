@@ -91,7 +91,7 @@ use point::PointSource;
 pub use point::closed_mesh_holding;
 pub use turned_eye::TurnedEye;
 
-use crate::light_samples::{fine_strata, inverse_normal_cdf, samples_side};
+use crate::light_samples::{gaussian_pair, samples_side};
 use convshadow_common::plan::{DEFAULT_REFERENCE_LENGTH, RenderPlan};
 use convshadow_common::prepare::geometry::SceneGeometry;
 use rayon::prelude::*;
@@ -384,16 +384,10 @@ impl<'a> Reference<'a> {
             }
         };
         let m = k * k;
-        let inv_m = 1.0 / f64::from(m);
         let mut acc = [0.0f64; 3];
         for a in 0..k {
             for b in 0..k {
-                let h = mix32(base ^ (a * k + b).wrapping_mul(0x9e37_79b9));
-                let j1 = (f64::from(h >> 8) + 0.5) / 16_777_216.0;
-                let j2 = (f64::from(mix32(h) >> 8) + 0.5) / 16_777_216.0;
-                let (fx, fy) = fine_strata(base, k, a, b);
-                let z1 = inverse_normal_cdf((f64::from(fx) + j1) * inv_m);
-                let z2 = inverse_normal_cdf((f64::from(fy) + j2) * inv_m);
+                let ([z1, z2], _) = gaussian_pair(base, k, a, b);
                 let dir = [
                     mu[0] + f[0][0] * z1 + f[0][1] * z2,
                     mu[1] + f[1][0] * z1 + f[1][1] * z2,

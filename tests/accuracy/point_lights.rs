@@ -164,15 +164,11 @@ fn a_hard_point_lights_shadow_line_is_where_the_edge_projects() {
     assert!((got[0] - 1.0).abs() < 1e-9 && got[1] < 1e-12, "{got:?}");
 }
 
-#[test]
-fn a_spot_lights_cone_edge_lands_where_its_angle_projects() {
-    // A spot 2 before a wall (its front face at z = 1), pointing along +z: lit within
-    // tan(cone)·3 of the axis, at 1/d² there; nothing beyond. The wall is white, a Lambert
-    // surface (the default), the background black, so a pixel is the light reaching its
-    // centre times the cosine of the direction to the light.
-    for (cone, falloff) in [(10.0f64, 0.0f64), (12.0, 6.0)] {
-        let text = format!(
-            r#"
+/// A white wall (a Lambert surface, its front face at z = 1) filling a 128 × 4 view 4 wide,
+/// under a spot 3 before it at (0, 0, −2) pointing along +z whose other keys are `spot`.
+fn spot_wall_scene(spot: &str) -> String {
+    format!(
+        r#"
 [image]
 width = 128
 height = 4
@@ -186,8 +182,7 @@ slabs = 8
 kind = "spot"
 position = [0.0, 0.0, -2.0]
 direction = [0.0, 0.0, 1.0]
-cone_deg = {cone}
-falloff_deg = {falloff}
+{spot}
 [[mesh]]
 shape = "box"
 size = [8.0, 8.0, 0.02]
@@ -196,7 +191,17 @@ material = "wall"
 [material.wall]
 color = [1.0, 1.0, 1.0]
 "#
-        );
+    )
+}
+
+#[test]
+fn a_spot_lights_cone_edge_lands_where_its_angle_projects() {
+    // A spot 2 before a wall (its front face at z = 1), pointing along +z: lit within
+    // tan(cone)·3 of the axis, at 1/d² there; nothing beyond. The wall is white, a Lambert
+    // surface (the default), the background black, so a pixel is the light reaching its
+    // centre times the cosine of the direction to the light.
+    for (cone, falloff) in [(10.0f64, 0.0f64), (12.0, 6.0)] {
+        let text = spot_wall_scene(&format!("cone_deg = {cone}\nfalloff_deg = {falloff}"));
         let scene = Scene::parse(&text, "spot", Path::new(".")).unwrap();
         let r = render_reference(&scene, 1, 4, 1 << 30, false, &[], None).unwrap();
         let px = 4.0 / 128.0;
@@ -273,32 +278,11 @@ fn a_spot_lights_gobo_lands_where_it_projects_through_the_cone() {
     // texel's centre at a = 0.2 and stays white beyond; on the wall 3 from the spot, at 3·a.
     let dir = crate::support::temp_dir("spot_gobo");
     convshadow::io::image::save_gray_png(&dir.join("gobo.png"), 2, 1, vec![0, 255]).unwrap();
-    let text = r#"
-[image]
-width = 128
-height = 4
-background = [0.0, 0.0, 0.0]
-[camera]
-direction = [0.0, 0.0, 1.0]
-view_width = 4.0
-[sweep]
-slabs = 8
-[[light]]
-kind = "spot"
-position = [0.0, 0.0, -2.0]
-direction = [0.0, 0.0, 1.0]
-up = [0.0, 1.0, 0.0]
-cone_deg = 60.0
-pattern = { path = "gobo.png", size = [0.4, 0.4], center = [0.1, 0.0] }
-[[mesh]]
-shape = "box"
-size = [8.0, 8.0, 0.02]
-translate = [0.0, 0.0, 1.01]
-material = "wall"
-[material.wall]
-color = [1.0, 1.0, 1.0]
-"#;
-    let scene = Scene::parse(text, "gobo", &dir).unwrap();
+    let text = spot_wall_scene(
+        "up = [0.0, 1.0, 0.0]\ncone_deg = 60.0\n\
+         pattern = { path = \"gobo.png\", size = [0.4, 0.4], center = [0.1, 0.0] }",
+    );
+    let scene = Scene::parse(&text, "gobo", &dir).unwrap();
     let r = render_reference(&scene, 1, 4, 1 << 30, false, &[], None).unwrap();
     let px = 4.0 / 128.0;
     let row = 1usize;

@@ -15,7 +15,7 @@ use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
 
 use crate::contract::files::PlanFiles;
-use crate::model::scene::{LightSpec, Media, Penumbra, Scene};
+use crate::model::scene::{Media, PatternSpec, Penumbra, Scene};
 use crate::pixel::hash::{JITTER_STREAM, slab_hash};
 use crate::pixel::texture3d::TextureError;
 use crate::plan::kernel::{
@@ -505,27 +505,24 @@ impl RenderPlan {
         if scene.lights.iter().all(|l| l.pattern.is_none()) {
             return Ok(self);
         }
-        let spot_pattern = |l: usize, spec: &LightSpec| {
-            let p = spec.pattern.as_ref()?;
-            spec.point?;
-            Some(
-                files
-                    .patterns
-                    .get(l)
-                    .and_then(Option::as_ref)
-                    .ok_or_else(|| PlanError {
-                        scene: scene.source.clone(),
-                        what: format!("key `light[{l}].pattern.path`"),
-                        source: TextureError::NotRead {
-                            path: p.path.clone(),
-                        },
-                    }),
-            )
+        // Light l's loaded pattern image, `p` its spec.
+        let loaded = |l: usize, p: &PatternSpec| {
+            files
+                .patterns
+                .get(l)
+                .and_then(Option::as_ref)
+                .ok_or_else(|| PlanError {
+                    scene: scene.source.clone(),
+                    what: format!("key `light[{l}].pattern.path`"),
+                    source: TextureError::NotRead {
+                        path: p.path.clone(),
+                    },
+                })
         };
         for (l, spec) in scene.lights.iter().enumerate() {
-            if let Some(pattern) = spot_pattern(l, spec) {
+            if let (Some(p), Some(_)) = (&spec.pattern, spec.point) {
                 self.spot_patterns.resize(scene.lights.len(), None);
-                self.spot_patterns[l] = Some(Arc::new(pattern?.clone()));
+                self.spot_patterns[l] = Some(Arc::new(loaded(l, p)?.clone()));
             }
         }
         if scene
@@ -544,17 +541,7 @@ impl RenderPlan {
             let Some(p) = spec.pattern.as_ref().filter(|_| spec.point.is_none()) else {
                 continue;
             };
-            let pattern = files
-                .patterns
-                .get(l)
-                .and_then(Option::as_ref)
-                .ok_or_else(|| PlanError {
-                    scene: scene.source.clone(),
-                    what: format!("key `light[{l}].pattern.path`"),
-                    source: TextureError::NotRead {
-                        path: p.path.clone(),
-                    },
-                })?;
+            let pattern = loaded(l, p)?;
             let (tw, th) = (f64::from(pattern.width), f64::from(pattern.height));
             let (left, top) = (f64::from(self.guard.left), f64::from(self.guard.top));
             // A turned-round pass's camera x is the scene camera's reversed; `center` is the

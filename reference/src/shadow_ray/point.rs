@@ -22,7 +22,7 @@ use glam::DVec3;
 
 use super::geometry::{Start, Tri, intersect, sub};
 use super::{Reference, Scratch};
-use crate::light_samples::{fine_strata, inverse_normal_cdf, permute};
+use crate::light_samples::{gaussian_pair, inverse_normal_cdf, permute};
 use convshadow_common::pixel::hash::mix32;
 
 /// A point or spot light where the tracer works (slab-grid coordinates: x, y in grid pixels,
@@ -192,17 +192,10 @@ impl Reference<'_> {
         let mut acc = [0.0f64; 3];
         for a in 0..k {
             for b in 0..k {
-                let h = mix32(base ^ (a * k + b).wrapping_mul(0x9e37_79b9));
-                let j1 = (f64::from(h >> 8) + 0.5) / 16_777_216.0;
-                let j2 = (f64::from(mix32(h) >> 8) + 0.5) / 16_777_216.0;
+                let ([z1, z2], h) = gaussian_pair(base, k, a, b);
                 let j3 = (f64::from(mix32(h ^ 0x5bd1_e995) >> 8) + 0.5) / 16_777_216.0;
-                let (fx, fy) = fine_strata(base, k, a, b);
                 let fz = permute(a * k + b, m, depth_perm);
-                let z = [
-                    inverse_normal_cdf((f64::from(fx) + j1) * inv_m),
-                    inverse_normal_cdf((f64::from(fy) + j2) * inv_m),
-                    inverse_normal_cdf((f64::from(fz) + j3) * inv_m),
-                ];
+                let z = [z1, z2, inverse_normal_cdf((f64::from(fz) + j3) * inv_m)];
                 let target: [f64; 3] =
                     std::array::from_fn(|i| light.center[i] + light.sigma[i] * z[i]);
                 // The ray's parameter runs 0 → 1 from p to the light's point: the start's
