@@ -229,7 +229,9 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
         }
     }
     refuse_point_lights(scene)?;
-    if scene.camera.is_perspective() {
+    // A perspective camera, or an orthographic one whose light grid is not its image's pixels:
+    // the light swept on its own grid, the eye's rays reading it.
+    if scene.camera.is_perspective() || scene.sweep.light_resolution != 1.0 {
         return perspective::render_perspective(scene, req);
     }
     passes::render_passes(scene, &req.aovs, passes::Mirror::Yes, |pass, aovs| {

@@ -52,6 +52,7 @@ fn eye_buffers(
         width: eye.width,
         height: eye.height,
         zoom: eye.zoom,
+        scale: eye.scale,
         z_origin: eye.z_origin,
         axis: eye.axis,
         centre: [eye.width as f32 * 0.5, eye.height as f32 * 0.5],

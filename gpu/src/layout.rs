@@ -96,9 +96,10 @@ pub struct EyeParams {
     /// The grid's pixel size in world units (`RenderPlan::pixel_size` in f32): a light's travel
     /// per slab is (drift · pixel size, slab distance).
     pub pixel_size: f32,
+    /// Grid pixels per image pixel of offset at any depth (`EyeView::scale`: an orthographic
+    /// camera's light resolution; 0 perspective).
+    pub scale: f32,
     /// Uniform structs are a multiple of 16 bytes.
-    pub _pad1: u32,
-    /// See `_pad1`.
     pub _pad2: u32,
 }
 

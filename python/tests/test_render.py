@@ -255,11 +255,16 @@ def test_light_resolution_and_point_lights_follow_the_command_line(cli, tmp_path
     assert run.returncode == 0
     assert bits(read_exr(tmp_path / "half.exr")).tolist() == bits(image).tolist()
     assert bits(image).tolist() != bits(convshadow.render(PERSPECTIVE)[0]).tolist()
-    # An orthographic camera's light buffers are its pixels: refused as an argument.
+    # An orthographic camera's light grid at another resolution: the command line's bits too.
     ortho = PERSPECTIVE.replace('projection = "perspective"', "view_width = 3.0").replace(
         "eye =", "#").replace("look_at =", "#").replace("fov_deg =", "#")
+    image, _ = convshadow.render(ortho, light_resolution=2.0)
+    path.write_text(ortho)
+    run = cli("render", path, "--light-resolution", "2", "-o", tmp_path / "ortho.exr", "-q")
+    assert run.returncode == 0
+    assert bits(read_exr(tmp_path / "ortho.exr")).tolist() == bits(image).tolist()
     with pytest.raises(convshadow.Error) as info:
-        convshadow.render(ortho, light_resolution=2.0)
+        convshadow.render(ortho, light_resolution=32.0)
     assert info.value.exit_code == 2 and "light_resolution" in info.value.message
     # A point light: the reference renders it, the sweep refuses it naming the backend.
     point = PERSPECTIVE + '[[light]]\nkind = "point"\nposition = [0.0, 3.0, -3.0]\nradius = 0.1\n'

@@ -6,7 +6,9 @@
 use std::time::Instant;
 
 use convshadow_common::contract::ldi::{BYTES_PER_FRAGMENT, Ldi};
-use convshadow_common::model::scene::{CameraSpec, MAX_IMAGE_SIDE, Projection, Scene, SlabSpec};
+use convshadow_common::model::scene::{
+    CameraSpec, GuardBandSpec, MAX_IMAGE_SIDE, Projection, Scene, SlabSpec,
+};
 use convshadow_common::prepare::geometry::SceneGeometry;
 use convshadow_common::prepare::raster::RasterSetup;
 use convshadow_cpu::sweep::{
@@ -28,10 +30,24 @@ use convshadow_common::plan::RenderPlan;
 /// distance) over `sweep.light_resolution`, centred on the eye (so every view depth is the eye's
 /// bit for bit), `eye`'s slab count, and a grid that holds every vertex within the frustum,
 /// symmetric about the axis.
+///
+/// An orthographic camera's grid (`sweep.light_resolution` ≠ 1) is its own view: the same camera,
+/// cells of its pixel over the light resolution, an even number of them across each way (at
+/// least the image's width; centred on it), its own guard band.
 pub(super) fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, RenderError> {
     let cam = &eye.camera;
-    let focal = cam.focal_px.expect("a perspective camera");
     let (w, h) = (f64::from(cam.width), f64::from(cam.height));
+    let Some(focal) = cam.focal_px else {
+        let cells = scene.sweep.light_resolution;
+        let side = |image: f64| 2.0 * (0.5 * image * cells).ceil();
+        let (gw, gh) = (side(w), side(h));
+        let mut grid = scene.clone();
+        grid.camera.view_width = gw * (cam.pixel_size / cells);
+        grid.image.width = gw as u32;
+        grid.image.height = gh as u32;
+        grid.sweep.slabs = SlabSpec::Count(eye.slabs);
+        return Ok(grid);
+    };
     let (mut half_x, mut half_y, mut z_max) = (0.0f64, 0.0f64, 0.0f64);
     for m in &eye.meshes {
         for p in &m.mesh.positions {
@@ -119,7 +135,9 @@ pub(super) fn eye_on_grid(
     light_resolution: f64,
 ) -> (f64, [f64; 2]) {
     let cam = &eye.camera;
-    let zoom = light_resolution / (cam.focal_px.expect("a perspective camera") * cam.pixel_size);
+    let zoom = cam
+        .focal_px
+        .map_or(0.0, |f| light_resolution / (f * cam.pixel_size));
     let axis = [f64::from(plan.width / 2), f64::from(plan.height / 2)];
     (zoom, axis)
 }
@@ -141,14 +159,22 @@ pub(super) fn turned_eye(
     (ldi, raster)
 }
 
-/// [`super::render`] for a perspective camera: the eye's geometry once, then a pass per end of
+/// [`super::render`] for a perspective camera, or an orthographic one whose light grid is not its
+/// image's pixels (`sweep.light_resolution` ≠ 1): the eye's geometry once, then a pass per end of
 /// the sweep (`passes::render_passes`; the lights travelling towards the viewer swept from the
 /// far end, their image the eye's, not mirrored).
 pub(super) fn render_perspective(
     scene: &Scene,
     req: &RenderRequest<'_>,
 ) -> Result<Rendered, RenderError> {
-    let eye = convshadow_io::build_geometry(scene)?;
+    // An orthographic eye's LDI is its image's pixels alone: the guard band is the grid's.
+    let eye = if scene.camera.is_perspective() {
+        convshadow_io::build_geometry(scene)?
+    } else {
+        let mut bare = scene.clone();
+        bare.sweep.guard_band = GuardBandSpec::Pixels(0);
+        convshadow_io::build_geometry(&bare)?
+    };
     render_passes(scene, &req.aovs, Mirror::No, |pass, aovs| {
         render_perspective_pass(pass, &eye, req, aovs)
     })
@@ -228,6 +254,12 @@ fn render_perspective_pass(
         width: cam.width,
         height: cam.height,
         zoom: zoom as f32,
+        // An orthographic eye reads the grid at the same scale at every depth.
+        scale: if cam.focal_px.is_some() {
+            0.0
+        } else {
+            pass.sweep.light_resolution as f32
+        },
         z_origin: z_origin as f32,
         turned_round: scene.turned_round,
         axis: [

@@ -13,6 +13,7 @@ mod distance_penumbra;
 mod fixed_pixel_edge;
 mod guard_band;
 mod hard_cases;
+mod light_resolution;
 mod lights_from_any_direction;
 mod oblique_receiver;
 mod open_meshes;

@@ -109,12 +109,19 @@ fn perspective_images_are_the_same_bits_on_both_paths_any_thread_count_and_early
         "shader paths, a light towards the eye",
         support::scene(&format!("{text}\n{towards_eye}"), &dir),
     ));
-    // Light grids finer and coarser than the eye's pixels (`sweep.light_resolution`).
+    // Light grids finer and coarser than the eye's pixels (`sweep.light_resolution`), for a
+    // perspective camera and an orthographic one (whose eye then reads a grid of its own).
     for s in [0.5, 2.5] {
         let mut scene = walled_scene(&format!("{from_behind}{towards_eye}"));
         scene.sweep.light_resolution = s;
         scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
         scenes.push(("walled, another light resolution", scene));
+        let text = support::path_scene_text(&dir, false, true);
+        let mut scene = support::scene(&format!("{text}\n{towards_eye}"), &dir);
+        assert!(!scene.camera.is_perspective());
+        scene.sweep.light_resolution = s;
+        scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+        scenes.push(("orthographic shader paths, another light resolution", scene));
     }
     for (what, scene) in &scenes {
         let reference = run(scene, CpuPath::Scalar, 1, true);

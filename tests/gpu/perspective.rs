@@ -113,6 +113,21 @@ fn gpu_perspective_image_equals_cpu_at_other_light_resolutions() {
         check(&ctx, &scene, &what);
         check_distance(&ctx, &scene, &what);
     }
+    // An orthographic camera's eye reading a grid of its own, with a light towards it.
+    for s in [0.5, 2.0] {
+        let text = support::path_scene_text(&dir, false, true);
+        let mut scene = support::scene(
+            &format!("{text}\n[[light]]\ndirection = [0.2, -0.3, -1.0]\nvariance = [0.01, 0.01]\n"),
+            &dir,
+        );
+        scene.sweep.light_resolution = s;
+        scene.revalidate().unwrap_or_else(|e| panic!("{e}"));
+        check(
+            &ctx,
+            &scene,
+            &format!("orthographic shader paths, light_resolution {s}"),
+        );
+    }
 }
 
 #[test]

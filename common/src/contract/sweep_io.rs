@@ -66,8 +66,9 @@ impl Default for SweepOptions<'_> {
     }
 }
 
-/// A perspective camera as the eye pass reads it (CPU `sweep_perspective`, GPU
-/// `sweep_perspective`): docs/how-it-works.md, "A perspective camera".
+/// A camera as the eye pass reads it (CPU `sweep_perspective`, GPU `sweep_perspective`): a
+/// perspective one (docs/how-it-works.md, "A perspective camera"), or an orthographic one whose
+/// light grid has another resolution than its image (`sweep.light_resolution`).
 pub struct EyeView<'a> {
     /// The LDI along the eye's rays (the image's pixels, no guard band), depths relative to the
     /// sweep's origin.
@@ -79,8 +80,11 @@ pub struct EyeView<'a> {
     /// See `width`.
     pub height: u32,
     /// Grid pixels per image pixel of offset from the centre, per unit of view depth:
-    /// `1 / (focal_px · pixel_size)`.
+    /// `light_resolution / (focal_px · pixel_size)` (perspective; 0 orthographic).
     pub zoom: f32,
+    /// Grid pixels per image pixel of offset from the centre at any depth: an orthographic
+    /// camera's `light_resolution` (0 perspective). The read's scale is `scale + depth · zoom`.
+    pub scale: f32,
     /// The sweep's origin as a view depth (the eye's depths are relative to it); in a
     /// turned-round pass, minus the turned grid's origin (a view depth is then `z_origin − z`).
     pub z_origin: f32,

@@ -26,7 +26,7 @@ pub const MAX_SLABS: u32 = 65536;
 /// Smallest and largest accepted `sweep.slab_factor` (the modulation of `slabs = "auto"`).
 pub const SLAB_FACTOR_RANGE: (f64, f64) = (1.0 / 1024.0, 1024.0);
 
-/// Range of `sweep.light_resolution`: a perspective camera's light-grid cells per eye pixel.
+/// Range of `sweep.light_resolution`: the light grid's cells per image pixel.
 pub const LIGHT_RESOLUTION_RANGE: (f64, f64) = (1.0 / 16.0, 16.0);
 /// Largest accepted |g| of a Henyey–Greenstein phase function (the function needs |g| < 1; this
 /// bound keeps its largest value, (1 + 0.999)/(1 − 0.999)² ≈ 2·10⁶, finite with every colour in f32).
@@ -448,11 +448,11 @@ pub struct SweepSpec {
     /// sub-pixel shift from its mean occluder, not the whole pixels the sweep carries the light's
     /// drift in (`sweep.subpixel_shadows`, default on; docs/how-it-works.md).
     pub subpixel_shadows: bool,
-    /// A perspective camera's light grid: its cells per eye pixel at the `look_at` distance
-    /// (`sweep.light_resolution`, 1/16–16, default 1; orthographic cameras only take 1: their
-    /// light buffers are the image's pixels). Below 1 the light is swept on fewer cells
-    /// (faster; soft shadows rarely need the image's resolution), above 1 on more (sharper
-    /// shadow edges).
+    /// The light grid's cells per image pixel (a perspective camera's: per pixel at the
+    /// `look_at` distance; `sweep.light_resolution`, 1/16–16, default 1). At 1 an orthographic
+    /// camera sweeps its light on its image's pixels; at any other value it gets a grid of its
+    /// own, read by the eye's rays, as a perspective camera always does. Below 1 faster (soft
+    /// shadows rarely need the image's resolution), above 1 sharper shadow edges.
     pub light_resolution: f64,
 }
 

@@ -404,7 +404,7 @@ fn ray_on_grid(view: &EyeView<'_>, p: &EyePixel, z: f32) -> (f32, f32) {
     } else {
         view.z_origin + z
     };
-    let scale = view_depth * view.zoom;
+    let scale = view.scale + view_depth * view.zoom;
     (
         view.axis[0] + p.offset[0] * scale,
         view.axis[1] + p.offset[1] * scale,

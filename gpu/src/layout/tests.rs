@@ -143,7 +143,7 @@ fn rust_layouts() -> Vec<Layout> {
             centre,
             turned_round,
             pixel_size,
-            _pad1,
+            scale,
             _pad2
         }),
     ]

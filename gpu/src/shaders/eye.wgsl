@@ -119,7 +119,7 @@ fn ray_on_grid(x: u32, y: u32, z: f32) -> vec2<f32> {
         view_depth = view.z_origin - z;
         offset_x = view.centre.x - (f32(x) + 0.5);
     }
-    let scale = view_depth * view.zoom;
+    let scale = view.scale + view_depth * view.zoom;
     return vec2<f32>(view.axis.x + offset_x * scale, view.axis.y + ((f32(y) + 0.5) - view.centre.y) * scale);
 }
 

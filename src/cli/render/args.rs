@@ -129,8 +129,9 @@ pub struct RenderArgs {
     /// at the whole pixels the sweep carries it in.
     #[arg(long, value_name = "BOOL")]
     pub subpixel_shadows: Option<bool>,
-    /// Override `sweep.light_resolution` (perspective cameras): the light grid's cells per eye
-    /// pixel at `look_at`, 1/16 to 16 (default 1); below 1 faster, above 1 sharper edges.
+    /// Override `sweep.light_resolution`: the light grid's cells per image pixel (perspective:
+    /// at `look_at`), 1/16 to 16 (default 1); below 1 faster, above 1 sharper edges; not 1, an
+    /// orthographic camera's light gets a grid of its own.
     #[arg(long, value_name = "CELLS")]
     pub light_resolution: Option<f64>,
     /// Render even if a closed mesh leaves pixels with odd fragment counts (reported). Open

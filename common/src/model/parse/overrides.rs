@@ -146,7 +146,7 @@ impl Scene {
                  shadows are right (or use the distance penumbra, which needs none)",
             ));
         }
-        v.light_resolution(self.sweep.light_resolution, &self.camera)?;
+        v.light_resolution(self.sweep.light_resolution)?;
         Ok(())
     }
 }

@@ -192,7 +192,7 @@ impl Validator<'_> {
         let camera = self.camera(&raw.camera, aspect)?;
 
         let sweep = self.sweep(raw.sweep)?;
-        self.light_resolution(sweep.light_resolution, &camera)?;
+        self.light_resolution(sweep.light_resolution)?;
 
         if raw.light.len() > MAX_LIGHTS {
             return Err(self.err(
@@ -358,17 +358,10 @@ impl Validator<'_> {
         })
     }
 
-    /// `sweep.light_resolution`: 1/16 to 16, and 1 unless the camera is a perspective one.
-    pub(super) fn light_resolution(&self, r: f64, camera: &CameraSpec) -> Result<(), SceneError> {
+    /// `sweep.light_resolution`: 1/16 to 16.
+    pub(super) fn light_resolution(&self, r: f64) -> Result<(), SceneError> {
         let (lo, hi) = LIGHT_RESOLUTION_RANGE;
         self.in_range("sweep.light_resolution", r, lo, hi)?;
-        if r != 1.0 && !camera.is_perspective() {
-            return Err(self.err(
-                "sweep.light_resolution",
-                "only applies to a perspective camera (its light grid is separate from the \
-                 image); an orthographic camera's light buffers are its image's pixels",
-            ));
-        }
         Ok(())
     }
 

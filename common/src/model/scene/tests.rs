@@ -376,7 +376,7 @@ fn bad_light_kinds_and_directions_name_the_key() {
 }
 
 #[test]
-fn light_resolution_is_a_perspective_cameras_and_in_range() {
+fn light_resolution_is_in_range() {
     let with = |camera: &str, r: &str| {
         format!(
             "[image]\nwidth = 8\nheight = 8\n[camera]\n{camera}\n[sweep]\nslabs = 4\n{r}\n[[mesh]]\nshape = \"box\"\nsize = [1.0, 1.0, 1.0]\nmaterial = \"m\"\n[material.m]\n"
@@ -413,10 +413,13 @@ fn light_resolution_is_a_perspective_cameras_and_in_range() {
         "sweep.light_resolution",
         "finite",
     );
-    expect_err(
-        &with("view_width = 2.0", "light_resolution = 2.0"),
-        "sweep.light_resolution",
-        "only applies to a perspective camera",
+    // An orthographic camera takes one too (its eye then reads a grid of its own).
+    assert_eq!(
+        parse(&with("view_width = 2.0", "light_resolution = 0.5"))
+            .unwrap()
+            .sweep
+            .light_resolution,
+        0.5
     );
 }
 

@@ -226,7 +226,7 @@ struct EyeParams {
     centre: vec2<f32>, // the image centre (width · 0.5, height · 0.5)
     turned_round: u32, // 1: the far end's pass (x mirrored, depth z_origin − z, back to front)
     pixel_size: f32,   // the grid's pixel size (world units): a light's travel per slab is (drift · pixel_size, slab_distance)
-    _pad1: u32,
+    scale: f32,        // grid pixels per image pixel of offset at any depth (orthographic; 0 perspective)
     _pad2: u32,
 }
 
