@@ -37,10 +37,25 @@ use convshadow_common::plan::RenderPlan;
 pub(super) fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, RenderError> {
     let cam = &eye.camera;
     let (w, h) = (f64::from(cam.width), f64::from(cam.height));
+    let too_large = |gw: f64, gh: f64| {
+        RenderError::OutOfMemory(format!(
+            "{}: the view's light grid would be {gw} × {gh} pixels, more than {MAX_IMAGE_SIDE} a \
+             side; lower sweep.light_resolution{}",
+            scene.source,
+            if cam.focal_px.is_some() {
+                ", narrow camera.fov_deg or the scene's depth"
+            } else {
+                " or the image size"
+            }
+        ))
+    };
     let Some(focal) = cam.focal_px else {
         let cells = scene.sweep.light_resolution;
         let side = |image: f64| 2.0 * (0.5 * image * cells).ceil();
         let (gw, gh) = (side(w), side(h));
+        if gw > f64::from(MAX_IMAGE_SIDE) || gh > f64::from(MAX_IMAGE_SIDE) {
+            return Err(too_large(gw, gh));
+        }
         let mut grid = scene.clone();
         grid.camera.view_width = gw * (cam.pixel_size / cells);
         grid.image.width = gw as u32;
@@ -66,12 +81,7 @@ pub(super) fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, Re
     let side = |half: f64, image: f64| 2.0 * (half.min(0.5 * image * frustum) * cells + 2.0).ceil();
     let (gw, gh) = (side(half_x, w), side(half_y, h));
     if gw > f64::from(MAX_IMAGE_SIDE) || gh > f64::from(MAX_IMAGE_SIDE) {
-        return Err(RenderError::OutOfMemory(format!(
-            "{}: the perspective view's light grid would be {gw} × {gh} pixels, more than \
-             {MAX_IMAGE_SIDE} a side; narrow camera.fov_deg or the scene's depth, or lower \
-             sweep.light_resolution",
-            scene.source
-        )));
+        return Err(too_large(gw, gh));
     }
     let mut grid = scene.clone();
     grid.camera = CameraSpec {

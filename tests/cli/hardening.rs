@@ -568,3 +568,51 @@ fn bad_point_and_spot_lights_exit_3_without_an_output_file() {
     assert_eq!(r.0, 0, "{}", r.2);
     assert!(dir.join("a.png").exists());
 }
+
+#[test]
+fn a_light_grid_beyond_the_largest_side_is_a_resource_limit_without_an_output() {
+    let dir = support::temp_dir("h-light-grid");
+    std::fs::write(dir.join("t.toml"), support::lone_box_scene(16, 8)).unwrap();
+    // 4096 px at 16 cells a pixel: a 65536-cell grid, beyond the 16384 a side of any image.
+    let r = cli(
+        &dir,
+        &[
+            "render",
+            "t.toml",
+            "--size",
+            "4096x4096",
+            "--light-resolution",
+            "16",
+            "-o",
+            "a.png",
+            "-q",
+        ],
+    );
+    refused(
+        "a huge light grid",
+        &r,
+        4,
+        &["light grid", "65536", "sweep.light_resolution"],
+    );
+    assert!(!dir.join("a.png").exists());
+    // Out of its range it is a bad argument, naming the key.
+    let r = cli(
+        &dir,
+        &[
+            "render",
+            "t.toml",
+            "--light-resolution",
+            "17",
+            "-o",
+            "a.png",
+            "-q",
+        ],
+    );
+    refused(
+        "light resolution 17",
+        &r,
+        BAD_ARGUMENTS,
+        &["light_resolution"],
+    );
+    assert!(!dir.join("a.png").exists());
+}
