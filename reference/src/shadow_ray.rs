@@ -706,16 +706,27 @@ impl<'a> Reference<'a> {
                         });
                         let iin = &iin[..lights * ch];
                         // A point light's shading terms are those of the direction to it from
-                        // this sample; a directional light's are the plan's.
+                        // this sample (found once per sample, read by the diffuse and specular
+                        // sums); a directional light's are the plan's.
                         let g = self.phase_g[self.mesh_material[mesh as usize]];
-                        let terms = |l: usize| match &self.lights[l] {
-                            LightSource::Point(light) => light.terms(pos, plan.lights[l].color, g),
-                            LightSource::Directional(..) => LightTerms::of(plan, material, l),
-                        };
+                        scratch.terms.clear();
+                        scratch
+                            .terms
+                            .extend(self.lights.iter().enumerate().map(
+                                |(l, source)| match source {
+                                    LightSource::Point(light) => {
+                                        light.terms(pos, plan.lights[l].color, g)
+                                    }
+                                    LightSource::Directional(..) => {
+                                        LightTerms::of(plan, material, l)
+                                    }
+                                },
+                            ));
+                        let terms = &scratch.terms;
                         let shaded = shade_with(
                             ch,
                             lights,
-                            terms,
+                            |l| terms[l],
                             material,
                             tf.color,
                             iin,
@@ -744,4 +755,6 @@ impl<'a> Reference<'a> {
 struct Scratch {
     tris: Vec<u32>,
     hits: Vec<(f64, u32)>,
+    /// The shading's terms of each light at the current sample.
+    terms: Vec<LightTerms>,
 }

@@ -49,37 +49,33 @@ pub(super) fn grid_scene(scene: &Scene, eye: &SceneGeometry) -> Result<Scene, Re
             }
         ))
     };
-    let Some(focal) = cam.focal_px else {
-        let cells = scene.sweep.light_resolution;
-        let side = |image: f64| 2.0 * (0.5 * image * cells).ceil();
-        let (gw, gh) = (side(w), side(h));
-        if gw > f64::from(MAX_IMAGE_SIDE) || gh > f64::from(MAX_IMAGE_SIDE) {
-            return Err(too_large(gw, gh));
-        }
-        let mut grid = scene.clone();
-        grid.camera.view_width = gw * (cam.pixel_size / cells);
-        grid.image.width = gw as u32;
-        grid.image.height = gh as u32;
-        grid.sweep.slabs = SlabSpec::Count(eye.slabs);
-        return Ok(grid);
-    };
-    let (mut half_x, mut half_y, mut z_max) = (0.0f64, 0.0f64, 0.0f64);
-    for m in &eye.meshes {
-        for p in &m.mesh.positions {
-            let g = cam.to_grid(*p);
-            half_x = half_x.max((g.x - 0.5 * w).abs());
-            half_y = half_y.max((g.y - 0.5 * h).abs());
-            z_max = z_max.max(g.z);
-        }
-    }
-    // Nothing beyond the frustum at the farthest depth can shadow what the eye sees, but through
-    // the guard band the grid adds for the lights' reach.
-    let frustum = z_max / (focal * cam.pixel_size);
     // Half-widths in the grid's cells (eye pixels times the light resolution).
     let cells = scene.sweep.light_resolution;
     let cell = cam.pixel_size / cells;
-    let side = |half: f64, image: f64| 2.0 * (half.min(0.5 * image * frustum) * cells + 2.0).ceil();
-    let (gw, gh) = (side(half_x, w), side(half_y, h));
+    let (gw, gh) = match cam.focal_px {
+        None => {
+            let side = |image: f64| 2.0 * (0.5 * image * cells).ceil();
+            (side(w), side(h))
+        }
+        Some(focal) => {
+            let (mut half_x, mut half_y, mut z_max) = (0.0f64, 0.0f64, 0.0f64);
+            for m in &eye.meshes {
+                for p in &m.mesh.positions {
+                    let g = cam.to_grid(*p);
+                    half_x = half_x.max((g.x - 0.5 * w).abs());
+                    half_y = half_y.max((g.y - 0.5 * h).abs());
+                    z_max = z_max.max(g.z);
+                }
+            }
+            // Nothing beyond the frustum at the farthest depth can shadow what the eye sees, but
+            // through the guard band the grid adds for the lights' reach.
+            let frustum = z_max / (focal * cam.pixel_size);
+            let side = |half: f64, image: f64| {
+                2.0 * (half.min(0.5 * image * frustum) * cells + 2.0).ceil()
+            };
+            (side(half_x, w), side(half_y, h))
+        }
+    };
     if gw > f64::from(MAX_IMAGE_SIDE) || gh > f64::from(MAX_IMAGE_SIDE) {
         return Err(too_large(gw, gh));
     }
@@ -143,13 +139,29 @@ pub(super) fn eye_on_grid(
     eye: &SceneGeometry,
     plan: &RenderPlan,
     light_resolution: f64,
-) -> (f64, [f64; 2]) {
+) -> EyeOnGrid {
     let cam = &eye.camera;
-    let zoom = cam
-        .focal_px
-        .map_or(0.0, |f| light_resolution / (f * cam.pixel_size));
-    let axis = [f64::from(plan.width / 2), f64::from(plan.height / 2)];
-    (zoom, axis)
+    let (zoom, scale) = match cam.focal_px {
+        Some(f) => (light_resolution / (f * cam.pixel_size), 0.0),
+        // An orthographic eye reads the grid at the same scale at every depth.
+        None => (0.0, light_resolution),
+    };
+    EyeOnGrid {
+        zoom,
+        scale,
+        axis: [f64::from(plan.width / 2), f64::from(plan.height / 2)],
+    }
+}
+
+/// Where the eye's rays read the grid ([`eye_on_grid`]): grid pixel `axis + offset·(scale + z·zoom)`
+/// for an eye pixel `offset` from the image centre at view depth z.
+pub(super) struct EyeOnGrid {
+    /// Grid pixels per image pixel of offset per unit of view depth (perspective; else 0).
+    pub(super) zoom: f64,
+    /// Grid pixels per image pixel of offset at any depth (orthographic; else 0).
+    pub(super) scale: f64,
+    /// Where the view axis meets the grid's image, its image pixels (no guard band).
+    pub(super) axis: [f64; 2],
 }
 
 /// The eye's LDI and rasterizer set-up as a turned-round pass walks them: each ray's fragments
@@ -257,19 +269,14 @@ fn render_perspective_pass(
         Some((ldi, raster)) => (ldi, raster, -geometry.z_origin),
         None => (&eye_ldi, &eye.raster, eye.z_origin),
     };
-    let (zoom, axis) = eye_on_grid(eye, &plan, pass.sweep.light_resolution);
+    let EyeOnGrid { zoom, scale, axis } = eye_on_grid(eye, &plan, pass.sweep.light_resolution);
     let view = EyeView {
         ldi: view_ldi,
         raster: view_raster,
         width: cam.width,
         height: cam.height,
         zoom: zoom as f32,
-        // An orthographic eye reads the grid at the same scale at every depth.
-        scale: if cam.focal_px.is_some() {
-            0.0
-        } else {
-            pass.sweep.light_resolution as f32
-        },
+        scale: scale as f32,
         z_origin: z_origin as f32,
         turned_round: scene.turned_round,
         axis: [

@@ -154,7 +154,8 @@ fn perspective_far_end_pass(
     let plan = convshadow_io::build_plan(&grid, &geometry)
         .map_err(|e| RenderError::BadPlan(e.to_string()))?;
     let (ldi, raster) = perspective::turned_eye(eye, &eye_ldi, &geometry);
-    let (zoom, axis) = perspective::eye_on_grid(eye, &plan, pass.sweep.light_resolution);
+    let perspective::EyeOnGrid { zoom, axis, .. } =
+        perspective::eye_on_grid(eye, &plan, pass.sweep.light_resolution);
     let view = View {
         ldi: &ldi,
         stats,

@@ -502,9 +502,6 @@ impl RenderPlan {
         scene: &Scene,
         files: &PlanFiles,
     ) -> Result<RenderPlan, PlanError> {
-        if scene.lights.iter().all(|l| l.pattern.is_none()) {
-            return Ok(self);
-        }
         // Light l's loaded pattern image, `p` its spec.
         let loaded = |l: usize, p: &PatternSpec| {
             files
