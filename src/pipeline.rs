@@ -21,12 +21,14 @@ mod budget;
 mod error;
 mod passes;
 mod perspective;
+mod point;
+mod point_passes;
 mod reference;
 
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use convshadow_common::model::scene::{Penumbra, Scene, SceneError};
+use convshadow_common::model::scene::{Penumbra, Scene};
 use convshadow_common::pixel::hash::Fingerprint;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::plan::kernel::{TableGuard, distance_levels};
@@ -228,7 +230,9 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
             check_light_index(scene, l)?;
         }
     }
-    refuse_point_lights(scene)?;
+    if scene.lights.iter().any(|l| l.point.is_some()) {
+        return point_passes::render_with_point_lights(scene, req);
+    }
     // A perspective camera, or an orthographic one whose light grid is not its image's pixels:
     // the light swept on its own grid, the eye's rays reading it.
     if scene.camera.is_perspective() || scene.sweep.light_resolution != 1.0 {
@@ -237,22 +241,6 @@ pub fn render(scene: &Scene, req: &RenderRequest<'_>) -> Result<Rendered, Render
     passes::render_passes(scene, &req.aovs, passes::Mirror::Yes, |pass, aovs| {
         render_pass(pass, req, aovs)
     })
-}
-
-/// The convolution sweep has no point or spot lights yet (issue 41): a scene with one is refused
-/// by name (exit code 3, `light[i].kind`), pointing at the backend that renders it.
-fn refuse_point_lights(scene: &Scene) -> Result<(), RenderError> {
-    let Some(i) = scene.lights.iter().position(|l| l.point.is_some()) else {
-        return Ok(());
-    };
-    Err(RenderError::Scene(SceneError {
-        file: scene.source.clone(),
-        key: format!("light[{i}].kind"),
-        message: "point and spot lights are rendered by the shadow-ray reference only so far \
-                  (`--backend reference`): the convolution sweep (cpu and gpu backends) does not \
-                  have them yet"
-            .to_string(),
-    }))
 }
 
 /// [`render`] of one pass: every light at the same end of the sweep, `aovs` instead of

@@ -7,7 +7,7 @@
 use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::{FLUSH_BELOW, MaterialPlan, RenderPlan};
 
-use crate::shading::{Surface, TfLanes, shade};
+use crate::shading::{LightTerms, Surface, TfLanes, shade_with};
 
 /// One slab's sample of `material` with entry `tf` shaded and composited into (`color`, `alpha`)
 /// in the lanes of `lanes` (composite.wgsl `shade_sample`): `tf` scaled to the part of the slab
@@ -28,13 +28,44 @@ pub fn shade_sample<L: Lane>(
     (color, alpha): (&mut [L; 3], &mut L),
     lanes: L::M,
 ) {
+    let terms = |l: usize| LightTerms::of(plan, material, l);
+    shade_sample_with(
+        plan,
+        material,
+        tf,
+        (inside, lit_from),
+        iin,
+        surface,
+        (color, alpha),
+        lanes,
+        terms,
+    );
+}
+
+/// [`shade_sample`] with each light's shading terms given by `terms` (`shade_with`): the eye
+/// pass's point lights, whose direction and falloff change from sample to sample.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn shade_sample_with<L: Lane>(
+    plan: &RenderPlan,
+    material: &MaterialPlan,
+    tf: &mut TfLanes<L>,
+    (inside, lit_from): (L, L),
+    iin: &[L],
+    surface: Option<([L; 3], L::M)>,
+    (color, alpha): (&mut [L; 3], &mut L),
+    lanes: L::M,
+    terms: impl Fn(usize) -> LightTerms,
+) {
     let surface = surface.map(|(normal, lanes)| Surface {
         normal,
         lanes,
         alpha: tf.alpha,
     });
     let light = part_of_slab(tf, inside, lit_from);
-    let shaded = shade(plan, material, tf.color, iin, surface.as_ref());
+    let lights = material.light_color.len();
+    let ch = plan.channels as usize;
+    let shaded = shade_with(ch, lights, terms, material, tf.color, iin, surface.as_ref());
     let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
     composite(color, alpha, shaded, tf.alpha, lanes, plan.turned_round);
 }

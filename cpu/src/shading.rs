@@ -9,6 +9,7 @@
 use convshadow_common::model::scene::SpecularModel;
 use convshadow_common::pixel::hash::{pixel_hash, unit_float};
 use convshadow_common::pixel::lane::{Lane, MAX_LANES};
+pub use convshadow_common::plan::point_light::LightTerms;
 use convshadow_common::plan::{MaterialPlan, PI_SIZE, RenderPlan, SpecularPlan, TF_SIZE, TfEntry};
 
 use crate::ldi::Ldi;
@@ -79,7 +80,17 @@ pub fn material_at<L: Lane>(plan: &RenderPlan, mesh: u32, x: L, y: L, z: L) -> T
 pub fn detail_at<L: Lane>(plan: &RenderPlan, mesh: u32, x: L, y: L, z: L) -> L {
     let material = &plan.materials[plan.mesh_material[mesh as usize] as usize];
     let half = L::splat(0.5);
-    let q = to_detail(&plan.mesh_to_detail[mesh as usize], x + half, y + half, z);
+    let (x, y) = (x + half, y + half);
+    // A point light's grid: its cell's slab-grid point at this depth.
+    let (x, y) = match &plan.projective {
+        None => (x, y),
+        Some(p) => {
+            let s = (L::splat(p.depth_origin) + z) * L::splat(p.per_depth);
+            let (cx, cy) = (L::splat(p.centre[0]), L::splat(p.centre[1]));
+            (cx + (x - cx) * s, cy + (y - cy) * s)
+        }
+    };
+    let q = to_detail(&plan.mesh_to_detail[mesh as usize], x, y, z);
     detail_value(material, q)
 }
 
@@ -315,38 +326,6 @@ pub fn shade<L: Lane>(
         iin,
         surface,
     )
-}
-
-/// What the shading takes of light `l` at a shading point: for a directional light its plan's
-/// constants ([`shade`]); for a point light, those of the direction to it from the point
-/// (the shadow-ray reference's point lights).
-#[derive(Clone, Copy, Debug)]
-pub struct LightTerms {
-    /// The light's colour times the material's phase function (`MaterialPlan::light_color`).
-    pub light_color: [f32; 3],
-    /// The bare colour, for the specular term.
-    pub color: [f32; 3],
-    /// Unit direction towards the light, as `LightPlan::to_light`.
-    pub to_light: [f32; 3],
-    /// Blinn–Phong half vector, as `LightPlan::half_vector`.
-    pub half_vector: [f32; 3],
-    /// Ashikmin–Shirley's Fresnel constants, as `LightPlan::fresnel`.
-    pub fresnel: [f32; 2],
-}
-
-impl LightTerms {
-    /// The plan's terms of directional light `l` for `material`.
-    #[inline(always)]
-    pub fn of(plan: &RenderPlan, material: &MaterialPlan, l: usize) -> LightTerms {
-        let light = &plan.lights[l];
-        LightTerms {
-            light_color: material.light_color[l],
-            color: light.color,
-            to_light: light.to_light,
-            half_vector: light.half_vector,
-            fresnel: light.fresnel,
-        }
-    }
 }
 
 /// [`shade`] with each light's terms given by `terms` (`lights` of them, `ch` channels).

@@ -87,7 +87,7 @@ enum LightSource {
     /// A point or spot light.
     Point(PointSource),
 }
-use point::PointSource;
+use convshadow_common::plan::point_light::PointSource;
 pub use point::closed_mesh_holding;
 pub use turned_eye::TurnedEye;
 

@@ -83,22 +83,29 @@ pub fn render_passes(
         return Ok(back);
     };
     // C_front + (1 − A)·background + C_back: the background once, in the front pass.
-    for (f, b) in front.image.data.iter_mut().zip(&back.image.data) {
-        *f += *b;
-    }
+    front.turned_round_lights = back.turned_round_lights;
+    add_pass(&mut front, back);
     front.light_layers = light_layers;
     front.image_hash = image_fingerprint(&front.image.data);
-    front.slabs_swept += back.slabs_swept;
-    front.turned_round_lights = back.turned_round_lights;
-    front.updates += back.updates;
-    front.seconds_ldi += back.seconds_ldi;
-    front.seconds_plan += back.seconds_plan;
-    front.seconds_sweep += back.seconds_sweep;
-    front.seconds_total += back.seconds_total;
-    for (f, b) in front.chunks.iter_mut().zip(back.chunks) {
+    Ok(front)
+}
+
+/// Adds pass `pass`'s image (its background black) to `total`'s and its counts (slabs, updates,
+/// seconds, chunks) to `total`'s; the light layers, the image hash and the turned-round lights
+/// are the caller's.
+pub fn add_pass(total: &mut Rendered, pass: Rendered) {
+    for (f, b) in total.image.data.iter_mut().zip(&pass.image.data) {
+        *f += *b;
+    }
+    total.slabs_swept += pass.slabs_swept;
+    total.updates += pass.updates;
+    total.seconds_ldi += pass.seconds_ldi;
+    total.seconds_plan += pass.seconds_plan;
+    total.seconds_sweep += pass.seconds_sweep;
+    total.seconds_total += pass.seconds_total;
+    for (f, b) in total.chunks.iter_mut().zip(pass.chunks) {
         *f += b;
     }
-    Ok(front)
 }
 
 /// Reverses the order of the pixels in each row of an image of `width` pixels of `channels`

@@ -9,21 +9,24 @@ use convshadow_common::contract::ldi::{BYTES_PER_FRAGMENT, Ldi};
 use convshadow_common::model::scene::{
     CameraSpec, GuardBandSpec, MAX_IMAGE_SIDE, Projection, Scene, SlabSpec,
 };
+use convshadow_common::prepare::camera::Camera;
 use convshadow_common::prepare::geometry::SceneGeometry;
 use convshadow_common::prepare::raster::RasterSetup;
 use convshadow_cpu::sweep::{
-    ChunkCounts, CpuOptions, EyeView, SweepOptions, SweepOutput, sweep_perspective,
+    ChunkCounts, CpuOptions, EyePoint, EyeView, SweepOptions, SweepOutput, sweep_perspective,
 };
 use convshadow_io::image::RgbImage;
 
 use super::aov::{first_hit_depth_in, light_layers};
 use super::budget::LDI_BYTES_PER_PIXEL;
 use super::passes::{Mirror, render_passes};
+use super::point::{point_grid, projective};
 use super::{
     Aov, Backend, Engine, RenderError, RenderRequest, Rendered, check_cancel, image_fingerprint,
     plan_updates, refuse_open_meshes,
 };
 use convshadow_common::plan::RenderPlan;
+use convshadow_common::plan::point_light::PointSource;
 
 /// The orthographic scene whose sweep carries the light for `scene`'s perspective camera: the
 /// same view axis and `up`, cells of the eye's pixel size (the footprint at the `look_at`
@@ -189,30 +192,47 @@ pub(super) fn render_perspective(
     scene: &Scene,
     req: &RenderRequest<'_>,
 ) -> Result<Rendered, RenderError> {
-    // An orthographic eye's LDI is its image's pixels alone: the guard band is the grid's.
-    let eye = if scene.camera.is_perspective() {
+    let eye = eye_geometry(scene)?;
+    render_passes(scene, &req.aovs, Mirror::No, |pass, aovs| {
+        render_perspective_pass(pass, &eye, req, aovs, false)
+    })
+}
+
+/// The eye's geometry for the eye pass: a perspective camera's, or an orthographic camera's
+/// without its guard band (its LDI is its image's pixels alone: the guard band is the grid's).
+pub(super) fn eye_geometry(scene: &Scene) -> Result<SceneGeometry, RenderError> {
+    Ok(if scene.camera.is_perspective() {
         convshadow_io::build_geometry(scene)?
     } else {
         let mut bare = scene.clone();
         bare.sweep.guard_band = GuardBandSpec::Pixels(0);
         convshadow_io::build_geometry(&bare)?
-    };
-    render_passes(scene, &req.aovs, Mirror::No, |pass, aovs| {
-        render_perspective_pass(pass, &eye, req, aovs)
     })
 }
 
 /// One pass of [`render_perspective`]: `pass` has its lights (and, turned round, its camera's
-/// direction reversed), `eye` the scene's eye.
-fn render_perspective_pass(
+/// direction reversed), `eye` the scene's eye. `point`: `pass` has one light, a point or spot
+/// light, swept on its own grid ([`point_grid`]) instead of the slab grid.
+pub(super) fn render_perspective_pass(
     pass: &Scene,
     eye: &SceneGeometry,
     req: &RenderRequest<'_>,
     aovs: &[Aov],
+    point: bool,
 ) -> Result<Rendered, RenderError> {
     let scene = pass;
     let start = Instant::now();
-    let grid = grid_scene(scene, eye)?;
+    let point_grid = if point {
+        let frame = grid_scene(scene, eye)?;
+        let frame = Camera::new(&frame.camera, &frame.image);
+        Some(point_grid(scene, eye, frame, 0)?)
+    } else {
+        None
+    };
+    let grid = match &point_grid {
+        Some(p) => p.scene.clone(),
+        None => grid_scene(scene, eye)?,
+    };
     let engine = Engine::open(&grid, true, req.backend, req.threads, req.memory_budget)?;
     let (geometry, fragment_budget) = engine.geometry(&grid, req.memory_budget)?;
     let fragment_budget =
@@ -223,12 +243,18 @@ fn render_perspective_pass(
         scene.camera.projection,
         Projection::Perspective { near: Some(_), .. }
     );
-    let geometry = if near && !scene.turned_round {
-        geometry.with_slabs(&grid, eye.z_origin, eye.slab_distance, eye.slabs)?
-    } else {
-        geometry
+    let geometry = match &point_grid {
+        // A point light's grid measures view depth from the light: the eye's slabs there.
+        Some(p) => {
+            geometry.with_slabs(&grid, eye.z_origin - p.depth, eye.slab_distance, eye.slabs)?
+        }
+        None if near && !scene.turned_round => {
+            geometry.with_slabs(&grid, eye.z_origin, eye.slab_distance, eye.slabs)?
+        }
+        None => geometry,
     };
     if !scene.turned_round
+        && point_grid.is_none()
         && (geometry.z_origin, geometry.slab_distance, geometry.slabs)
             != (eye.z_origin, eye.slab_distance, eye.slabs)
     {
@@ -256,7 +282,13 @@ fn render_perspective_pass(
     let t_plan = Instant::now();
     let fragments = stats.fragments + engine.pool.install(|| ldi.stats()).fragments;
     let allowance = super::budget::table_allowance(fragment_budget, fragments);
-    let plan = engine.plan(&grid, &geometry, req.cancel, allowance, fragments)?;
+    let mut plan = engine.plan(&grid, &geometry, req.cancel, allowance, fragments)?;
+    if point_grid.is_some() {
+        plan.projective = Some(projective(&geometry));
+        // A hard light's rays are the grid's columns: no gather reads a neighbour, so no
+        // surface shadows itself and none is held (a hold would let light past it).
+        plan.surface_hold = Vec::new();
+    }
     let seconds_plan = t_plan.elapsed().as_secs_f64();
     engine.check_tables(&grid, &plan, fragment_budget, fragments)?;
     check_cancel(req.cancel)?;
@@ -270,6 +302,40 @@ fn render_perspective_pass(
         None => (&eye_ldi, &eye.raster, eye.z_origin),
     };
     let EyeOnGrid { zoom, scale, axis } = eye_on_grid(eye, &plan, pass.sweep.light_resolution);
+    let phase_g: Vec<f64> = (scene.meshes.iter())
+        .map(|m| scene.materials[m.material].phase_g)
+        .collect();
+    let point_source = point_grid.as_ref().map(|p| {
+        let light = scene.lights[0].point.as_ref().expect("a point pass");
+        let pattern = (scene.lights[0].pattern.as_ref())
+            .zip(plan.spot_patterns.first().and_then(Option::as_ref));
+        PointSource::new(light, pattern, &p.frame, eye.z_origin)
+    });
+    let eye_point = point_grid
+        .as_ref()
+        .zip(point_source.as_ref())
+        .map(|(p, source)| {
+            let frame_axis = [
+                f64::from(p.frame.width) * 0.5,
+                f64::from(p.frame.height) * 0.5,
+            ];
+            let focal = geometry
+                .camera
+                .focal_px
+                .expect("a point light's grid is perspective");
+            EyePoint {
+                source,
+                color: scene.lights[0].color,
+                phase_g: &phase_g,
+                frame_axis,
+                offset: [
+                    (source.center[0] - frame_axis[0]) as f32,
+                    (source.center[1] - frame_axis[1]) as f32,
+                ],
+                depth: p.depth as f32,
+                focal: (p.frame.pixel_size * focal) as f32,
+            }
+        });
     let view = EyeView {
         ldi: view_ldi,
         raster: view_raster,
@@ -279,6 +345,7 @@ fn render_perspective_pass(
         scale: scale as f32,
         z_origin: z_origin as f32,
         turned_round: scene.turned_round,
+        point: eye_point,
         axis: [
             (axis[0] + f64::from(plan.guard.left)) as f32,
             (axis[1] + f64::from(plan.guard.top)) as f32,
@@ -318,7 +385,6 @@ fn render_perspective_pass(
     let seconds_sweep = t_sweep.elapsed().as_secs_f64();
     // The extra layers, as `super::render_pass` makes them: one more sweep per light layer on
     // the plan with the other lights and the background black; the depth from the eye's LDI.
-    let mut plan = plan;
     let light_layers = light_layers(&mut plan, aovs, req.cancel, |plan| {
         Ok(run(plan, &CpuOptions::default())?.image)
     })?;

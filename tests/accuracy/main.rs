@@ -21,6 +21,7 @@ mod patterned_light;
 mod perspective;
 mod phase_function;
 mod point_lights;
+mod point_sweep;
 mod preintegration;
 mod reference_convergence;
 mod several_depths;

@@ -5,7 +5,8 @@
 //! components in the plane of the edge's normal and the depth matter; for a given depth offset
 //! the segment is blocked iff δ's component across the edge passes a threshold, so
 //! `V = ∫ Φ(threshold(δ_z)/r) N(δ_z; 0, r²) dδ_z`, integrated by Gauss–Legendre over ±8 r. A
-//! spot's cone edge is placed by its angle, `tan(cone)` times the distance.
+//! spot's cone edge is placed by its angle, `tan(cone)` times the distance; a hard spot's cone,
+//! falloff and gobo are checked on the sweep too (`point_sweep.rs` has its shadows).
 
 use std::path::Path;
 
@@ -203,42 +204,43 @@ fn a_spot_lights_cone_edge_lands_where_its_angle_projects() {
     for (cone, falloff) in [(10.0f64, 0.0f64), (12.0, 6.0)] {
         let text = spot_wall_scene(&format!("cone_deg = {cone}\nfalloff_deg = {falloff}"));
         let scene = Scene::parse(&text, "spot", Path::new(".")).unwrap();
-        let r = render_reference(&scene, 1, 4, 1 << 30, false, &[], None).unwrap();
-        let px = 4.0 / 128.0;
-        // Pixel i's centre is at world |x| = |i + 0.5 − 64|·px (the row is symmetric).
-        let row = 1usize;
-        let mut lit_edge: Option<f64> = None;
-        for i in 64..128usize {
-            let x = (i as f64 + 0.5 - 64.0) * px;
-            let v = f64::from(r.image.data[3 * (row * 128 + i)]);
-            let y = (row as f64 + 0.5 - 2.0) * px;
-            let d2 = x * x + y * y + 9.0;
-            let angle = ((x * x + y * y).sqrt() / 3.0).atan().to_degrees();
-            let s = ((angle - cone) / falloff.max(1e-300)).clamp(0.0, 1.0);
-            let want = if angle <= cone {
-                1.0
-            } else if falloff == 0.0 {
-                0.0
-            } else {
-                1.0 - s * s * (3.0 - 2.0 * s)
-            };
-            // The wall is a Lambert surface facing the light's axis: cos = 3/d, per point.
-            let lit = v * d2 / (3.0 / d2.sqrt());
-            assert!(
-                (lit - want).abs() < 1e-5,
-                "cone {cone}: pixel {i}: {lit} vs {want}"
-            );
-            if v > 0.0 {
-                lit_edge = Some(x);
+        for r in reference_and_sweep(&scene) {
+            let px = 4.0 / 128.0;
+            // Pixel i's centre is at world |x| = |i + 0.5 − 64|·px (the row is symmetric).
+            let row = 1usize;
+            let mut lit_edge: Option<f64> = None;
+            for i in 64..128usize {
+                let x = (i as f64 + 0.5 - 64.0) * px;
+                let v = f64::from(r.image.data[3 * (row * 128 + i)]);
+                let y = (row as f64 + 0.5 - 2.0) * px;
+                let d2 = x * x + y * y + 9.0;
+                let angle = ((x * x + y * y).sqrt() / 3.0).atan().to_degrees();
+                let s = ((angle - cone) / falloff.max(1e-300)).clamp(0.0, 1.0);
+                let want = if angle <= cone {
+                    1.0
+                } else if falloff == 0.0 {
+                    0.0
+                } else {
+                    1.0 - s * s * (3.0 - 2.0 * s)
+                };
+                // The wall is a Lambert surface facing the light's axis: cos = 3/d, per point.
+                let lit = v * d2 / (3.0 / d2.sqrt());
+                assert!(
+                    (lit - want).abs() < 1e-5,
+                    "cone {cone}: pixel {i}: {lit} vs {want}"
+                );
+                if v > 0.0 {
+                    lit_edge = Some(x);
+                }
             }
+            // The last lit pixel centre lies within half a pixel before the projected edge.
+            let edge = 3.0 * (cone + falloff).to_radians().tan();
+            let last = lit_edge.unwrap();
+            assert!(
+                last <= edge && edge - last <= px,
+                "cone {cone}: last lit {last}, edge {edge}"
+            );
         }
-        // The last lit pixel centre lies within half a pixel before the projected edge.
-        let edge = 3.0 * (cone + falloff).to_radians().tan();
-        let last = lit_edge.unwrap();
-        assert!(
-            last <= edge && edge - last <= px,
-            "cone {cone}: last lit {last}, edge {edge}"
-        );
     }
 }
 
@@ -260,14 +262,18 @@ fn a_point_light_inside_a_closed_mesh_is_refused_and_the_sweep_names_the_backend
         "direction = [0.0, 0.0, 1.0]\nview_width = 2.0",
         "kind = \"point\"\nposition = [1.0, 0.0, -1.0]",
     );
-    let e = convshadow::pipeline::render(&scene, &Default::default())
+    // The same light outside the mesh renders with the reference, and hard with the sweep;
+    // the sweep has no soft point lights yet (radius > 0), and says which backend has them.
+    render_reference(&scene, 1, 4, 1 << 30, false, &[], None).unwrap();
+    convshadow::pipeline::render(&scene, &Default::default()).unwrap();
+    let mut soft = scene.clone();
+    soft.lights[0].point.as_mut().unwrap().radius = 0.05;
+    let e = convshadow::pipeline::render(&soft, &Default::default())
         .err()
         .expect("refused");
     assert!(
-        e.to_string().contains("light[0].kind") && e.to_string().contains("--backend reference")
+        e.to_string().contains("light[0].radius") && e.to_string().contains("--backend reference")
     );
-    // The same light outside the mesh renders with the reference.
-    render_reference(&scene, 1, 4, 1 << 30, false, &[], None).unwrap();
 }
 
 #[test]
@@ -283,30 +289,39 @@ fn a_spot_lights_gobo_lands_where_it_projects_through_the_cone() {
          pattern = { path = \"gobo.png\", size = [0.4, 0.4], center = [0.1, 0.0] }",
     );
     let scene = Scene::parse(&text, "gobo", &dir).unwrap();
-    let r = render_reference(&scene, 1, 4, 1 << 30, false, &[], None).unwrap();
-    let px = 4.0 / 128.0;
-    let row = 1usize;
-    let y = (row as f64 + 0.5 - 2.0) * px;
-    let mut half: Option<f64> = None;
-    let mut before = (f64::NAN, f64::NAN);
-    for i in 0..128usize {
-        // The image's right is world −x, as the spot's right: `a` is the image x over 3.
-        let x = (i as f64 + 0.5 - 64.0) * px;
-        let d2 = x * x + y * y + 9.0;
-        let lit = f64::from(r.image.data[3 * (row * 128 + i)]) * d2 / (3.0 / d2.sqrt());
-        let a = x / 3.0;
-        let want = (a / 0.2).clamp(0.0, 1.0);
-        assert!((lit - want).abs() < 1e-4, "pixel {i}: {lit} vs {want}");
-        if before.1 < 0.5 && lit >= 0.5 {
-            // The half-way crossing, linearly between the two pixel centres.
-            half = Some(before.0 + (0.5 - before.1) / (lit - before.1) * (x - before.0));
+    for r in reference_and_sweep(&scene) {
+        let px = 4.0 / 128.0;
+        let row = 1usize;
+        let y = (row as f64 + 0.5 - 2.0) * px;
+        let mut half: Option<f64> = None;
+        let mut before = (f64::NAN, f64::NAN);
+        for i in 0..128usize {
+            // The image's right is world −x, as the spot's right: `a` is the image x over 3.
+            let x = (i as f64 + 0.5 - 64.0) * px;
+            let d2 = x * x + y * y + 9.0;
+            let lit = f64::from(r.image.data[3 * (row * 128 + i)]) * d2 / (3.0 / d2.sqrt());
+            let a = x / 3.0;
+            let want = (a / 0.2).clamp(0.0, 1.0);
+            assert!((lit - want).abs() < 1e-4, "pixel {i}: {lit} vs {want}");
+            if before.1 < 0.5 && lit >= 0.5 {
+                // The half-way crossing, linearly between the two pixel centres.
+                half = Some(before.0 + (0.5 - before.1) / (lit - before.1) * (x - before.0));
+            }
+            before = (x, lit);
         }
-        before = (x, lit);
+        // The gobo's half-way line projects to 3·0.1 = 0.3 from the axis: within half a pixel.
+        let half = half.expect("a crossing");
+        assert!(
+            (half - 0.3).abs() <= 0.5 * px,
+            "crossing at {half}, projected 0.3"
+        );
     }
-    // The gobo's half-way line projects to 3·0.1 = 0.3 from the axis: within half a pixel.
-    let half = half.expect("a crossing");
-    assert!(
-        (half - 0.3).abs() <= 0.5 * px,
-        "crossing at {half}, projected 0.3"
-    );
+}
+
+/// `scene` rendered by the shadow-ray reference and by the sweep (a hard light: both render it).
+fn reference_and_sweep(scene: &Scene) -> [convshadow::pipeline::Rendered; 2] {
+    [
+        render_reference(scene, 1, 4, 1 << 30, false, &[], None).unwrap(),
+        convshadow::pipeline::render(scene, &Default::default()).unwrap(),
+    ]
 }

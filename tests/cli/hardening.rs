@@ -533,7 +533,14 @@ fn bad_point_and_spot_lights_exit_3_without_an_output_file() {
         ),
         ("zero spot axis", "[[light]]\nkind = \"spot\"\nposition = [0.0, 0.0, -2.0]\ndirection = [0.0, 0.0, 0.0]\ncone_deg = 20.0".to_string(), "cpu", vec!["light[0].direction"]),
         ("tilt on a point light", point("tilt_deg = [10.0, 0.0]"), "reference", vec!["light[0].tilt_deg", "directional"]),
-        ("the sweep", point(""), "cpu", vec!["light[0].kind", "--backend reference"]),
+        ("a radius in the sweep", point("radius = 0.05"), "cpu", vec!["light[0].radius", "--backend reference"]),
+        (
+            "amid the meshes in the sweep",
+            "[[light]]\nkind = \"point\"\nposition = [5.0, 0.0, 0.0]".to_string(),
+            "cpu",
+            vec!["light[0].position", "before every mesh", "--backend reference"],
+        ),
+        ("the gpu backend", point(""), "gpu", vec!["light[0].kind", "--backend cpu"]),
         (
             "inside the box",
             "[[light]]\nkind = \"point\"\nposition = [0.0, 0.0, 0.0]".to_string(),
@@ -565,6 +572,13 @@ fn bad_point_and_spot_lights_exit_3_without_an_output_file() {
             "-q",
         ],
     );
+    assert_eq!(r.0, 0, "{}", r.2);
+    assert!(dir.join("a.png").exists());
+    // A hard one before the box renders with the sweep.
+    std::fs::remove_file(dir.join("a.png")).unwrap();
+    let text = base.replacen(LIGHT, &point(""), 1);
+    std::fs::write(dir.join("t.toml"), text).unwrap();
+    let r = cli(&dir, &["render", "t.toml", "-o", "a.png", "-q"]);
     assert_eq!(r.0, 0, "{}", r.2);
     assert!(dir.join("a.png").exists());
 }

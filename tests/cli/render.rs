@@ -397,10 +397,10 @@ fn a_world_direction_light_renders_like_its_tilt_and_bad_ones_exit_3() {
             "direction = [0.0, 0.0, 1.0]\ntilt_deg = [5.0, 0.0]",
             "not both",
         ),
-        // A spot light is valid, but the sweep does not have it: refused naming the kind.
+        // A spot light is valid, but the sweep has no soft ones yet: refused naming the radius.
         (
-            "kind = \"spot\"\nposition = [0.0, 0.0, -3.0]\ndirection = [0.0, 0.0, 1.0]\ncone_deg = 20.0",
-            "light[0].kind",
+            "kind = \"spot\"\nposition = [0.0, 0.0, -3.0]\nradius = 0.1\ndirection = [0.0, 0.0, 1.0]\ncone_deg = 20.0",
+            "light[0].radius",
         ),
         ("kind = \"spot\"", "light[0].position"),
     ] {

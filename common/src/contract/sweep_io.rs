@@ -6,6 +6,7 @@
 use std::sync::atomic::AtomicBool;
 
 use crate::contract::ldi::Ldi;
+use crate::plan::point_light::PointSource;
 use crate::prepare::raster::RasterSetup;
 
 /// Largest light count × channels handled per pixel (the CPU's stack arrays, the WGSL private
@@ -95,4 +96,32 @@ pub struct EyeView<'a> {
     /// the turned grid's depths ([`Ldi::turned_round`]), `raster`'s normals are the turned
     /// camera's, and each ray composites back to front.
     pub turned_round: bool,
+    /// A point or spot light's grid (a perspective view from the light's centre) instead of a
+    /// slab grid: the eye's rays read it projectively ([`EyePoint`]) and shade with the
+    /// direction to the light per sample; `None`: a slab grid.
+    pub point: Option<EyePoint<'a>>,
+}
+
+/// How the eye reads a point light's grid ([`EyeView::point`]). The eye's ray at image-pixel
+/// offset `o` from the centre and view depth `d` is `o·(scale + d·zoom)` cells of the eye's own
+/// slab-grid frame from the view axis; the light's grid pixel there is
+/// `axis + (o·(scale + d·zoom) − offset)·(focal / (d − depth))`.
+pub struct EyePoint<'a> {
+    /// The light's centre, its falloff, cone and pattern, in the eye's slab-grid frame (grid
+    /// pixels of that frame, relative depths of the sweep).
+    pub source: &'a PointSource,
+    /// The light's colour.
+    pub color: [f32; 3],
+    /// Per mesh, the Henyey–Greenstein `g` of its material's phase function (0: isotropic).
+    pub phase_g: &'a [f64],
+    /// Where the view axis meets the eye's slab-grid frame, its grid pixels: with the ray's
+    /// offset, a sample's x and y in `source`'s coordinates.
+    pub frame_axis: [f64; 2],
+    /// The light's centre's offset from the view axis, in cells of the eye's frame.
+    pub offset: [f32; 2],
+    /// The view depth of the light's centre (the eye's view depths).
+    pub depth: f32,
+    /// The light grid's focal length in its pixels times the eye frame's cell size: grid pixels
+    /// per cell of offset at unit view depth from the light.
+    pub focal: f32,
 }

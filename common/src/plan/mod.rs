@@ -9,6 +9,7 @@ pub mod kernel;
 pub mod levels;
 pub mod material;
 pub mod pattern;
+pub mod point_light;
 pub mod surface_hold;
 
 use glam::{DAffine3, DVec3};
@@ -204,6 +205,23 @@ pub struct RenderPlan {
     /// exact_shift`), and records the crossing's depth within its slab in the depth plane.
     /// Empty when none is.
     pub subpixel_meshes: Vec<bool>,
+    /// A point light's grid (the sweep's point lights, docs/how-it-works.md "Point and spot
+    /// lights"): a perspective view from the light's centre, whose cell (x, y) at relative depth
+    /// z is the slab-grid point `centre + (x − centre)·(depth_origin + z)·per_depth` that
+    /// `mesh_to_detail` maps; `None` for a slab grid (an orthographic view: no change).
+    pub projective: Option<ProjectiveGrid>,
+}
+
+/// The cells of a perspective grid as slab-grid coordinates ([`RenderPlan::projective`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProjectiveGrid {
+    /// Where the grid's axis meets its image, image pixels.
+    pub centre: [f32; 2],
+    /// The view depth (from the grid's eye) of relative depth 0.
+    pub depth_origin: f32,
+    /// `1 / (focal_px · pixel_size)`: a cell's offset from the centre in slab-grid pixels per
+    /// unit of view depth.
+    pub per_depth: f32,
 }
 
 impl RenderPlan {
@@ -397,6 +415,7 @@ impl RenderPlan {
             pixel_size: px,
             initial_light: None,
             spot_patterns: Vec::new(),
+            projective: None,
             preintegration: scene.sweep.preintegration,
             surface_hold: Vec::new(),
             subpixel_meshes: Vec::new(),

@@ -23,16 +23,16 @@ use std::cell::RefCell;
 use rayon::prelude::*;
 use wide::{f32x8, u32x8};
 
-use convshadow_common::contract::sweep_io::EyeView;
+use convshadow_common::contract::sweep_io::{EyePoint, EyeView};
 use convshadow_common::pixel::hash::row_hash;
 use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::RenderPlan;
 
 use super::kit::{MAX_LIGHT_CHANNELS, light_block};
-use crate::composite::shade_sample;
+use crate::composite::{shade_sample, shade_sample_with};
 use crate::ldi::Ldi;
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
-use crate::shading::{TfLanes, detail_at, material_at, pre_transfer, shading_depth};
+use crate::shading::{LightTerms, TfLanes, detail_at, material_at, pre_transfer, shading_depth};
 use convshadow_common::pixel::lane::MAX_LANES;
 
 /// The eye's per-pixel state: layer cursor, inside mask, composited colour and alpha.
@@ -187,12 +187,20 @@ pub(crate) fn eye_slab(
                 front,
                 back,
             };
-            if !batched {
+            // A point light's samples each take their own light direction: one by one.
+            if !batched || view.point.is_some() {
                 for x in 0..w {
                     let cursor = (&mut next[x], &mut inside[x]);
                     if let Some(sample) = eye_sample(plan, view, &pixel(x), cursor, alpha[x]) {
                         let tf = sample_entry(plan, sample.mesh, sample.at, sample.faces);
-                        eye_shade(plan, grid, &sample, tf, (&mut color[x], &mut alpha[x]));
+                        eye_shade(
+                            plan,
+                            view,
+                            grid,
+                            &sample,
+                            tf,
+                            (&mut color[x], &mut alpha[x]),
+                        );
                     }
                 }
                 return;
@@ -405,10 +413,29 @@ fn ray_on_grid(view: &EyeView<'_>, p: &EyePixel, z: f32) -> (f32, f32) {
         view.z_origin + z
     };
     let scale = view.scale + view_depth * view.zoom;
+    let Some(point) = &view.point else {
+        return (
+            view.axis[0] + p.offset[0] * scale,
+            view.axis[1] + p.offset[1] * scale,
+        );
+    };
+    // A point light's grid: the ray's offset from the light's centre, projected from it.
+    let k = point.focal / (view_depth - point.depth);
     (
-        view.axis[0] + p.offset[0] * scale,
-        view.axis[1] + p.offset[1] * scale,
+        view.axis[0] + (p.offset[0] * scale - point.offset[0]) * k,
+        view.axis[1] + (p.offset[1] * scale - point.offset[1]) * k,
     )
+}
+
+/// Where the ray of eye pixel `p` meets relative depth `z`, in the eye's slab-grid frame of a
+/// point light's grid (`point.source`'s coordinates).
+fn ray_in_frame(view: &EyeView<'_>, point: &EyePoint<'_>, p: &EyePixel, z: f32) -> [f64; 3] {
+    let scale = view.scale + (view.z_origin + z) * view.zoom;
+    [
+        point.frame_axis[0] + f64::from(p.offset[0] * scale),
+        point.frame_axis[1] + f64::from(p.offset[1] * scale),
+        f64::from(z),
+    ]
 }
 
 /// Where one eye pixel is in the sweep.
@@ -447,6 +474,9 @@ struct EyeSample {
     read_at: (f32, f32),
     skip: Skip,
     back_along_light: Option<f32>,
+    /// A point light's grid: where the sample is in the eye's slab-grid frame
+    /// ([`ray_in_frame`]), for the direction to the light.
+    in_frame: Option<[f64; 3]>,
 }
 
 impl EyeSample {
@@ -542,6 +572,7 @@ fn eye_sample(
         read_at: (gx, gy),
         skip,
         back_along_light,
+        in_frame: view.point.as_ref().map(|pt| ray_in_frame(view, pt, p, z)),
     })
 }
 
@@ -550,6 +581,7 @@ fn eye_sample(
 /// and `alpha`.
 fn eye_shade(
     plan: &RenderPlan,
+    view: &EyeView<'_>,
     grid: &GridLight<'_>,
     sample: &EyeSample,
     mut tf: TfLanes<f32>,
@@ -561,16 +593,50 @@ fn eye_shade(
     let surface = sample.normal.filter(|_| sample.shades_surface);
     let part = (sample.part, sample.lit_from);
     let surface = surface.map(|normal| (normal, true));
-    shade_sample(
-        plan,
-        material,
-        &mut tf,
-        part,
-        &iin[..n],
-        surface,
-        (color, alpha),
-        true,
-    );
+    let target = (color, alpha);
+    match (&view.point, sample.in_frame) {
+        (Some(point), Some(at)) => {
+            // A point light (its grid's one light): the direction to it from this sample, and
+            // its centre's falloff, cone and pattern in its colour.
+            let terms = point_terms(point, at, point.phase_g[sample.mesh as usize]);
+            let terms = |_: usize| terms;
+            shade_sample_with(
+                plan,
+                material,
+                &mut tf,
+                part,
+                &iin[..n],
+                surface,
+                target,
+                true,
+                terms,
+            );
+        }
+        _ => shade_sample(
+            plan,
+            material,
+            &mut tf,
+            part,
+            &iin[..n],
+            surface,
+            target,
+            true,
+        ),
+    }
+}
+
+/// A point light's shading terms at `at` (the eye's slab-grid frame) for a material of phase
+/// `g`: the direction to its centre ([`PointSource::terms`]) and both colours times the light its
+/// centre gives there ([`PointSource::falloff`]).
+fn point_terms(point: &EyePoint<'_>, at: [f64; 3], g: f64) -> LightTerms {
+    let falloff = point.source.falloff(at);
+    let terms = point.source.terms(at, point.color, g);
+    let scaled = |c: [f32; 3]| std::array::from_fn(|k| (f64::from(c[k]) * falloff[k]) as f32);
+    LightTerms {
+        light_color: scaled(terms.light_color),
+        color: scaled(terms.color),
+        ..terms
+    }
 }
 
 /// Every light's channels read bilinearly from the grid's outgoing light at grid position

@@ -44,7 +44,7 @@ use fast::{ChunkState, QuietRow, QuietSetup, RowSpans, SimdSlab, TapColumns, swe
 use kit::{Previous, Reach, RowContext, RowState, SlabContext};
 use level_blocks::LevelBlocks;
 
-pub use convshadow_common::contract::sweep_io::EyeView;
+pub use convshadow_common::contract::sweep_io::{EyePoint, EyeView};
 pub use convshadow_common::contract::sweep_io::{
     MAX_LIGHT_CHANNELS, SweepError, SweepOptions, SweepOutput,
 };
