@@ -13,7 +13,7 @@
 //! light is read once, bilinearly, where the exact drift puts it. Only the shading read moves:
 //! the buffer the next slab gathers from keeps the carried light.
 
-use convshadow_common::pixel::levels::pixel_level;
+use convshadow_common::pixel::levels::{LevelAt, pixel_level};
 use convshadow_common::plan::{LightPlan, OCCLUSION_EPS};
 
 use crate::kernels::{LightPlanes, TapOrigin, gather};
@@ -55,7 +55,8 @@ pub fn exact_shift(
     if occluded <= OCCLUSION_EPS || occluded.is_nan() {
         return None;
     }
-    if pixel_level::<f32>(&light.table, occluded, depth, slab) != row_level {
+    // A slab grid's (a point light's grid has no drift to shift by: no sub-pixel shadows).
+    if pixel_level::<f32>(&light.table, occluded, depth, LevelAt::slab(slab)) != row_level {
         return None;
     }
     let residual = &light.carry_residual;

@@ -5,16 +5,18 @@
 //! `super::perspective::render_perspective_pass`). `super::point_passes` renders each such light
 //! in a pass of its own.
 //!
-//! Built so far: hard lights (`radius = 0`) before every mesh along the view, on the CPU.
+//! Built so far: lights before every mesh along the view, on the CPU; a soft one (`radius` > 0)
+//! with the distance penumbra in φ.
 
 use glam::DVec3;
 
 use convshadow_common::model::scene::{
-    CameraSpec, GuardBandSpec, MAX_IMAGE_SIDE, Projection, Scene, SceneError, SlabSpec,
+    CameraSpec, GuardBandSpec, MAX_IMAGE_SIDE, Penumbra, Projection, Scene, SceneError, SlabSpec,
 };
 use convshadow_common::plan::ProjectiveGrid;
 use convshadow_common::prepare::camera::Camera;
 use convshadow_common::prepare::geometry::SceneGeometry;
+use convshadow_common::prepare::raster::{FIXED_ONE, TriangleSetup};
 
 use super::RenderError;
 
@@ -52,15 +54,16 @@ pub(super) fn point_grid(
             message,
         })
     };
-    if light.radius > 0.0 {
-        return Err(refuse(
-            "radius",
-            format!(
-                "the convolution sweep renders hard point and spot lights only so far (radius \
-                 0; this one is {}): `--backend reference` renders a point light's penumbra",
-                light.radius
+    if light.radius > 0.0 && scene.sweep.penumbra == Penumbra::Iterated {
+        return Err(RenderError::Scene(SceneError {
+            file: scene.source.clone(),
+            key: "sweep.penumbra".to_string(),
+            message: format!(
+                "light[{l}] is a point light with a radius: the convolution sweep gives its \
+                 penumbra with the distance penumbra only (\"distance\", the default), whose \
+                 depths it measures from the light; `--backend reference` renders it either way"
             ),
-        ));
+        }));
     }
     let cam = &eye.camera;
     let at = cam.to_camera(DVec3::from(light.position));
@@ -71,10 +74,12 @@ pub(super) fn point_grid(
     let lr = scene.sweep.light_resolution;
     let (mut near, mut tan_x, mut tan_y) = (f64::INFINITY, 0.0f64, 0.0f64);
     let mut focal = 0.0f64;
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for m in &eye.meshes {
         for v in &m.mesh.positions {
             let view = cam.to_camera(*v);
             let c = view - at;
+            (lo, hi) = (lo.min(c), hi.max(c));
             near = near.min(c.z);
             if c.z > 0.0 {
                 tan_x = tan_x.max(c.x.abs() / c.z);
@@ -113,6 +118,27 @@ pub(super) fn point_grid(
     }
     let look_at = DVec3::from(light.position) + cam.forward * (focal * cell);
     let mut grid = scene.clone();
+    // A soft light spreads by `focal·radius` grid pixels per unit of φ = −1/(depth from the
+    // light): its first slab's spread, the covariance step every level scales
+    // (`DepthScale`), is a directional light's of this variance at this pixel size.
+    let origin = eye.z_origin - at.z;
+    let e = eye.slab_distance;
+    let first = 1.0 / origin - 1.0 / (origin + e);
+    let spread = light.radius * first * focal * cell / e;
+    // The light's depth extent blurs too, along the ray's slope m = (x, y)/z: by r·|m| per unit
+    // φ·focal, a covariance `spread²·(I + m·mᵀ)` that changes across the grid. The grid's light
+    // takes it at one slope (a spot's axis, else the middle of what the light sees): exact
+    // there, off by √((1 + m²)/(1 + m̄²)) in the width elsewhere (docs/how-it-works.md).
+    let middle = 0.5 * (lo + hi);
+    let axis = light
+        .spot
+        .map(|s| cam.to_camera(cam.center + DVec3::from(s.direction)))
+        .filter(|d| d.z > 0.1 * d.length())
+        .unwrap_or(middle);
+    let slope = [axis.x / axis.z, axis.y / axis.z];
+    let along = 1.0 + slope[0] * slope[0] + slope[1] * slope[1];
+    grid.lights[l].variance = [spread * spread * along, spread * spread];
+    grid.lights[l].rotation_deg = slope[1].atan2(slope[0]).to_degrees();
     grid.camera = CameraSpec {
         center: light.position,
         view_width: gw * cell,
@@ -146,4 +172,23 @@ pub(super) fn projective(geometry: &SceneGeometry) -> ProjectiveGrid {
         depth_origin: geometry.z_origin as f32,
         per_depth: (1.0 / (focal * cam.pixel_size)) as f32,
     }
+}
+
+/// A triangle's depth gradient on a point light's perspective grid (world units of view depth
+/// per grid pixel, x and y) for the surface hold: the raster's plane is the inverse depth w, so
+/// `dz = −z²·dw`, taken at the triangle's vertex farthest from the light (the largest).
+pub(super) fn perspective_gradient(t: &TriangleSetup) -> (f32, f32) {
+    let one = FIXED_ONE as f64;
+    let corner = [f64::from(t.bbox[0]) + 0.5, f64::from(t.bbox[1]) + 0.5];
+    let w_at = |v: [i32; 2]| {
+        f64::from(t.depth_ref)
+            + f64::from(t.depth_dx) * (f64::from(v[0]) / one - corner[0])
+            + f64::from(t.depth_dy) * (f64::from(v[1]) / one - corner[1])
+    };
+    let w = t.v.iter().map(|&v| w_at(v)).fold(f64::INFINITY, f64::min);
+    let z2 = if w > 0.0 { 1.0 / (w * w) } else { 0.0 };
+    (
+        (-z2 * f64::from(t.depth_dx)) as f32,
+        (-z2 * f64::from(t.depth_dy)) as f32,
+    )
 }

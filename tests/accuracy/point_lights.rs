@@ -51,7 +51,7 @@ color = [1.0, 1.0, 1.0]
 /// (z < −H): the segment from x to `p + δ` meets the plate iff its world x is ≥ 0 at z = H or
 /// at z = −H, i.e. iff `δ_x ≥ min over z of x_x·(1 − 1/s(z)) − p_x`, s(z) = (z − x_z)/(l_z − x_z)
 /// the fraction of the way to the light's point.
-fn visibility(x: DVec3, p: DVec3, r: f64) -> f64 {
+pub(crate) fn visibility(x: DVec3, p: DVec3, r: f64) -> f64 {
     let nodes = gauss_legendre(400);
     let mut v = 0.0;
     for (node, weight) in nodes {
@@ -262,17 +262,21 @@ fn a_point_light_inside_a_closed_mesh_is_refused_and_the_sweep_names_the_backend
         "direction = [0.0, 0.0, 1.0]\nview_width = 2.0",
         "kind = \"point\"\nposition = [1.0, 0.0, -1.0]",
     );
-    // The same light outside the mesh renders with the reference, and hard with the sweep;
-    // the sweep has no soft point lights yet (radius > 0), and says which backend has them.
+    // The same light outside the mesh renders with the reference, and with the sweep, hard and
+    // soft; a soft one with the iterated penumbra only with the reference, and the sweep says so.
     render_reference(&scene, 1, 4, 1 << 30, false, &[], None).unwrap();
     convshadow::pipeline::render(&scene, &Default::default()).unwrap();
     let mut soft = scene.clone();
     soft.lights[0].point.as_mut().unwrap().radius = 0.05;
+    convshadow::pipeline::render(&soft, &Default::default()).unwrap();
+    soft.sweep.penumbra = convshadow::common::model::scene::Penumbra::Iterated;
+    soft.sweep.optimal_distance = Some(0.5);
     let e = convshadow::pipeline::render(&soft, &Default::default())
         .err()
         .expect("refused");
     assert!(
-        e.to_string().contains("light[0].radius") && e.to_string().contains("--backend reference")
+        e.to_string().contains("sweep.penumbra") && e.to_string().contains("--backend reference"),
+        "{e}"
     );
 }
 

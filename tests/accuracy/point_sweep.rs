@@ -14,14 +14,14 @@ use glam::DVec3;
 /// Half the plate's thickness; it spans world x ≥ 0 (to 3), z ∈ [−H, H].
 const H: f64 = 0.005;
 
-/// A `64 × 8` scene seen by `camera` (TOML lines): the opaque plate x ≥ 0 around z = 0 before a
-/// white Lambert wall whose front face is z = 1, a background of black, lit by `light`.
-fn plate_and_wall(camera: &str, light: &str) -> Scene {
+/// A `width × height` scene seen by `camera` (TOML lines): the opaque plate x ≥ 0 around z = 0
+/// before a white Lambert wall whose front face is z = 1, a background of black, lit by `light`.
+fn plate_and_wall((width, height): (usize, usize), camera: &str, light: &str) -> Scene {
     let text = format!(
         r#"
 [image]
-width = 64
-height = 8
+width = {width}
+height = {height}
 background = [0.0, 0.0, 0.0]
 [camera]
 {camera}
@@ -74,7 +74,7 @@ fn a_hard_point_lights_shadow_on_a_wall_is_its_closed_form_on_the_sweep() {
     for (camera, focal) in cameras {
         for p in [DVec3::new(0.2, 0.1, -2.0), DVec3::new(0.6, -0.3, -1.2)] {
             let light = format!("kind = \"point\"\nposition = [{}, {}, {}]", p.x, p.y, p.z);
-            let scene = plate_and_wall(camera, &light);
+            let scene = plate_and_wall((64, 8), camera, &light);
             let r = render(&scene, &RenderRequest::default()).unwrap();
             let line = [-H, H]
                 .map(|z| p.x - p.x * (1.0 - p.z) / (z - p.z))
@@ -123,6 +123,93 @@ fn a_hard_point_lights_shadow_on_a_wall_is_its_closed_form_on_the_sweep() {
                     (crossing - line).abs() <= 0.5 * px,
                     "{camera} P {p}: row {row}: the line at {crossing}, projected {line} (px {px})"
                 );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_soft_point_lights_penumbra_on_a_wall_matches_the_integrated_visibility_on_the_sweep() {
+    // The light of radius r at P past the plate: the wall point X gets V(X)·cos/|X − P|², V the
+    // visibility integrated over the light's Gaussian in the test (`point_lights::visibility`).
+    // The sweep's profile over the wall, normalised by the unshadowed cos/|X − P|², against V,
+    // 128 × 16 px, penumbrae of 3–4 px; the edge's rasterization on the light's grid (up to half
+    // a cell) is the error left, so it falls with `light_resolution`.
+    let cameras = [
+        ("direction = [0.0, 0.0, 1.0]\nview_width = 2.0", None),
+        (
+            "projection = \"perspective\"\neye = [0.0, 0.0, -4.0]\nlook_at = [0.0, 0.0, 1.0]\n\
+             fov_deg = 4.0",
+            Some(8.0 / (2.0f64).to_radians().tan()),
+        ),
+    ];
+    let (w, h) = (128usize, 16usize);
+    for (camera, focal) in cameras {
+        for (p, r) in [
+            (DVec3::new(0.2, 0.1, -2.0), 0.1),
+            (DVec3::new(0.6, -0.3, -1.2), 0.05),
+        ] {
+            let light = format!(
+                "kind = \"point\"\nposition = [{}, {}, {}]\nradius = {r}",
+                p.x, p.y, p.z
+            );
+            let mut rmse_at = Vec::new();
+            for light_resolution in [1.0, 4.0] {
+                let mut scene = plate_and_wall((w, h), camera, &light);
+                scene.sweep.light_resolution = light_resolution;
+                let image = render(&scene, &RenderRequest::default())
+                    .unwrap()
+                    .image
+                    .data;
+                let px = focal.map_or(2.0 / w as f64, |f| 5.0 / f);
+                let (mut sum, mut n) = (0.0f64, 0usize);
+                for row in 0..h {
+                    for i in 0..w {
+                        let u = 0.5 * w as f64 - (i as f64 + 0.5);
+                        let v = 0.5 * h as f64 - (row as f64 + 0.5);
+                        let (eye, dir) = match focal {
+                            None => (DVec3::new(u * px, v * px, -5.0), DVec3::Z),
+                            Some(f) => (DVec3::new(0.0, 0.0, -4.0), DVec3::new(u / f, v / f, 1.0)),
+                        };
+                        let Some(x) = wall_point(eye, dir) else {
+                            continue;
+                        };
+                        let d = (x - p).length();
+                        let lit = (1.0 - p.z) / (d * d * d);
+                        let got = f64::from(image[3 * (row * w + i)]) / lit;
+                        let want = crate::point_lights::visibility(x, p, r);
+                        if row == 8
+                            && light_resolution == 4.0
+                            && std::env::var_os("DUMP").is_some()
+                            && want > 0.002
+                            && want < 0.998
+                        {
+                            eprintln!("{:.4} {got:.4} {want:.4}", x.x);
+                        }
+                        sum += (got - want).powi(2);
+                        n += 1;
+                    }
+                }
+                let rmse = (sum / n as f64).sqrt();
+                eprintln!(
+                    "{camera:?}, P {p}, r {r}, light_resolution {light_resolution}: RMSE \
+                     {rmse:.3e} over {n} wall pixels"
+                );
+                rmse_at.push(rmse);
+            }
+            let [one, four] = rmse_at[..] else {
+                unreachable!()
+            };
+            // Near the light's axis (P₁: the edge's rays 6° off the view axis) the issue's bar,
+            // the grid's cells the error left (it falls with `light_resolution`). 27° off (P₂)
+            // the grid's light takes the blur of the light's depth extent at one slope (the
+            // middle of what it sees, 21° off here): across the edge 5 % narrow in σ at the
+            // edge's. A looser bar, and no convergence to claim (docs/how-it-works.md).
+            if p.x < 0.5 {
+                assert!(four <= 5e-3, "{camera:?} P {p} r {r}: RMSE {rmse_at:?}");
+                assert!(four < 0.6 * one, "{camera:?} P {p} r {r}: RMSE {rmse_at:?}");
+            } else {
+                assert!(four <= 8e-3, "{camera:?} P {p} r {r}: RMSE {rmse_at:?}");
             }
         }
     }

@@ -533,7 +533,6 @@ fn bad_point_and_spot_lights_exit_3_without_an_output_file() {
         ),
         ("zero spot axis", "[[light]]\nkind = \"spot\"\nposition = [0.0, 0.0, -2.0]\ndirection = [0.0, 0.0, 0.0]\ncone_deg = 20.0".to_string(), "cpu", vec!["light[0].direction"]),
         ("tilt on a point light", point("tilt_deg = [10.0, 0.0]"), "reference", vec!["light[0].tilt_deg", "directional"]),
-        ("a radius in the sweep", point("radius = 0.05"), "cpu", vec!["light[0].radius", "--backend reference"]),
         (
             "amid the meshes in the sweep",
             "[[light]]\nkind = \"point\"\nposition = [5.0, 0.0, 0.0]".to_string(),
@@ -574,13 +573,35 @@ fn bad_point_and_spot_lights_exit_3_without_an_output_file() {
     );
     assert_eq!(r.0, 0, "{}", r.2);
     assert!(dir.join("a.png").exists());
-    // A hard one before the box renders with the sweep.
+    // Before the box it renders with the sweep, hard and soft; soft with the iterated penumbra
+    // it is refused, naming the key and the backend that renders it.
+    for light in [point(""), point("radius = 0.05")] {
+        std::fs::remove_file(dir.join("a.png")).unwrap();
+        std::fs::write(dir.join("t.toml"), base.replacen(LIGHT, &light, 1)).unwrap();
+        let r = cli(&dir, &["render", "t.toml", "-o", "a.png", "-q"]);
+        assert_eq!(r.0, 0, "{light}: {}", r.2);
+        assert!(dir.join("a.png").exists());
+    }
     std::fs::remove_file(dir.join("a.png")).unwrap();
-    let text = base.replacen(LIGHT, &point(""), 1);
-    std::fs::write(dir.join("t.toml"), text).unwrap();
-    let r = cli(&dir, &["render", "t.toml", "-o", "a.png", "-q"]);
-    assert_eq!(r.0, 0, "{}", r.2);
-    assert!(dir.join("a.png").exists());
+    let r = cli(
+        &dir,
+        &[
+            "render",
+            "t.toml",
+            "--penumbra",
+            "iterated",
+            "-o",
+            "a.png",
+            "-q",
+        ],
+    );
+    refused(
+        "soft, iterated",
+        &r,
+        BAD_INPUT,
+        &["sweep.penumbra", "--backend reference"],
+    );
+    assert!(!dir.join("a.png").exists(), "no output file");
 }
 
 #[test]

@@ -397,10 +397,11 @@ fn a_world_direction_light_renders_like_its_tilt_and_bad_ones_exit_3() {
             "direction = [0.0, 0.0, 1.0]\ntilt_deg = [5.0, 0.0]",
             "not both",
         ),
-        // A spot light is valid, but the sweep has no soft ones yet: refused naming the radius.
+        // A spot light is valid, but the sweep needs it before every mesh: refused naming the
+        // position.
         (
-            "kind = \"spot\"\nposition = [0.0, 0.0, -3.0]\nradius = 0.1\ndirection = [0.0, 0.0, 1.0]\ncone_deg = 20.0",
-            "light[0].radius",
+            "kind = \"spot\"\nposition = [0.0, 0.0, 30.0]\nradius = 0.1\ndirection = [0.0, 0.0, -1.0]\ncone_deg = 20.0",
+            "light[0].position",
         ),
         ("kind = \"spot\"", "light[0].position"),
     ] {

@@ -1,7 +1,7 @@
 //! Distance penumbra: the level plane before the first slab, from the initial light (built on
 //! the host for both backends, with the per-pixel [`pixel_level`]).
 
-use crate::pixel::levels::pixel_level;
+use crate::pixel::levels::{level_at, pixel_level};
 use crate::plan::RenderPlan;
 
 /// The level planes before the first slab, `[row][light][x]` (one unused entry per row with the
@@ -26,7 +26,7 @@ pub fn initial_levels(plan: &RenderPlan, light: &[f32]) -> Vec<u32> {
                 }
                 let occluded = ch as f32 - lit;
                 levels[y * lrl + l * w + x] =
-                    pixel_level::<f32>(&light_plan.table, occluded, at(ch), 0);
+                    pixel_level::<f32>(&light_plan.table, occluded, at(ch), level_at(plan, 0));
             }
         }
     }

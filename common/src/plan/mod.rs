@@ -5,6 +5,7 @@
 //! correction `α_slab = 1 − (1 − α)^(e/e_ref)`, attenuation factors and specular half vectors are
 //! all here.
 
+pub mod depth_scale;
 pub mod kernel;
 pub mod levels;
 pub mod material;
@@ -210,6 +211,9 @@ pub struct RenderPlan {
     /// z is the slab-grid point `centre + (x − centre)·(depth_origin + z)·per_depth` that
     /// `mesh_to_detail` maps; `None` for a slab grid (an orthographic view: no change).
     pub projective: Option<ProjectiveGrid>,
+    /// A soft point light's grid: the distance penumbra's depth plane and level search in ψ,
+    /// the light's φ-distance ([`depth_scale::DepthScale`]); `None`: in slabs.
+    pub depth_scale: Option<depth_scale::DepthScale>,
 }
 
 /// The cells of a perspective grid as slab-grid coordinates ([`RenderPlan::projective`]).
@@ -416,6 +420,7 @@ impl RenderPlan {
             initial_light: None,
             spot_patterns: Vec::new(),
             projective: None,
+            depth_scale: None,
             preintegration: scene.sweep.preintegration,
             surface_hold: Vec::new(),
             subpixel_meshes: Vec::new(),
@@ -470,6 +475,19 @@ impl RenderPlan {
     /// Sets every triangle's surface hold ([`RenderPlan::surface_hold`]) from its depth slopes
     /// and the lights' kernels.
     fn with_surface_hold(mut self, scene: &Scene, geometry: &SceneGeometry) -> RenderPlan {
+        self.surface_hold = self.surface_holds(scene, geometry, |t| (t.depth_dx, t.depth_dy));
+        self
+    }
+
+    /// Every rasterized triangle's surface hold ([`RenderPlan::surface_hold`]; empty where none
+    /// holds), its depth gradient (world units per grid pixel, x and y) given by `gradient`: the
+    /// raster plane's for a slab grid, the true depth's for a point light's perspective grid.
+    pub fn surface_holds(
+        &self,
+        scene: &Scene,
+        geometry: &SceneGeometry,
+        gradient: impl Fn(&crate::prepare::raster::TriangleSetup) -> (f32, f32),
+    ) -> Vec<u32> {
         let moments: Vec<KernelMoments> = self.lights.iter().map(|l| l.moments).collect();
         let e = geometry.slab_distance;
         let compensation = scene.sweep.variance_compensation;
@@ -488,23 +506,16 @@ impl RenderPlan {
                 if !blocks[self.mesh_material[t.mesh as usize] as usize] {
                     return 0;
                 }
-                surface_hold::surface_hold(
-                    &moments,
-                    self.penumbra,
-                    compensation,
-                    t.depth_dx,
-                    t.depth_dy,
-                    e,
-                )
+                let (dx, dy) = gradient(t);
+                surface_hold::surface_hold(&moments, self.penumbra, compensation, dx, dy, e)
             })
             .collect();
         // No per-pixel hold state where no surface holds (camera-facing receivers).
-        self.surface_hold = if holds.iter().any(|&h| h != 0) {
+        if holds.iter().any(|&h| h != 0) {
             holds
         } else {
             Vec::new()
-        };
-        self
+        }
     }
 
     /// Whether some surface is held ([`RenderPlan::surface_hold`]): the sweep then keeps one

@@ -25,7 +25,7 @@
 //! visits one padding tap for all and reads a tap's four level corners as one 2×2 block minimum
 //! (`crate::kernels::LevelPlane::corners`).
 
-use convshadow_common::pixel::levels::pixel_level;
+use convshadow_common::pixel::levels::{depth_coord, level_at, pixel_level};
 use convshadow_common::plan::TfEntry;
 
 use super::kit::{
@@ -409,13 +409,15 @@ fn attenuate_light(
         }
         if plan.depth_planes() > 0 {
             let occluded = ch as f32 - lit_out;
+            let removed_at = depth_coord(plan.depth_scale.as_ref(), removed_at);
             out[ch] = if released {
                 owned_depth(removed_at, occluded)
             } else {
                 deepen(light.depth[l], removed_at, lit_in - lit_out)
             };
             let table = &plan.lights[l].table;
-            state.levels[l * w + x] = pixel_level::<f32>(table, occluded, out[ch], ctx.slab + 1);
+            state.levels[l * w + x] =
+                pixel_level::<f32>(table, occluded, out[ch], level_at(plan, ctx.slab + 1));
         }
         copy_planes(
             &mut state.light[light_block(plan, l) + x * planes..][..planes],

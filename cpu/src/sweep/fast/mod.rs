@@ -26,7 +26,7 @@ mod per_lane;
 mod quiet;
 mod row;
 
-use convshadow_common::pixel::levels::pixel_level;
+use convshadow_common::pixel::levels::{level_at, pixel_level};
 use convshadow_common::plan::RenderPlan;
 
 pub(crate) use per_lane::TapColumns;
@@ -62,6 +62,6 @@ fn dark_levels(plan: &RenderPlan, slab: u32) -> Vec<u32> {
     let ch = plan.channels as f32;
     plan.lights
         .iter()
-        .map(|l| pixel_level::<f32>(&l.table, ch, 0.0, slab + 1))
+        .map(|l| pixel_level::<f32>(&l.table, ch, 0.0, level_at(plan, slab + 1)))
         .collect()
 }
