@@ -16,6 +16,7 @@ use convshadow_cpu::sweep::{
     ChunkCounts, CpuOptions, EyePoint, EyeView, SweepOptions, SweepOutput, sweep_perspective,
 };
 use convshadow_io::image::RgbImage;
+use glam::DVec3;
 
 use super::aov::{first_hit_depth_in, light_layers};
 use super::budget::LDI_BYTES_PER_PIXEL;
@@ -195,7 +196,7 @@ pub(super) fn render_perspective(
 ) -> Result<Rendered, RenderError> {
     let eye = eye_geometry(scene)?;
     render_passes(scene, &req.aovs, Mirror::No, |pass, aovs| {
-        render_perspective_pass(pass, &eye, req, aovs, false)
+        render_perspective_pass(pass, &eye, req, aovs, None)
     })
 }
 
@@ -213,22 +214,24 @@ pub(super) fn eye_geometry(scene: &Scene) -> Result<SceneGeometry, RenderError> 
 
 /// One pass of [`render_perspective`]: `pass` has its lights (and, turned round, its camera's
 /// direction reversed), `eye` the scene's eye. `point`: `pass` has one light, a point or spot
-/// light, swept on its own grid ([`point_grid`]) instead of the slab grid.
+/// light, swept on its own grid ([`point_grid`]) instead of the slab grid, where the eye's rays
+/// meet the meshes between these points ([`super::point::visible_points`]).
 pub(super) fn render_perspective_pass(
     pass: &Scene,
     eye: &SceneGeometry,
     req: &RenderRequest<'_>,
     aovs: &[Aov],
-    point: bool,
+    point: Option<&[DVec3]>,
 ) -> Result<Rendered, RenderError> {
     let scene = pass;
     let start = Instant::now();
-    let point_grid = if point {
-        let frame = grid_scene(scene, eye)?;
-        let frame = Camera::new(&frame.camera, &frame.image);
-        Some(point_grid(scene, eye, frame, 0)?)
-    } else {
-        None
+    let point_grid = match point {
+        Some(visible) => {
+            let frame = grid_scene(scene, eye)?;
+            let frame = Camera::new(&frame.camera, &frame.image);
+            Some(point_grid(scene, eye, frame, visible, 0)?)
+        }
+        None => None,
     };
     let grid = match &point_grid {
         Some(p) => p.scene.clone(),

@@ -10,6 +10,7 @@
 
 use glam::DVec3;
 
+use convshadow_common::contract::ldi::Ldi;
 use convshadow_common::model::scene::{
     CameraSpec, GuardBandSpec, MAX_IMAGE_SIDE, Penumbra, Projection, Scene, SceneError, SlabSpec,
 };
@@ -33,14 +34,16 @@ pub(super) struct PointGrid {
 }
 
 /// The grid `scene`'s light `l` (a point or spot light, of a pass that has only it) is swept on,
-/// for the eye `eye` whose slab-grid frame is `frame`: a perspective view from the light's centre along the view axis, holding
-/// every vertex, its cell at every vertex no coarser than the eye's there (so a shadow edge
+/// for the eye `eye` whose slab-grid frame is `frame` and whose rays meet the meshes between the
+/// points `visible` ([`visible_points`]): a perspective view from the light's centre along the view axis, holding
+/// every vertex the eye's rays pass, its cell at every vertex no coarser than the eye's there (so a shadow edge
 /// lands within half an eye cell of where it projects). Refused (naming the key) for a light that is not before every mesh along the
 /// view or has a radius, and when the grid would be too large.
 pub(super) fn point_grid(
     scene: &Scene,
     eye: &SceneGeometry,
     frame: Camera,
+    visible: &[DVec3],
     l: usize,
 ) -> Result<PointGrid, RenderError> {
     let light = scene.lights[l]
@@ -104,6 +107,18 @@ pub(super) fn point_grid(
             ),
         ));
     }
+    // Only what the eye samples needs the light, and whatever shadows a sample lies on its ray
+    // from the light, in the same grid column: the grid need not reach beyond the eye's rays'
+    // stretches through the meshes (`visible`) as the light sees them.
+    let mut seen = [0.0f64; 2];
+    for v in visible {
+        let c = *v - at;
+        if c.z > 0.0 {
+            seen[0] = seen[0].max(c.x.abs() / c.z);
+            seen[1] = seen[1].max(c.y.abs() / c.z);
+        }
+    }
+    let (tan_x, tan_y) = (tan_x.min(seen[0]), tan_y.min(seen[1]));
     let cell = frame.pixel_size;
     // Two cells beyond the outermost vertex: every ray that meets a mesh is in the grid.
     let side = |tan: f64| 2.0 * (tan * focal + 2.0).ceil();
@@ -191,4 +206,32 @@ pub(super) fn perspective_gradient(t: &TriangleSetup) -> (f32, f32) {
         (-z2 * f64::from(t.depth_dx)) as f32,
         (-z2 * f64::from(t.depth_dy)) as f32,
     )
+}
+
+/// Where the eye's rays are among the meshes: each image pixel's ray at its first and last
+/// fragment of `ldi` (the eye's LDI), camera coordinates. Every sample the eye takes lies
+/// between the two on its ray.
+pub(super) fn visible_points(eye: &SceneGeometry, ldi: &Ldi) -> Vec<DVec3> {
+    let cam = &eye.camera;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let mut points = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let p = y * w + x;
+            let (first, end) = (ldi.offsets[p] as usize, ldi.offsets[p + 1] as usize);
+            if first == end {
+                continue;
+            }
+            for d in [ldi.depth[first], ldi.depth[end - 1]] {
+                let depth = eye.z_origin + f64::from(d);
+                let s = cam.pixel_size_at(depth);
+                points.push(DVec3::new(
+                    (x as f64 + 0.5 - 0.5 * w as f64) * s,
+                    (y as f64 + 0.5 - 0.5 * h as f64) * s,
+                    depth,
+                ));
+            }
+        }
+    }
+    points
 }

@@ -4,8 +4,10 @@
 
 use super::passes::add_pass;
 use super::perspective::{eye_geometry, render_perspective_pass};
+use super::point::visible_points;
 use super::{Aov, Backend, RenderError, RenderRequest, Rendered, image_fingerprint};
 use convshadow_common::model::scene::{Scene, SceneError};
+use convshadow_cpu::ldi::{BuildLdi, Ldi};
 
 /// [`super::render`] for a scene with point or spot lights: its directional lights rendered as
 /// without them (one scene, [`super::render`]), each point or spot light in a pass of its own
@@ -43,6 +45,12 @@ pub(super) fn render_with_point_lights(
         passes.push((vec![l], with_lights(scene, &[l])));
     }
     let eye = eye_geometry(scene)?;
+    // Where the eye's rays meet the meshes, which bounds every point light's grid (the eye's
+    // LDI once more; each pass builds its own within its budget).
+    let visible = {
+        let ldi = Ldi::build(&eye.raster, req.memory_budget)?;
+        visible_points(&eye, &ldi)
+    };
     let mut total: Option<Rendered> = None;
     let mut layers = Vec::new();
     for (i, (lights, mut pass)) in passes.into_iter().enumerate() {
@@ -59,7 +67,7 @@ pub(super) fn render_with_point_lights(
             })
             .collect();
         let mut rendered = if is_point(lights[0]) {
-            render_perspective_pass(&pass, &eye, req, &aovs, true)?
+            render_perspective_pass(&pass, &eye, req, &aovs, Some(&visible))?
         } else {
             super::render(&pass, &RenderRequest { aovs, ..*req })?
         };
