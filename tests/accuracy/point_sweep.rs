@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use convshadow::common::model::scene::Scene;
-use convshadow::pipeline::{CpuPath, RenderRequest, render, render_reference};
+use convshadow::pipeline::{Aov, CpuPath, RenderRequest, render, render_reference};
 use glam::DVec3;
 
 /// Half the plate's thickness; it spans world x ≥ 0 (to 3), z ∈ [−H, H].
@@ -304,5 +304,36 @@ fn point_lights_have_the_same_bits_on_both_paths_at_any_thread_count() {
             assert_eq!(bits(&simd), bits(&with(CpuPath::Scalar, 1)), "{camera}");
             assert_eq!(bits(&simd), bits(&with(CpuPath::Simd, 1)), "{camera}");
         }
+    }
+}
+
+#[test]
+fn a_scene_with_point_lights_is_the_sum_of_its_light_layers_and_background() {
+    // A directional light, a soft point light and a light towards the viewer (its own pass):
+    // each light's layer is a sweep of its own with the others dark, so the image must be their
+    // sum plus the background where nothing covers it.
+    let lights = "[[light]]\ntilt_deg = [10.0, 5.0]\nvariance = [0.01, 0.01]\n\
+                  color = [0.3, 0.3, 0.3]\n\
+                  [[light]]\nkind = \"point\"\nposition = [-0.5, 0.4, -1.0]\nradius = 0.05\n\
+                  color = [2.0, 1.5, 1.0]\n\
+                  [[light]]\ndirection = [0.3, 0.0, -1.0]\ncolor = [0.2, 0.2, 0.2]";
+    for camera in [ORTHOGRAPHIC, PERSPECTIVE] {
+        let mut scene = medium_scene(camera, lights);
+        scene.image.background = [0.1, 0.2, 0.3];
+        let req = RenderRequest {
+            aovs: vec![Aov::Light(2), Aov::Light(0), Aov::Light(1)],
+            ..RenderRequest::default()
+        };
+        let r = render(&scene, &req).unwrap();
+        let order: Vec<usize> = r.light_layers.iter().map(|(l, _)| *l).collect();
+        assert_eq!(order, [2, 0, 1], "the layers in request order");
+        let mut worst = 0.0f32;
+        for (k, v) in r.image.data.iter().enumerate() {
+            let lights: f32 = r.light_layers.iter().map(|(_, layer)| layer[k]).sum();
+            let background = (1.0 - r.alpha[k / 3]) * scene.image.background[k % 3];
+            worst = worst.max((v - (lights + background)).abs());
+        }
+        assert!(worst < 1e-5, "{camera}: largest difference {worst}");
+        assert!(r.light_layers[2].1.iter().any(|&v| v > 0.01), "the point light lights");
     }
 }
