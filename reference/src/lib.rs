@@ -9,6 +9,8 @@
 //!   perpendicular to a directional light seen from any angle, integrated along each view ray;
 //! - [`perspective_edge`]: a half-plane's shadow on a receiver seen through a perspective camera,
 //!   evaluated where each pixel's ray meets the receiver;
+//! - [`point_edge`]: a point light's shadow of a half-plane on a wall, integrated over the
+//!   light's Gaussian;
 //! - [`impulse`]: a single lit pixel through an empty scene, whose exact spread is n·Σκ;
 //! - [`quadrature`]: the Gauss–Legendre nodes of the disk's and the sheet's integrals.
 //!
@@ -20,6 +22,7 @@ pub mod half_plane_sheet;
 pub mod impulse;
 pub mod light_samples;
 pub mod perspective_edge;
+pub mod point_edge;
 pub mod quadrature;
 pub mod shadow_ray;
 

@@ -63,7 +63,8 @@ impl ReportOptions {
              scene at 48×48, ellipse2 with and without pre-integration, slabs 64, 128, against \
              2048 slabs (self-error against 4096); a directional light at 0°, 100°, 180° from the view \
              over a half-plane and a translucent sheet (isotropic light); a perspective camera \
-             at fov 30° and 90° over a half-plane's shadow on a receiver"
+             at fov 30° and 90° over a half-plane's shadow on a receiver; a soft point light's \
+             penumbra on a wall, orthographic and perspective, light resolution 1 and 4"
                 .to_string()
         } else {
             "full grid: edge at d = d1/4, d1, 4·d1 × 7 kernels × slabs 64, 128, 256, 512 × variance \
@@ -74,7 +75,8 @@ impl ReportOptions {
              slabs 64, 128, 256, 512, against 2048 slabs (self-error against 4096); a directional \
              light at 0°, 45°, 80°, 100°, 135°, 180° from the view over a half-plane and a \
              translucent sheet (isotropic and rotated anisotropic light); a perspective camera at \
-             fov 30° and 90° over a half-plane's shadow on a receiver"
+             fov 30° and 90° over a half-plane's shadow on a receiver; a soft point light's \
+             penumbra on a wall, orthographic and perspective, light resolution 1 and 4"
                 .to_string()
         }
     }

@@ -15,14 +15,17 @@
 //! - `direction`: a directional light at 0°–180° from the view axis ([`direction`]), an opaque
 //!   half-plane's shadow on a translucent sheet; reference: its closed form along each view ray;
 //! - `perspective`: a perspective camera at fov 30° and 90° over a half-plane's shadow on a
-//!   receiver ([`perspective`]); reference: the closed form where each pixel's ray meets it.
+//!   receiver ([`perspective`]); reference: the closed form where each pixel's ray meets it;
+//! - `point`: a soft point light's penumbra on a wall behind a half-plane ([`point`]),
+//!   orthographic and perspective, two light-grid resolutions; reference: the visibility
+//!   integrated over the light's Gaussian at each pixel's wall point.
 //!
 //! "Slab count" for the edge and disk is the number of convolutions between occluder and
 //! receiver (d = n·e); for the scene it is the scene's slab count.
 //!
 //! Files: [`row`] (the numbers of a case and of a report, which every other file reads),
 //! [`grid`] (the cases), [`runner`] (running them against their references, then the writers),
-//! [`direction`] and [`perspective`] (those families' cases), [`csv`] and [`markdown`] (the writers), [`plot`] (the figure). Imports go one way: runner →
+//! [`direction`], [`perspective`] and [`point`] (those families' cases), [`csv`] and [`markdown`] (the writers), [`plot`] (the figure). Imports go one way: runner →
 //! writers → grid and row.
 
 pub mod csv;
@@ -31,6 +34,7 @@ pub mod grid;
 pub mod markdown;
 pub mod perspective;
 pub mod plot;
+pub mod point;
 pub mod row;
 pub mod runner;
 

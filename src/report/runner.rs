@@ -17,7 +17,7 @@ use super::grid::{
     edge_setup, kernels,
 };
 use super::row::{Report, Row};
-use super::{csv, direction, markdown, perspective, plot};
+use super::{csv, direction, markdown, perspective, plot, point};
 
 /// Runs one edge case.
 pub fn edge_row(setup: &EdgeSetup, level: &str) -> Row {
@@ -545,6 +545,20 @@ fn perspective_cases(cases: &mut Cases<'_>) -> Result<(), String> {
     Ok(())
 }
 
+/// The point-light family: orthographic and perspective × the light grid's resolution; the same
+/// in the quick and the full report.
+fn point_cases(cases: &mut Cases<'_>) -> Result<(), String> {
+    for perspective in [false, true] {
+        for resolution in point::LIGHT_RESOLUTIONS {
+            cases.next += 1;
+            if cases.want(cases.next - 1) {
+                cases.push(point::point_row(perspective, resolution)?);
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Refuses an `options.case` past the last of the `count` cases.
 fn check_case(options: &ReportOptions, count: usize) -> Result<(), String> {
     if let Some(c) = options.case
@@ -607,10 +621,11 @@ pub fn case_count(options: &ReportOptions) -> usize {
     let _ = disk_cases(&mut cases);
     scene_cases(&mut cases);
     narrowband_cases(&mut cases);
-    // Without a wanted case the direction and perspective families render nothing, so they
-    // cannot fail.
+    // Without a wanted case the direction, perspective and point families render nothing, so
+    // they cannot fail.
     let _ = direction_cases(&mut cases);
     let _ = perspective_cases(&mut cases);
+    let _ = point_cases(&mut cases);
     cases.next
 }
 
@@ -653,6 +668,7 @@ pub fn run(options: &ReportOptions) -> Result<Report, String> {
     narrowband_cases(&mut cases);
     direction_cases(&mut cases)?;
     perspective_cases(&mut cases)?;
+    point_cases(&mut cases)?;
     check_case(options, cases.next)?;
     write_files(options, cases.rows, start)
 }

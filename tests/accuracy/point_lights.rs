@@ -1,5 +1,5 @@
 //! Point and spot lights (issue 41) in the shadow-ray reference, against visibilities integrated
-//! here: the light of a point light of radius r reaching a point X past an opaque thin half-plane
+//! in `convshadow_reference::point_edge`: the light of a point light of radius r reaching a point X past an opaque thin half-plane
 //! is `V(X) / |X − P|²`, V the probability that the segment from X to a point `P + δ` of the
 //! light's Gaussian (`δ ~ N(0, r²·I)`) misses the half-plane. Across the edge only δ's two
 //! components in the plane of the edge's normal and the depth matter; for a given depth offset
@@ -13,12 +13,8 @@ use std::path::Path;
 use convshadow::common::model::scene::Scene;
 use convshadow::pipeline::render_reference;
 use convshadow::reference::Reference;
-use convshadow::reference::edge::phi;
-use convshadow::reference::quadrature::gauss_legendre;
+use convshadow::reference::point_edge::{H, visibility};
 use glam::DVec3;
-
-/// Half the half-plane's thickness; it spans world x ≥ 0 (to 3), all y in view, z ∈ [−H, H].
-const H: f64 = 0.005;
 
 /// A scene with the opaque half-plane x ≥ 0 around z = 0 and `light` (TOML lines), seen by
 /// `camera` (TOML lines).
@@ -45,34 +41,6 @@ color = [1.0, 1.0, 1.0]
         t = 2.0 * H
     );
     Scene::parse(&text, "point_lights", Path::new(".")).unwrap()
-}
-
-/// V at world point `x` (z > H, y inside the plate's extent) for a light of radius `r` at `p`
-/// (z < −H): the segment from x to `p + δ` meets the plate iff its world x is ≥ 0 at z = H or
-/// at z = −H, i.e. iff `δ_x ≥ min over z of x_x·(1 − 1/s(z)) − p_x`, s(z) = (z − x_z)/(l_z − x_z)
-/// the fraction of the way to the light's point.
-pub(crate) fn visibility(x: DVec3, p: DVec3, r: f64) -> f64 {
-    let nodes = gauss_legendre(400);
-    let mut v = 0.0;
-    for (node, weight) in nodes {
-        let dz = 8.0 * r * node;
-        let lz = p.z + dz;
-        let threshold = [H, -H]
-            .map(|z| {
-                let s = (z - x.z) / (lz - x.z);
-                x.x * (1.0 - 1.0 / s)
-            })
-            .into_iter()
-            .fold(f64::INFINITY, f64::min);
-        let density = (-0.5 * (dz / r).powi(2)).exp() / (r * (2.0 * std::f64::consts::PI).sqrt());
-        let miss = if r > 0.0 {
-            phi((threshold - p.x) / r)
-        } else {
-            f64::from(u8::from(p.x < threshold))
-        };
-        v += weight * 8.0 * r * density * miss;
-    }
-    v
 }
 
 /// The reference's light (channel 0) at each world point, `k²` samples, and the expected

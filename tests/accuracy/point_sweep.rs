@@ -9,52 +9,13 @@ use std::path::Path;
 
 use convshadow::common::model::scene::Scene;
 use convshadow::pipeline::{Aov, CpuPath, RenderRequest, render, render_reference};
+use convshadow::reference::point_edge::{self, H, View, wall_point};
 use glam::DVec3;
 
-/// Half the plate's thickness; it spans world x ≥ 0 (to 3), z ∈ [−H, H].
-const H: f64 = 0.005;
-
-/// A `width × height` scene seen by `camera` (TOML lines): the opaque plate x ≥ 0 around z = 0
-/// before a white Lambert wall whose front face is z = 1, a background of black, lit by `light`.
-fn plate_and_wall((width, height): (usize, usize), camera: &str, light: &str) -> Scene {
-    let text = format!(
-        r#"
-[image]
-width = {width}
-height = {height}
-background = [0.0, 0.0, 0.0]
-[camera]
-{camera}
-[sweep]
-slabs = 64
-[[light]]
-{light}
-[[mesh]]
-shape = "box"
-size = [3.0, 8.0, {t}]
-translate = [1.5, 0.0, 0.0]
-material = "plate"
-[[mesh]]
-shape = "box"
-size = [8.0, 8.0, 0.02]
-translate = [0.0, 0.0, 1.01]
-material = "wall"
-[material.plate]
-color = [1.0, 1.0, 1.0]
-[material.wall]
-color = [1.0, 1.0, 1.0]
-"#,
-        t = 2.0 * H
-    );
+/// The plate-and-wall scene of `point_edge`, `width × height`, 64 slabs.
+fn plate_and_wall(size: (usize, usize), camera: &str, light: &str) -> Scene {
+    let text = point_edge::scene_toml(size, camera, 64, light);
     Scene::parse(&text, "point_sweep", Path::new(".")).unwrap()
-}
-
-/// Where the ray from `eye` along `dir` meets the wall's face z = 1, if it passes the plate
-/// (at z = ±H it is at x < 0) and meets it within its 8 × 8 extent.
-fn wall_point(eye: DVec3, dir: DVec3) -> Option<DVec3> {
-    let at = |z: f64| eye + dir * ((z - eye.z) / dir.z);
-    let x = at(1.0);
-    (at(-H).x < 0.0 && at(H).x < 0.0 && x.x.abs() < 4.0 && x.y.abs() < 4.0).then_some(x)
 }
 
 #[test]
@@ -63,7 +24,7 @@ fn a_hard_point_lights_shadow_on_a_wall_is_its_closed_form_on_the_sweep() {
     // corners of P_x − P_x·(1 − P_z)/(z − P_z) on the wall. A wall point X on the lit side gets
     // (1 − P_z)/|X − P|³ (the cosine of the direction to P over the squared distance), 0 beyond.
     let cameras = [
-        // (camera lines, eye, pixel → ray direction)
+        // (camera lines, a perspective camera's focal length in pixels)
         ("direction = [0.0, 0.0, 1.0]\nview_width = 2.0", None),
         (
             "projection = \"perspective\"\neye = [0.0, 0.0, -4.0]\nlook_at = [0.0, 0.0, 1.0]\n\
@@ -80,19 +41,13 @@ fn a_hard_point_lights_shadow_on_a_wall_is_its_closed_form_on_the_sweep() {
                 .map(|z| p.x - p.x * (1.0 - p.z) / (z - p.z))
                 .into_iter()
                 .fold(f64::INFINITY, f64::min);
-            // World units across one eye pixel on the wall.
-            let px = focal.map_or(2.0 / 64.0, |f| 5.0 / f);
+            let view = focal.map_or(View::Orthographic(2.0), View::Perspective);
+            let px = view.pixel_on_wall(64);
             for row in 0..8usize {
                 let mut crossing: Option<f64> = None;
                 let mut last: Option<(f64, f64, f64)> = None;
                 for i in 0..64usize {
-                    // The image's right and down are world −x and −y (the default `up`, +y,
-                    // looking along +z).
-                    let (u, v) = (32.0 - (i as f64 + 0.5), 4.0 - (row as f64 + 0.5));
-                    let (eye, dir) = match focal {
-                        None => (DVec3::new(u * px, v * px, -5.0), DVec3::Z),
-                        Some(f) => (DVec3::new(0.0, 0.0, -4.0), DVec3::new(u / f, v / f, 1.0)),
-                    };
+                    let (eye, dir) = view.ray((64, 8), (i, row));
                     let Some(x) = wall_point(eye, dir) else {
                         continue;
                     };
@@ -161,36 +116,8 @@ fn a_soft_point_lights_penumbra_on_a_wall_matches_the_integrated_visibility_on_t
                     .unwrap()
                     .image
                     .data;
-                let px = focal.map_or(2.0 / w as f64, |f| 5.0 / f);
-                let (mut sum, mut n) = (0.0f64, 0usize);
-                for row in 0..h {
-                    for i in 0..w {
-                        let u = 0.5 * w as f64 - (i as f64 + 0.5);
-                        let v = 0.5 * h as f64 - (row as f64 + 0.5);
-                        let (eye, dir) = match focal {
-                            None => (DVec3::new(u * px, v * px, -5.0), DVec3::Z),
-                            Some(f) => (DVec3::new(0.0, 0.0, -4.0), DVec3::new(u / f, v / f, 1.0)),
-                        };
-                        let Some(x) = wall_point(eye, dir) else {
-                            continue;
-                        };
-                        let d = (x - p).length();
-                        let lit = (1.0 - p.z) / (d * d * d);
-                        let got = f64::from(image[3 * (row * w + i)]) / lit;
-                        let want = crate::point_lights::visibility(x, p, r);
-                        if row == 8
-                            && light_resolution == 4.0
-                            && std::env::var_os("DUMP").is_some()
-                            && want > 0.002
-                            && want < 0.998
-                        {
-                            eprintln!("{:.4} {got:.4} {want:.4}", x.x);
-                        }
-                        sum += (got - want).powi(2);
-                        n += 1;
-                    }
-                }
-                let rmse = (sum / n as f64).sqrt();
+                let view = focal.map_or(View::Orthographic(2.0), View::Perspective);
+                let (rmse, n) = point_edge::wall_rmse(&image, (w, h), view, p, r);
                 eprintln!(
                     "{camera:?}, P {p}, r {r}, light_resolution {light_resolution}: RMSE \
                      {rmse:.3e} over {n} wall pixels"
@@ -334,6 +261,9 @@ fn a_scene_with_point_lights_is_the_sum_of_its_light_layers_and_background() {
             worst = worst.max((v - (lights + background)).abs());
         }
         assert!(worst < 1e-5, "{camera}: largest difference {worst}");
-        assert!(r.light_layers[2].1.iter().any(|&v| v > 0.01), "the point light lights");
+        assert!(
+            r.light_layers[2].1.iter().any(|&v| v > 0.01),
+            "the point light lights"
+        );
     }
 }

@@ -109,6 +109,23 @@ fn check_case_counts(t: &Csv<'_>) {
         persp("4.000000") < persp("1.000000"),
         "light resolution 4 against 1"
     );
+    // A point light: orthographic and perspective, light resolution 1 and 4; the finer grid
+    // better on each camera (the integrated visibility of `convshadow_reference::point_edge`).
+    assert_eq!(count("point"), 2 * 2);
+    for fov in ["", "4.000000"] {
+        let err = |res: &str| -> f64 {
+            let r = rows
+                .iter()
+                .find(|r| {
+                    r[col("family")] == "point"
+                        && r[col("fov_deg")] == fov
+                        && r[col("light_resolution")] == res
+                })
+                .expect("a point row");
+            r[col("rmse_correct")].parse().unwrap()
+        };
+        assert!(err("4.000000") < err("1.000000"), "point, fov {fov:?}");
+    }
     for k in kernels() {
         for family in ["edge", "disk", "scene"] {
             assert!(
@@ -165,6 +182,7 @@ fn check_cells(t: &Csv<'_>) {
             ],
             "direction" => &["rmse_correct", "view_angle_deg"],
             "perspective" => &["rmse_correct", "isoline_err_px", "fov_deg"],
+            "point" => &["rmse_correct", "light_resolution"],
             _ => &["rmse_reference", "reference_self_err"],
         };
         for name in required {
