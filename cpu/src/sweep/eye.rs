@@ -593,36 +593,23 @@ fn eye_shade(
     let surface = sample.normal.filter(|_| sample.shades_surface);
     let part = (sample.part, sample.lit_from);
     let surface = surface.map(|normal| (normal, true));
+    // A point light (its grid's one light): the direction to it from this sample, and its
+    // centre's falloff, cone and pattern in its colour; else the plan's terms.
+    let point = (view.point.as_ref().zip(sample.in_frame))
+        .map(|(point, at)| point_terms(point, at, point.phase_g[sample.mesh as usize]));
+    let terms = |l: usize| point.unwrap_or_else(|| LightTerms::of(plan, material, l));
     let target = (color, alpha);
-    match (&view.point, sample.in_frame) {
-        (Some(point), Some(at)) => {
-            // A point light (its grid's one light): the direction to it from this sample, and
-            // its centre's falloff, cone and pattern in its colour.
-            let terms = point_terms(point, at, point.phase_g[sample.mesh as usize]);
-            let terms = |_: usize| terms;
-            shade_sample_with(
-                plan,
-                material,
-                &mut tf,
-                part,
-                &iin[..n],
-                surface,
-                target,
-                true,
-                terms,
-            );
-        }
-        _ => shade_sample(
-            plan,
-            material,
-            &mut tf,
-            part,
-            &iin[..n],
-            surface,
-            target,
-            true,
-        ),
-    }
+    shade_sample_with(
+        plan,
+        material,
+        &mut tf,
+        part,
+        &iin[..n],
+        surface,
+        target,
+        true,
+        terms,
+    );
 }
 
 /// A point light's shading terms at `at` (the eye's slab-grid frame) for a material of phase
