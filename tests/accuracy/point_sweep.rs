@@ -267,3 +267,24 @@ fn a_scene_with_point_lights_is_the_sum_of_its_light_layers_and_background() {
         );
     }
 }
+
+#[test]
+fn a_point_light_whose_grid_would_be_too_large_is_refused_by_name() {
+    // A light a hair before a wide wall sees it at nearly 90° either way: its grid (tangents of
+    // the view axis at the eye's cell size) would pass 16384 cells a side.
+    let scene = plate_and_wall(
+        (64, 8),
+        "direction = [0.0, 0.0, 1.0]\nview_width = 8.0",
+        "kind = \"point\"\nposition = [0.0, 0.0, -0.006]",
+    );
+    let e = render(&scene, &RenderRequest::default())
+        .err()
+        .expect("refused");
+    let msg = e.to_string();
+    assert!(
+        matches!(e, convshadow::pipeline::RenderError::OutOfMemory(_))
+            && msg.contains("light[0]")
+            && msg.contains("16384"),
+        "{msg}"
+    );
+}
