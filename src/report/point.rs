@@ -22,7 +22,7 @@ const RADIUS: f64 = 0.1;
 /// The perspective camera's vertical field of view (degrees).
 const FOV_DEG: f64 = 4.0;
 
-/// One case: the wall seen orthographically or (`perspective`) at [`FOV_DEG`], the light grid at
+/// One case: the wall seen orthographically or (`perspective`) at a 4° field of view, the light grid at
 /// `light_resolution`; its time and the wall's RMSE against the integrated visibility.
 pub fn point_row(perspective: bool, light_resolution: f64) -> Result<Row, String> {
     let (camera, view) = if perspective {

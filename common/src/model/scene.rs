@@ -481,8 +481,8 @@ pub struct LightSpec {
     /// and `rotation_deg` are those the turned-round camera sees.
     pub toward_viewer: bool,
     /// A point or spot light (`kind = "point" | "spot"`): its place, size and cone. Its tilt is
-    /// then 0 and its variance 0 (they describe directional lights only); only the shadow-ray
-    /// reference renders it so far.
+    /// then 0 and its variance 0 (they describe directional lights only): the CPU sweep renders
+    /// it on a grid of its own (`src/pipeline/point.rs`), the shadow-ray reference anywhere.
     pub point: Option<PointLight>,
 }
 

@@ -189,7 +189,7 @@ pub struct RenderPlan {
     /// when a light has a pattern; `None`: every light starts at 1.
     pub initial_light: Option<Vec<f32>>,
     /// Per light, a spot light's pattern (a gobo projected through its cone, read where the
-    /// light arrives, not a light buffer: only the shadow-ray reference renders spot lights);
+    /// light arrives, not a light buffer: the reference's tracer and the sweep's eye pass);
     /// empty when no spot light has one.
     pub spot_patterns: Vec<Option<Arc<Pattern>>>,
     /// Pre-integrated compositing (`sweep.preintegration`): materials with a
