@@ -15,8 +15,8 @@ use crate::plan::{RenderPlan, fresnel_terms, henyey_greenstein};
 use crate::prepare::camera::Camera;
 
 /// What the shading takes of light `l` at a shading point: for a directional light its plan's
-/// constants (`convshadow_cpu::shading::shade`); for a point light, those of the direction to it from the point
-/// (the shadow-ray reference and the sweep's eye pass).
+/// constants (`convshadow_cpu::shading::shade`); for a point light, those of the direction to
+/// it from the point (the shadow-ray reference and the sweep's eye pass).
 #[derive(Clone, Copy, Debug)]
 pub struct LightTerms {
     /// The light's colour times the material's phase function (`MaterialPlan::light_color`).
