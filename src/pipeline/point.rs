@@ -35,10 +35,11 @@ pub(super) struct PointGrid {
 
 /// The grid `scene`'s light `l` (a point or spot light, of a pass that has only it) is swept on,
 /// for the eye `eye` whose slab-grid frame is `frame` and whose rays meet the meshes between the
-/// points `visible` ([`visible_points`]): a perspective view from the light's centre along the view axis, holding
-/// every vertex the eye's rays pass, its cell at every vertex no coarser than the eye's there (so a shadow edge
-/// lands within half an eye cell of where it projects). Refused (naming the key) for a light that is not before every mesh along the
-/// view or has a radius, and when the grid would be too large.
+/// points `visible` ([`visible_points`]): a perspective view from the light's centre along the
+/// view axis, holding every vertex the eye's rays pass, its cell at every vertex no coarser than
+/// the eye's there (so a shadow edge lands within half an eye cell of where it projects), a
+/// soft light's spread in its variance. Refused (naming the key) for a light that is not before
+/// every mesh along the view, a soft one with the iterated penumbra, and a grid too large.
 pub(super) fn point_grid(
     scene: &Scene,
     eye: &SceneGeometry,

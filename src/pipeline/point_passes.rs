@@ -11,9 +11,10 @@ use convshadow_cpu::ldi::{BuildLdi, Ldi};
 
 /// [`super::render`] for a scene with point or spot lights: its directional lights rendered as
 /// without them (one scene, [`super::render`]), each point or spot light in a pass of its own
-/// ([`render_perspective_pass`] on its grid, `super::point::point_grid`), the images added with the background
-/// once (the first pass's). The depth layer is the first pass's; each light layer the pass's
-/// that has the light. The GPU backend has no point lights yet: `auto` renders on the CPU.
+/// ([`render_perspective_pass`] on its grid, `super::point::point_grid`), the images added with
+/// the background once (the first pass's). The depth layer is the first pass's; each light layer
+/// the pass's that has the light. The GPU backend has no point lights yet: `auto` renders on the
+/// CPU.
 pub(super) fn render_with_point_lights(
     scene: &Scene,
     req: &RenderRequest<'_>,
