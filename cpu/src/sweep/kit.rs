@@ -3,6 +3,7 @@
 //! row's mutable state ([`RowState`]), the light buffer's layout and the gather's reach.
 
 use convshadow_common::pixel::hash::row_hash;
+use convshadow_common::pixel::levels::LevelAt;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::prepare::raster::RasterSetup;
 
@@ -26,6 +27,9 @@ pub(crate) struct SlabContext<'a> {
     pub back: f32,
     /// Front face of the slab.
     pub front: f32,
+    /// Where the distance penumbra's level search stands for the next slab (`level_at`, once
+    /// per slab).
+    pub next_level_at: LevelAt,
 }
 
 /// What the previous slab left that a pixel's gather reads beyond its own row: the light

@@ -29,6 +29,7 @@ mod kit;
 mod level_blocks;
 mod pixel;
 
+use convshadow_common::pixel::levels::level_at;
 use std::sync::atomic::Ordering;
 
 use convshadow_common::plan::RenderPlan;
@@ -541,6 +542,7 @@ fn drive(
             slab,
             back: plan.slab_back[slab as usize],
             front: plan.slab_front[slab as usize],
+            next_level_at: level_at(plan, slab + 1),
         };
         if before_slab(slab, &state) {
             slabs_swept = slab;

@@ -25,7 +25,7 @@
 //! visits one padding tap for all and reads a tap's four level corners as one 2×2 block minimum
 //! (`crate::kernels::LevelPlane::corners`).
 
-use convshadow_common::pixel::levels::{depth_coord, level_at, pixel_level};
+use convshadow_common::pixel::levels::{depth_coord, pixel_level};
 use convshadow_common::plan::TfEntry;
 
 use super::kit::{
@@ -417,7 +417,7 @@ fn attenuate_light(
             };
             let table = &plan.lights[l].table;
             state.levels[l * w + x] =
-                pixel_level::<f32>(table, occluded, out[ch], level_at(plan, ctx.slab + 1));
+                pixel_level::<f32>(table, occluded, out[ch], ctx.next_level_at);
         }
         copy_planes(
             &mut state.light[light_block(plan, l) + x * planes..][..planes],

@@ -33,7 +33,7 @@ use crate::sweep::kit::{
 use crate::sweep::pixel::{
     Hit, LightIn, convolve, exact_light, hold, shade_and_composite, subpixel_part,
 };
-use convshadow_common::pixel::levels::{depth_coord, level_at, pixel_level};
+use convshadow_common::pixel::levels::{depth_coord, pixel_level};
 use convshadow_common::plan::OCCLUSION_EPS;
 use convshadow_common::plan::{RenderPlan, TfEntry};
 use wide::f32x8;
@@ -667,12 +667,7 @@ fn finish_depth<L: Layout>(
     if let Some(released) = released {
         out = L::select(released, owned_depth(removed_at, occluded), out);
     }
-    let level = pixel_level::<L>(
-        &plan.lights[l].table,
-        occluded,
-        out,
-        level_at(plan, ctx.slab + 1),
-    );
+    let level = pixel_level::<L>(&plan.lights[l].table, occluded, out, ctx.next_level_at);
     let mut lanes = [0u32; MAX_LANES];
     L::u_store(level, &mut lanes);
     state.levels[l * w + x0..][..L::LANES].copy_from_slice(&lanes[..L::LANES]);
