@@ -638,7 +638,7 @@ fn bad_perspective_cameras_name_the_key() {
     let err =
         |camera: String, key: &str, words: &str| expect_err(&with_camera(&camera), key, words);
     err(
-        format!("projection = \"fisheye\"\nview_width = 2.0"),
+        "projection = \"fisheye\"\nview_width = 2.0".to_string(),
         "camera.projection",
         "\"orthographic\" or \"perspective\"",
     );

@@ -164,6 +164,7 @@ fn compare_lanes(
             slab,
             back: plan.slab_back[slab as usize],
             front: plan.slab_front[slab as usize],
+            next_level_at: convshadow_common::pixel::levels::level_at(&plan, slab + 1),
         };
         let simd = SimdSlab::new(&plan, &columns, slab);
         for y in [0, 1, h / 2, h - 1, rng.below(h as u32) as usize] {
