@@ -21,13 +21,12 @@ use glam::DVec3;
 use super::aov::{first_hit_depth_in, light_layers};
 use super::budget::LDI_BYTES_PER_PIXEL;
 use super::passes::{Mirror, render_passes};
-use super::point::{perspective_gradient, point_grid, projective};
+use super::point::{on_point_grid, point_grid};
 use super::{
     Aov, Backend, Engine, RenderError, RenderRequest, Rendered, check_cancel, image_fingerprint,
     plan_updates, refuse_open_meshes,
 };
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::plan::depth_scale::DepthScale;
 use convshadow_common::plan::point_light::PointSource;
 
 /// The orthographic scene whose sweep carries the light for `scene`'s perspective camera: the
@@ -288,22 +287,7 @@ pub(super) fn render_perspective_pass(
     let allowance = super::budget::table_allowance(fragment_budget, fragments);
     let mut plan = engine.plan(&grid, &geometry, req.cancel, allowance, fragments)?;
     if point_grid.is_some() {
-        plan.projective = Some(projective(&geometry));
-        // The light's rays are the grid's columns: nothing to shift by sub-pixel amounts.
-        plan.subpixel_meshes = Vec::new();
-        let soft = scene.lights[0].point.is_some_and(|p| p.radius > 0.0);
-        plan.surface_hold = if soft {
-            plan.depth_scale = Some(DepthScale::new(
-                geometry.z_origin,
-                geometry.slab_distance,
-                geometry.slabs,
-            ));
-            plan.surface_holds(&grid, &geometry, perspective_gradient)
-        } else {
-            // A hard light's gather reads no neighbour, so no surface shadows itself and none
-            // is held (a hold would let light past it).
-            Vec::new()
-        };
+        on_point_grid(&mut plan, &grid, &geometry);
     }
     let seconds_plan = t_plan.elapsed().as_secs_f64();
     engine.check_tables(&grid, &plan, fragment_budget, fragments)?;

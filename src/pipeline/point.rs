@@ -14,7 +14,8 @@ use convshadow_common::contract::ldi::Ldi;
 use convshadow_common::model::scene::{
     CameraSpec, GuardBandSpec, MAX_IMAGE_SIDE, Penumbra, Projection, Scene, SceneError, SlabSpec,
 };
-use convshadow_common::plan::ProjectiveGrid;
+use convshadow_common::plan::depth_scale::DepthScale;
+use convshadow_common::plan::{ProjectiveGrid, RenderPlan};
 use convshadow_common::prepare::camera::Camera;
 use convshadow_common::prepare::geometry::SceneGeometry;
 use convshadow_common::prepare::raster::{FIXED_ONE, TriangleSetup};
@@ -176,9 +177,31 @@ pub(super) fn point_grid(
     })
 }
 
+/// `plan`, built for the point light's grid `grid` and its `geometry`, as that grid needs it:
+/// the material read at each cell's own point (`projective`), no sub-pixel shadows (the light's
+/// rays are the grid's columns: nothing to shift), and for a soft light the distance penumbra in
+/// ψ (`depth_scale`) with holds from the grid's true depth gradients; a hard light holds no
+/// surface (its gather reads no neighbour, so no surface shadows itself; a hold would let light
+/// past it).
+pub(super) fn on_point_grid(plan: &mut RenderPlan, grid: &Scene, geometry: &SceneGeometry) {
+    plan.projective = Some(projective(geometry));
+    plan.subpixel_meshes = Vec::new();
+    let soft = grid.lights[0].point.is_some_and(|p| p.radius > 0.0);
+    plan.surface_hold = if soft {
+        plan.depth_scale = Some(DepthScale::new(
+            geometry.z_origin,
+            geometry.slab_distance,
+            geometry.slabs,
+        ));
+        plan.surface_holds(grid, geometry, perspective_gradient)
+    } else {
+        Vec::new()
+    };
+}
+
 /// The cells of a point light's grid `geometry` as its slab-grid coordinates
 /// ([`convshadow_common::plan::RenderPlan::projective`]).
-pub(super) fn projective(geometry: &SceneGeometry) -> ProjectiveGrid {
+fn projective(geometry: &SceneGeometry) -> ProjectiveGrid {
     let cam = &geometry.camera;
     let focal = cam
         .focal_px
@@ -193,7 +216,7 @@ pub(super) fn projective(geometry: &SceneGeometry) -> ProjectiveGrid {
 /// A triangle's depth gradient on a point light's perspective grid (world units of view depth
 /// per grid pixel, x and y) for the surface hold: the raster's plane is the inverse depth w, so
 /// `dz = −z²·dw`, taken at the triangle's vertex farthest from the light (the largest).
-pub(super) fn perspective_gradient(t: &TriangleSetup) -> (f32, f32) {
+fn perspective_gradient(t: &TriangleSetup) -> (f32, f32) {
     let one = FIXED_ONE as f64;
     let corner = [f64::from(t.bbox[0]) + 0.5, f64::from(t.bbox[1]) + 0.5];
     let w_at = |v: [i32; 2]| {
