@@ -6,13 +6,14 @@
 //! The eye's LDI, layer cursors, colours and triangle normals are bound at the sweep's slots, so
 //! the stage files (`parity.wgsl`, `shading.wgsl`, `composite.wgsl`) read them unchanged.
 
-use convshadow_common::contract::sweep_io::{EyeView, SweepOptions, SweepOutput};
+use bytemuck::Zeroable;
+use convshadow_common::contract::sweep_io::{EyePoint, EyeView, SweepOptions, SweepOutput};
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::prepare::raster::RasterSetup;
 
 use crate::buffers::{bind, dispatch_once, pipeline, uniform, upload, zeroed};
 use crate::device::{GpuContext, GpuError};
-use crate::layout::{EyeParams, slot};
+use crate::layout::{EyeParams, PointParams, slot};
 use crate::shader::eye_wgsl;
 use crate::sweep::{
     BeforeSlab, GridSweep, TILE, first_cursors, fragment_meta, last_light, read_rgba,
@@ -30,6 +31,8 @@ struct EyeBuffers {
     normals: wgpu::Buffer,
     image: wgpu::Buffer,
     image_words: u64,
+    point_params: wgpu::Buffer,
+    spot_pattern: wgpu::Buffer,
 }
 
 /// Uploads the eye's LDI (cursors at each pixel's first fragment, nothing composited) and
@@ -60,6 +63,10 @@ fn eye_buffers(
         pixel_size: plan.pixel_size as f32,
         ..EyeParams::default()
     };
+    let point = eye.point.as_ref().map(point_params);
+    let texels = (eye.point.as_ref())
+        .and_then(|p| p.shading.pattern.as_ref())
+        .map_or(&[0.0f32][..], |p| &p.image.texels[..]);
     Ok(EyeBuffers {
         params: uniform(ctx, "eye params", &params),
         cursors: upload(ctx, "eye layer cursor", &first_cursors(ldi, pixels), false)?,
@@ -70,7 +77,40 @@ fn eye_buffers(
         normals: upload(ctx, "eye triangle normal", &normals, false)?,
         image: zeroed(ctx, "image", pixels * 4)?,
         image_words: pixels * 4,
+        point_params: uniform(ctx, "point light", &point.unwrap_or_else(Zeroable::zeroed)),
+        spot_pattern: upload(ctx, "spot pattern", texels, false)?,
     })
+}
+
+/// The eye pass's point-light constants of `p` (`eye.wgsl` `point_terms`).
+fn point_params(p: &EyePoint<'_>) -> PointParams {
+    let s = p.shading;
+    let four = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
+    let mut params = PointParams {
+        on: 1,
+        pixel_size: s.pixel_size,
+        center: four(s.center),
+        color: four(s.color),
+        offset: p.offset,
+        depth: p.depth,
+        focal: p.focal,
+        frame_axis: p.frame_axis,
+        ..Zeroable::zeroed()
+    };
+    if let Some(c) = &s.cone {
+        (params.spot, params.axis) = (1, four(c.axis));
+        (params.inner, params.outer) = (c.inner, c.outer);
+    }
+    if let Some(pt) = &s.pattern {
+        params.pattern = 1;
+        (params.right, params.down) = (four(pt.right), four(pt.down));
+        (params.pattern_size, params.pattern_centre) = (pt.size, pt.center);
+        (params.pattern_width, params.pattern_height) = (pt.image.width, pt.image.height);
+    }
+    for (out, phase) in params.phase.iter_mut().zip(p.phase) {
+        *out = [phase[0], phase[1], phase[2], 0.0];
+    }
+    params
 }
 
 /// The eye pass's per-slab dispatch: bind groups `[even, odd]` reading the grid's light buffer
@@ -110,6 +150,8 @@ fn eye_slab_dispatch(
                 (slot::GRID_OFFSETS, &g.offsets),
                 (slot::GRID_FRAG_META, &g.frag_meta),
                 (slot::LIGHT_PREV, light_prev),
+                (slot::POINT_PARAMS, &e.point_params),
+                (slot::SPOT_PATTERN, &e.spot_pattern),
             ],
         )
     };

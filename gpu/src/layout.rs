@@ -103,6 +103,57 @@ pub struct EyeParams {
     pub _pad2: u32,
 }
 
+/// A point or spot light's eye pass (`shaders/eye.wgsl` `point_terms`, uniform): the CPU's
+/// `EyePoint` and its `PointShading`, vectors padded to four floats (WGSL's `vec4` alignment).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct PointParams {
+    /// 1 on a point light's grid (the eye reads it projectively and shades with these terms).
+    pub on: u32,
+    /// 1 for a spot (`axis`, `inner`, `outer`).
+    pub spot: u32,
+    /// 1 for a spot with a pattern (`pattern_*`, texels at the `spot_pattern` slot).
+    pub pattern: u32,
+    /// `PointShading::pixel_size`.
+    pub pixel_size: f32,
+    /// `PointShading::center` (x, y, z, 0).
+    pub center: [f32; 4],
+    /// `PointShading::color` (r, g, b, 0).
+    pub color: [f32; 4],
+    /// `ConeCosines::axis`.
+    pub axis: [f32; 4],
+    /// `PatternPlacement::right`.
+    pub right: [f32; 4],
+    /// `PatternPlacement::down`.
+    pub down: [f32; 4],
+    /// `EyePoint::offset`.
+    pub offset: [f32; 2],
+    /// `EyePoint::depth`.
+    pub depth: f32,
+    /// `EyePoint::focal`.
+    pub focal: f32,
+    /// `EyePoint::frame_axis`.
+    pub frame_axis: [f32; 2],
+    /// `ConeCosines::inner`.
+    pub inner: f32,
+    /// `ConeCosines::outer`.
+    pub outer: f32,
+    /// `PatternPlacement::size`.
+    pub pattern_size: [f32; 2],
+    /// `PatternPlacement::center`.
+    pub pattern_centre: [f32; 2],
+    /// The pattern's texels across.
+    pub pattern_width: u32,
+    /// The pattern's texels down.
+    pub pattern_height: u32,
+    /// Padding before the 16-byte aligned array.
+    pub _pad0: u32,
+    /// See `_pad0`.
+    pub _pad1: u32,
+    /// Per mesh, `EyePoint::phase` (1 − g², 1 + g², 2g, 0).
+    pub phase: [[f32; 4]; MAX_MESHES],
+}
+
 /// Per-render constants of the sweep (uniform).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -165,8 +216,24 @@ pub struct Globals {
     pub subpixel_shadows: u32,
     /// 1 in a turned-round pass (`RenderPlan::turned_round`): composite back to front.
     pub back_to_front: u32,
-    /// Padding.
-    pub _pad5: u32,
+    /// 1 on a point light's grid (`RenderPlan::projective`): a cell's material is read at its
+    /// own 3D point, `centre + (xy − centre)·(depth_origin + z)·per_depth`.
+    pub projective: u32,
+    /// `ProjectiveGrid::centre`.
+    pub projective_centre: [f32; 2],
+    /// `ProjectiveGrid::depth_origin`.
+    pub projective_depth_origin: f32,
+    /// `ProjectiveGrid::per_depth`.
+    pub projective_per_depth: f32,
+    /// 1 on a soft point light's grid (`RenderPlan::depth_scale`): the distance penumbra's
+    /// depths in ψ, read from `level_table` at `psi_at`.
+    pub depth_scaled: u32,
+    /// `level_table` index of ψ at slab coordinate 0 (`DepthScale::psi`, f32 bits).
+    pub psi_at: u32,
+    /// `DepthScale::psi.len() − 2`: the last slab coordinate whose step is ψ's own.
+    pub psi_last: u32,
+    /// Uniform structs are a multiple of 16 bytes.
+    pub _pad6: u32,
 }
 
 /// One slab's faces and jitter hash.
@@ -432,6 +499,8 @@ pub mod slot {
         GRID_CURSORS = "grid_cursors", 37;
         GRID_OFFSETS = "grid_offsets", 38;
         GRID_FRAG_META = "grid_frag_meta", 39;
+        POINT_PARAMS = "point_params", 40;
+        SPOT_PATTERN = "spot_pattern", 41;
     }
 }
 

@@ -333,6 +333,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
         let header = light_tables(light, slabs, distance, &mut t);
         t.lights.push(header);
     }
+    point_grid_tables(plan, &mut t);
     for (i, m) in plan.materials.iter().enumerate() {
         // A material sharing an earlier one's texture (an open mesh's shell variant) reads the
         // voxels already uploaded.
@@ -347,6 +348,24 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
         t.materials.push(header);
     }
     Ok(t)
+}
+
+/// A point light's grid (`src/pipeline/point.rs` `on_point_grid`): its projective material
+/// map into the globals and a soft light's ψ per slab coordinate after the level tables.
+fn point_grid_tables(plan: &RenderPlan, t: &mut Tables) {
+    if let Some(p) = &plan.projective {
+        let g = &mut t.globals;
+        g.projective = 1;
+        g.projective_centre = p.centre;
+        g.projective_depth_origin = p.depth_origin;
+        g.projective_per_depth = p.per_depth;
+    }
+    if let Some(scale) = &plan.depth_scale {
+        t.globals.depth_scaled = 1;
+        t.globals.psi_at = t.level_table.len() as u32;
+        t.globals.psi_last = (scale.psi.len() - 2) as u32;
+        t.level_table.extend(scale.psi.iter().map(|v| v.to_bits()));
+    }
 }
 
 /// The grid's pixel and light-word counts, refused where they exceed 32-bit indices.

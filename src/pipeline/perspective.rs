@@ -27,7 +27,7 @@ use super::{
     plan_updates, refuse_open_meshes,
 };
 use convshadow_common::plan::RenderPlan;
-use convshadow_common::plan::point_light::PointSource;
+use convshadow_common::plan::point_light::{PointShading, PointSource, phase_constants};
 
 /// The orthographic scene whose sweep carries the light for `scene`'s perspective camera: the
 /// same view axis and `up`, cells of the eye's pixel size (the footprint at the `look_at`
@@ -302,35 +302,32 @@ pub(super) fn render_perspective_pass(
         None => (&eye_ldi, &eye.raster, eye.z_origin),
     };
     let EyeOnGrid { zoom, scale, axis } = eye_on_grid(eye, &plan, pass.sweep.light_resolution);
-    let phase_g: Vec<f64> = (scene.meshes.iter())
-        .map(|m| scene.materials[m.material].phase_g)
+    let phase: Vec<[f32; 3]> = (scene.meshes.iter())
+        .map(|m| phase_constants(scene.materials[m.material].phase_g))
         .collect();
-    let point_source = point_grid.as_ref().map(|p| {
+    let point_shading = point_grid.as_ref().map(|p| {
         let light = scene.lights[0].point.as_ref().expect("a point pass");
         let pattern = (scene.lights[0].pattern.as_ref())
             .zip(plan.spot_patterns.first().and_then(Option::as_ref));
-        PointSource::new(light, pattern, &p.frame, eye.z_origin)
+        let source = PointSource::new(light, pattern, &p.frame, eye.z_origin);
+        PointShading::new(&source, scene.lights[0].color)
     });
     let eye_point = point_grid
         .as_ref()
-        .zip(point_source.as_ref())
-        .map(|(p, source)| {
-            let frame_axis = [
-                f64::from(p.frame.width) * 0.5,
-                f64::from(p.frame.height) * 0.5,
-            ];
+        .zip(point_shading.as_ref())
+        .map(|(p, shading)| {
+            let frame_axis = [p.frame.width as f32 * 0.5, p.frame.height as f32 * 0.5];
             let focal = geometry
                 .camera
                 .focal_px
                 .expect("a point light's grid is perspective");
             EyePoint {
-                source,
-                color: scene.lights[0].color,
-                phase_g: &phase_g,
+                shading,
+                phase: &phase,
                 frame_axis,
                 offset: [
-                    (source.center[0] - frame_axis[0]) as f32,
-                    (source.center[1] - frame_axis[1]) as f32,
+                    shading.center[0] - frame_axis[0],
+                    shading.center[1] - frame_axis[1],
                 ],
                 depth: p.depth as f32,
                 focal: (p.frame.pixel_size * focal) as f32,

@@ -5,34 +5,23 @@
 use super::passes::add_pass;
 use super::perspective::{eye_geometry, render_perspective_pass};
 use super::point::visible_points;
-use super::{Aov, Backend, RenderError, RenderRequest, Rendered, image_fingerprint};
-use convshadow_common::model::scene::{Scene, SceneError};
+use super::{Aov, RenderError, RenderRequest, Rendered, image_fingerprint};
+use convshadow_common::model::scene::Scene;
 use convshadow_cpu::ldi::{BuildLdi, Ldi};
 
 /// [`super::render`] for a scene with point or spot lights: its directional lights rendered as
 /// without them (one scene, [`super::render`]), each point or spot light in a pass of its own
 /// ([`render_perspective_pass`] on its grid, `super::point::point_grid`), the images added with
 /// the background once (the first pass's). The depth layer is the first pass's; each light layer
-/// the pass's that has the light. The GPU backend has no point lights yet: `auto` renders on the
-/// CPU.
+/// the pass's that has the light. Every pass on the request's backend (the GPU port runs the
+/// point grids' sweep and eye pass as the CPU does: `gpu/src/shaders/eye.wgsl` `point_terms`).
 pub(super) fn render_with_point_lights(
     scene: &Scene,
     req: &RenderRequest<'_>,
 ) -> Result<Rendered, RenderError> {
     let is_point = |l: usize| scene.lights[l].point.is_some();
-    if req.backend == Backend::Gpu {
-        let l = (0..scene.lights.len()).find(|&l| is_point(l)).unwrap_or(0);
-        return Err(RenderError::Scene(SceneError {
-            file: scene.source.clone(),
-            key: format!("light[{l}].kind"),
-            message: "the GPU backend has no point or spot lights yet: render with `--backend \
-                      cpu` (or `auto`)"
-                .to_string(),
-        }));
-    }
     let requested = req.aovs.clone();
     let req = &RenderRequest {
-        backend: Backend::Cpu,
         aovs: Vec::new(),
         ..*req
     };

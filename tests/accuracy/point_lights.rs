@@ -182,14 +182,17 @@ fn a_spot_lights_cone_edge_lands_where_its_angle_projects() {
                 let v = f64::from(r.image.data[3 * (row * 128 + i)]);
                 let y = (row as f64 + 0.5 - 2.0) * px;
                 let d2 = x * x + y * y + 9.0;
-                let angle = ((x * x + y * y).sqrt() / 3.0).atan().to_degrees();
-                let s = ((angle - cone) / falloff.max(1e-300)).clamp(0.0, 1.0);
-                let want = if angle <= cone {
+                // The falloff is a smoothstep in the cosine of the angle from the axis, from
+                // cos(cone + falloff) (0) to cos(cone) (1), as pbrt-v4's spot.
+                let cos = 3.0 / d2.sqrt();
+                let (inner, outer) = (cone.to_radians().cos(), (cone + falloff).to_radians().cos());
+                let want = if cos >= inner {
                     1.0
-                } else if falloff == 0.0 {
+                } else if cos <= outer {
                     0.0
                 } else {
-                    1.0 - s * s * (3.0 - 2.0 * s)
+                    let s = (cos - outer) / (inner - outer);
+                    s * s * (3.0 - 2.0 * s)
                 };
                 // The wall is a Lambert surface facing the light's axis: cos = 3/d, per point.
                 let lit = v * d2 / (3.0 / d2.sqrt());

@@ -539,7 +539,6 @@ fn bad_point_and_spot_lights_exit_3_without_an_output_file() {
             "cpu",
             vec!["light[0].position", "before every mesh", "--backend reference"],
         ),
-        ("the gpu backend", point(""), "gpu", vec!["light[0].kind", "--backend cpu"]),
         (
             "inside the box",
             "[[light]]\nkind = \"point\"\nposition = [0.0, 0.0, 0.0]".to_string(),

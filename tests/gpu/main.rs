@@ -9,4 +9,5 @@ mod support;
 
 mod ldi;
 mod perspective;
+mod point;
 mod render;

@@ -6,7 +6,7 @@
 use std::sync::atomic::AtomicBool;
 
 use crate::contract::ldi::Ldi;
-use crate::plan::point_light::PointSource;
+use crate::plan::point_light::PointShading;
 use crate::prepare::raster::RasterSetup;
 
 /// Largest light count × channels handled per pixel (the CPU's stack arrays, the WGSL private
@@ -107,16 +107,14 @@ pub struct EyeView<'a> {
 /// slab-grid frame from the view axis; the light's grid pixel there is
 /// `axis + (o·(scale + d·zoom) − offset)·(focal / (d − depth))`.
 pub struct EyePoint<'a> {
-    /// The light's centre, its falloff, cone and pattern, in the eye's slab-grid frame (grid
+    /// The light's centre, falloff, cone and pattern in f32, in the eye's slab-grid frame (grid
     /// pixels of that frame, relative depths of the sweep).
-    pub source: &'a PointSource,
-    /// The light's colour.
-    pub color: [f32; 3],
-    /// Per mesh, the Henyey–Greenstein `g` of its material's phase function (0: isotropic).
-    pub phase_g: &'a [f64],
+    pub shading: &'a PointShading,
+    /// Per mesh, its material's Henyey–Greenstein constants (`phase_constants`).
+    pub phase: &'a [[f32; 3]],
     /// Where the view axis meets the eye's slab-grid frame, its grid pixels: with the ray's
-    /// offset, a sample's x and y in `source`'s coordinates.
-    pub frame_axis: [f64; 2],
+    /// offset, a sample's x and y in `shading`'s coordinates.
+    pub frame_axis: [f32; 2],
     /// The light's centre's offset from the view axis, in cells of the eye's frame.
     pub offset: [f32; 2],
     /// The view depth of the light's centre (the eye's view depths).

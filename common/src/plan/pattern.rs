@@ -49,4 +49,23 @@ impl Pattern {
         let bottom = at(x0, y0 + 1) * (1.0 - ax) + at(x0 + 1, y0 + 1) * ax;
         top * (1.0 - ay) + bottom * ay
     }
+
+    /// [`Pattern::sample`] in f32 (the sweep's spot patterns; `eye.wgsl` `pattern_sample` is
+    /// the same operations): the texel indices clamped in float before they become integers,
+    /// so no conversion saturates.
+    pub fn sample_f32(&self, tx: f32, ty: f32, c: usize) -> f32 {
+        let (w, h) = (self.width as f32, self.height as f32);
+        let (fx, fy) = (tx - 0.5, ty - 0.5);
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (ax, ay) = (fx - x0, fy - y0);
+        let (x0, y0) = (x0.clamp(-1.0, w) as i32, y0.clamp(-1.0, h) as i32);
+        let at = |x: i32, y: i32| {
+            let x = x.clamp(0, self.width as i32 - 1) as usize;
+            let y = y.clamp(0, self.height as i32 - 1) as usize;
+            self.texels[(y * self.width as usize + x) * 3 + c]
+        };
+        let top = at(x0, y0) * (1.0 - ax) + at(x0 + 1, y0) * ax;
+        let bottom = at(x0, y0 + 1) * (1.0 - ax) + at(x0 + 1, y0 + 1) * ax;
+        top * (1.0 - ay) + bottom * ay
+    }
 }

@@ -1,8 +1,9 @@
 //! Point and spot lights as the shading sees them (`[[light]] kind = "point" | "spot"`,
 //! docs/how-it-works.md "Point and spot lights"): where the light's centre is on a slab grid, the
 //! factor its centre gives the light arriving at a point (`cone·pattern / |X − P|²`) and the
-//! shading's terms of the direction to it — one implementation for the shadow-ray reference and
-//! the sweep's eye pass.
+//! shading's terms of the direction to it: in f64 for the shadow-ray reference ([`PointSource`]),
+//! in f32 with a fixed operation order for the sweep's eye pass on the CPU and the GPU
+//! ([`PointShading`], built from the same [`PointSource`]).
 
 use std::sync::Arc;
 
@@ -47,8 +48,8 @@ impl LightTerms {
 }
 
 /// A point or spot light where a slab grid sees it (slab-grid coordinates: x, y in grid pixels,
-/// z in world depth relative to the first slab plane): the shadow-ray reference's tracer and the
-/// eye pass of the sweep's point lights.
+/// z in world depth relative to the first slab plane): the shadow-ray reference's tracer, and
+/// what the sweep's f32 [`PointShading`] is made from.
 #[derive(Clone, Debug)]
 pub struct PointSource {
     /// The light's centre, grid coordinates.
@@ -193,4 +194,169 @@ impl PointSource {
             fresnel: fresnel_terms(h, to_light),
         }
     }
+}
+
+/// A point or spot light's shading constants in f32 for the sweep's eye pass: the direction to
+/// its centre, its falloff, cone and pattern at each eye sample, evaluated by
+/// [`PointShading::terms`] — which `gpu/src/shaders/eye.wgsl` `point_terms` mirrors operation
+/// for operation, so the CPU and the GPU port shade a point light with the same bits. (The
+/// shadow-ray reference evaluates the same model in f64: [`PointSource`].)
+#[derive(Clone, Debug)]
+pub struct PointShading {
+    /// The light's centre, the eye's slab-grid coordinates (x, y grid pixels, z relative depth).
+    pub center: [f32; 3],
+    /// World units per grid pixel across the view.
+    pub pixel_size: f32,
+    /// The light's colour.
+    pub color: [f32; 3],
+    /// A spot's cone: its axis (camera space) and the cosines of its half-angle and outer edge.
+    pub cone: Option<ConeCosines>,
+    /// A spot's pattern (gobo), placed as [`PointSource`]'s.
+    pub pattern: Option<PatternPlacement>,
+}
+
+/// A spot's cone in f32 ([`SpotCone::factor`]'s smoothstep in the cosine).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConeCosines {
+    /// The unit axis, camera space (x right, y down, z along the view).
+    pub axis: [f32; 3],
+    /// cos(`cone_deg`): full intensity at or above it.
+    pub inner: f32,
+    /// cos(`cone_deg + falloff_deg`): nothing at or below it.
+    pub outer: f32,
+}
+
+/// A spot's pattern in f32: its image on the plane at unit distance along the axis, the spot's
+/// right and down axes (camera space), the image's size and centre on that plane.
+#[derive(Clone, Debug)]
+pub struct PatternPlacement {
+    /// The spot's right axis, camera space.
+    pub right: [f32; 3],
+    /// The spot's down axis, camera space.
+    pub down: [f32; 3],
+    /// The image's extent on the unit plane.
+    pub size: [f32; 2],
+    /// The image's centre on the unit plane.
+    pub center: [f32; 2],
+    /// The image.
+    pub image: Arc<Pattern>,
+}
+
+/// A medium's Henyey–Greenstein constants in f32, `[1 − g², 1 + g², 2g]` (`2g` = 0: isotropic,
+/// the bare colour): the phase for `cos θ` is `(1 − g²) / (x·√x)`, `x = 1 + g² − 2g·cos θ`.
+pub fn phase_constants(g: f64) -> [f32; 3] {
+    [(1.0 - g * g) as f32, (1.0 + g * g) as f32, (2.0 * g) as f32]
+}
+
+impl PointShading {
+    /// The f32 constants of `source` (the same light, the same frame) with colour `color`.
+    pub fn new(source: &PointSource, color: [f32; 3]) -> PointShading {
+        let f32x3 = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+        PointShading {
+            center: source.center.map(|c| c as f32),
+            pixel_size: source.pixel_size as f32,
+            color,
+            cone: source.spot.map(|s| {
+                let [inner, outer] = s.cosines();
+                ConeCosines {
+                    axis: s.direction.map(|c| c as f32),
+                    inner: inner as f32,
+                    outer: outer as f32,
+                }
+            }),
+            pattern: source.pattern.as_ref().map(|p| PatternPlacement {
+                right: f32x3(p.right),
+                down: f32x3(p.down),
+                size: p.size.map(|c| c as f32),
+                center: p.center.map(|c| c as f32),
+                image: Arc::clone(&p.image),
+            }),
+        }
+    }
+
+    /// The shading's terms of this light at grid point `p` for a medium of
+    /// [`phase_constants`] `phase`, with both colours times the light its centre gives there
+    /// (`cone·pattern / |X − P|²`; 0 at the centre itself). Every operation in f32 in a fixed
+    /// order, no fused multiply-add (DESIGN §3): eye.wgsl's `point_terms` is the same.
+    pub fn terms(&self, p: [f32; 3], phase: [f32; 3]) -> LightTerms {
+        let ps = self.pixel_size;
+        let d = [
+            (self.center[0] - p[0]) * ps,
+            (self.center[1] - p[1]) * ps,
+            self.center[2] - p[2],
+        ];
+        let d2 = (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
+        let (to_light, falloff) = if d2 > 0.0 {
+            let len = d2.sqrt();
+            let t = [d[0] / len, d[1] / len, d[2] / len];
+            let cone = self.cone.map_or(1.0, |c| cone_factor(&c, t));
+            let pattern = self
+                .pattern
+                .as_ref()
+                .map(|pt| pattern_at(pt, &self.cone, d));
+            let falloff: [f32; 3] =
+                std::array::from_fn(|c| pattern.map_or(cone, |v| cone * v[c]) / d2);
+            (t, falloff)
+        } else {
+            ([0.0, 0.0, -1.0], [0.0; 3])
+        };
+        let t = to_light;
+        let hv = [t[0], t[1], t[2] - 1.0];
+        let hl2 = (hv[0] * hv[0] + hv[1] * hv[1]) + hv[2] * hv[2];
+        let h = if hl2 > 0.0 {
+            let len = hl2.sqrt();
+            [hv[0] / len, hv[1] / len, hv[2] / len]
+        } else {
+            [0.0, 0.0, -1.0]
+        };
+        let hk = (h[0] * t[0] + h[1] * t[1]) + h[2] * t[2];
+        let q = 1.0 - hk;
+        let q2 = q * q;
+        let fresnel_p = (q2 * q2) * q;
+        // cos θ between the travel (−to_light) and the direction to the viewer (−z) is t.z.
+        let light_color = if phase[2] == 0.0 {
+            self.color
+        } else {
+            let x = phase[1] - phase[2] * t[2];
+            let factor = phase[0] / (x * x.sqrt());
+            self.color.map(|c| c * factor)
+        };
+        LightTerms {
+            light_color: std::array::from_fn(|c| light_color[c] * falloff[c]),
+            color: std::array::from_fn(|c| self.color[c] * falloff[c]),
+            to_light: t,
+            half_vector: h,
+            fresnel: [fresnel_p / hk, (1.0 - fresnel_p) / hk],
+        }
+    }
+}
+
+/// [`SpotCone::factor`] in f32 for unit direction `t` towards the light (the emission is −t).
+fn cone_factor(c: &ConeCosines, t: [f32; 3]) -> f32 {
+    let cos = 0.0 - ((t[0] * c.axis[0] + t[1] * c.axis[1]) + t[2] * c.axis[2]);
+    if cos >= c.inner {
+        1.0
+    } else if cos > c.outer {
+        let s = (cos - c.outer) / (c.inner - c.outer);
+        s * s * (3.0 - 2.0 * s)
+    } else {
+        0.0
+    }
+}
+
+/// A spot pattern's value per channel for emission along `−d` (`d` towards the light): where
+/// the ray from the centre meets the unit plane along the axis, bilinear; 0 at 90° or more.
+fn pattern_at(p: &PatternPlacement, cone: &Option<ConeCosines>, d: [f32; 3]) -> [f32; 3] {
+    let out = [0.0 - d[0], 0.0 - d[1], 0.0 - d[2]];
+    let dot = |a: [f32; 3], b: [f32; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
+    let along = dot(out, cone.map_or([0.0, 0.0, 1.0], |c| c.axis));
+    if along.is_nan() || along <= 0.0 {
+        return [0.0; 3];
+    }
+    let a = dot(out, p.right) / along;
+    let b = dot(out, p.down) / along;
+    let img = &p.image;
+    let tx = ((a - p.center[0]) / p.size[0] + 0.5) * img.width as f32;
+    let ty = ((b - p.center[1]) / p.size[1] + 0.5) * img.height as f32;
+    std::array::from_fn(|c| img.sample_f32(tx, ty, c))
 }

@@ -428,13 +428,13 @@ fn ray_on_grid(view: &EyeView<'_>, p: &EyePixel, z: f32) -> (f32, f32) {
 }
 
 /// Where the ray of eye pixel `p` meets relative depth `z`, in the eye's slab-grid frame of a
-/// point light's grid (`point.source`'s coordinates).
-fn ray_in_frame(view: &EyeView<'_>, point: &EyePoint<'_>, p: &EyePixel, z: f32) -> [f64; 3] {
+/// point light's grid (`point.shading`'s coordinates).
+fn ray_in_frame(view: &EyeView<'_>, point: &EyePoint<'_>, p: &EyePixel, z: f32) -> [f32; 3] {
     let scale = view.scale + (view.z_origin + z) * view.zoom;
     [
-        point.frame_axis[0] + f64::from(p.offset[0] * scale),
-        point.frame_axis[1] + f64::from(p.offset[1] * scale),
-        f64::from(z),
+        point.frame_axis[0] + p.offset[0] * scale,
+        point.frame_axis[1] + p.offset[1] * scale,
+        z,
     ]
 }
 
@@ -476,7 +476,7 @@ struct EyeSample {
     back_along_light: Option<f32>,
     /// A point light's grid: where the sample is in the eye's slab-grid frame
     /// ([`ray_in_frame`]), for the direction to the light.
-    in_frame: Option<[f64; 3]>,
+    in_frame: Option<[f32; 3]>,
 }
 
 impl EyeSample {
@@ -596,7 +596,7 @@ fn eye_shade(
     // A point light (its grid's one light): the direction to it from this sample, and its
     // centre's falloff, cone and pattern in its colour; else the plan's terms.
     let point = (view.point.as_ref().zip(sample.in_frame))
-        .map(|(point, at)| point_terms(point, at, point.phase_g[sample.mesh as usize]));
+        .map(|(point, at)| point.shading.terms(at, point.phase[sample.mesh as usize]));
     let terms = |l: usize| point.unwrap_or_else(|| LightTerms::of(plan, material, l));
     let target = (color, alpha);
     shade_sample_with(
@@ -610,20 +610,6 @@ fn eye_shade(
         true,
         terms,
     );
-}
-
-/// A point light's shading terms at `at` (the eye's slab-grid frame) for a material of phase
-/// `g`: the direction to its centre ([`PointSource::terms`]) and both colours times the light its
-/// centre gives there ([`PointSource::falloff`]).
-fn point_terms(point: &EyePoint<'_>, at: [f64; 3], g: f64) -> LightTerms {
-    let falloff = point.source.falloff(at);
-    let terms = point.source.terms(at, point.color, g);
-    let scaled = |c: [f32; 3]| std::array::from_fn(|k| (f64::from(c[k]) * falloff[k]) as f32);
-    LightTerms {
-        light_color: scaled(terms.light_color),
-        color: scaled(terms.color),
-        ..terms
-    }
 }
 
 /// Every light's channels read bilinearly from the grid's outgoing light at grid position

@@ -106,6 +106,12 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         e = transfer(m, value);
     }
+    if point_params.on != 0u {
+        // A point light (the grid's one light): the direction to it from this sample, its
+        // centre's falloff, cone and pattern in its colour.
+        terms = point_terms(ray_in_frame(x, y, z), point_params.phase[mesh]);
+        terms_on = true;
+    }
     accum[p] = shade_sample(acc, mi, m, e, part, crossed, adv.first).acc;
 }
 
@@ -120,7 +126,133 @@ fn ray_on_grid(x: u32, y: u32, z: f32) -> vec2<f32> {
         offset_x = view.centre.x - (f32(x) + 0.5);
     }
     let scale = view.scale + view_depth * view.zoom;
-    return vec2<f32>(view.axis.x + offset_x * scale, view.axis.y + ((f32(y) + 0.5) - view.centre.y) * scale);
+    let offset_y = (f32(y) + 0.5) - view.centre.y;
+    if point_params.on != 0u {
+        // A point light's grid: the ray's offset from the light's centre, projected from it.
+        let pp = point_params;
+        let k = pp.focal / (view_depth - pp.depth);
+        return vec2<f32>(view.axis.x + (offset_x * scale - pp.offset.x) * k, view.axis.y + (offset_y * scale - pp.offset.y) * k);
+    }
+    return vec2<f32>(view.axis.x + offset_x * scale, view.axis.y + offset_y * scale);
+}
+
+// `ray_in_frame`: where eye pixel (x, y)'s ray meets relative depth z in the eye's slab-grid
+// frame of a point light's grid (`point_params`' coordinates; never turned round).
+fn ray_in_frame(x: u32, y: u32, z: f32) -> vec3<f32> {
+    let view = eye_params;
+    let scale = view.scale + (view.z_origin + z) * view.zoom;
+    let fa = point_params.frame_axis;
+    let ox = (f32(x) + 0.5) - view.centre.x;
+    let oy = (f32(y) + 0.5) - view.centre.y;
+    return vec3<f32>(fa.x + ox * scale, fa.y + oy * scale, z);
+}
+
+// `PointShading::terms`: the shading's terms of the point light at `p` (the eye's slab-grid
+// frame) for a medium of Henyey–Greenstein constants `phase`, both colours times the light its
+// centre gives there (`cone·pattern / |X − P|²`, 0 at the centre). The CPU's operations in its
+// order.
+fn point_terms(p: vec3<f32>, phase: vec4<f32>) -> LightTerms {
+    let pp = point_params;
+    let ps = pp.pixel_size;
+    let d = vec3<f32>((pp.center.x - p.x) * ps, (pp.center.y - p.y) * ps, pp.center.z - p.z);
+    let d2 = (d.x * d.x + d.y * d.y) + d.z * d.z;
+    var t = vec3<f32>(0.0, 0.0, -1.0);
+    var falloff = vec3<f32>(0.0, 0.0, 0.0);
+    if d2 > 0.0 {
+        let len = sqrt(d2);
+        t = vec3<f32>(d.x / len, d.y / len, d.z / len);
+        var cone = 1.0;
+        if pp.spot != 0u {
+            cone = cone_factor(t);
+        }
+        falloff = vec3<f32>(cone / d2, cone / d2, cone / d2);
+        if pp.pattern != 0u {
+            let v = pattern_at(d);
+            falloff = vec3<f32>((cone * v.x) / d2, (cone * v.y) / d2, (cone * v.z) / d2);
+        }
+    }
+    let hv = vec3<f32>(t.x, t.y, t.z - 1.0);
+    let hl2 = (hv.x * hv.x + hv.y * hv.y) + hv.z * hv.z;
+    var h = vec3<f32>(0.0, 0.0, -1.0);
+    if hl2 > 0.0 {
+        let len = sqrt(hl2);
+        h = vec3<f32>(hv.x / len, hv.y / len, hv.z / len);
+    }
+    let hk = (h.x * t.x + h.y * t.y) + h.z * t.z;
+    let q = 1.0 - hk;
+    let q2 = q * q;
+    let fresnel_p = (q2 * q2) * q;
+    let c = pp.color;
+    var lc = vec3<f32>(c.x, c.y, c.z);
+    if phase.z != 0.0 {
+        let xp = phase.y - phase.z * t.z;
+        let factor = phase.x / (xp * sqrt(xp));
+        lc = vec3<f32>(c.x * factor, c.y * factor, c.z * factor);
+    }
+    return LightTerms(
+        vec3<f32>(lc.x * falloff.x, lc.y * falloff.y, lc.z * falloff.z),
+        vec3<f32>(c.x * falloff.x, c.y * falloff.y, c.z * falloff.z),
+        array<f32, 3>(t.x, t.y, t.z),
+        array<f32, 3>(h.x, h.y, h.z),
+        array<f32, 2>(fresnel_p / hk, (1.0 - fresnel_p) / hk),
+    );
+}
+
+// `cone_factor`: the spot's smoothstep in the cosine for unit direction t towards the light.
+fn cone_factor(t: vec3<f32>) -> f32 {
+    let a = point_params.axis;
+    let cos = 0.0 - ((t.x * a.x + t.y * a.y) + t.z * a.z);
+    let inner = point_params.inner;
+    let outer = point_params.outer;
+    if cos >= inner {
+        return 1.0;
+    }
+    if cos > outer {
+        let s = (cos - outer) / (inner - outer);
+        return s * s * (3.0 - 2.0 * s);
+    }
+    return 0.0;
+}
+
+// `pattern_at`: a spot pattern's value per channel for emission along −d (d towards the light),
+// where the ray from the centre meets the unit plane along the axis; 0 at 90° or more.
+fn pattern_at(d: vec3<f32>) -> vec3<f32> {
+    let pp = point_params;
+    let o = vec3<f32>(0.0 - d.x, 0.0 - d.y, 0.0 - d.z);
+    let along = (o.x * pp.axis.x + o.y * pp.axis.y) + o.z * pp.axis.z;
+    if !(along > 0.0) {
+        return vec3<f32>(0.0, 0.0, 0.0);
+    }
+    let a = ((o.x * pp.right.x + o.y * pp.right.y) + o.z * pp.right.z) / along;
+    let b = ((o.x * pp.down.x + o.y * pp.down.y) + o.z * pp.down.z) / along;
+    let tx = ((a - pp.pattern_centre.x) / pp.pattern_size.x + 0.5) * f32(pp.pattern_width);
+    let ty = ((b - pp.pattern_centre.y) / pp.pattern_size.y + 0.5) * f32(pp.pattern_height);
+    return vec3<f32>(pattern_sample(tx, ty, 0u), pattern_sample(tx, ty, 1u), pattern_sample(tx, ty, 2u));
+}
+
+// `Pattern::sample_f32`: bilinear at texel coordinates (tx, ty), clamped to the edge texels.
+fn pattern_sample(tx: f32, ty: f32, c: u32) -> f32 {
+    let w = f32(point_params.pattern_width);
+    let h = f32(point_params.pattern_height);
+    let fx = tx - 0.5;
+    let fy = ty - 0.5;
+    let x0f = floor(fx);
+    let y0f = floor(fy);
+    let ax = fx - x0f;
+    let ay = fy - y0f;
+    let x0 = i32(clamp(x0f, -1.0, w));
+    let y0 = i32(clamp(y0f, -1.0, h));
+    let top = texel(x0, y0, c) * (1.0 - ax) + texel(x0 + 1, y0, c) * ax;
+    let bottom = texel(x0, y0 + 1, c) * (1.0 - ax) + texel(x0 + 1, y0 + 1, c) * ax;
+    return top * (1.0 - ay) + bottom * ay;
+}
+
+// A pattern texel's channel c, (x, y) clamped to the image.
+fn texel(x: i32, y: i32, c: u32) -> f32 {
+    let w = i32(point_params.pattern_width);
+    let xc = u32(clamp(x, 0, w - 1));
+    let yc = u32(clamp(y, 0, i32(point_params.pattern_height) - 1));
+    return spot_pattern[(yc * u32(w) + xc) * 3u + c];
 }
 
 // The detail of mesh `mesh` (material `m`) where eye pixel (x, y)'s ray meets depth z (the
@@ -134,7 +266,7 @@ fn detail_on_ray(mesh: u32, m: MaterialHeader, x: u32, y: u32, z: f32) -> f32 {
 fn detail_at_grid(mesh: u32, m: MaterialHeader, g: vec2<f32>, z: f32) -> f32 {
     let xi = (g.x - 0.5) - f32(globals.guard_left);
     let yi = (g.y - 0.5) - f32(globals.guard_top);
-    return detail_value(m, to_detail(mesh, xi + 0.5, yi + 0.5, z));
+    return detail_at(mesh, m, xi + 0.5, yi + 0.5, z);
 }
 
 const SKIP_NONE: u32 = 0u;

@@ -47,15 +47,64 @@ fn gather(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, o
     return acc;
 }
 
+// `LevelAt`: where the level search stands: the slab's coordinate in the depth plane's units
+// (a slab grid's slab index) and, on a soft point light's grid (`scaled`), the slab's step there.
+struct LevelAt {
+    coord: f32,
+    step: f32,
+    scaled: bool,
+}
+
+// `LevelAt::slab`: slab `slab` of a slab grid.
+fn slab_level(slab: u32) -> LevelAt {
+    return LevelAt(f32(slab), 1.0, false);
+}
+
+// `DepthScale`'s ψ at slab coordinate k (its f32 bits after the level tables).
+fn psi(k: u32) -> f32 {
+    return bitcast<f32>(level_table[globals.psi_at + k]);
+}
+
+// `depth_coord`: the depth plane's coordinate of removal depth t (slabs): t itself, or on a soft
+// point light's grid `DepthScale::at` (linear between slab coordinates, the end steps continued;
+// the floor clamped in float as Rust's `max(0.0)` (NaN: 0) and `min(last)`).
+fn depth_coord(t: f32) -> f32 {
+    if globals.depth_scaled == 0u {
+        return t;
+    }
+    var fl = floor(t);
+    if !(fl > 0.0) {
+        fl = 0.0;
+    }
+    let k = u32(min(fl, f32(globals.psi_last)));
+    let f = t - f32(k);
+    return psi(k) + f * (psi(k + 1u) - psi(k));
+}
+
+// `level_at`: slab `slab`'s `LevelAt` (on a soft point light's grid its ψ and its step
+// `DepthScale::step`, the step from slab k − 1 with k clamped to 1..=psi.len() − 1).
+fn level_at(slab: u32) -> LevelAt {
+    if globals.depth_scaled == 0u {
+        return slab_level(slab);
+    }
+    let k = clamp(slab, 1u, globals.psi_last + 1u);
+    return LevelAt(depth_coord(f32(slab)), psi(k) - psi(k - 1u), true);
+}
+
 // `pixel_level` (distance penumbra): the level of a pixel whose light, after a slab, has the
-// occluded part `occluded` (channels − Σ I) and the occlusion-weighted depth `depth`, for slab
-// `slab`: the mean occluder depth depth / occluded, the distance h = slab − depth / occluded
-// rounded (+ ½, truncated) and clamped to 1..=level_top by selects, `level_of[h]` from
-// `level_table`; LIT_LEVEL without an occluder (occluded ≤ OCCLUSION_EPS). The CPU's order.
-fn pixel_level(light: LightHeader, occluded: f32, depth: f32, slab: u32) -> u32 {
+// occluded part `occluded` (channels − Σ I) and the occlusion-weighted depth `depth`, in the slab
+// at `at`: the mean occluder depth depth / occluded, the distance h = coord − depth / occluded
+// (on a point light's grid n·h − (n² − 1)/2 for the slab's step n) rounded (+ ½, truncated) and
+// clamped to 1..=level_top by selects, `level_of[h]` from `level_table`; LIT_LEVEL without an
+// occluder (occluded ≤ OCCLUSION_EPS). The CPU's order.
+fn pixel_level(light: LightHeader, occluded: f32, depth: f32, at: LevelAt) -> u32 {
     let has_occluder = occluded > globals.occlusion_eps;
     let mean_depth = depth / select(1.0, occluded, has_occluder);
-    var h = (f32(slab) - mean_depth) + 0.5;
+    var h = at.coord - mean_depth;
+    if at.scaled {
+        h = at.step * h - (at.step * at.step - 1.0) * 0.5;
+    }
+    h = h + 0.5;
     let top = f32(light.level_top);
     h = select(h, 1.0, h < 1.0);
     h = select(h, top, h > top);

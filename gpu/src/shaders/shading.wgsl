@@ -59,6 +59,19 @@ fn to_detail(mesh: u32, x: f32, y: f32, z: f32) -> vec3<f32> {
     return out;
 }
 
+// `detail_at` (cpu/src/shading.rs): the detail of mesh `mesh` (material `m`) at image pixels
+// (x, y) (+ 0.5 already) and relative depth z — on a point light's grid (`projective`) at the
+// cell's own 3D point, `centre + (xy − centre)·(depth_origin + z)·per_depth`.
+fn detail_at(mesh: u32, m: MaterialHeader, x: f32, y: f32, z: f32) -> f32 {
+    var q = vec2<f32>(x, y);
+    if globals.projective != 0u {
+        let s = (globals.projective_depth_origin + z) * globals.projective_per_depth;
+        let c = globals.projective_centre;
+        q = vec2<f32>(c.x + (x - c.x) * s, c.y + (y - c.y) * s);
+    }
+    return detail_value(m, to_detail(mesh, q.x, q.y, z));
+}
+
 fn lerp3(f: f32, u: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(u.x + f * (v.x - u.x), u.y + f * (v.y - u.y), u.z + f * (v.z - u.z));
 }
@@ -147,9 +160,9 @@ fn preintegrated(p: u32, mesh: u32, m: MaterialHeader, crossed: bool, zc: f32, f
         if crossed {
             z = zc;
         }
-        vf = detail_value(m, to_detail(mesh, x, y, z));
+        vf = detail_at(mesh, m, x, y, z);
     }
-    let vb = detail_value(m, to_detail(mesh, x, y, back));
+    let vb = detail_at(mesh, m, x, y, back);
     var next = PRE_NONE;
     if keep {
         next = bitcast<u32>(vb);
@@ -192,26 +205,64 @@ fn positive(d: f32) -> f32 {
     return select(0.0, d, d > 0.0);
 }
 
+// `LightTerms`: what the shading takes of a light. The grid's sweep takes every light's from its
+// header and `light_colors`; the eye pass of a point light's grid sets `terms` per sample
+// (eye.wgsl `point_terms`) and `terms_on`, and the shading takes them for its one light.
+struct LightTerms {
+    light_color: vec3<f32>, // the colour times the material's phase function
+    color: vec3<f32>,       // the bare colour (specular)
+    to_light: array<f32, 3>,
+    half_vector: array<f32, 3>,
+    fresnel: array<f32, 2>,
+}
+
+var<private> terms_on: bool = false;
+var<private> terms: LightTerms;
+
+fn half_vector_of(l: u32) -> array<f32, 3> {
+    if terms_on {
+        return terms.half_vector;
+    }
+    return lights[l].half_vector;
+}
+
+fn to_light_of(l: u32) -> array<f32, 3> {
+    if terms_on {
+        return terms.to_light;
+    }
+    return lights[l].to_light;
+}
+
+fn fresnel_of(l: u32) -> array<f32, 2> {
+    if terms_on {
+        return terms.fresnel;
+    }
+    return lights[l].fresnel;
+}
+
 // `blinn_phong`: strength · max(0, f·h)^exponent at a facing normal f.
 fn blinn_phong(f: vec3<f32>, l: u32, m: MaterialHeader) -> f32 {
-    let d = positive(dot_fixed(f, lights[l].half_vector));
+    let d = positive(dot_fixed(f, half_vector_of(l)));
     return m.spec_strength * powi_by_squaring(d, m.spec_exponent);
 }
 
 // `ashikmin_shirley`: a · (f·h)^e · (f·l) / max(f·l, f·v), v = (0, 0, −1), a = the material's
 // normalised strength · (b + f0·c) with the light's Fresnel constants; a zero denominator is 1.
 fn ashikmin_shirley(f: vec3<f32>, l: u32, m: MaterialHeader) -> f32 {
-    let nh = positive(dot_fixed(f, lights[l].half_vector));
-    let nl = positive(dot_fixed(f, lights[l].to_light));
+    let nh = positive(dot_fixed(f, half_vector_of(l)));
+    let nl = positive(dot_fixed(f, to_light_of(l)));
     let nv = positive(0.0 - f.z);
     var den = select(nv, nl, nl > nv);
     den = select(1.0, den, den > 0.0);
-    let fr = lights[l].fresnel;
+    let fr = fresnel_of(l);
     let a = m.spec_strength * (fr[0] + m.spec_f0 * fr[1]);
     return a * (powi_by_squaring(nh, m.spec_exponent) * (nl / den));
 }
 
 fn light_color(l: u32) -> vec3<f32> {
+    if terms_on {
+        return terms.color;
+    }
     let c = lights[l].color;
     return vec3<f32>(c[0], c[1], c[2]);
 }
@@ -223,6 +274,9 @@ fn iin_at(l: u32, c: u32) -> f32 {
 
 // Material `material`'s colour of light `l`: the light's colour times its phase function.
 fn phase_light_color(material: u32, l: u32) -> vec3<f32> {
+    if terms_on {
+        return terms.light_color;
+    }
     let c = light_colors[material * globals.lights + l];
     return vec3<f32>(c[0], c[1], c[2]);
 }
@@ -240,7 +294,7 @@ fn shade(material: u32, color: vec3<f32>, alpha: f32, surface: bool, n: vec3<f32
         let lc = phase_light_color(material, l);
         var k = 1.0;
         if diffuse {
-            k = positive(dot_fixed(f, lights[l].to_light));
+            k = positive(dot_fixed(f, to_light_of(l)));
         }
         for (var c = 0u; c < 3u; c++) {
             sum[c] = sum[c] + (iin_at(l, c) * lc[c]) * k;

@@ -25,7 +25,7 @@ fn exact_shift(l: u32, slab: u32, part: f32, lit: f32, depth: f32, row_level: u3
     if !(occluded > globals.occlusion_eps) {
         return vec3<f32>(0.0, 0.0, 0.0);
     }
-    if pixel_level(lights[l], occluded, depth, slab) != row_level {
+    if pixel_level(lights[l], occluded, depth, slab_level(slab)) != row_level {
         return vec3<f32>(0.0, 0.0, 0.0);
     }
     let t = depth / occluded + 0.5;

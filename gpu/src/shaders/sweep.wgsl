@@ -129,7 +129,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             var value = 0.0;
             if m.tf_len > 1u {
-                value = detail_value(m, to_detail(mesh, xi, yi, z));
+                value = detail_at(mesh, m, xi, yi, z);
             }
             e = transfer(m, value);
         }
@@ -163,13 +163,14 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         if distance {
             let occluded = f32(ch) - lit_out;
-            var depth_out = deepen(depth_in[l], removed_at, lit_in - lit_out);
+            let at = depth_coord(removed_at);
+            var depth_out = deepen(depth_in[l], at, lit_in - lit_out);
             if held == HELD_RELEASE {
-                depth_out = owned_depth(removed_at, occluded);
+                depth_out = owned_depth(at, occluded);
             }
             light_cur[row_base + (l * planes + ch) * w + x] = depth_out;
             // The level this pixel starts the next slab with.
-            level_cur[(y * globals.lights + l) * w + x] = pixel_level(lights[l], occluded, depth_out, slab + 1u);
+            level_cur[(y * globals.lights + l) * w + x] = pixel_level(lights[l], occluded, depth_out, level_at(slab + 1u));
         }
     }
 }

@@ -1,6 +1,6 @@
 //! Point and spot lights (`[[light]] kind = "point" | "spot"`): a light at a place, whose rays
-//! diverge from it (issue 41). Rendered by the shadow-ray reference; the convolution sweep
-//! refuses them by name until it has them (docs/how-it-works.md, "Point and spot lights").
+//! diverge from it (issue 41). Rendered by the shadow-ray reference and by the sweep on a grid of
+//! their own (docs/how-it-works.md, "Point and spot lights").
 
 use glam::DVec3;
 
@@ -36,22 +36,28 @@ pub struct SpotCone {
 
 impl SpotCone {
     /// The cone's factor for light leaving the light's centre along `to_point` (any length, not
-    /// zero): 1 within `cone_deg` of the axis, `1 − smoothstep` over the falloff
-    /// (`3s² − 2s³`, s the fraction of the falloff passed), 0 beyond.
+    /// zero): 1 within `cone_deg` of the axis, 0 beyond `cone_deg + falloff_deg`, between them
+    /// the smoothstep `3s² − 2s³` of `s = (cos θ − cos_outer) / (cos_inner − cos_outer)` — in the
+    /// cosine of the angle θ from the axis, as pbrt-v4's spot light, so no arc cosine is needed
+    /// (the GPU port evaluates it in f32 with the same operations, [`SpotCone::cosines`]).
     pub fn factor(&self, to_point: DVec3) -> f64 {
-        let cos = to_point
-            .normalize()
-            .dot(DVec3::from(self.direction))
-            .clamp(-1.0, 1.0);
-        let angle = cos.acos().to_degrees();
-        if angle <= self.cone_deg {
-            return 1.0;
+        let cos = to_point.normalize().dot(DVec3::from(self.direction));
+        let [inner, outer] = self.cosines();
+        if cos >= inner {
+            1.0
+        } else if cos > outer {
+            let s = (cos - outer) / (inner - outer);
+            s * s * (3.0 - 2.0 * s)
+        } else {
+            0.0
         }
-        if self.falloff_deg == 0.0 || angle >= self.cone_deg + self.falloff_deg {
-            return 0.0;
-        }
-        let s = (angle - self.cone_deg) / self.falloff_deg;
-        1.0 - s * s * (3.0 - 2.0 * s)
+    }
+
+    /// The cosines of the cone's half-angle and of its outer edge (`cone_deg + falloff_deg`,
+    /// at most 90°).
+    pub fn cosines(&self) -> [f64; 2] {
+        let outer = (self.cone_deg + self.falloff_deg).min(90.0);
+        [self.cone_deg.to_radians().cos(), outer.to_radians().cos()]
     }
 }
 
@@ -60,7 +66,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_spot_is_full_inside_its_cone_half_way_down_its_falloff_and_dark_beyond() {
+    fn a_spot_is_full_inside_its_cone_half_at_its_falloffs_middle_cosine_and_dark_beyond() {
         let spot = SpotCone {
             direction: [0.0, 0.0, 1.0],
             up: [0.0, 1.0, 0.0],
@@ -73,8 +79,10 @@ mod tests {
         };
         assert_eq!(at(0.0), 1.0);
         assert_eq!(at(19.9), 1.0);
-        // Half-way through the falloff the smoothstep is exactly 1/2.
-        assert!((at(25.0) - 0.5).abs() < 1e-9, "{}", at(25.0));
+        // Half-way through the falloff in the cosine the smoothstep is exactly 1/2.
+        let half = ((20f64.to_radians().cos() + 30f64.to_radians().cos()) * 0.5).acos();
+        let at_half = at(half.to_degrees());
+        assert!((at_half - 0.5).abs() < 1e-9, "{at_half}");
         assert!(at(22.0) > at(24.0) && at(26.0) > at(28.0));
         assert_eq!(at(30.1), 0.0);
         assert_eq!(at(120.0), 0.0);

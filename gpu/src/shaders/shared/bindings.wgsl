@@ -82,7 +82,14 @@ struct Globals {
     second_order_media: u32, // 1: sweep.media = "second-order" (else slab_part is (1, 0))
     subpixel_shadows: u32, // 1: some mesh reads its light at the exact shift (MeshHeader.subpixel)
     back_to_front: u32, // 1: a turned-round pass (RenderPlan::turned_round): composite back to front
-    _pad5: u32,
+    projective: u32,    // 1: a point light's grid (RenderPlan::projective): materials read at a cell's 3D point
+    projective_centre: vec2<f32>,
+    projective_depth_origin: f32,
+    projective_per_depth: f32,
+    depth_scaled: u32,  // 1: a soft point light's grid (RenderPlan::depth_scale): depths in ψ
+    psi_at: u32,        // level_table index of ψ at slab coordinate 0 (f32 bits)
+    psi_last: u32,      // DepthScale::psi.len() − 2
+    _pad6: u32,
 }
 
 struct Slab {
@@ -236,3 +243,35 @@ struct EyeParams {
 @group(0) @binding(37) var<storage, read> grid_cursors: array<Cursor>;
 @group(0) @binding(38) var<storage, read> grid_offsets: array<u32>;
 @group(0) @binding(39) var<storage, read> grid_frag_meta: array<u32>;
+
+// A point or spot light's grid (`EyePoint`, `PointShading`): the eye reads the grid
+// projectively and shades each sample with the direction to the light and the light its centre
+// gives there (eye.wgsl `point_terms`); `on` = 0 elsewhere.
+struct PointParams {
+    on: u32,
+    spot: u32,           // 1: a spot (axis, inner, outer)
+    pattern: u32,        // 1: a spot with a pattern (texels in `spot_pattern`)
+    pixel_size: f32,     // world units per grid pixel of the eye's frame
+    center: vec4<f32>,   // the light's centre, the eye's slab-grid frame (x, y, z)
+    color: vec4<f32>,
+    axis: vec4<f32>,     // a spot's unit axis, camera space
+    right: vec4<f32>,    // a pattern's right axis, camera space
+    down: vec4<f32>,     // a pattern's down axis
+    offset: vec2<f32>,   // the centre's offset from the view axis, cells of the eye's frame
+    depth: f32,          // the centre's view depth
+    focal: f32,          // the light grid's focal length times the eye frame's cell size
+    frame_axis: vec2<f32>, // where the view axis meets the eye's frame, its grid pixels
+    inner: f32,          // cos(cone_deg)
+    outer: f32,          // cos(cone_deg + falloff_deg)
+    pattern_size: vec2<f32>,   // the pattern's extent on the unit plane along the axis
+    pattern_centre: vec2<f32>, // its centre there
+    pattern_width: u32,
+    pattern_height: u32,
+    _pad0: u32,
+    _pad1: u32,
+    phase: array<vec4<f32>, MAX_MESHES>, // per mesh (1 − g², 1 + g², 2g, 0)
+}
+
+@group(0) @binding(40) var<uniform> point_params: PointParams;
+// A spot's pattern: linear RGB per texel, row-major from the top row (one unused word without).
+@group(0) @binding(41) var<storage, read> spot_pattern: array<f32>;
