@@ -95,6 +95,7 @@ fn point_params(p: &EyePoint<'_>) -> PointParams {
         depth: p.depth,
         focal: p.focal,
         frame_axis: p.frame_axis,
+        turned: u32::from(s.turned),
         ..Zeroable::zeroed()
     };
     if let Some(c) = &s.cone {

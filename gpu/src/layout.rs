@@ -146,9 +146,9 @@ pub struct PointParams {
     pub pattern_width: u32,
     /// The pattern's texels down.
     pub pattern_height: u32,
+    /// 1 in a turned-round pass (`PointShading::turned`: a light behind every mesh).
+    pub turned: u32,
     /// Padding before the 16-byte aligned array.
-    pub _pad0: u32,
-    /// See `_pad0`.
     pub _pad1: u32,
     /// Per mesh, `EyePoint::phase` (1 − g², 1 + g², 2g, 0).
     pub phase: [[f32; 4]; MAX_MESHES],

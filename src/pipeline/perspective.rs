@@ -169,14 +169,11 @@ pub(super) struct EyeOnGrid {
 }
 
 /// The eye's LDI and rasterizer set-up as a turned-round pass walks them: each ray's fragments
-/// far to near at the turned grid's relative depths (`−z` from the eye, less `grid`'s origin),
+/// far to near at the turned grid's relative depths (`−z` from the eye, less the grid's origin
+/// `z_grid` in those depths),
 /// the normals as the turned camera sees them (x and z reversed).
-pub(super) fn turned_eye(
-    eye: &SceneGeometry,
-    eye_ldi: &Ldi,
-    grid: &SceneGeometry,
-) -> (Ldi, RasterSetup) {
-    let (z_eye, z_grid) = (eye.z_origin, grid.z_origin);
+pub(super) fn turned_eye(eye: &SceneGeometry, eye_ldi: &Ldi, z_grid: f64) -> (Ldi, RasterSetup) {
+    let z_eye = eye.z_origin;
     let ldi = eye_ldi.turned_round(|d| (-(z_eye + f64::from(d)) - z_grid) as f32);
     let mut raster = eye.raster.clone();
     for t in &mut raster.triangles {
@@ -248,9 +245,7 @@ pub(super) fn render_perspective_pass(
     );
     let geometry = match &point_grid {
         // A point light's grid measures view depth from the light: the eye's slabs there.
-        Some(p) => {
-            geometry.with_slabs(&grid, eye.z_origin - p.depth, eye.slab_distance, eye.slabs)?
-        }
+        Some(p) => geometry.with_slabs(&grid, p.origin, eye.slab_distance, eye.slabs)?,
         None if near && !scene.turned_round => {
             geometry.with_slabs(&grid, eye.z_origin, eye.slab_distance, eye.slabs)?
         }
@@ -294,11 +289,16 @@ pub(super) fn render_perspective_pass(
     check_cancel(req.cancel)?;
     let t_sweep = Instant::now();
     let cam = &eye.camera;
+    // Turned round, the grid's relative depth 0 in the turned camera's depths (a point light's
+    // grid measures its depths from the light).
+    let turned_origin = point_grid
+        .as_ref()
+        .map_or(geometry.z_origin, |p| p.frame_z_origin);
     let turned = scene
         .turned_round
-        .then(|| turned_eye(eye, &eye_ldi, &geometry));
+        .then(|| turned_eye(eye, &eye_ldi, turned_origin));
     let (view_ldi, view_raster, z_origin) = match &turned {
-        Some((ldi, raster)) => (ldi, raster, -geometry.z_origin),
+        Some((ldi, raster)) => (ldi, raster, -turned_origin),
         None => (&eye_ldi, &eye.raster, eye.z_origin),
     };
     let EyeOnGrid { zoom, scale, axis } = eye_on_grid(eye, &plan, pass.sweep.light_resolution);
@@ -309,8 +309,8 @@ pub(super) fn render_perspective_pass(
         let light = scene.lights[0].point.as_ref().expect("a point pass");
         let pattern = (scene.lights[0].pattern.as_ref())
             .zip(plan.spot_patterns.first().and_then(Option::as_ref));
-        let source = PointSource::new(light, pattern, &p.frame, eye.z_origin);
-        PointShading::new(&source, scene.lights[0].color)
+        let source = PointSource::new(light, pattern, &p.frame, p.frame_z_origin);
+        PointShading::new(&source, scene.lights[0].color, scene.turned_round)
     });
     let eye_point = point_grid
         .as_ref()
@@ -330,7 +330,10 @@ pub(super) fn render_perspective_pass(
                     shading.center[1] - frame_axis[1],
                 ],
                 depth: p.depth as f32,
-                focal: (p.frame.pixel_size * focal) as f32,
+                // Turned round, the grid looks back along the view: its depth from the light
+                // is the light's view depth less the sample's.
+                focal: (if scene.turned_round { -1.0 } else { 1.0 } * p.frame.pixel_size * focal)
+                    as f32,
             }
         });
     let view = EyeView {

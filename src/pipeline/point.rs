@@ -5,14 +5,16 @@
 //! `super::perspective::render_perspective_pass`). `super::point_passes` renders each such light
 //! in a pass of its own.
 //!
-//! Built so far: lights before every mesh along the view, on the CPU; a soft one (`radius` > 0)
-//! with the distance penumbra in φ.
+//! Built so far: lights before every mesh along the view, and behind every mesh (a turned-round
+//! pass: the grid looks back along the view from the light, the eye composites back to front);
+//! a soft one (`radius` > 0) with the distance penumbra in φ.
 
 use glam::DVec3;
 
 use convshadow_common::contract::ldi::Ldi;
 use convshadow_common::model::scene::{
-    CameraSpec, GuardBandSpec, MAX_IMAGE_SIDE, Penumbra, Projection, Scene, SceneError, SlabSpec,
+    CameraSpec, GuardBandSpec, LightSpec, MAX_IMAGE_SIDE, Penumbra, Projection, Scene, SceneError,
+    SlabSpec,
 };
 use convshadow_common::plan::depth_scale::DepthScale;
 use convshadow_common::plan::{ProjectiveGrid, RenderPlan};
@@ -32,6 +34,11 @@ pub(super) struct PointGrid {
     pub(super) frame: Camera,
     /// The light's centre's view depth (the eye's view depths).
     pub(super) depth: f64,
+    /// The grid's first slab plane's distance from the light along its axis.
+    pub(super) origin: f64,
+    /// The depth in `frame` of the grid's relative depth 0: the eye's origin, or turned round
+    /// (`frame` the turned camera's, depths the view's negated) the first plane's.
+    pub(super) frame_z_origin: f64,
 }
 
 /// The grid `scene`'s light `l` (a point or spot light, of a pass that has only it) is swept on,
@@ -72,7 +79,13 @@ pub(super) fn point_grid(
     }
     let cam = &eye.camera;
     let at = cam.to_camera(DVec3::from(light.position));
-    // Every vertex before the light's centre along the view: the tangents of its rays' angles.
+    // A turned-round pass (a light behind every mesh) looks back along the view: its grid's x
+    // and depth axes are the camera's reversed.
+    let turned = scene.turned_round;
+    let sign = if turned { -1.0 } else { 1.0 };
+    let to_light_frame = |c: DVec3| DVec3::new(sign * c.x, c.y, sign * c.z);
+    // Every vertex before the light's centre along its grid's axis (the view, or turned round
+    // the view reversed): the tangents of its rays' angles.
     // And the grid's focal length (its pixels) that makes its cell at every vertex no coarser
     // than the eye's cell there: the eye frame's cell, times view depth over the `look_at`
     // distance in perspective.
@@ -83,7 +96,7 @@ pub(super) fn point_grid(
     for m in &eye.meshes {
         for v in &m.mesh.positions {
             let view = cam.to_camera(*v);
-            let c = view - at;
+            let c = to_light_frame(view - at);
             (lo, hi) = (lo.min(c), hi.max(c));
             near = near.min(c.z);
             if c.z > 0.0 {
@@ -100,12 +113,11 @@ pub(super) fn point_grid(
         return Err(refuse(
             "position",
             format!(
-                "the convolution sweep renders a point or spot light only before every mesh \
-                 along the view so far: this light is at view depth {:.6}, the nearest vertex \
-                 at {:.6} (move the light towards the camera, or render with `--backend \
-                 reference`)",
+                "the convolution sweep renders a point or spot light only before or behind \
+                 every mesh along the view so far: this light is at view depth {:.6}, amid the \
+                 meshes' vertices (move it towards the camera or beyond the farthest mesh, or \
+                 render with `--backend reference`)",
                 at.z,
-                at.z + near
             ),
         ));
     }
@@ -114,7 +126,7 @@ pub(super) fn point_grid(
     // stretches through the meshes (`visible`) as the light sees them.
     let mut seen = [0.0f64; 2];
     for v in visible {
-        let c = *v - at;
+        let c = to_light_frame(*v - at);
         if c.z > 0.0 {
             seen[0] = seen[0].max(c.x.abs() / c.z);
             seen[1] = seen[1].max(c.y.abs() / c.z);
@@ -133,13 +145,22 @@ pub(super) fn point_grid(
             scene.source
         )));
     }
-    let look_at = DVec3::from(light.position) + cam.forward * (focal * cell);
+    let look_at = DVec3::from(light.position) + cam.forward * (sign * focal * cell);
     let mut grid = scene.clone();
     // A soft light spreads by `focal·radius` grid pixels per unit of φ = −1/(depth from the
     // light): its first slab's spread, the covariance step every level scales
     // (`DepthScale`), is a directional light's of this variance at this pixel size.
-    let origin = eye.z_origin - at.z;
     let e = eye.slab_distance;
+    // The grid's first slab plane, its distance from the light: the eye's first plane; turned
+    // round, the eye's last (the slabs mirrored), moved towards the eye where that is not
+    // beyond the light, to half way between the light and the farthest vertex (the slabs then
+    // still reach the eye's first plane, and no vertex lies beyond the first).
+    let origin = if turned {
+        let far = eye.z_origin + f64::from(eye.slabs) * e;
+        (at.z - far).max(0.5 * near)
+    } else {
+        eye.z_origin - at.z
+    };
     let first = 1.0 / origin - 1.0 / (origin + e);
     let spread = light.radius * first * focal * cell / e;
     // The light's depth extent blurs too, along the ray's slope m = (x, y)/z: by r·|m| per unit
@@ -149,7 +170,7 @@ pub(super) fn point_grid(
     let middle = 0.5 * (lo + hi);
     let axis = light
         .spot
-        .map(|s| cam.to_camera(cam.center + DVec3::from(s.direction)))
+        .map(|s| to_light_frame(cam.to_camera(cam.center + DVec3::from(s.direction))))
         .filter(|d| d.z > 0.1 * d.length())
         .unwrap_or(middle);
     let slope = [axis.x / axis.z, axis.y / axis.z];
@@ -174,6 +195,8 @@ pub(super) fn point_grid(
         scene: grid,
         frame,
         depth: at.z,
+        origin,
+        frame_z_origin: if turned { origin - at.z } else { eye.z_origin },
     })
 }
 
@@ -230,6 +253,20 @@ fn perspective_gradient(t: &TriangleSetup) -> (f32, f32) {
         (-z2 * f64::from(t.depth_dx)) as f32,
         (-z2 * f64::from(t.depth_dy)) as f32,
     )
+}
+
+/// Whether point light `light` lies behind every mesh along the view of `eye` (every vertex
+/// nearer the camera than its centre): its pass is turned round ([`point_grid`]).
+pub(super) fn behind_every_mesh(eye: &SceneGeometry, light: &LightSpec) -> bool {
+    let Some(point) = &light.point else {
+        return false;
+    };
+    let cam = &eye.camera;
+    let at = cam.to_camera(DVec3::from(point.position)).z;
+    eye.meshes
+        .iter()
+        .flat_map(|m| &m.mesh.positions)
+        .all(|v| cam.to_camera(*v).z < at)
 }
 
 /// Where the eye's rays are among the meshes: each image pixel's ray at its first and last

@@ -4,7 +4,7 @@
 
 use super::passes::add_pass;
 use super::perspective::{eye_geometry, render_perspective_pass};
-use super::point::visible_points;
+use super::point::{behind_every_mesh, visible_points};
 use super::{Aov, RenderError, RenderRequest, Rendered, image_fingerprint};
 use convshadow_common::model::scene::Scene;
 use convshadow_cpu::ldi::{BuildLdi, Ldi};
@@ -31,10 +31,16 @@ pub(super) fn render_with_point_lights(
     if !directional.is_empty() {
         passes.push((directional.clone(), with_lights(scene, &directional)));
     }
-    for l in (0..scene.lights.len()).filter(|&l| is_point(l)) {
-        passes.push((vec![l], with_lights(scene, &[l])));
-    }
     let eye = eye_geometry(scene)?;
+    for l in (0..scene.lights.len()).filter(|&l| is_point(l)) {
+        let mut pass = with_lights(scene, &[l]);
+        if behind_every_mesh(&eye, &scene.lights[l]) {
+            // Its light travels towards the viewer: swept from the far end, looking back.
+            pass.camera = pass.camera.turned_round();
+            pass.turned_round = true;
+        }
+        passes.push((vec![l], pass));
+    }
     // Where the eye's rays meet the meshes, which bounds every point light's grid (the eye's
     // LDI once more; each pass builds its own within its budget).
     let visible = {

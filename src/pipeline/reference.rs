@@ -153,7 +153,7 @@ fn perspective_far_end_pass(
     let t_plan = Instant::now();
     let plan = convshadow_io::build_plan(&grid, &geometry)
         .map_err(|e| RenderError::BadPlan(e.to_string()))?;
-    let (ldi, raster) = perspective::turned_eye(eye, &eye_ldi, &geometry);
+    let (ldi, raster) = perspective::turned_eye(eye, &eye_ldi, geometry.z_origin);
     let perspective::EyeOnGrid { zoom, axis, .. } =
         perspective::eye_on_grid(eye, &plan, pass.sweep.light_resolution);
     let view = View {

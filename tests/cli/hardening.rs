@@ -537,7 +537,7 @@ fn bad_point_and_spot_lights_exit_3_without_an_output_file() {
             "amid the meshes in the sweep",
             "[[light]]\nkind = \"point\"\nposition = [5.0, 0.0, 0.0]".to_string(),
             "cpu",
-            vec!["light[0].position", "before every mesh", "--backend reference"],
+            vec!["light[0].position", "before or behind every mesh", "--backend reference"],
         ),
         (
             "inside the box",

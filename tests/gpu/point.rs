@@ -1,7 +1,8 @@
 //! Point and spot lights on the GPU (`gpu/src/shaders/eye.wgsl` `point_terms`, the point grid's
 //! projective material map and ψ depth scale in `shading.wgsl` and `kernels.wgsl`): on lavapipe
 //! the same image and final grid light bits as the CPU's point passes — a soft spot with a
-//! falloff and a pattern, a soft point light beside a directional one, a hard point light with
+//! falloff and a pattern, a soft point light beside a directional one, a soft point light behind
+//! every mesh (a turned-round pass; the scene's opaque wall taken out), a hard point light with
 //! the iterated penumbra, over every shader path (detail, textures, specular, phase functions,
 //! jitter), for an orthographic and a perspective camera.
 
@@ -10,6 +11,10 @@ use crate::support;
 use crate::support::gpu as gpu_common;
 
 use convshadow::common::model::scene::Penumbra;
+
+/// The shader-path scene's opaque wall behind its meshes.
+const WALL: &str = "[[mesh]]\nshape = \"box\"\nsize = [6.0, 6.0, 0.3]\ntranslate = [0.0, 0.0, 1.5]\n\
+                    material = \"wall\"\n";
 
 /// The shader-path scene's three directional lights, replaced by each case's.
 const PATH_SCENE_LIGHTS: &str = "[[light]]\ncolor = [1.0, 0.8, 0.6]";
@@ -37,6 +42,11 @@ fn gpu_point_and_spot_lights_equal_cpu_for_both_cameras() {
              color = [6.0, 5.0, 4.0]\n",
         ),
         (
+            "soft point behind every mesh",
+            "[[light]]\nkind = \"point\"\nposition = [0.5, -0.4, 6.0]\nradius = 0.1\n\
+             color = [30.0, 28.0, 25.0]\n",
+        ),
+        (
             "hard point, iterated penumbra",
             "[[light]]\nkind = \"point\"\nposition = [0.6, 0.3, -2.8]\n\
              color = [7.0, 7.0, 6.0]\n",
@@ -53,7 +63,12 @@ fn gpu_point_and_spot_lights_equal_cpu_for_both_cameras() {
             .expect("the path scene's lights");
         let end = text.find("[[mesh]]").expect("the path scene's meshes");
         for (what, lights) in cases {
-            let text = format!("{}{lights}{}", &text[..start], &text[end..]);
+            let mut text = format!("{}{lights}{}", &text[..start], &text[end..]);
+            if what.contains("behind") {
+                // The opaque wall behind the scene would hide a light behind it.
+                assert!(text.contains(WALL), "the path scene's wall");
+                text = text.replacen(WALL, "", 1);
+            }
             let mut scene = support::scene(&text, &dir);
             if what.contains("iterated") {
                 scene.sweep.penumbra = Penumbra::Iterated;
@@ -75,6 +90,8 @@ fn gpu_point_and_spot_lights_equal_cpu_for_both_cameras() {
                 cpu.image.data.iter().any(|&v| v > 0.5),
                 "{what}: the light lights the scene"
             );
+            let behind = what.contains("behind");
+            assert_eq!(cpu.turned_round_lights, usize::from(behind), "{what}");
         }
     }
 }

@@ -213,6 +213,10 @@ pub struct PointShading {
     pub cone: Option<ConeCosines>,
     /// A spot's pattern (gobo), placed as [`PointSource`]'s.
     pub pattern: Option<PatternPlacement>,
+    /// A turned-round pass (a light behind every mesh): the frame is the turned camera's, the
+    /// viewer towards its +z, and the shading's direction to the light and half vector are
+    /// negated as a turned pass's `LightPlan` has them (the shading faces normals towards −z).
+    pub turned: bool,
 }
 
 /// A spot's cone in f32 ([`SpotCone::factor`]'s smoothstep in the cosine).
@@ -249,8 +253,9 @@ pub fn phase_constants(g: f64) -> [f32; 3] {
 }
 
 impl PointShading {
-    /// The f32 constants of `source` (the same light, the same frame) with colour `color`.
-    pub fn new(source: &PointSource, color: [f32; 3]) -> PointShading {
+    /// The f32 constants of `source` (the same light, the same frame) with colour `color`, in
+    /// a turned-round pass where `turned`.
+    pub fn new(source: &PointSource, color: [f32; 3], turned: bool) -> PointShading {
         let f32x3 = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
         PointShading {
             center: source.center.map(|c| c as f32),
@@ -271,6 +276,7 @@ impl PointShading {
                 center: p.center.map(|c| c as f32),
                 image: Arc::clone(&p.image),
             }),
+            turned,
         }
     }
 
@@ -286,6 +292,8 @@ impl PointShading {
             self.center[2] - p[2],
         ];
         let d2 = (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
+        // The direction to the viewer is (0, 0, view_z).
+        let view_z = if self.turned { 1.0 } else { -1.0 };
         let (to_light, falloff) = if d2 > 0.0 {
             let len = d2.sqrt();
             let t = [d[0] / len, d[1] / len, d[2] / len];
@@ -298,34 +306,35 @@ impl PointShading {
                 std::array::from_fn(|c| pattern.map_or(cone, |v| cone * v[c]) / d2);
             (t, falloff)
         } else {
-            ([0.0, 0.0, -1.0], [0.0; 3])
+            ([0.0, 0.0, view_z], [0.0; 3])
         };
         let t = to_light;
-        let hv = [t[0], t[1], t[2] - 1.0];
+        let hv = [t[0], t[1], t[2] + view_z];
         let hl2 = (hv[0] * hv[0] + hv[1] * hv[1]) + hv[2] * hv[2];
         let h = if hl2 > 0.0 {
             let len = hl2.sqrt();
             [hv[0] / len, hv[1] / len, hv[2] / len]
         } else {
-            [0.0, 0.0, -1.0]
+            [0.0, 0.0, view_z]
         };
         let hk = (h[0] * t[0] + h[1] * t[1]) + h[2] * t[2];
         let q = 1.0 - hk;
         let q2 = q * q;
         let fresnel_p = (q2 * q2) * q;
-        // cos θ between the travel (−to_light) and the direction to the viewer (−z) is t.z.
+        // cos θ between the travel (−to_light) and the direction to the viewer: ∓t.z.
+        let cos = if self.turned { -t[2] } else { t[2] };
         let light_color = if phase[2] == 0.0 {
             self.color
         } else {
-            let x = phase[1] - phase[2] * t[2];
+            let x = phase[1] - phase[2] * cos;
             let factor = phase[0] / (x * x.sqrt());
             self.color.map(|c| c * factor)
         };
         LightTerms {
             light_color: std::array::from_fn(|c| light_color[c] * falloff[c]),
             color: std::array::from_fn(|c| self.color[c] * falloff[c]),
-            to_light: t,
-            half_vector: h,
+            to_light: if self.turned { t.map(|v| -v) } else { t },
+            half_vector: if self.turned { h.map(|v| -v) } else { h },
             fresnel: [fresnel_p / hk, (1.0 - fresnel_p) / hk],
         }
     }

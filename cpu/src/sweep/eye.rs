@@ -407,11 +407,7 @@ fn on_image(plan: &RenderPlan, (gx, gy): (f32, f32), z: f32) -> [f32; 3] {
 /// Where the ray of eye pixel `p` meets view depth `z_origin + z` (turned round: `z_origin −
 /// z`), in grid pixel coordinates.
 fn ray_on_grid(view: &EyeView<'_>, p: &EyePixel, z: f32) -> (f32, f32) {
-    let view_depth = if view.turned_round {
-        view.z_origin - z
-    } else {
-        view.z_origin + z
-    };
+    let view_depth = view_depth(view, z);
     let scale = view.scale + view_depth * view.zoom;
     let Some(point) = &view.point else {
         return (
@@ -427,10 +423,21 @@ fn ray_on_grid(view: &EyeView<'_>, p: &EyePixel, z: f32) -> (f32, f32) {
     )
 }
 
+/// The eye's view depth of the grid's relative depth `z`: `z_origin + z` (turned round:
+/// `z_origin − z`).
+fn view_depth(view: &EyeView<'_>, z: f32) -> f32 {
+    if view.turned_round {
+        view.z_origin - z
+    } else {
+        view.z_origin + z
+    }
+}
+
 /// Where the ray of eye pixel `p` meets relative depth `z`, in the eye's slab-grid frame of a
-/// point light's grid (`point.shading`'s coordinates).
+/// point light's grid (`point.shading`'s coordinates: turned round, the turned frame's, where the
+/// pixel's offset is mirrored and `z` is the turned depth already).
 fn ray_in_frame(view: &EyeView<'_>, point: &EyePoint<'_>, p: &EyePixel, z: f32) -> [f32; 3] {
-    let scale = view.scale + (view.z_origin + z) * view.zoom;
+    let scale = view.scale + view_depth(view, z) * view.zoom;
     [
         point.frame_axis[0] + p.offset[0] * scale,
         point.frame_axis[1] + p.offset[1] * scale,

@@ -173,7 +173,7 @@ fn rust_layouts() -> Vec<Layout> {
             pattern_centre,
             pattern_width,
             pattern_height,
-            _pad0,
+            turned,
             _pad1,
             phase,
         }),

@@ -115,36 +115,48 @@ fn eye_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     accum[p] = shade_sample(acc, mi, m, e, part, crossed, adv.first).acc;
 }
 
+// `view_depth`: the eye's view depth of the grid's relative depth z (turned round z_origin − z).
+fn view_depth(z: f32) -> f32 {
+    if eye_params.turned_round != 0u {
+        return eye_params.z_origin - z;
+    }
+    return eye_params.z_origin + z;
+}
+
+// Eye pixel (x, y)'s centre's offset from the image centre, image pixels (turned round, x
+// mirrored: the turned grid's x axis is the image's reversed).
+fn pixel_offset(x: u32, y: u32) -> vec2<f32> {
+    let view = eye_params;
+    var offset_x = (f32(x) + 0.5) - view.centre.x;
+    if view.turned_round != 0u {
+        offset_x = view.centre.x - (f32(x) + 0.5);
+    }
+    return vec2<f32>(offset_x, (f32(y) + 0.5) - view.centre.y);
+}
+
 // `ray_on_grid`: where eye pixel (x, y)'s ray meets view depth z_origin + z (turned round:
 // z_origin − z, x mirrored), in grid pixel coordinates.
 fn ray_on_grid(x: u32, y: u32, z: f32) -> vec2<f32> {
     let view = eye_params;
-    var view_depth = view.z_origin + z;
-    var offset_x = (f32(x) + 0.5) - view.centre.x;
-    if view.turned_round != 0u {
-        view_depth = view.z_origin - z;
-        offset_x = view.centre.x - (f32(x) + 0.5);
-    }
-    let scale = view.scale + view_depth * view.zoom;
-    let offset_y = (f32(y) + 0.5) - view.centre.y;
+    let o = pixel_offset(x, y);
+    let scale = view.scale + view_depth(z) * view.zoom;
     if point_params.on != 0u {
         // A point light's grid: the ray's offset from the light's centre, projected from it.
         let pp = point_params;
-        let k = pp.focal / (view_depth - pp.depth);
-        return vec2<f32>(view.axis.x + (offset_x * scale - pp.offset.x) * k, view.axis.y + (offset_y * scale - pp.offset.y) * k);
+        let k = pp.focal / (view_depth(z) - pp.depth);
+        return vec2<f32>(view.axis.x + (o.x * scale - pp.offset.x) * k, view.axis.y + (o.y * scale - pp.offset.y) * k);
     }
-    return vec2<f32>(view.axis.x + offset_x * scale, view.axis.y + offset_y * scale);
+    return vec2<f32>(view.axis.x + o.x * scale, view.axis.y + o.y * scale);
 }
 
 // `ray_in_frame`: where eye pixel (x, y)'s ray meets relative depth z in the eye's slab-grid
-// frame of a point light's grid (`point_params`' coordinates; never turned round).
+// frame of a point light's grid (`point_params`' coordinates; turned round the turned frame's).
 fn ray_in_frame(x: u32, y: u32, z: f32) -> vec3<f32> {
     let view = eye_params;
-    let scale = view.scale + (view.z_origin + z) * view.zoom;
+    let scale = view.scale + view_depth(z) * view.zoom;
     let fa = point_params.frame_axis;
-    let ox = (f32(x) + 0.5) - view.centre.x;
-    let oy = (f32(y) + 0.5) - view.centre.y;
-    return vec3<f32>(fa.x + ox * scale, fa.y + oy * scale, z);
+    let o = pixel_offset(x, y);
+    return vec3<f32>(fa.x + o.x * scale, fa.y + o.y * scale, z);
 }
 
 // `PointShading::terms`: the shading's terms of the point light at `p` (the eye's slab-grid
@@ -156,7 +168,12 @@ fn point_terms(p: vec3<f32>, phase: vec4<f32>) -> LightTerms {
     let ps = pp.pixel_size;
     let d = vec3<f32>((pp.center.x - p.x) * ps, (pp.center.y - p.y) * ps, pp.center.z - p.z);
     let d2 = (d.x * d.x + d.y * d.y) + d.z * d.z;
-    var t = vec3<f32>(0.0, 0.0, -1.0);
+    // The direction to the viewer is (0, 0, view_z).
+    var view_z = -1.0;
+    if pp.turned != 0u {
+        view_z = 1.0;
+    }
+    var t = vec3<f32>(0.0, 0.0, view_z);
     var falloff = vec3<f32>(0.0, 0.0, 0.0);
     if d2 > 0.0 {
         let len = sqrt(d2);
@@ -171,9 +188,9 @@ fn point_terms(p: vec3<f32>, phase: vec4<f32>) -> LightTerms {
             falloff = vec3<f32>((cone * v.x) / d2, (cone * v.y) / d2, (cone * v.z) / d2);
         }
     }
-    let hv = vec3<f32>(t.x, t.y, t.z - 1.0);
+    let hv = vec3<f32>(t.x, t.y, t.z + view_z);
     let hl2 = (hv.x * hv.x + hv.y * hv.y) + hv.z * hv.z;
-    var h = vec3<f32>(0.0, 0.0, -1.0);
+    var h = vec3<f32>(0.0, 0.0, view_z);
     if hl2 > 0.0 {
         let len = sqrt(hl2);
         h = vec3<f32>(hv.x / len, hv.y / len, hv.z / len);
@@ -184,16 +201,29 @@ fn point_terms(p: vec3<f32>, phase: vec4<f32>) -> LightTerms {
     let fresnel_p = (q2 * q2) * q;
     let c = pp.color;
     var lc = vec3<f32>(c.x, c.y, c.z);
+    // cos θ between the travel (−t) and the direction to the viewer.
+    var cos = t.z;
+    if pp.turned != 0u {
+        cos = -t.z;
+    }
     if phase.z != 0.0 {
-        let xp = phase.y - phase.z * t.z;
+        let xp = phase.y - phase.z * cos;
         let factor = phase.x / (xp * sqrt(xp));
         lc = vec3<f32>(c.x * factor, c.y * factor, c.z * factor);
+    }
+    // Turned round, the direction to the light and the half vector negated (the shading faces
+    // normals towards −z, the viewer's side reversed).
+    var tl = t;
+    var hh = h;
+    if pp.turned != 0u {
+        tl = -t;
+        hh = -h;
     }
     return LightTerms(
         vec3<f32>(lc.x * falloff.x, lc.y * falloff.y, lc.z * falloff.z),
         vec3<f32>(c.x * falloff.x, c.y * falloff.y, c.z * falloff.z),
-        array<f32, 3>(t.x, t.y, t.z),
-        array<f32, 3>(h.x, h.y, h.z),
+        array<f32, 3>(tl.x, tl.y, tl.z),
+        array<f32, 3>(hh.x, hh.y, hh.z),
         array<f32, 2>(fresnel_p / hk, (1.0 - fresnel_p) / hk),
     );
 }

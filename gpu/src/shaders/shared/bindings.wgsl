@@ -267,7 +267,7 @@ struct PointParams {
     pattern_centre: vec2<f32>, // its centre there
     pattern_width: u32,
     pattern_height: u32,
-    _pad0: u32,
+    turned: u32,         // 1: a turned-round pass (a light behind every mesh)
     _pad1: u32,
     phase: array<vec4<f32>, MAX_MESHES>, // per mesh (1 − g², 1 + g², 2g, 0)
 }
