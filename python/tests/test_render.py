@@ -267,12 +267,15 @@ def test_light_resolution_and_point_lights_follow_the_command_line(cli, tmp_path
         convshadow.render(ortho, light_resolution=32.0)
     assert info.value.exit_code == 2 and "light_resolution" in info.value.message
     # A point light before the sphere: the reference and the sweep render it; one behind the
-    # sphere only the reference, and the sweep says so.
+    # sphere the sweep too (a turned-round pass); one beside it, amid the scene's depths, only
+    # the reference, and the sweep says so.
     point = PERSPECTIVE + '[[light]]\nkind = "point"\nposition = [0.0, 3.0, -3.0]\nradius = 0.1\n'
     for image, _ in (convshadow.render(point, backend="reference", reference_samples=4),
                      convshadow.render(point, backend="cpu")):
         assert np.isfinite(image).all() and (image > 0).any()
-    behind = point.replace("[0.0, 3.0, -3.0]", "[0.0, 0.0, 3.0]")
+    behind, stats = convshadow.render(point.replace("[0.0, 3.0, -3.0]", "[0.0, 0.0, 3.0]"))
+    assert np.isfinite(behind).all() and stats["lights_toward_viewer"] == 1
+    amid = point.replace("[0.0, 3.0, -3.0]", "[2.0, 0.0, 0.0]")
     with pytest.raises(convshadow.Error) as info:
-        convshadow.render(behind)
+        convshadow.render(amid)
     assert info.value.exit_code == 3 and "--backend reference" in info.value.message

@@ -201,13 +201,7 @@ fn point_and_spot_lights_on_media_match_the_shadow_ray_reference() {
             let reference = render_reference(&scene, 0, 1, 1 << 30, false, &[], None).unwrap();
             let (a, b) = (&sweep.image.data, &reference.image.data);
             let peak = b.iter().fold(0.0f32, |m, &v| m.max(v));
-            let rmse = (a
-                .iter()
-                .zip(b)
-                .map(|(x, y)| f64::from(x - y).powi(2))
-                .sum::<f64>()
-                / a.len() as f64)
-                .sqrt();
+            let rmse = root_mean_square(a, b);
             eprintln!("{camera:?} / {lights:?}: RMSE {rmse:.3e} of a peak {peak}");
             assert!(peak > 0.1, "the scene is lit");
             assert!(rmse <= 5e-3 * f64::from(peak), "RMSE {rmse} (peak {peak})");
@@ -357,14 +351,7 @@ fn point_and_spot_lights_behind_every_mesh_match_the_shadow_ray_reference() {
                 let sweep = render(&scene, &RenderRequest::default()).unwrap();
                 assert_eq!(sweep.turned_round_lights, 1, "a turned-round pass");
                 let a = &sweep.image.data;
-                rmse[k] = (a
-                    .iter()
-                    .zip(b)
-                    .map(|(x, y)| f64::from(x - y).powi(2))
-                    .sum::<f64>()
-                    / a.len() as f64)
-                    .sqrt()
-                    / f64::from(peak);
+                rmse[k] = root_mean_square(a, b) / f64::from(peak);
             }
             eprintln!(
                 "behind, {camera:?} / {lights:?}: RMSE / peak {:.3e} (1), {:.3e} (4)",
@@ -373,4 +360,10 @@ fn point_and_spot_lights_behind_every_mesh_match_the_shadow_ray_reference() {
             assert!(rmse[1] <= 5e-3 && rmse[1] < rmse[0], "RMSE / peak {rmse:?}");
         }
     }
+}
+
+/// The root-mean-square difference of two images' values.
+fn root_mean_square(a: &[f32], b: &[f32]) -> f64 {
+    let sum: f64 = a.iter().zip(b).map(|(x, y)| f64::from(x - y).powi(2)).sum();
+    (sum / a.len() as f64).sqrt()
 }
