@@ -397,10 +397,10 @@ fn a_world_direction_light_renders_like_its_tilt_and_bad_ones_exit_3() {
             "direction = [0.0, 0.0, 1.0]\ntilt_deg = [5.0, 0.0]",
             "not both",
         ),
-        // A spot light is valid, but the sweep needs it before every mesh: refused naming the
-        // position.
+        // A spot light is valid, but the sweep needs it before or behind every mesh: one
+        // between the box and the wall is refused naming the position.
         (
-            "kind = \"spot\"\nposition = [0.0, 0.0, 30.0]\nradius = 0.1\ndirection = [0.0, 0.0, -1.0]\ncone_deg = 20.0",
+            "kind = \"spot\"\nposition = [2.0, 0.0, 0.8]\nradius = 0.1\ndirection = [0.0, 0.0, -1.0]\ncone_deg = 20.0",
             "light[0].position",
         ),
         ("kind = \"spot\"", "light[0].position"),
