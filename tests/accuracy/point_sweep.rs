@@ -147,17 +147,7 @@ fn a_soft_point_lights_penumbra_on_a_wall_matches_the_integrated_visibility_on_t
 /// A translucent box (a Henyey–Greenstein medium) on a white wall in a 64 × 48 view by
 /// `camera`, lit by `lights` (`[[light]]` tables).
 fn medium_scene(camera: &str, lights: &str) -> Scene {
-    let text = format!(
-        r#"
-[image]
-width = 64
-height = 48
-background = [0.0, 0.0, 0.0]
-[camera]
-{camera}
-[sweep]
-slabs = 96
-{lights}
+    let meshes = r#"
 [[mesh]]
 shape = "box"
 size = [1.0, 1.0, 0.6]
@@ -171,12 +161,10 @@ material = "wall"
 [material.cloud]
 color = [1.0, 0.8, 0.6]
 opacity = 0.8
-phase = {{ g = 0.4 }}
+phase = { g = 0.4 }
 [material.wall]
-color = [1.0, 1.0, 1.0]
-"#
-    );
-    Scene::parse(&text, "point_medium", Path::new(".")).unwrap()
+color = [1.0, 1.0, 1.0]"#;
+    small_scene(camera, lights, meshes, "point_medium")
 }
 
 const ORTHOGRAPHIC: &str = "direction = [0.0, 0.0, 1.0]\nview_width = 3.0";
@@ -292,17 +280,7 @@ fn a_point_light_whose_grid_would_be_too_large_is_refused_by_name() {
 /// A translucent cloud (Henyey–Greenstein g = 0.4, so a light behind it makes it glow) and a
 /// small opaque plate between it and `lights`, placed behind both: nothing else.
 fn backlit_scene(camera: &str, lights: &str) -> Scene {
-    let text = format!(
-        r#"
-[image]
-width = 64
-height = 48
-background = [0.0, 0.0, 0.0]
-[camera]
-{camera}
-[sweep]
-slabs = 96
-{lights}
+    let meshes = r#"
 [[mesh]]
 shape = "box"
 size = [1.4, 1.0, 0.6]
@@ -315,12 +293,10 @@ material = "plate"
 [material.cloud]
 color = [1.0, 0.8, 0.6]
 opacity = 0.6
-phase = {{ g = 0.4 }}
+phase = { g = 0.4 }
 [material.plate]
-color = [1.0, 1.0, 1.0]
-"#
-    );
-    Scene::parse(&text, "point_backlit", Path::new(".")).unwrap()
+color = [1.0, 1.0, 1.0]"#;
+    small_scene(camera, lights, meshes, "point_backlit")
 }
 
 /// Lights behind every mesh: a hard point light, and a spot pointing back at the viewer with a
@@ -366,4 +342,14 @@ fn point_and_spot_lights_behind_every_mesh_match_the_shadow_ray_reference() {
 fn root_mean_square(a: &[f32], b: &[f32]) -> f64 {
     let sum: f64 = a.iter().zip(b).map(|(x, y)| f64::from(x - y).powi(2)).sum();
     (sum / a.len() as f64).sqrt()
+}
+
+/// A 64 × 48 scene on a black background, 96 slabs, seen by `camera` and lit by `lights`
+/// (`[[light]]` tables), with `meshes` (its meshes' and materials' tables), named `name`.
+fn small_scene(camera: &str, lights: &str, meshes: &str, name: &str) -> Scene {
+    let text = format!(
+        "[image]\nwidth = 64\nheight = 48\nbackground = [0.0, 0.0, 0.0]\n[camera]\n{camera}\n\
+         [sweep]\nslabs = 96\n{lights}\n{meshes}"
+    );
+    Scene::parse(&text, name, Path::new(".")).unwrap()
 }

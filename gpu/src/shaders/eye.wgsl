@@ -139,12 +139,13 @@ fn pixel_offset(x: u32, y: u32) -> vec2<f32> {
 fn ray_on_grid(x: u32, y: u32, z: f32) -> vec2<f32> {
     let view = eye_params;
     let o = pixel_offset(x, y);
-    let scale = view.scale + view_depth(z) * view.zoom;
+    let depth = view_depth(z);
+    let scale = view.scale + depth * view.zoom;
     if point_params.on != 0u {
         // A point light's grid: the ray's offset from the light's centre, projected from it.
-        let pp = point_params;
-        let k = pp.focal / (view_depth(z) - pp.depth);
-        return vec2<f32>(view.axis.x + (o.x * scale - pp.offset.x) * k, view.axis.y + (o.y * scale - pp.offset.y) * k);
+        let k = point_params.focal / (depth - point_params.depth);
+        let c = point_params.offset;
+        return vec2<f32>(view.axis.x + (o.x * scale - c.x) * k, view.axis.y + (o.y * scale - c.y) * k);
     }
     return vec2<f32>(view.axis.x + o.x * scale, view.axis.y + o.y * scale);
 }
@@ -164,13 +165,12 @@ fn ray_in_frame(x: u32, y: u32, z: f32) -> vec3<f32> {
 // centre gives there (`cone·pattern / |X − P|²`, 0 at the centre). The CPU's operations in its
 // order.
 fn point_terms(p: vec3<f32>, phase: vec4<f32>) -> LightTerms {
-    let pp = point_params;
-    let ps = pp.pixel_size;
-    let d = vec3<f32>((pp.center.x - p.x) * ps, (pp.center.y - p.y) * ps, pp.center.z - p.z);
+    let ps = point_params.pixel_size;
+    let d = vec3<f32>((point_params.center.x - p.x) * ps, (point_params.center.y - p.y) * ps, point_params.center.z - p.z);
     let d2 = (d.x * d.x + d.y * d.y) + d.z * d.z;
     // The direction to the viewer is (0, 0, view_z).
     var view_z = -1.0;
-    if pp.turned != 0u {
+    if point_params.turned != 0u {
         view_z = 1.0;
     }
     var t = vec3<f32>(0.0, 0.0, view_z);
@@ -179,11 +179,11 @@ fn point_terms(p: vec3<f32>, phase: vec4<f32>) -> LightTerms {
         let len = sqrt(d2);
         t = vec3<f32>(d.x / len, d.y / len, d.z / len);
         var cone = 1.0;
-        if pp.spot != 0u {
+        if point_params.spot != 0u {
             cone = cone_factor(t);
         }
         falloff = vec3<f32>(cone / d2, cone / d2, cone / d2);
-        if pp.pattern != 0u {
+        if point_params.pattern != 0u {
             let v = pattern_at(d);
             falloff = vec3<f32>((cone * v.x) / d2, (cone * v.y) / d2, (cone * v.z) / d2);
         }
@@ -199,11 +199,11 @@ fn point_terms(p: vec3<f32>, phase: vec4<f32>) -> LightTerms {
     let q = 1.0 - hk;
     let q2 = q * q;
     let fresnel_p = (q2 * q2) * q;
-    let c = pp.color;
+    let c = point_params.color;
     var lc = vec3<f32>(c.x, c.y, c.z);
     // cos θ between the travel (−t) and the direction to the viewer.
     var cos = t.z;
-    if pp.turned != 0u {
+    if point_params.turned != 0u {
         cos = -t.z;
     }
     if phase.z != 0.0 {
@@ -215,7 +215,7 @@ fn point_terms(p: vec3<f32>, phase: vec4<f32>) -> LightTerms {
     // normals towards −z, the viewer's side reversed).
     var tl = t;
     var hh = h;
-    if pp.turned != 0u {
+    if point_params.turned != 0u {
         tl = -t;
         hh = -h;
     }
@@ -247,16 +247,15 @@ fn cone_factor(t: vec3<f32>) -> f32 {
 // `pattern_at`: a spot pattern's value per channel for emission along −d (d towards the light),
 // where the ray from the centre meets the unit plane along the axis; 0 at 90° or more.
 fn pattern_at(d: vec3<f32>) -> vec3<f32> {
-    let pp = point_params;
     let o = vec3<f32>(0.0 - d.x, 0.0 - d.y, 0.0 - d.z);
-    let along = (o.x * pp.axis.x + o.y * pp.axis.y) + o.z * pp.axis.z;
+    let along = (o.x * point_params.axis.x + o.y * point_params.axis.y) + o.z * point_params.axis.z;
     if !(along > 0.0) {
         return vec3<f32>(0.0, 0.0, 0.0);
     }
-    let a = ((o.x * pp.right.x + o.y * pp.right.y) + o.z * pp.right.z) / along;
-    let b = ((o.x * pp.down.x + o.y * pp.down.y) + o.z * pp.down.z) / along;
-    let tx = ((a - pp.pattern_centre.x) / pp.pattern_size.x + 0.5) * f32(pp.pattern_width);
-    let ty = ((b - pp.pattern_centre.y) / pp.pattern_size.y + 0.5) * f32(pp.pattern_height);
+    let a = ((o.x * point_params.right.x + o.y * point_params.right.y) + o.z * point_params.right.z) / along;
+    let b = ((o.x * point_params.down.x + o.y * point_params.down.y) + o.z * point_params.down.z) / along;
+    let tx = ((a - point_params.pattern_centre.x) / point_params.pattern_size.x + 0.5) * f32(point_params.pattern_width);
+    let ty = ((b - point_params.pattern_centre.y) / point_params.pattern_size.y + 0.5) * f32(point_params.pattern_height);
     return vec3<f32>(pattern_sample(tx, ty, 0u), pattern_sample(tx, ty, 1u), pattern_sample(tx, ty, 2u));
 }
 
