@@ -130,23 +130,6 @@ pub fn groups_1d(groups: u32) -> (u32, u32) {
     (x, groups.div_ceil(x).max(1))
 }
 
-/// A compute pipeline for `entry` of `module` with an automatic layout.
-pub fn pipeline(
-    ctx: &GpuContext,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-) -> wgpu::ComputePipeline {
-    ctx.device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: None,
-            module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        })
-}
-
 /// A bind group for group 0 of `pipeline` with `(binding, buffer)` entries.
 pub fn bind(
     ctx: &GpuContext,

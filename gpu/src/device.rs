@@ -1,7 +1,12 @@
 //! Device set-up: the Vulkan backend, a hardware adapter when there is one, else a software one
 //! (Mesa lavapipe), the adapter's own limits, and one error type for everything GPU-side.
 
+use std::collections::HashMap;
+use std::sync::Mutex;
+
 use convshadow_common::contract::ldi::LdiError;
+
+use crate::shader::Program;
 
 /// Environment variable that picks an adapter by a case-insensitive substring of its name
 /// (e.g. `llvmpipe` to force lavapipe on a machine that also has a GPU).
@@ -67,6 +72,16 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// The limits the device was created with (the adapter's own, not the defaults).
     pub limits: wgpu::Limits,
+    /// Every shader module and compute pipeline made so far: a driver compiles each once per
+    /// device, not once per frame or light pass (about a second each on lavapipe).
+    compiled: Mutex<Compiled>,
+}
+
+/// The shader modules and pipelines a [`GpuContext`] has compiled.
+#[derive(Default)]
+struct Compiled {
+    modules: HashMap<Program, wgpu::ShaderModule>,
+    pipelines: HashMap<(Program, &'static str), wgpu::ComputePipeline>,
 }
 
 impl std::fmt::Debug for GpuContext {
@@ -135,7 +150,38 @@ impl GpuContext {
             queue,
             info,
             limits,
+            compiled: Mutex::default(),
         })
+    }
+
+    /// The compute pipeline of `entry` in `program` (automatic layout), compiled on first use.
+    pub(crate) fn pipeline(&self, program: Program, entry: &'static str) -> wgpu::ComputePipeline {
+        // A poisoned lock only means another thread panicked mid-insert: the maps are still whole.
+        let mut compiled = self.compiled.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(pipeline) = compiled.pipelines.get(&(program, entry)) {
+            return pipeline.clone();
+        }
+        let module = compiled.modules.entry(program).or_insert_with(|| {
+            self.device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(program.name()),
+                    source: wgpu::ShaderSource::Wgsl(program.source().into()),
+                })
+        });
+        let pipeline = self
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        compiled
+            .pipelines
+            .insert((program, entry), pipeline.clone());
+        pipeline
     }
 
     /// The adapter as named in summaries and stats, e.g. `llvmpipe (LLVM 15.0.6, 256 bits)

@@ -11,10 +11,10 @@ use convshadow_common::contract::sweep_io::{EyePoint, EyeView, SweepOptions, Swe
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::prepare::raster::RasterSetup;
 
-use crate::buffers::{bind, dispatch_once, pipeline, uniform, upload, zeroed};
+use crate::buffers::{bind, dispatch_once, uniform, upload, zeroed};
 use crate::device::{GpuContext, GpuError};
 use crate::layout::{EyeParams, PointParams, slot};
-use crate::shader::eye_wgsl;
+use crate::shader::Program;
 use crate::sweep::{
     BeforeSlab, GridSweep, TILE, first_cursors, fragment_meta, last_light, read_rgba,
 };
@@ -118,12 +118,11 @@ fn point_params(p: &EyePoint<'_>) -> PointParams {
 /// of that parity and its cursors.
 fn eye_slab_dispatch(
     ctx: &GpuContext,
-    module: &wgpu::ShaderModule,
     run: &GridSweep,
     e: &EyeBuffers,
     eye: &EyeView<'_>,
 ) -> BeforeSlab {
-    let pipe = pipeline(ctx, module, "eye_slab");
+    let pipe = ctx.pipeline(Program::Eye, "eye_slab");
     let g = &run.buffers;
     let group = |light_prev: &wgpu::Buffer| {
         bind(
@@ -166,14 +165,8 @@ fn eye_slab_dispatch(
 }
 
 /// Adds the background to the eye's colours into its RGBA image.
-fn dispatch_eye_finish(
-    ctx: &GpuContext,
-    module: &wgpu::ShaderModule,
-    run: &GridSweep,
-    e: &EyeBuffers,
-    eye: &EyeView<'_>,
-) {
-    let pipe = pipeline(ctx, module, "eye_finish");
+fn dispatch_eye_finish(ctx: &GpuContext, run: &GridSweep, e: &EyeBuffers, eye: &EyeView<'_>) {
+    let pipe = ctx.pipeline(Program::Eye, "eye_finish");
     let group = bind(
         ctx,
         &pipe,
@@ -201,15 +194,9 @@ pub fn sweep_perspective(
 ) -> Result<SweepOutput, GpuError> {
     let run = GridSweep::prepare(ctx, plan, raster, ldi, options)?;
     let buffers = eye_buffers(ctx, plan, eye)?;
-    let module = ctx
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("eye.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(eye_wgsl().into()),
-        });
-    let before = eye_slab_dispatch(ctx, &module, &run, &buffers, eye);
+    let before = eye_slab_dispatch(ctx, &run, &buffers, eye);
     run.dispatch(ctx, plan, options, Some(&before))?;
-    dispatch_eye_finish(ctx, &module, &run, &buffers, eye);
+    dispatch_eye_finish(ctx, &run, &buffers, eye);
     let (image, alpha) = read_rgba(ctx, &buffers.image, buffers.image_words)?;
     Ok(SweepOutput {
         image,

@@ -18,10 +18,10 @@
 use convshadow_common::contract::ldi::{Ldi, check_fragment_storage, from_sortable_bits};
 use convshadow_common::prepare::raster::RasterSetup;
 
-use crate::buffers::{bind, check_size, groups_1d, pipeline, read_back, uniform, upload, zeroed};
+use crate::buffers::{bind, check_size, groups_1d, read_back, uniform, upload, zeroed};
 use crate::device::{GpuContext, GpuError};
 use crate::layout::{LdiParams, Triangle, WorkItem, slot};
-use crate::shader::ldi_wgsl;
+use crate::shader::Program;
 
 /// Invocations per workgroup (`@workgroup_size(64)` in the shader).
 const WORKGROUP: u32 = 64;
@@ -107,12 +107,6 @@ pub fn build_ldi(
             setup.width, setup.height
         )));
     }
-    let module = ctx
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("ldi.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(ldi_wgsl().into()),
-        });
     let tris = upload(ctx, "LDI triangle", &triangles(setup), false)?;
     let item_list = work_items(setup);
     let n_items = item_list.len() as u32;
@@ -121,7 +115,7 @@ pub fn build_ldi(
     let counts = zeroed(ctx, "LDI count", pixels)?;
 
     // 1. Counts.
-    let count = pipeline(ctx, &module, "count");
+    let count = ctx.pipeline(Program::Ldi, "count");
     let item_params = params(ctx, n_items, setup);
     let group = bind(
         ctx,
@@ -156,8 +150,8 @@ pub fn build_ldi(
     let cursor = upload(ctx, "LDI cursor", &offsets[..pixels as usize], false)?;
     let key_depth = zeroed(ctx, "LDI fragment key", total)?;
     let key_tri = zeroed(ctx, "LDI fragment key", total)?;
-    let fill = pipeline(ctx, &module, "fill");
-    let sort = pipeline(ctx, &module, "sort");
+    let fill = ctx.pipeline(Program::Ldi, "fill");
+    let sort = ctx.pipeline(Program::Ldi, "sort");
     let fill_group = bind(
         ctx,
         &fill,

@@ -109,6 +109,34 @@ pub fn assemble(name: &str) -> String {
     out
 }
 
+/// The port's three WGSL programs; a device compiles each once ([`crate::GpuContext`] keeps
+/// its pipelines).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Program {
+    /// The LDI passes ([`ldi_wgsl`]).
+    Ldi,
+    /// The sweep ([`sweep_wgsl`]).
+    Sweep,
+    /// The perspective camera's eye pass ([`eye_wgsl`]).
+    Eye,
+}
+
+impl Program {
+    /// The program's import name, which is also its label on the device.
+    pub fn name(self) -> &'static str {
+        match self {
+            Program::Ldi => "ldi",
+            Program::Sweep => "sweep",
+            Program::Eye => "eye",
+        }
+    }
+
+    /// The program's complete WGSL.
+    pub fn source(self) -> String {
+        assemble(self.name())
+    }
+}
+
 /// The WGSL of the LDI passes.
 pub fn ldi_wgsl() -> String {
     assemble("ldi")

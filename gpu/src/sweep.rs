@@ -22,9 +22,7 @@ use convshadow_common::plan::{
 };
 use convshadow_common::prepare::raster::RasterSetup;
 
-use crate::buffers::{
-    bind, check_size, dispatch_once, pipeline, read_back, uniform, upload, wait, zeroed,
-};
+use crate::buffers::{bind, check_size, dispatch_once, read_back, uniform, upload, wait, zeroed};
 use crate::device::{GpuContext, GpuError};
 use crate::layout::{
     Cursor, DETAIL_FBM, DETAIL_NONE, DETAIL_PERLIN, DETAIL_RIDGED, DETAIL_TURBULENCE, Globals,
@@ -32,7 +30,7 @@ use crate::layout::{
     PHASE_PER_SLAB, PHASE_SCHEDULE, PRE_NONE, SPEC_ASHIKMIN_SHIRLEY, SPEC_BLINN_PHONG, Slab,
     SlabParams, TEXTURE_BRICKED, TEXTURE_DENSE, Tap, TransferEntry, slot,
 };
-use crate::shader::sweep_wgsl;
+use crate::shader::Program;
 
 /// Largest triangle index + 1 (the bits of a fragment's meta word above the mesh id).
 pub const MAX_TRIANGLES: usize = 1 << (32 - MESH_BITS);
@@ -563,19 +561,6 @@ fn slab_params_buffer(ctx: &GpuContext, slabs: u32) -> wgpu::Buffer {
         })
 }
 
-/// The sweep's two pipelines from `sweep.wgsl`: the per-slab step and the image finish.
-fn sweep_pipelines(ctx: &GpuContext) -> (wgpu::ComputePipeline, wgpu::ComputePipeline) {
-    let module = ctx
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("sweep.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(sweep_wgsl().into()),
-        });
-    let slab_pipe = pipeline(ctx, &module, "sweep_slab");
-    let finish_pipe = pipeline(ctx, &module, "finish_image");
-    (slab_pipe, finish_pipe)
-}
-
 /// The per-slab bind groups, `[even, odd]`: each reads one light buffer and level plane and
 /// writes the other.
 fn slab_groups(
@@ -800,7 +785,8 @@ impl GridSweep {
         check_size(ctx, "light", grid.light_words * 4)?;
         check_size(ctx, "per-pixel colour", grid.pixels * 16)?;
         let buffers = upload_buffers(ctx, plan, ldi, options, &tables, &grid)?;
-        let (slab_pipe, finish_pipe) = sweep_pipelines(ctx);
+        let slab_pipe = ctx.pipeline(Program::Sweep, "sweep_slab");
+        let finish_pipe = ctx.pipeline(Program::Sweep, "finish_image");
         let groups = slab_groups(ctx, &slab_pipe, &buffers);
         Ok(GridSweep {
             grid,

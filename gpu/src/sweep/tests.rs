@@ -1,6 +1,7 @@
 //! The GPU sweep's host-side checks: its tables, limits and bindings.
 
 use super::*;
+use crate::shader::sweep_wgsl;
 use convshadow_common::contract::files::{GeometryFiles, PlanFiles};
 use convshadow_common::model::scene::{Penumbra, Scene, SlabSpec};
 use convshadow_common::prepare::geometry::SceneGeometry;
