@@ -73,7 +73,8 @@ pub struct GpuContext {
     /// The limits the device was created with (the adapter's own, not the defaults).
     pub limits: wgpu::Limits,
     /// Every shader module and compute pipeline made so far: a driver compiles each once per
-    /// device, not once per frame or light pass (about a second each on lavapipe).
+    /// device, not once per frame or light pass (on lavapipe the sweep's two take about half a
+    /// second).
     compiled: Mutex<Compiled>,
 }
 

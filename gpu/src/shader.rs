@@ -113,15 +113,18 @@ pub fn assemble(name: &str) -> String {
 /// its pipelines).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Program {
-    /// The LDI passes ([`ldi_wgsl`]).
+    /// The LDI passes (`shaders/ldi.wgsl`).
     Ldi,
-    /// The sweep ([`sweep_wgsl`]).
+    /// The sweep (the stage files it imports, then `shaders/sweep.wgsl`).
     Sweep,
-    /// The perspective camera's eye pass ([`eye_wgsl`]).
+    /// The perspective camera's eye pass (`shaders/eye.wgsl` and its imports).
     Eye,
 }
 
 impl Program {
+    /// Every program.
+    pub const ALL: [Program; 3] = [Program::Ldi, Program::Sweep, Program::Eye];
+
     /// The program's import name, which is also its label on the device.
     pub fn name(self) -> &'static str {
         match self {
@@ -137,28 +140,13 @@ impl Program {
     }
 }
 
-/// The WGSL of the LDI passes.
-pub fn ldi_wgsl() -> String {
-    assemble("ldi")
-}
-
-/// The WGSL of the sweep (the stage files it imports, then the sweep itself).
-pub fn sweep_wgsl() -> String {
-    assemble("sweep")
-}
-
-/// The WGSL of the perspective camera's eye pass (the stage files it imports, then the pass).
-pub fn eye_wgsl() -> String {
-    assemble("eye")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn every_import_is_expanded_once() {
-        for src in [ldi_wgsl(), sweep_wgsl(), eye_wgsl()] {
+        for src in Program::ALL.map(Program::source) {
             assert!(!src.contains("#import"));
             assert_eq!(src.matches("struct Globals {").count(), 1);
             assert_eq!(src.matches("const MAX_LIGHT_CHANNELS: u32").count(), 1);

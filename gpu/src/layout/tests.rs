@@ -1,7 +1,7 @@
 use std::mem::{offset_of, size_of};
 
 use super::*;
-use crate::shader::{eye_wgsl, ldi_wgsl, sweep_wgsl};
+use crate::shader::Program;
 
 /// A struct's layout: name, size, and (member, offset) in declaration order.
 type Layout = (&'static str, usize, Vec<(&'static str, usize)>);
@@ -230,19 +230,15 @@ fn mismatches(wgsl: &str, layouts: &[Layout], slots: &[(&str, u32)]) -> Vec<Stri
 
 #[test]
 fn rust_and_wgsl_layouts_agree() {
-    for (what, wgsl) in [
-        ("ldi", ldi_wgsl()),
-        ("sweep", sweep_wgsl()),
-        ("eye", eye_wgsl()),
-    ] {
-        let bad = mismatches(&wgsl, &rust_layouts(), slot::ALL);
-        assert!(bad.is_empty(), "{what} shader: {bad:#?}");
+    for program in Program::ALL {
+        let bad = mismatches(&program.source(), &rust_layouts(), slot::ALL);
+        assert!(bad.is_empty(), "{} shader: {bad:#?}", program.name());
     }
 }
 
 #[test]
 fn a_moved_field_is_reported() {
-    let wgsl = sweep_wgsl();
+    let wgsl = Program::Sweep.source();
     // Swap two members of one struct on the WGSL side only.
     let moved = wgsl.replacen(
         "    depth_dx: f32,\n    depth_dy: f32,\n",

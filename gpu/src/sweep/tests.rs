@@ -1,7 +1,7 @@
 //! The GPU sweep's host-side checks: its tables, limits and bindings.
 
 use super::*;
-use crate::shader::sweep_wgsl;
+use crate::shader::Program;
 use convshadow_common::contract::files::{GeometryFiles, PlanFiles};
 use convshadow_common::model::scene::{Penumbra, Scene, SlabSpec};
 use convshadow_common::prepare::geometry::SceneGeometry;
@@ -70,7 +70,7 @@ fn a_malformed_level_table_is_refused_naming_the_light() {
 
 #[test]
 fn the_sweep_binds_the_counted_storage_buffers() {
-    let wgsl = sweep_wgsl();
+    let wgsl = Program::Sweep.source();
     let module = naga::front::wgsl::parse_str(&wgsl).expect("the sweep WGSL parses");
     let info = naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
