@@ -68,6 +68,18 @@ pub fn load_pattern(path: &Path) -> Result<Pattern, TextureError> {
 /// stored and its linear f32 RGB texels. `None` when the header cannot be read (the load then
 /// reports why).
 pub fn memory_need(path: &Path) -> Option<u64> {
+    let (decoded, texels) = header_sizes(path)?;
+    Some(decoded.saturating_add(texels.saturating_mul(12)))
+}
+
+/// Bytes of the pattern's linear f32 RGB texels alone (what a device copy of it holds), from its
+/// header; `None` when the header cannot be read.
+pub fn texel_bytes(path: &Path) -> Option<u64> {
+    header_sizes(path).map(|(_, texels)| texels.saturating_mul(12))
+}
+
+/// The decoded image's size in bytes as stored and its texel count, from the file's header.
+fn header_sizes(path: &Path) -> Option<(u64, u64)> {
     use image::ImageDecoder;
     crate::input::check_regular(path).ok()?;
     let decoder = image::ImageReader::open(path)
@@ -77,12 +89,7 @@ pub fn memory_need(path: &Path) -> Option<u64> {
         .into_decoder()
         .ok()?;
     let (w, h) = decoder.dimensions();
-    let texels = u64::from(w) * u64::from(h);
-    Some(
-        decoder
-            .total_bytes()
-            .saturating_add(texels.saturating_mul(12)),
-    )
+    Some((decoder.total_bytes(), u64::from(w) * u64::from(h)))
 }
 
 #[cfg(test)]

@@ -63,23 +63,42 @@ pub struct MemoryNeed {
     pub gpu_fragments: bool,
 }
 
-/// Bytes the scene's input files need in memory (see [`MemoryNeed::inputs`]); a file that cannot
-/// be inspected counts 0 here and is reported when it is loaded.
-fn input_bytes(scene: &Scene, textures: bool) -> u64 {
-    use convshadow_common::model::scene::{ShapeSpec, TextureFormat};
-    let size = |p: &std::path::Path| std::fs::metadata(p).map_or(0, |m| m.len());
-    let meshes: u64 = scene
+/// Bytes the scene's input files need in memory (see [`MemoryNeed::inputs`]): its meshes, and
+/// for a render (`sweep`) its 3D textures and light patterns; a file that cannot be inspected
+/// counts 0 here and is reported when it is loaded.
+fn input_bytes(scene: &Scene, sweep: bool) -> u64 {
+    if sweep {
+        mesh_bytes(scene)
+            .saturating_add(texture_bytes(scene))
+            .saturating_add(pattern_bytes(scene))
+    } else {
+        mesh_bytes(scene)
+    }
+}
+
+/// The size of the file at `p`, 0 when it cannot be inspected.
+fn file_size(p: &std::path::Path) -> u64 {
+    std::fs::metadata(p).map_or(0, |m| m.len())
+}
+
+/// Mesh files: `convshadow_io::mesh::memory_need` (OBJ counted from its lines, binary data from
+/// its size).
+fn mesh_bytes(scene: &Scene) -> u64 {
+    use convshadow_common::model::scene::ShapeSpec;
+    scene
         .meshes
         .iter()
         .filter_map(|m| match &m.shape {
             ShapeSpec::Obj { path } => Some(convshadow_io::mesh::memory_need(path)),
             _ => None,
         })
-        .sum();
-    if !textures {
-        return meshes;
-    }
-    let texture_bytes: u64 = scene
+        .fold(0u64, u64::saturating_add)
+}
+
+/// 3D textures: the file and its f32 voxels while loading.
+fn texture_bytes(scene: &Scene) -> u64 {
+    use convshadow_common::model::scene::TextureFormat;
+    scene
         .materials
         .iter()
         .filter_map(|m| m.texture.as_ref())
@@ -92,29 +111,42 @@ fn input_bytes(scene: &Scene, textures: bool) -> u64 {
             // gzip file or a 4D series counts what it holds); from the file's size (at most 4
             // f32 bytes per stored byte) when the header cannot be read.
             TextureFormat::Nifti { .. } => {
-                convshadow_io::nifti::memory_need(&t.path).unwrap_or_else(|| 5 * size(&t.path))
+                convshadow_io::nifti::memory_need(&t.path).unwrap_or_else(|| 5 * file_size(&t.path))
             }
             // OpenVDB: vdb-rs's tree, the brick table and at most one brick per active voxel,
             // from the grid's metadata ([`convshadow_io::vdb::memory_need`]); 64 bytes per
             // stored byte when the metadata cannot be read (compressed data, densely filled).
             TextureFormat::Vdb { ref grid } => convshadow_io::vdb::memory_need(&t.path, grid)
-                .unwrap_or_else(|| size(&t.path).saturating_mul(64)),
+                .unwrap_or_else(|| file_size(&t.path).saturating_mul(64)),
         })
-        .fold(0u64, u64::saturating_add);
-    // Light patterns: the decoded image and its f32 texels, from the header (the file's size
-    // says nothing of a PNG's decoded size); from 16 f32 bytes per stored byte when unreadable.
-    let pattern_bytes: u64 = scene
+        .fold(0u64, u64::saturating_add)
+}
+
+/// Light patterns: the decoded image and its f32 texels, from the header (the file's size says
+/// nothing of a PNG's decoded size); from 16 f32 bytes per stored byte when unreadable.
+fn pattern_bytes(scene: &Scene) -> u64 {
+    scene
         .lights
         .iter()
         .filter_map(|l| l.pattern.as_ref())
         .map(|p| {
             convshadow_io::pattern::memory_need(&p.path)
-                .unwrap_or_else(|| size(&p.path).saturating_mul(16))
+                .unwrap_or_else(|| file_size(&p.path).saturating_mul(16))
         })
-        .fold(0u64, u64::saturating_add);
-    meshes
-        .saturating_add(texture_bytes)
-        .saturating_add(pattern_bytes)
+        .fold(0u64, u64::saturating_add)
+}
+
+/// Bytes of the spot lights' patterns as f32 RGB texels, the copy the GPU's eye pass uploads
+/// (gpu/src/eye.rs); a directional light's pattern becomes its initial light buffer, already
+/// counted. A file whose header cannot be read counts 0 here and is reported when it is loaded.
+fn spot_pattern_bytes(scene: &Scene) -> u64 {
+    scene
+        .lights
+        .iter()
+        .filter(|l| l.point.as_ref().is_some_and(|p| p.spot.is_some()))
+        .filter_map(|l| l.pattern.as_ref())
+        .filter_map(|p| convshadow_io::pattern::texel_bytes(&p.path))
+        .fold(0u64, u64::saturating_add)
 }
 
 impl MemoryNeed {
@@ -181,16 +213,18 @@ impl MemoryNeed {
     /// ping-pong pair (as on the CPU), 8-byte layer cursors, 16-byte per-pixel colour, 4-byte LDI
     /// offsets (with pre-integration 4-byte kept front values), the RGBA image (16 bytes per pixel)
     /// and its read-back copy, and the 3D textures' f32
-    /// voxels; for an LDI alone, its per-pixel counts and offsets. Fragments are then held on
+    /// voxels, and the spot lights' patterns as f32 texels (gpu/src/eye.rs `spot_pattern`); for
+    /// an LDI alone, its per-pixel counts and offsets. Fragments are then held on
     /// the host and on the device.
     pub fn on_gpu(mut self, scene: &Scene, sweep: bool) -> MemoryNeed {
         let image_pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
         self.gpu_buffers = if sweep {
-            let textures = input_bytes(scene, true).saturating_sub(input_bytes(scene, false));
+            let textures = texture_bytes(scene);
             // With pre-integration, 4 more bytes per pixel: the kept front value.
             let pre = if scene.sweep.preintegration { 4 } else { 0 };
             (self.light_buffers + (8 + 16 + 4 + pre) * self.grid_pixels + 2 * 16 * image_pixels)
                 .saturating_add(textures / 2)
+                .saturating_add(spot_pattern_bytes(scene))
         } else {
             (4 + 4) * self.grid_pixels
         };
@@ -381,6 +415,7 @@ pub fn open_within_budget(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
 
     #[test]
     fn the_distance_penumbra_counts_a_depth_and_a_level_plane_per_light() {
@@ -403,6 +438,37 @@ mod tests {
             distance.gpu_buffers - iterated.gpu_buffers,
             distance.light_buffers - iterated.light_buffers
         );
+    }
+
+    #[test]
+    fn a_spots_pattern_counts_on_the_gpu_as_f32_texels() {
+        // The gallery's spot light projects scenes/gobo.png (48 × 48): the eye pass uploads its
+        // linear RGB texels as f32, 12 bytes each, beside the host's copy (an input).
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/perspective/spotlight.toml");
+        let scene = convshadow_io::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+        let (w, h) =
+            image::image_dimensions(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/gobo.png"))
+                .unwrap();
+        let g = GuardBand::default();
+        assert_eq!(spot_pattern_bytes(&scene), u64::from(w) * u64::from(h) * 12);
+        // The same light as a point light, its pattern kept (so the light buffers' channels are
+        // the same): the spot's device copy is all that differs.
+        let with = MemoryNeed::for_backend(&scene, g, true, Backend::Gpu);
+        let mut bare = scene.clone();
+        bare.lights.iter_mut().for_each(|l| {
+            if let Some(p) = l.point.as_mut() {
+                p.spot = None;
+            }
+        });
+        assert_eq!(spot_pattern_bytes(&bare), 0);
+        let without = MemoryNeed::for_backend(&bare, g, true, Backend::Gpu);
+        assert_eq!(
+            with.gpu_buffers - without.gpu_buffers,
+            u64::from(w) * u64::from(h) * 12
+        );
+        // On the CPU the pattern is an input only.
+        let cpu = MemoryNeed::for_backend(&scene, g, true, Backend::Cpu);
+        assert_eq!(cpu.gpu_buffers, 0);
     }
 
     #[test]
