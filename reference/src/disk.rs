@@ -182,9 +182,6 @@ pub fn convex_hull(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
 /// between them) and into pieces no wider than a quarter of the u standard deviation, each by
 /// 16-point Gauss–Legendre. Zero variances reduce to indicator functions exactly.
 pub fn gaussian_in_polygon(poly: &[[f64; 2]], mean: [f64; 2], cov: [[f64; 2]; 2]) -> f64 {
-    thread_local! {
-        static GL: Vec<(f64, f64)> = gauss_legendre(16);
-    }
     let (l1, l2, e1) = eigen2(cov);
     let e2 = [-e1[1], e1[0]];
     // Polygon in the principal frame, relative to the mean.
@@ -269,36 +266,35 @@ pub fn gaussian_in_polygon(poly: &[[f64; 2]], mean: [f64; 2], cov: [[f64; 2]; 2]
     }
     cuts.sort_by(f64::total_cmp);
     let norm = 1.0 / (s1 * (2.0 * std::f64::consts::PI).sqrt());
-    GL.with(|gl| {
-        let mut total = 0.0;
-        let mut crossing = Vec::with_capacity(edges.len());
-        for w in cuts.windows(2) {
-            let (c0, c1) = (w[0], w[1]);
-            if c1 <= c0 {
-                continue;
-            }
-            // No vertex lies between two cuts, so the edges that cross u are the same for every
-            // u inside: found once, at the middle.
-            let middle = 0.5 * (c0 + c1);
-            crossing.clear();
-            crossing.extend(
-                edges
-                    .iter()
-                    .filter(|(a, b)| a[0].min(b[0]) <= middle && middle <= a[0].max(b[0])),
-            );
-            let pieces = ((c1 - c0) / (0.25 * s1)).ceil().max(1.0) as usize;
-            let hw = 0.5 * (c1 - c0) / pieces as f64;
-            for k in 0..pieces {
-                let mid = c0 + (2 * k + 1) as f64 * hw;
-                for (x, wt) in gl {
-                    let u = mid + hw * x;
-                    let g = norm * (-0.5 * (u / s1) * (u / s1)).exp();
-                    total += wt * hw * g * inner(&crossing, u);
-                }
+    let gl = gauss_legendre(16);
+    let mut total = 0.0;
+    let mut crossing = Vec::with_capacity(edges.len());
+    for w in cuts.windows(2) {
+        let (c0, c1) = (w[0], w[1]);
+        if c1 <= c0 {
+            continue;
+        }
+        // No vertex lies between two cuts, so the edges that cross u are the same for every
+        // u inside: found once, at the middle.
+        let middle = 0.5 * (c0 + c1);
+        crossing.clear();
+        crossing.extend(
+            edges
+                .iter()
+                .filter(|(a, b)| a[0].min(b[0]) <= middle && middle <= a[0].max(b[0])),
+        );
+        let pieces = ((c1 - c0) / (0.25 * s1)).ceil().max(1.0) as usize;
+        let hw = 0.5 * (c1 - c0) / pieces as f64;
+        for k in 0..pieces {
+            let mid = c0 + (2 * k + 1) as f64 * hw;
+            for (x, wt) in gl {
+                let u = mid + hw * x;
+                let g = norm * (-0.5 * (u / s1) * (u / s1)).exp();
+                total += wt * hw * g * inner(&crossing, u);
             }
         }
-        total
-    })
+    }
+    total
 }
 
 #[cfg(test)]

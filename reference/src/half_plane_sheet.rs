@@ -122,8 +122,8 @@ fn visibility(x: f64, z: f64, sigma: f64) -> f64 {
 /// 16-point Gauss–Legendre on [0, 1]: (node, weight).
 fn gauss_legendre_16() -> Vec<(f64, f64)> {
     gauss_legendre(16)
-        .into_iter()
-        .map(|(x, w)| (0.5 * (x + 1.0), 0.5 * w))
+        .iter()
+        .map(|&(x, w)| (0.5 * (x + 1.0), 0.5 * w))
         .collect()
 }
 

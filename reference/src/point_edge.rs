@@ -11,8 +11,6 @@
 //! `δ_x` passes a threshold, so `V = ∫ Φ(threshold(δ_z)/r) N(δ_z; 0, r²) dδ_z`, by
 //! Gauss–Legendre over ±8 r.
 
-use std::sync::OnceLock;
-
 use glam::DVec3;
 
 use crate::edge::phi;
@@ -78,11 +76,8 @@ pub fn visibility(x: DVec3, p: DVec3, r: f64) -> f64 {
     if r == 0.0 {
         return f64::from(u8::from(p.x < threshold(p.z)));
     }
-    // The nodes once per process: computing them (Newton on a degree-400 polynomial) cost far
-    // more than the integral, once per pixel.
-    static NODES: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
     let mut v = 0.0;
-    for &(node, weight) in NODES.get_or_init(|| gauss_legendre(400)) {
+    for &(node, weight) in gauss_legendre(400) {
         let dz = 8.0 * r * node;
         let density = (-0.5 * (dz / r).powi(2)).exp() / (r * (2.0 * std::f64::consts::PI).sqrt());
         v += weight * 8.0 * r * density * phi((threshold(p.z + dz) - p.x) / r);

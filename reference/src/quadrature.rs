@@ -1,7 +1,28 @@
 //! Gauss–Legendre quadrature for the references' numerical integrals.
 
+use std::sync::RwLock;
+
+/// Gauss–Legendre nodes and weights on [−1, 1] for `n` points, computed once per process and
+/// kept: the references evaluate their integrals per pixel, and finding the nodes (Newton on a
+/// degree-n polynomial for each) costs far more than an integral.
+pub fn gauss_legendre(n: usize) -> &'static [(f64, f64)] {
+    static KEPT: RwLock<Vec<&'static [(f64, f64)]>> = RwLock::new(Vec::new());
+    let find = |kept: &[&'static [(f64, f64)]]| kept.iter().copied().find(|t| t.len() == n);
+    // A panic elsewhere while the lock was held cannot leave a wrong entry (a push is whole).
+    if let Some(t) = find(&KEPT.read().unwrap_or_else(|p| p.into_inner())) {
+        return t;
+    }
+    let mut kept = KEPT.write().unwrap_or_else(|p| p.into_inner());
+    if let Some(t) = find(&kept) {
+        return t;
+    }
+    let t: &'static [(f64, f64)] = Box::leak(nodes_by_newton(n).into_boxed_slice());
+    kept.push(t);
+    t
+}
+
 /// Gauss–Legendre nodes and weights on [−1, 1] (Newton on the Legendre polynomial).
-pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+fn nodes_by_newton(n: usize) -> Vec<(f64, f64)> {
     let mut out = Vec::with_capacity(n);
     for i in 0..n {
         let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
