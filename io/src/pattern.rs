@@ -69,14 +69,17 @@ pub fn load_pattern(path: &Path) -> Result<Pattern, TextureError> {
 /// reports why).
 pub fn memory_need(path: &Path) -> Option<u64> {
     let (decoded, texels) = header_sizes(path)?;
-    Some(decoded.saturating_add(texels.saturating_mul(12)))
+    Some(decoded.saturating_add(texels.saturating_mul(TEXEL_BYTES)))
 }
 
 /// Bytes of the pattern's linear f32 RGB texels alone (what a device copy of it holds), from its
 /// header; `None` when the header cannot be read.
 pub fn texel_bytes(path: &Path) -> Option<u64> {
-    header_sizes(path).map(|(_, texels)| texels.saturating_mul(12))
+    header_sizes(path).map(|(_, texels)| texels.saturating_mul(TEXEL_BYTES))
 }
+
+/// Bytes of one loaded texel: linear RGB as f32.
+const TEXEL_BYTES: u64 = 12;
 
 /// The decoded image's size in bytes as stored and its texel count, from the file's header.
 fn header_sizes(path: &Path) -> Option<(u64, u64)> {
