@@ -16,7 +16,8 @@ exact, as if each band's light buffer were blurred with exactly its depth's kern
 
 The fog block of the same test (κ = ln 10 per unit depth, 0.5 deep) is a continuum of depths:
 its exact visibility E[exp(−κ·ℓ(k))] (ℓ the depth a ray spends inside) against the product of
-the exact visibilities of n equal depth slices of it (ideal bands again), by Gauss–Legendre
+the exact visibilities of n equal depth slices of it (ideal bands again) and against the strip
+model reading each slice's removed light and its moment as an opaque set's, by Gauss–Legendre
 quadrature split at the slices' corner slopes.
 
 Prints, per case, the RMSE over the test's pixels (not hidden by a block, not fully lit).
@@ -150,8 +151,9 @@ GAUSS_LEGENDRE = [
 
 
 def fog_visibility(block, kappa, x, var):
-    """E[exp(−κ·ℓ(k))] over k ~ N(0, var): ℓ the depth the ray through (x, WALL) with slope k
-    spends in the block; split at its corner slopes, pieces of at most σ/4."""
+    """(E[exp(−κ·ℓ(k))], E[u·(1 − exp(−κ·ℓ(k)))]) over k = σu ~ N(0, var): the visibility and
+    the first moment of the light the block removes; ℓ the depth the ray through (x, WALL) with
+    slope k spends in the block; split at its corner slopes, pieces of at most σ/4."""
     x0, x1, z0, z1 = block
     s = sqrt(var)
 
@@ -165,7 +167,7 @@ def fog_visibility(block, kappa, x, var):
         return max(hi - lo, 0.0)
 
     cuts = sorted({-8.0, 8.0} | {u / s for u in hidden_slopes(block, x) if abs(u / s) < 8.0})
-    total = 0.0
+    total, removed_moment = 0.0, 0.0
     for lo, hi in zip(cuts, cuts[1:]):
         pieces = max(1, int((hi - lo) / 0.25 + 0.999))
         step = (hi - lo) / pieces
@@ -173,28 +175,36 @@ def fog_visibility(block, kappa, x, var):
             mid = lo + step * (j + 0.5)
             for node, weight in GAUSS_LEGENDRE:
                 u = mid + 0.5 * step * node
-                total += 0.5 * step * weight * pdf(u) * exp(-kappa * inside(s * u))
-    return total
+                through = exp(-kappa * inside(s * u))
+                total += 0.5 * step * weight * pdf(u) * through
+                removed_moment += 0.5 * step * weight * pdf(u) * u * (1.0 - through)
+    return total, removed_moment
 
 
 def fog_rmse(block, kappa, slices):
-    """RMSE of the product of `slices` equal depth slices' visibilities (white light)."""
+    """RMSE of the product of `slices` equal depth slices' visibilities, and of the strip model
+    reading each slice's removed light and its moment as an opaque set's (white light)."""
     x0, x1, z0, z1 = block
-    sq, n = 0.0, 0
+    sq, n = [0.0, 0.0], 0
     for i in range(SIZE):
         x = (i + 0.5) * PX - VIEW / 2.0
         if x0 - PX < x < x1 + PX:
             continue
-        exact = fog_visibility(block, kappa, x, 0.01)
+        exact = fog_visibility(block, kappa, x, 0.01)[0]
         if exact > 1.0 - 1e-6:
             continue
-        product = 1.0
+        product, strips = 1.0, []
         for j in range(slices):
             za, zb = z0 + (z1 - z0) * j / slices, z0 + (z1 - z0) * (j + 1) / slices
-            product *= fog_visibility((x0, x1, za, zb), kappa, x, 0.01)
-        sq += (product - exact) ** 2
+            v, m = fog_visibility((x0, x1, za, zb), kappa, x, 0.01)
+            product *= v
+            iv = strip(1.0 - v, m)
+            if iv is not None:
+                strips.append(iv)
+        sq[0] += (product - exact) ** 2
+        sq[1] += (1.0 - mass(union(strips)) - exact) ** 2
         n += 1
-    return sqrt(sq / n)
+    return sqrt(sq[0] / n), sqrt(sq[1] / n)
 
 
 def main():
@@ -221,9 +231,10 @@ def main():
         e = rmse(blocks, bands, lights)
         print(f"{name:48} {e['product']:8.4f} {e['strip']:8.4f}")
     fog = (-0.8, 0.4, WALL - 1.5, WALL - 1.0)
-    print("a fog block (κ = ln 10, 0.5 deep) at distance 1.5, product of n slices:")
+    print("a fog block (κ = ln 10, 0.5 deep) at distance 1.5 cut into n depth slices:")
     for slices in (1, 2, 4, 8, 32):
-        print(f"  n = {slices:2}: {fog_rmse(fog, log(10.0), slices):.4f}")
+        product, strip_v = fog_rmse(fog, log(10.0), slices)
+        print(f"  n = {slices:2}{'':38} {product:8.4f} {strip_v:8.4f}")
 
 
 if __name__ == "__main__":
