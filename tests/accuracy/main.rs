@@ -26,6 +26,7 @@ mod preintegration;
 mod reference_convergence;
 mod several_depths;
 mod slab_convergence;
+mod sphere_over_receiver;
 mod surface_shading;
 mod sweep_accuracy;
 mod translucent_strip;

@@ -54,7 +54,7 @@ fn pixel_centre(i: usize, j: usize, w: usize, h: usize, px: f64) -> (f64, f64) {
 
 /// RMSE of each image against `expected` over the pixels where it is `Some`; returns the RMSEs
 /// (one per M) and the number of pixels compared.
-fn rmse_per_m(images: &[Vec<f64>], expected: &[Option<f64>]) -> (Vec<f64>, usize) {
+pub(crate) fn rmse_per_m(images: &[Vec<f64>], expected: &[Option<f64>]) -> (Vec<f64>, usize) {
     let n = expected.iter().flatten().count();
     let rmse = images
         .iter()
@@ -266,11 +266,11 @@ const SPHERE_R: f64 = 0.5;
 /// Subdivisions of the icosphere: the expected values are the polyhedron's, so any will do.
 const SPHERE_SUBDIV: u32 = 3;
 /// Distance from the sphere's centre to the receiver's front face (world z = 0).
-const SPHERE_D: f64 = 1.2;
+pub(crate) const SPHERE_D: f64 = 1.2;
 const SPHERE_TILT: [f64; 2] = [35.0, -10.0];
 const SPHERE_VAR: [f64; 2] = [0.03, 0.015];
 
-fn sphere_scene() -> Scene {
+pub(crate) fn sphere_scene() -> Scene {
     let text = format!(
         r#"
 [image]
@@ -518,25 +518,24 @@ fn the_receiver_closed_form_of_the_polyhedron_is_the_spheres_within_its_facets()
     assert!(penumbra >= 3, "the points must include penumbra");
 }
 
-#[test]
-fn the_reference_converges_on_a_spheres_receiver_shadow_and_its_lit_surface() {
-    let scene = sphere_scene();
-    let poly = sphere_polyhedron(&scene);
-    let images = reference_images(&scene);
-    let px = SPHERE_VIEW / SPHERE_SIZE as f64;
+/// The sphere scene's expected light per pixel (row-major, at the scene's image size, square):
+/// (the receiver where the sphere shadows it, 2 px or more outside the outline; the sphere's own
+/// surface, 3 px or more inside it), `None` elsewhere.
+pub(crate) fn sphere_expected(scene: &Scene) -> (Vec<Option<f64>>, Vec<Option<f64>>) {
+    let size = scene.image.width as usize;
+    let poly = sphere_polyhedron(scene);
+    let px = SPHERE_VIEW / size as f64;
     let (mut receiver, mut surface) = (Vec::new(), Vec::new());
-    for j in 0..SPHERE_SIZE {
-        for i in 0..SPHERE_SIZE {
-            let (x, y) = pixel_centre(i, j, SPHERE_SIZE, SPHERE_SIZE, px);
+    for j in 0..size {
+        for i in 0..size {
+            let (x, y) = pixel_centre(i, j, size, size, px);
             let rho = (x * x + y * y).sqrt();
-            // Receiver pixels 2 px outside the outline, where the sphere casts any shadow.
             receiver.push(if rho > SPHERE_R + 2.0 * px {
                 let l = sphere_receiver_light(&poly, x, y);
                 (l < 1.0 - 1e-6).then_some(l)
             } else {
                 None
             });
-            // Surface pixels 3 px inside the outline.
             surface.push(if rho < SPHERE_R - 3.0 * px {
                 let n = seen_facet(&poly, x, y).expect("a facet under every inner pixel");
                 Some(facet_light(n))
@@ -545,6 +544,14 @@ fn the_reference_converges_on_a_spheres_receiver_shadow_and_its_lit_surface() {
             });
         }
     }
+    (receiver, surface)
+}
+
+#[test]
+fn the_reference_converges_on_a_spheres_receiver_shadow_and_its_lit_surface() {
+    let scene = sphere_scene();
+    let images = reference_images(&scene);
+    let (receiver, surface) = sphere_expected(&scene);
     let (rmse, n) = rmse_per_m(&images, &receiver);
     assert_converges("sphere: receiver in its shadow", &rmse, n, 300);
     let (rmse, n) = rmse_per_m(&images, &surface);
