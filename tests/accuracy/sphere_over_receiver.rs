@@ -15,7 +15,7 @@ use convshadow::pipeline::{RenderRequest, render};
 
 use crate::reference_convergence::{SPHERE_D, rmse_per_m, sphere_expected, sphere_scene};
 
-/// A penumbra model's (receiver, surface) RMSE bounds.
+/// A penumbra model with its receiver and surface RMSE bounds.
 type Bounds = (Penumbra, f64, f64);
 
 /// Per image size, today's RMSE at 64 and 256 slabs plus 25 % as (receiver, surface) bounds per
@@ -65,8 +65,8 @@ fn an_opaque_sphere_over_a_receiver_against_the_closed_forms() {
                 let (on_receiver, on_surface) = (on_receiver[0], on_surface[0]);
                 report.push(format!(
                     "{size} px, {penumbra:?}, {slabs} slabs: receiver {on_receiver:.4} over \
-                 {n_receiver} px (≤ {receiver_bound}), lit surface {on_surface:.4} over \
-                 {n_surface} px (≤ {surface_bound}); issue 46 asks 5e-3"
+                     {n_receiver} px (≤ {receiver_bound}), lit surface {on_surface:.4} over \
+                     {n_surface} px (≤ {surface_bound}); issue 46 asks 5e-3"
                 ));
                 failed |= on_receiver > receiver_bound || on_surface > surface_bound;
                 failed |= n_receiver < 300 || n_surface < 150;
