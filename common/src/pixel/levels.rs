@@ -51,12 +51,6 @@ pub fn depth_coord<L: Lane>(scale: Option<&DepthScale>, t: L) -> L {
     let Some(scale) = scale else {
         return t;
     };
-    // Every lane removes at the same depth (the slab, as most do): one lookup for all, the same
-    // bits as one per lane.
-    let first = t.lane(0);
-    if (1..L::LANES).all(|i| t.lane(i) == first) {
-        return L::splat(scale.at(first));
-    }
     let mut v = [0.0f32; MAX_LANES];
     for (i, out) in v.iter_mut().enumerate().take(L::LANES) {
         *out = scale.at(t.lane(i));

@@ -31,7 +31,6 @@ impl DepthScale {
 
     /// ψ at slab coordinate `t` (fractional between slabs: linear; beyond the ends: the end
     /// slab's step continued).
-    #[inline]
     pub fn at(&self, t: f32) -> f32 {
         let last = self.psi.len() - 2;
         let k = (t.floor().max(0.0) as usize).min(last);
