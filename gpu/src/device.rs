@@ -2,7 +2,8 @@
 //! (Mesa lavapipe), the adapter's own limits, and one error type for everything GPU-side.
 
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 
 use convshadow_common::contract::ldi::LdiError;
 
@@ -76,7 +77,12 @@ pub struct GpuContext {
     /// device, not once per frame or light pass (on lavapipe the sweep's two take about half a
     /// second).
     compiled: Mutex<Compiled>,
+    /// Set by the driver's device-lost callback: [`GpuContext::shared`] then opens a new device.
+    lost: Arc<AtomicBool>,
 }
+
+/// The device [`GpuContext::shared`] hands out, with the adapter name it was opened for.
+type SharedSlot = Option<(Option<String>, Arc<GpuContext>)>;
 
 /// The shader modules and pipelines a [`GpuContext`] has compiled.
 #[derive(Default)]
@@ -91,6 +97,14 @@ impl std::fmt::Debug for GpuContext {
             .field("adapter", &self.adapter_name())
             .finish()
     }
+}
+
+/// The adapter asked for by [`ADAPTER_ENV`], lower-cased; `None` when unset or empty.
+fn wanted_adapter() -> Option<String> {
+    std::env::var(ADAPTER_ENV)
+        .ok()
+        .filter(|s| !s.is_empty())
+        .map(|s| s.to_lowercase())
 }
 
 /// Preference order of device types: hardware first, software last.
@@ -110,15 +124,33 @@ impl GpuContext {
         pollster::block_on(Self::new_async())
     }
 
+    /// The device this process shares: opened on first use (as [`GpuContext::new`]) and handed
+    /// to every later render, so that a process rendering many frames, light passes or test
+    /// cases opens one device and compiles each pipeline once (on lavapipe a device and the
+    /// sweep's pipelines take about a second). A new one is opened when [`ADAPTER_ENV`] has
+    /// changed or the device was lost; errors are not kept, so a later call tries again.
+    pub fn shared() -> Result<Arc<GpuContext>, GpuError> {
+        static SHARED: Mutex<SharedSlot> = Mutex::new(None);
+        let wanted = wanted_adapter();
+        // A poisoned lock only means another thread panicked while opening: the slot is whole.
+        let mut slot = SHARED.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((name, ctx)) = slot.as_ref()
+            && *name == wanted
+            && !ctx.lost.load(Ordering::Acquire)
+        {
+            return Ok(Arc::clone(ctx));
+        }
+        let ctx = Arc::new(GpuContext::new()?);
+        *slot = Some((wanted, Arc::clone(&ctx)));
+        Ok(ctx)
+    }
+
     async fn new_async() -> Result<GpuContext, GpuError> {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::VULKAN;
         let instance = wgpu::Instance::new(desc);
         let mut adapters = instance.enumerate_adapters(wgpu::Backends::VULKAN).await;
-        let wanted = std::env::var(ADAPTER_ENV)
-            .ok()
-            .filter(|s| !s.is_empty())
-            .map(|s| s.to_lowercase());
+        let wanted = wanted_adapter();
         if let Some(w) = &wanted {
             adapters.retain(|a| a.get_info().name.to_lowercase().contains(w.as_str()));
         }
@@ -146,12 +178,16 @@ impl GpuContext {
                 adapter: info.name.clone(),
                 message: e.to_string(),
             })?;
+        let lost = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&lost);
+        device.set_device_lost_callback(move |_, _| flag.store(true, Ordering::Release));
         Ok(GpuContext {
             device,
             queue,
             info,
             limits,
             compiled: Mutex::default(),
+            lost,
         })
     }
 

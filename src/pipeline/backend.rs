@@ -2,6 +2,8 @@
 //! path ([`CpuPath`]) and its worker threads ([`thread_pool`]).
 
 use convshadow_cpu::sweep::SweepPath;
+use std::sync::Arc;
+
 use convshadow_gpu::GpuContext;
 
 use super::error::RenderError;
@@ -72,8 +74,9 @@ fn adapter_named() -> bool {
 
 /// The device chosen for a request.
 pub struct BackendChoice {
-    /// The GPU context, or `None` for the CPU.
-    pub gpu: Option<GpuContext>,
+    /// The GPU context (the process's shared device, [`GpuContext::shared`]), or `None` for
+    /// the CPU.
+    pub gpu: Option<Arc<GpuContext>>,
     /// Why `auto` fell back to the CPU, or that `gpu` runs on a software adapter.
     pub note: Option<String>,
 }
@@ -96,7 +99,7 @@ impl BackendChoice {
                 note: None,
             }),
             Backend::Gpu => {
-                let ctx = GpuContext::new()?;
+                let ctx = GpuContext::shared()?;
                 let note = ctx.is_software().then(|| {
                     format!(
                         "--backend gpu: {} is a software rasterizer: a correctness reference, \
@@ -109,7 +112,7 @@ impl BackendChoice {
                     note,
                 })
             }
-            Backend::Auto => Ok(match GpuContext::new() {
+            Backend::Auto => Ok(match GpuContext::shared() {
                 // Software is ranked last: the first adapter is software only when all are. The
                 // CPU oracle is faster than any of them; one asked for by name is used.
                 Ok(ctx) if ctx.is_software() && !adapter_named() => BackendChoice {
@@ -140,6 +143,6 @@ impl BackendChoice {
 
     /// The adapter's name on the GPU backend.
     pub fn adapter(&self) -> Option<String> {
-        self.gpu.as_ref().map(GpuContext::adapter_name)
+        self.gpu.as_deref().map(GpuContext::adapter_name)
     }
 }

@@ -3,14 +3,16 @@
 #![allow(dead_code)]
 
 use std::path::Path;
+use std::sync::Arc;
 
 use convshadow::common::model::scene::{Scene, SlabSpec};
 use convshadow_gpu::GpuContext;
 
-/// A GPU context, or `None` with a loud `SKIP` message. Under CI (env `CI` set) a missing
-/// adapter is a failure: the GPU tests are required there.
-pub fn gpu() -> Option<GpuContext> {
-    match GpuContext::new() {
+/// The process's shared GPU context (the one the renders use), or `None` with a loud `SKIP`
+/// message. Under CI (env `CI` set) a missing adapter is a failure: the GPU tests are required
+/// there.
+pub fn gpu() -> Option<Arc<GpuContext>> {
+    match GpuContext::shared() {
         Ok(ctx) => {
             eprintln!("GPU tests on adapter {}", ctx.adapter_name());
             Some(ctx)
