@@ -30,7 +30,8 @@ use crate::support;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-const GOLDEN: &str = "tests/data/golden_hashes.tsv";
+/// The defaults' table (also read by `determinism.rs`).
+pub(crate) const GOLDEN: &str = "tests/data/golden_hashes.tsv";
 /// The pre-guard-band bits, checked with `--guard-band 0 --penumbra iterated`.
 const GOLDEN_BAND0: &str = "tests/data/golden_hashes_band0.tsv";
 /// The iterated penumbra's bits with the automatic guard band, checked with `--penumbra iterated`.
@@ -95,7 +96,7 @@ fn golden_path(file: &str) -> PathBuf {
 }
 
 /// `key → (image_hash, ldi_hash)` from a golden file.
-fn read_golden(file: &str) -> BTreeMap<String, (String, String)> {
+pub(crate) fn read_golden(file: &str) -> BTreeMap<String, (String, String)> {
     let text = std::fs::read_to_string(golden_path(file)).expect(file);
     text.lines()
         .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
