@@ -11,10 +11,12 @@ mod support;
 
 mod determinism;
 mod early_finish;
+mod extreme_numbers;
 mod golden_hashes;
 mod ldi_parity;
 mod ldi_perspective;
+mod mesh_props;
 mod perspective_sweep;
-mod reliability_props;
 mod rules;
+mod scene_props;
 mod simd_quiet;
