@@ -654,3 +654,18 @@ fn render_backend_gpu_with_the_distance_penumbra_matches_the_cpu() {
     };
     assert_eq!(hash("gpu"), hash("cpu"));
 }
+
+#[test]
+fn the_renders_of_one_process_share_one_device() {
+    // `GpuContext::shared`: every render opens the same device, so each pipeline is compiled
+    // once per process (docs/gpu.md), not once per render.
+    use convshadow::pipeline::BackendChoice;
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let again = convshadow_gpu::GpuContext::shared().unwrap();
+    assert!(std::sync::Arc::ptr_eq(&ctx, &again));
+    let choice = BackendChoice::open(Backend::Gpu).unwrap();
+    let opened = choice.gpu.as_ref().expect("the GPU backend opens a device");
+    assert!(std::sync::Arc::ptr_eq(&ctx, opened));
+}
