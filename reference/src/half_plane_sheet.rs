@@ -227,9 +227,22 @@ fn right_of(f: [f64; 3]) -> [f64; 3] {
 /// per unit of view depth, `depth_rate` of it per unit of s), or `None` where the ray does not
 /// see the sheet first or meets it within 2 pixels of its ends.
 fn expected_on_ray(p: [f64; 3], f: [f64; 3], depth_rate: f64, light: SheetLight) -> Option<f64> {
+    let sigma = light.var_x().sqrt();
+    let (v, _) = integrate_on_ray(p, f, depth_rate, |x, z| (visibility(x, z, sigma), 1.0))?;
+    Some(v)
+}
+
+/// Along the view ray `p + s·f` through the sheet (see [`expected_on_ray`]): the mean over the
+/// sheet's scattering of `light(x, z) = (visibility, unshadowed irradiance)` weighted by the
+/// irradiance, and the mean irradiance: `(∫ w·V·E / ∫ w·E, ∫ w·E / ∫ w)` with `w = κ·e^(−κs)`.
+fn integrate_on_ray(
+    p: [f64; 3],
+    f: [f64; 3],
+    depth_rate: f64,
+    light: impl Fn(f64, f64) -> (f64, f64),
+) -> Option<(f64, f64)> {
     let px = VIEW / f64::from(WIDTH);
     let kappa = -(1.0 - OPACITY).ln() * depth_rate;
-    let sigma = light.var_x().sqrt();
     let (s0, s1) = slab_hit(p, f, (-1.5, 1.5), (W - T / 2.0, W + T / 2.0))?;
     if let Some((h0, _)) = slab_hit(p, f, (0.0, 3.0), (-H, H))
         && h0 < s0
@@ -245,16 +258,107 @@ fn expected_on_ray(p: [f64; 3], f: [f64; 3], depth_rate: f64, light: SheetLight)
     let nodes = gauss_legendre_16();
     let pieces = ((s1 - s0) / 0.005).ceil().max(1.0) as usize;
     let step = (s1 - s0) / pieces as f64;
-    let (mut num, mut den) = (0.0, 0.0);
+    let (mut num, mut lit, mut den) = (0.0, 0.0, 0.0);
     for k in 0..pieces {
         for &(u, w) in &nodes {
             let s = s0 + step * (k as f64 + u);
             let weight = w * step * kappa * (-kappa * (s - s0)).exp();
-            num += weight * visibility(x_at(s), p[2] + s * f[2], sigma);
+            let (v, e) = light(x_at(s), p[2] + s * f[2]);
+            num += weight * v * e;
+            lit += weight * e;
             den += weight;
         }
     }
-    Some(num / den)
+    Some((num / lit, lit / den))
+}
+
+/// The point-light variant's set-ups per view angle: (θ in degrees, the light's distance `L`
+/// before the half-plane, the light grid's resolution). The light lies at (0.2, 0, −L), its
+/// radius 0.05·L (the angular size of the directional light's σ/2 at the half-plane). `L` is
+/// the nearest round distance at which the light lies before every mesh along the view (θ < 90°)
+/// or behind every mesh (θ > 90°), as the sweep requires (a light amid the meshes is refused);
+/// at 80° and 100° the light's grid at the eye's cell size would be wider than 16384 cells
+/// (its rays graze the slabs), so it is swept at half the eye's resolution.
+pub const POINT_SETUPS: [(f64, f64, f64); 6] = [
+    (0.0, 2.0, 1.0),
+    (45.0, 2.0, 1.0),
+    (80.0, 10.0, 0.5),
+    (100.0, 20.0, 0.5),
+    (135.0, 4.0, 1.0),
+    (180.0, 2.0, 1.0),
+];
+
+/// The point light's position and radius at distance `l` ([`POINT_SETUPS`]).
+pub fn point_light_at(l: f64) -> ([f64; 3], f64) {
+    ([0.2, 0.0, -l], 0.05 * l)
+}
+
+/// A point light of radius `r` (an isotropic 3D Gaussian) at `position` (before the
+/// half-plane: z < −h) in the same scene, in place of the directional light: the `[[light]]`
+/// lines, its colour `l_z²` so that the unshadowed irradiance is about 1 at the half-plane.
+pub fn point_light_toml(position: [f64; 3], r: f64) -> String {
+    let [x, y, z] = position;
+    let c = z * z;
+    format!(
+        "kind = \"point\"\nposition = [{x:?}, {y:?}, {z:?}]\nradius = {r:?}\n\
+         color = [{c:?}, {c:?}, {c:?}]\n"
+    )
+}
+
+/// [`scene_toml`] with the point light of [`point_light_toml`] instead of the directional one.
+pub fn point_scene_toml(theta: f64, position: [f64; 3], r: f64, sweep: &str) -> String {
+    let text = scene_toml(theta, SheetLight::ISOTROPIC, sweep);
+    let start = text.find("[[light]]\n").expect("a light") + "[[light]]\n".len();
+    let end = text.find("[[mesh]]").expect("a mesh");
+    format!(
+        "{}{}{}",
+        &text[..start],
+        point_light_toml(position, r),
+        &text[end..]
+    )
+}
+
+/// [`expected_row`] for the point light of [`point_scene_toml`]: per pixel of a middle row, the
+/// expected value normalised by the pixel's own unshadowed light (the light falls off as
+/// 1/|X − P|² across the sheet), and that unshadowed light (relative: divide the render by it
+/// before [`profile_rmse`]). The visibility is integrated over the light's Gaussian
+/// (`point_edge::visibility_past`, the half-plane's own thickness).
+pub fn expected_row_point(theta: f64, position: [f64; 3], r: f64) -> Vec<Option<(f64, f64)>> {
+    let f = view_direction(theta);
+    let right = right_of(f);
+    let px = VIEW / f64::from(WIDTH);
+    let light = glam::DVec3::from(position);
+    (0..WIDTH)
+        .map(|i| {
+            let cx = (f64::from(i) + 0.5 - f64::from(WIDTH) / 2.0) * px;
+            let cy = 0.5 * px;
+            let p = [right[0] * cx, -cy, W + right[2] * cx];
+            integrate_on_ray(p, f, 1.0, |x, z| {
+                let at = glam::DVec3::new(x, p[1], z);
+                let e = 1.0 / (at - light).length_squared();
+                (crate::point_edge::visibility_past(at, light, r, H), e)
+            })
+        })
+        .collect()
+}
+
+/// [`profile_rmse`] of a point light's render: each pixel divided by its unshadowed light
+/// from [`expected_row_point`] first.
+pub fn point_profile_rmse(
+    image: &[f32],
+    expected: &[Option<(f64, f64)>],
+) -> Result<(f64, usize), String> {
+    let w = WIDTH as usize;
+    let levelled: Vec<f32> = image
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| match expected[(k / 3) % w] {
+            Some((_, e)) => (f64::from(v) / e) as f32,
+            None => v,
+        })
+        .collect();
+    let visibility: Vec<Option<f64>> = expected.iter().map(|e| e.map(|(v, _)| v)).collect();
+    profile_rmse(&levelled, &visibility)
 }
 
 /// The profile's error: the RMSE of the two middle rows of `image` (RGB, [`WIDTH`] ×
@@ -323,5 +427,33 @@ mod tests {
             let v = row[64 + k].unwrap();
             assert!((v - phi(-x / ((W + H) * sigma))).abs() < 2e-3, "{k}: {v}");
         }
+    }
+
+    #[test]
+    fn a_camera_along_a_point_light_sees_its_visibility_and_falloff() {
+        // θ = 0: beside the half-plane each pixel's ray runs along z through the sheet; the
+        // value is the visibility at the sheet's middle (within the thickness's average), the
+        // irradiance 1/|X − P|² there.
+        let (p, r) = point_light_at(2.0);
+        let light = glam::DVec3::from(p);
+        let row = expected_row_point(0.0, p, r);
+        for k in 0..12 {
+            let x = -(k as f64 + 0.5) * VIEW / f64::from(WIDTH);
+            let at = glam::DVec3::new(x, -0.5 * VIEW / f64::from(WIDTH), W);
+            let (v, e) = row[64 + k].unwrap();
+            let want = crate::point_edge::visibility_past(at, light, r, H);
+            assert!((v - want).abs() < 2e-3, "{k}: {v} against {want}");
+            let falloff = 1.0 / (at - light).length_squared();
+            assert!(
+                (e / falloff - 1.0).abs() < 1e-3,
+                "{k}: {e} against {falloff}"
+            );
+        }
+        // Some of those pixels are in the penumbra: the check is not of a constant.
+        assert!(
+            row[64..76]
+                .iter()
+                .any(|v| v.is_some_and(|(v, _)| v > 0.05 && v < 0.95))
+        );
     }
 }

@@ -64,8 +64,13 @@ color = [1.0, 1.0, 1.0]
 /// at z = −H, i.e. iff `δ_x ≥ min over z of x_x·(1 − 1/s(z)) − p_x`, s(z) = (z − x_z)/(l_z − x_z)
 /// the fraction of the way to the light's point. A hard light (r = 0): 1 or 0.
 pub fn visibility(x: DVec3, p: DVec3, r: f64) -> f64 {
+    visibility_past(x, p, r, H)
+}
+
+/// [`visibility`] for a plate of half-thickness `h` (z ∈ [−h, h]; x at z > h, p at z < −h).
+pub fn visibility_past(x: DVec3, p: DVec3, r: f64, h: f64) -> f64 {
     let threshold = |lz: f64| {
-        [H, -H]
+        [h, -h]
             .map(|z| {
                 let s = (z - x.z) / (lz - x.z);
                 x.x * (1.0 - 1.0 / s)
