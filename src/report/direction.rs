@@ -2,13 +2,16 @@
 //! opaque thin half-plane's shadow on a translucent sheet, both perpendicular to the light
 //! (`convshadow_reference::half_plane_sheet`); reference: that set-up's closed form along each
 //! view ray. Lights at more than 90° cost a second, turned-round pass (how-it-works.md, "Lights
-//! from in front of the viewer").
+//! from in front of the viewer"). The same set-up with a soft point light on the light's axis
+//! (its distance per angle: `POINT_SETUPS`), against the visibility integrated over its
+//! Gaussian, distance penumbra only (the sweep gives a soft point light no other).
 
 use std::path::Path;
 
 use convshadow_common::model::scene::{Penumbra, Scene};
 use convshadow_reference::half_plane_sheet::{
-    HEIGHT, SLAB_DISTANCE, SheetLight, W, WIDTH, expected_row, profile_rmse, scene_toml,
+    HEIGHT, POINT_SETUPS, SLAB_DISTANCE, SheetLight, W, WIDTH, expected_row, expected_row_point,
+    point_light_at, point_profile_rmse, point_scene_toml, profile_rmse, scene_toml,
 };
 
 use super::row::Row;
@@ -69,6 +72,56 @@ pub fn direction_row(
              {SLAB_DISTANCE}, slabs = every pass's; variance = the light's σ² across the edge; \
              RMSE of the sheet's profile normalised by its lit level over {pixels} penumbra \
              pixels against the closed form; {passes}"
+        ),
+        ..Row::default()
+    })
+}
+
+/// The point light's case at `theta` degrees from the view (one of `POINT_SETUPS`' angles): its
+/// time and its profile's RMSE, each pixel normalised by its own unshadowed light, against the
+/// visibility integrated over the light's Gaussian.
+pub fn point_direction_row(theta: f64) -> Result<Row, String> {
+    let (_, distance, resolution) = POINT_SETUPS
+        .into_iter()
+        .find(|s| s.0 == theta)
+        .ok_or_else(|| format!("no point-light set-up at {theta}°"))?;
+    let (position, radius) = point_light_at(distance);
+    let text = point_scene_toml(theta, position, radius, "");
+    let mut scene =
+        Scene::parse(&text, "direction_point.toml", Path::new(".")).map_err(|e| e.to_string())?;
+    scene.sweep.light_resolution = resolution;
+    let rendered = render(&scene, &RenderRequest::default()).map_err(|e| e.to_string())?;
+    let (rmse, pixels) = point_profile_rmse(
+        &rendered.image.data,
+        &expected_row_point(theta, position, radius),
+    )
+    .map_err(|e| format!("point light at {theta}°: {e}"))?;
+    let passes = if rendered.turned_round_lights > 0 {
+        "two passes"
+    } else {
+        "one pass"
+    };
+    Ok(Row {
+        family: "direction".into(),
+        kernel: scene.sweep.kernel.to_string(),
+        penumbra: scene.sweep.penumbra.to_string(),
+        slabs: rendered.slabs_swept,
+        variance_level: "point".into(),
+        compensation: scene.sweep.variance_compensation,
+        width: WIDTH,
+        height: HEIGHT,
+        time_ms: rendered.seconds_sweep * 1e3,
+        rmse_correct: Some(rmse),
+        view_angle_deg: Some(theta),
+        light_resolution: Some(resolution),
+        note: format!(
+            "soft point light of radius {radius} on the axis, {distance} before the half-plane \
+             (as near as the sweep allows at this angle: before or behind every mesh along the \
+             view), over a translucent sheet; light grid at {resolution} cells per pixel; \
+             view_angle_deg from the light's axis to the view direction; slab distance \
+             {SLAB_DISTANCE}; RMSE of the sheet's profile, each pixel over its own unshadowed \
+             light and normalised by the lit level, over {pixels} penumbra pixels against the \
+             visibility integrated over the light's Gaussian; {passes}"
         ),
         ..Row::default()
     })

@@ -62,7 +62,8 @@ impl ReportOptions {
              slabs 64, all kernels, reference M = 16 (self-error against M = 64); narrow-band \
              scene at 48×48, ellipse2 with and without pre-integration, slabs 64, 128, against \
              2048 slabs (self-error against 4096); a directional light at 0°, 100°, 180° from the view \
-             over a half-plane and a translucent sheet (isotropic light); a perspective camera \
+             over a half-plane and a translucent sheet (isotropic light), and a soft point light \
+             (distance penumbra); a perspective camera \
              at fov 30° and 90° over a half-plane's shadow on a receiver; a soft point light's \
              penumbra on a wall, orthographic and perspective, light resolution 1 and 4"
                 .to_string()
@@ -74,7 +75,8 @@ impl ReportOptions {
              M = 64); narrow-band scene at 64×64, ellipse2 with and without pre-integration × \
              slabs 64, 128, 256, 512, against 2048 slabs (self-error against 4096); a directional \
              light at 0°, 45°, 80°, 100°, 135°, 180° from the view over a half-plane and a \
-             translucent sheet (isotropic and rotated anisotropic light); a perspective camera at \
+             translucent sheet (isotropic and rotated anisotropic light) and a soft point light \
+             (distance penumbra); a perspective camera at \
              fov 30° and 90° over a half-plane's shadow on a receiver; a soft point light's \
              penumbra on a wall, orthographic and perspective, light resolution 1 and 4"
                 .to_string()

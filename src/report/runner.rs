@@ -498,7 +498,8 @@ fn scene_cases(cases: &mut Cases<'_>) {
     }
 }
 
-/// The light-direction family: light × view angle × penumbra model (`ellipse2`).
+/// The light-direction family: light × view angle × penumbra model (`ellipse2`), then a soft
+/// point light × view angle (distance penumbra).
 fn direction_cases(cases: &mut Cases<'_>) -> Result<(), String> {
     let quick = cases.options.quick;
     let angles: &[f64] = if quick {
@@ -513,6 +514,15 @@ fn direction_cases(cases: &mut Cases<'_>) -> Result<(), String> {
                 if cases.want(cases.next - 1) {
                     cases.push(direction::direction_row(theta, light, penumbra)?);
                 }
+            }
+        }
+    }
+    // A soft point light: the distance penumbra only (the sweep refuses it the iterated one).
+    if cases.options.penumbras().contains(&Penumbra::Distance) {
+        for &theta in angles {
+            cases.next += 1;
+            if cases.want(cases.next - 1) {
+                cases.push(direction::point_direction_row(theta)?);
             }
         }
     }

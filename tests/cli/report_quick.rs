@@ -89,8 +89,9 @@ fn check_case_counts(t: &Csv<'_>) {
         };
         assert!(err("true") < err("false"), "narrowband, {n} slabs");
     }
-    // Light directions: 0°, 100°, 180° from the view, isotropic light, both penumbra models.
-    assert_eq!(count("direction"), 3 * 2);
+    // Light directions: 0°, 100°, 180° from the view, isotropic light, both penumbra models,
+    // then a soft point light (distance penumbra only).
+    assert_eq!(count("direction"), 3 * 2 + 3);
     // A perspective camera: fov 30° and 90°, both penumbra models, then five light resolution
     // and edge offset rows.
     assert_eq!(count("perspective"), 2 * (2 + 5));
@@ -202,6 +203,7 @@ fn check_directions(t: &Csv<'_>) {
             .iter()
             .find(|r| {
                 r[col("family")] == "direction"
+                    && r[col("variance_level")] == "isotropic"
                     && r[col("view_angle_deg")].parse::<f64>().ok() == angle.parse().ok()
                     && r[col("penumbra")] == penumbra
             })
@@ -213,6 +215,15 @@ fn check_directions(t: &Csv<'_>) {
     }
     let slabs = |angle: &str| row(angle, "distance")[col("slabs")].parse::<u32>().unwrap();
     assert!(slabs("100") > slabs("0"), "100° sweeps both passes");
+    // The point light's rows: one per angle, measured (their accuracy is
+    // tests/accuracy/lights_from_any_direction.rs's).
+    let point: Vec<f64> = t
+        .rows
+        .iter()
+        .filter(|r| r[col("family")] == "direction" && r[col("variance_level")] == "point")
+        .map(|r| r[col("view_angle_deg")].parse().unwrap())
+        .collect();
+    assert_eq!(point, [0.0, 100.0, 180.0]);
 }
 
 /// A perspective camera's edge (issue 42: ≤ 5·10⁻³ and the shadow line within 0.5 px of the
