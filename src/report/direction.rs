@@ -15,7 +15,7 @@ use convshadow_reference::half_plane_sheet::{
 };
 
 use super::row::Row;
-use crate::pipeline::{RenderRequest, render};
+use crate::pipeline::{RenderRequest, Rendered, render};
 
 /// The angles (degrees) between the light's travel and the view direction of the full report.
 pub const VIEW_ANGLES: [f64; 6] = [0.0, 45.0, 80.0, 100.0, 135.0, 180.0];
@@ -48,11 +48,7 @@ pub fn direction_row(
     let rendered = render(&scene, &RenderRequest::default()).map_err(|e| e.to_string())?;
     let (rmse, pixels) = profile_rmse(&rendered.image.data, &expected_row(theta, light))
         .map_err(|e| format!("direction {theta}°: {e}"))?;
-    let passes = if rendered.turned_round_lights > 0 {
-        "two passes"
-    } else {
-        "one pass"
-    };
+    let passes = passes(&rendered);
     Ok(Row {
         family: "direction".into(),
         kernel: scene.sweep.kernel.to_string(),
@@ -96,11 +92,7 @@ pub fn point_direction_row(theta: f64) -> Result<Row, String> {
         &expected_row_point(theta, position, radius),
     )
     .map_err(|e| format!("point light at {theta}°: {e}"))?;
-    let passes = if rendered.turned_round_lights > 0 {
-        "two passes"
-    } else {
-        "one pass"
-    };
+    let passes = passes(&rendered);
     Ok(Row {
         family: "direction".into(),
         kernel: scene.sweep.kernel.to_string(),
@@ -125,4 +117,13 @@ pub fn point_direction_row(theta: f64) -> Result<Row, String> {
         ),
         ..Row::default()
     })
+}
+
+/// How many passes the render swept: a light towards the viewer adds a turned-round one.
+fn passes(rendered: &Rendered) -> &'static str {
+    if rendered.turned_round_lights > 0 {
+        "two passes"
+    } else {
+        "one pass"
+    }
 }
