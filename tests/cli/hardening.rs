@@ -126,16 +126,6 @@ fn diff_writes_its_heatmap_by_rename_not_in_place() {
     assert_eq!(std::fs::read(dir.join("a.exr")).unwrap(), before);
 }
 
-/// The names in `dir`, sorted.
-fn files_in(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
-
 #[test]
 fn render_refuses_outputs_over_its_inputs_and_checks_every_frame_before_rendering() {
     let dir = support::temp_dir("h43-render-outputs");
@@ -151,7 +141,7 @@ fn render_refuses_outputs_over_its_inputs_and_checks_every_frame_before_renderin
         .unwrap();
     std::fs::remove_file(dir.join("gobo.exr")).unwrap();
     let gobo = std::fs::read(dir.join("gobo.png")).unwrap();
-    let before = files_in(&dir);
+    let before = support::files_in(&dir);
     // `--stats-json s.toml` replaced the scene with JSON (exit 0).
     let r = cli(
         &dir,
@@ -193,7 +183,10 @@ fn render_refuses_outputs_over_its_inputs_and_checks_every_frame_before_renderin
         OUTPUT_FAILED,
         &["o1", "does not exist"],
     );
-    assert!(files_in(&dir.join("o0")).is_empty(), "frame 0 was written");
+    assert!(
+        support::files_in(&dir.join("o0")).is_empty(),
+        "frame 0 was written"
+    );
     std::fs::remove_dir(dir.join("o0")).unwrap();
     // Two patterns that meet on frame 10 overwrote each other silently.
     let r = cli(
@@ -222,7 +215,7 @@ fn render_refuses_outputs_over_its_inputs_and_checks_every_frame_before_renderin
     refused("long name", &r, OUTPUT_FAILED, &["at most 255"]);
     let r = cli(&dir, &["render", "s.toml", "-o", "a.png/", "-q"]);
     refused("trailing slash", &r, OUTPUT_FAILED, &["names a folder"]);
-    assert_eq!(files_in(&dir), before, "nothing was written");
+    assert_eq!(support::files_in(&dir), before, "nothing was written");
     // A frame range too long to check (and to render) is a bad argument, before the outputs
     // (`0..4000000000` collected 16 GB of frame numbers).
     let r = cli(
@@ -284,7 +277,7 @@ fn report_checks_its_outputs_before_any_case_and_writes_by_rename() {
     let csv = std::fs::read_to_string(dir.join("s/report.csv")).unwrap();
     assert_eq!(csv.lines().count(), 2, "{csv}");
     assert_eq!(
-        files_in(&dir.join("s")),
+        support::files_in(&dir.join("s")),
         ["report.csv"],
         "no temporary file left"
     );
@@ -374,7 +367,7 @@ fn time_steps_that_push_the_detail_time_past_its_limit_are_refused_before_render
             &["--time-step", "frame 2", "material.m.detail.time", "1e9"],
         );
     }
-    assert_eq!(files_in(&dir), ["d.toml"]);
+    assert_eq!(support::files_in(&dir), ["d.toml"]);
     // Within the limit: rendered, and times print as decimals (3 × 0.1 is not 0.3 in binary).
     let r = cli(
         &dir,

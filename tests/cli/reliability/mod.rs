@@ -4,6 +4,7 @@
 //! stop a render cleanly with exit code 130.
 
 use crate::support;
+use crate::support::files_in;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -46,16 +47,6 @@ material = "m"
 [material.m]
 opacity = 0.5
 "#;
-
-/// The names of the files in `dir` (outputs, temporary `.partial` files, anything).
-fn files_in(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
 
 /// Asserts a refused run: the exit code, no panic, the message names `what`.
 fn assert_refused(name: &str, code: i32, expected_code: i32, err: &str, what: &[&str]) {
