@@ -186,15 +186,19 @@ pub enum Held {
 
 /// Advances a pixel's packed surface hold `hold` through slab `slab`, in which its cursor
 /// crossed a surface whose hold is `crossed_hold` slabs (0: no crossing, or one that does not
-/// hold): a pending hold passes the light until its release slab and is cleared there; else a
-/// crossing with a hold starts one. Every lane path runs it in every slab where a pixel crosses
-/// a fragment or is released, so its state never goes stale.
+/// hold): a pending hold passes the light until its release slab and is cleared there, or
+/// earlier where `ends_hold` — the pixel crossed a fragment in this slab and has more ahead: its
+/// column leaves the held mesh (or meets another surface) with something behind, which light
+/// held on would reach through the mesh (a thin plate steep to a soft point light lost its whole
+/// shadow on a sheet behind it to a 1023-slab hold); else a crossing with a hold starts one.
+/// Every lane path runs it in every slab where a pixel crosses a fragment or is released, so
+/// its state never goes stale.
 #[inline(always)]
-pub fn hold_step(hold: &mut u32, slab: u32, crossed_hold: u32) -> Held {
+pub fn hold_step(hold: &mut u32, slab: u32, crossed_hold: u32, ends_hold: bool) -> Held {
     let packed = *hold;
     if packed != 0 {
         let release = packed & ((1 << HOLD_SHIFT) - 1);
-        if slab < release {
+        if slab < release && !ends_hold {
             return Held::Pass;
         }
         *hold = 0;
@@ -221,6 +225,26 @@ pub fn finish(color: &mut [f32; 3], alpha: f32, background: [f32; 3]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_hold_passes_until_its_release_or_a_crossing_with_something_behind() {
+        // Crossed in slab 10 with a hold of 5: passes through slab 14, released in 15.
+        let mut hold = 0;
+        assert_eq!(hold_step(&mut hold, 10, 5, false), Held::Pass);
+        for slab in 11..15 {
+            assert_eq!(hold_step(&mut hold, slab, 0, false), Held::Pass, "{slab}");
+        }
+        let released = Held::Release { removed_at: 10 };
+        assert_eq!(hold_step(&mut hold, 15, 0, false), released);
+        assert_eq!((hold, hold_step(&mut hold, 16, 0, false)), (0, Held::Free));
+        // The mesh's far face with nothing behind it (a floor) does not end the hold.
+        assert_eq!(hold_step(&mut hold, 10, 5, false), Held::Pass);
+        assert_eq!(hold_step(&mut hold, 12, 0, false), Held::Pass);
+        // A crossing with fragments behind it ends it there, at the first crossing's depth,
+        // and starts no new hold (the light is gone).
+        assert_eq!(hold_step(&mut hold, 13, 7, true), released);
+        assert_eq!((hold, hold_step(&mut hold, 14, 0, false)), (0, Held::Free));
+    }
 
     #[test]
     fn a_part_of_a_slab_takes_out_the_power_to_second_order() {

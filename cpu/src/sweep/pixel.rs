@@ -85,7 +85,7 @@ pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usi
     convolve(row, x, inside, &mut light);
     // 2. Intersection: advance the layer cursor to the slab's back face.
     let hit = intersect(row.ctx, row.y, state, x);
-    let held = hold(row.ctx, state, x, hit.crossed);
+    let held = hold(row.ctx, state, (x, row.y), hit.crossed);
     // Sub-pixel shadows: a crossed opaque surface's light read at its exact shift.
     let part = subpixel_part(row.ctx, &hit);
     let exact_in;
@@ -177,25 +177,30 @@ pub(crate) fn exact_light(
     }
 }
 
-/// Step 2's surface hold at pixel x, whose cursor crossed fragment `crossed` in this slab
-/// ([`NO_CROSSING`]: none): [`hold_step`] with the crossed triangle's hold.
+/// Step 2's surface hold at pixel x of row y, whose cursor crossed fragment `crossed` in this
+/// slab ([`NO_CROSSING`]: none): [`hold_step`] with the crossed triangle's hold, ending a pending
+/// one where the pixel has fragments left behind the crossing.
 #[inline(always)]
 pub(crate) fn hold(
     ctx: &SlabContext<'_>,
     state: &mut RowState<'_>,
-    x: usize,
+    (x, y): (usize, usize),
     crossed: u32,
 ) -> Held {
     let plan = ctx.plan;
     if !plan.has_surface_hold() {
         return Held::Free;
     }
-    let crossed_hold = if crossed == NO_CROSSING {
-        0
+    let (crossed_hold, ends_hold) = if crossed == NO_CROSSING {
+        (0, false)
     } else {
-        plan.surface_hold[ctx.ldi.triangle[crossed as usize] as usize]
+        let end = ctx.ldi.offsets[y * plan.grid_width as usize + x + 1];
+        (
+            plan.surface_hold[ctx.ldi.triangle[crossed as usize] as usize],
+            state.next[x] < end,
+        )
     };
-    hold_step(&mut state.hold[x], ctx.slab, crossed_hold)
+    hold_step(&mut state.hold[x], ctx.slab, crossed_hold, ends_hold)
 }
 
 /// Step 1: every light's planes gathered at pixel x through its kernel's tap row for this slab

@@ -112,11 +112,12 @@ struct HoldStep {
 
 // `hold_step`: a pixel's packed hold `state` through slab `slab`, where it crossed a surface that
 // holds `crossed_hold` slabs (0: none): a pending hold passes until its release slab and is
-// cleared there, else such a crossing starts one.
-fn hold_step(state: u32, slab: u32, crossed_hold: u32) -> HoldStep {
+// cleared there, or earlier where `ends_hold` (a crossing with fragments left behind it), else
+// such a crossing starts one.
+fn hold_step(state: u32, slab: u32, crossed_hold: u32, ends_hold: bool) -> HoldStep {
     if state != 0u {
         let release = state & ((1u << HOLD_SHIFT) - 1u);
-        if slab < release {
+        if slab < release && !ends_hold {
             return HoldStep(state, HELD_PASS, slab);
         }
         return HoldStep(0u, HELD_RELEASE, release - (state >> HOLD_SHIFT));

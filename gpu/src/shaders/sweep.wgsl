@@ -86,7 +86,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         if crossed {
             crossed_hold = surface_hold[frag_meta[adv.first] >> MESH_BITS];
         }
-        let step = hold_step(hold[p], slab, crossed_hold);
+        let step = hold_step(hold[p], slab, crossed_hold, crossed && adv.next < offsets[p + 1u]);
         hold[p] = step.state;
         held = step.held;
         removed_at = f32(step.removed_at);

@@ -314,7 +314,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         && (crossing || state.hold[x0..x0 + L::LANES].iter().any(|&h| h != 0))
     {
         for (i, h) in held.iter_mut().enumerate().take(L::LANES) {
-            *h = hold(ctx, state, x0 + i, hits.crossed[i]);
+            *h = hold(ctx, state, (x0 + i, y), hits.crossed[i]);
             released |= matches!(h, Held::Release { .. });
         }
     }

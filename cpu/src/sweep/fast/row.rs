@@ -270,7 +270,10 @@ fn advance_dark(row: &RowContext<'_>, state: &mut RowState<'_>, xs: Range<usize>
         );
         moved |= first != NO_CROSSING;
         // The surface hold moves as in the full stage (the light it passes or removes is 0).
-        moved |= matches!(pixel::hold(ctx, state, x, first), Held::Release { .. });
+        moved |= matches!(
+            pixel::hold(ctx, state, (x, row.y), first),
+            Held::Release { .. }
+        );
     }
     if ctx.plan.preintegration {
         // The cursors may have crossed surfaces: forget the kept front values (a kept value is
