@@ -184,3 +184,76 @@ fn a_soft_point_lights_shadow_on_a_sheet_from_every_camera_angle() {
     println!("{report}");
     assert!(!failed, "{report}");
 }
+
+/// A level floor lit by a light towards the viewer (the turned-round pass), as `rimlit`'s rim
+/// light at a small image size: the face the viewer sees is the sweep's exit from the floor box,
+/// and without the exit hold every row whose exit fell on a slab where the narrow light's drift
+/// was carried 0 pixels read the box's own inside — half the rows near black at 384 slabs, most
+/// at 1536 (docs/accuracy.md §2e). Closed form: Lambert, albedo × light × n·l, over the pixels
+/// whose view ray meets the floor's top 0.3 inside its edges (computed from the camera here).
+#[test]
+fn a_floor_lit_towards_the_viewer_is_even_at_any_slab_count() {
+    let (w, h, view_width) = (128usize, 96usize, 4.0f64);
+    let light = [0.25f64, -0.55, -1.0];
+    let norm = |v: [f64; 3]| {
+        let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        [v[0] / l, v[1] / l, v[2] / l]
+    };
+    let n_dot_l = -norm(light)[1];
+    let expected = 0.68 * n_dot_l; // green: albedo 0.68, light 1.0
+    // The orthographic camera's frame: `up` made orthogonal to the view, `right = up × d`.
+    let d = norm([0.0, -0.36, 1.0]);
+    let up = norm([-d[1] * d[0], 1.0 - d[1] * d[1], -d[1] * d[2]]);
+    let right = [
+        up[1] * d[2] - up[2] * d[1],
+        up[2] * d[0] - up[0] * d[2],
+        up[0] * d[1] - up[1] * d[0],
+    ];
+    let (centre, pixel) = ([0.0, -0.5, 0.5], view_width / w as f64);
+    for slabs in [384, 1536] {
+        let text = format!(
+            "[image]\nwidth = {w}\nheight = {h}\n[camera]\ndirection = [0.0, -0.36, 1.0]\n\
+             up = [0.0, 1.0, 0.0]\ncenter = [0.0, -0.5, 0.5]\nview_width = {view_width}\n\
+             [sweep]\nslabs = {slabs}\n[[light]]\ncolor = [1.0, 1.0, 1.0]\n\
+             direction = [{}, {}, {}]\nvariance = [0.003, 0.003]\n[[mesh]]\nshape = \"box\"\n\
+             size = [7.0, 0.3, 8.0]\ntranslate = [0.0, -1.15, 1.5]\nmaterial = \"floor\"\n\
+             [material.floor]\ncolor = [0.7, 0.68, 0.62]\n",
+            light[0], light[1], light[2]
+        );
+        let s = Scene::parse(&text, "turned_floor.toml", Path::new("."))
+            .unwrap_or_else(|e| panic!("{e}\n{text}"));
+        let r = render(&s, &RenderRequest::default()).unwrap_or_else(|e| panic!("{e}"));
+        let (mut sum2, mut n, mut darkest) = (0.0f64, 0usize, f64::INFINITY);
+        for row in 0..h {
+            for col in 0..w {
+                let (u, v) = (
+                    (col as f64 + 0.5 - w as f64 / 2.0) * pixel,
+                    (h as f64 / 2.0 - row as f64 - 0.5) * pixel,
+                );
+                let o: Vec<f64> = (0..3)
+                    .map(|a| centre[a] + u * right[a] + v * up[a])
+                    .collect();
+                // Where the view ray meets the floor's top, y = −1.
+                let t = (-1.0 - o[1]) / d[1];
+                let (x, z) = (o[0] + t * d[0], o[2] + t * d[2]);
+                if x.abs() > 3.2 || !(-2.2..=5.2).contains(&z) {
+                    continue;
+                }
+                let got = f64::from(r.image.data[3 * (row * w + col) + 1]);
+                sum2 += (got - expected) * (got - expected);
+                darkest = darkest.min(got);
+                n += 1;
+            }
+        }
+        let rmse = (sum2 / n as f64).sqrt() / expected;
+        println!(
+            "{slabs} slabs: relative RMSE {rmse:.2e} over {n} floor pixels, darkest {darkest:.4} \
+             (closed form {expected:.4})"
+        );
+        assert!(n > 2000, "{slabs} slabs: only {n} floor pixels");
+        assert!(
+            rmse <= 2e-2 && darkest >= 0.9 * expected,
+            "{slabs} slabs: relative RMSE {rmse:.2e}, darkest {darkest} (closed form {expected})"
+        );
+    }
+}

@@ -17,15 +17,18 @@
 //!   their rows). Never re-recorded either — but for the rows of the scenes with held surfaces,
 //!   all recorded after the surface hold existed (backlit, floor, rimlit, sunlit, teapot), when a
 //!   hold began to end at a crossing with something behind it (2026-12-07, docs/how-it-works.md
-//!   "Where a hold ends early"), rendered anew by the CLI at `--path scalar --threads 1`; no
-//!   other row changed. Checked with `--penumbra iterated --surface flat --media first-order`.
+//!   "Where a hold ends early"), and again for backlit, rimlit and the full-size floor and
+//!   sunlit when lit exit faces got their exit hold (same day, "The exit hold"), rendered anew
+//!   by the CLI at `--path scalar --threads 1`; no other row changed. Checked with `--penumbra iterated --surface flat --media first-order`.
 //! - `tests/data/golden_hashes.tsv`: the same cases with the defaults (automatic guard band,
 //!   distance penumbra), recorded when the distance penumbra became the default and re-recorded
 //!   when lambert surfaces did (2026-12-04, issue 40: opaque surfaces get max(0, n·l)) and when
 //!   second-order media did (2026-12-05, issue 46: a medium's slabs count the part inside it,
 //!   let through its exact transmittance and light the shading point), and for the scenes with
 //!   held surfaces when a hold began to end at a crossing with something behind it (2026-12-07,
-//!   issues 40/41: a thin plate's shadow was lost behind a 1023-slab hold). A change that is
+//!   issues 40/41: a thin plate's shadow was lost behind a 1023-slab hold) and when lit exit
+//!   faces got their exit hold (same day: a floor lit towards the viewer came out in black
+//!   rows at small image sizes). A change that is
 //!   meant to change an image (a new default) re-records this table with
 //!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test contract golden_hashes::` and says
 //!   why in its commit.

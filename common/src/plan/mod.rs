@@ -196,9 +196,11 @@ pub struct RenderPlan {
     /// [`MaterialPlan::pre`] table are shaded from their detail at the slab's faces, and the
     /// sweep keeps one more float per pixel (the next slab's front value).
     pub preintegration: bool,
-    /// Per rasterized triangle (`RasterSetup::triangles`' order): how many slabs an opaque
-    /// crossing of it keeps passing its pixel's light before removing it
-    /// ([`surface_hold::surface_hold`]; 0: removed at the crossing).
+    /// Per rasterized triangle (`RasterSetup::triangles`' order), packed
+    /// ([`surface_hold::pack_holds`]): how many slabs an opaque crossing of it keeps passing its
+    /// pixel's light before removing it ([`surface_hold::surface_hold`]; 0: removed at the
+    /// crossing), and how many slabs before a pixel leaves a light-blocking mesh through it the
+    /// pixel passes its light ([`surface_hold::exit_hold`]).
     pub surface_hold: Vec<u32>,
     /// `sweep.subpixel_shadows`: per mesh, whether a crossing of its
     /// surface (its material blocks light: [`MaterialPlan::blocks_light`]) is shaded with the
@@ -507,7 +509,13 @@ impl RenderPlan {
                     return 0;
                 }
                 let (dx, dy) = gradient(t);
-                surface_hold::surface_hold(&moments, self.penumbra, compensation, dx, dy, e)
+                let hold = |f: fn(&[KernelMoments], Penumbra, bool, f32, f32, f64) -> u32| {
+                    f(&moments, self.penumbra, compensation, dx, dy, e)
+                };
+                surface_hold::pack_holds(
+                    hold(surface_hold::surface_hold),
+                    hold(surface_hold::exit_hold),
+                )
             })
             .collect();
         // No per-pixel hold state where no surface holds (camera-facing receivers).

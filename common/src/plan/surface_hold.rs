@@ -61,10 +61,61 @@ pub fn surface_hold(
     depth_dy: f32,
     slab_distance: f64,
 ) -> u32 {
-    let g = [
+    let g = slopes(depth_dx, depth_dy, slab_distance);
+    // The gather reads against the impulse response's motion.
+    hold_slabs(moments, penumbra, compensation, g, |gm| 1.0 - gm)
+}
+
+/// The **exit hold** of the same triangle: how many slabs before a pixel leaves a light-blocking
+/// mesh through it the pixel passes the light it gathers, where the light reaches the surface
+/// from outside the mesh — from the side the pixel's column reaches after the crossing (where
+/// the entry's `a` above is ≤ 0). The sweep sees such a face from inside (the turned-round pass's view
+/// of a floor's top face): the light reaching it comes only from columns that left the mesh
+/// earlier, and where a narrow light's drift is carried in whole pixels (0 in some slabs) the
+/// crossing read its own column, still inside the mesh — a black row. Passing the light for
+/// these slabs gives the columns in front of the face the light as if the mesh were not there,
+/// as the hold does behind an entry; the same bound with the mirrored `a = g·m − 1`. 0 where the
+/// light reaches the face from inside or the face rises less than [`MIN_RISE`].
+pub fn exit_hold(
+    moments: &[KernelMoments],
+    penumbra: Penumbra,
+    compensation: bool,
+    depth_dx: f32,
+    depth_dy: f32,
+    slab_distance: f64,
+) -> u32 {
+    let g = slopes(depth_dx, depth_dy, slab_distance);
+    hold_slabs(moments, penumbra, compensation, g, |gm| gm - 1.0)
+}
+
+/// Where the exit hold starts in a packed per-triangle hold word ([`pack_holds`]); the entry
+/// hold lies below it.
+pub const EXIT_HOLD_SHIFT: u32 = 16;
+
+/// One triangle's holds in one word, as the sweep and `sweep.wgsl` read them: the entry hold
+/// ([`surface_hold`]) in the low [`EXIT_HOLD_SHIFT`] bits, the exit hold ([`exit_hold`]) above;
+/// both are at most [`MAX_SURFACE_HOLD`].
+pub fn pack_holds(entry: u32, exit: u32) -> u32 {
+    entry | (exit << EXIT_HOLD_SHIFT)
+}
+
+/// The depth gradient in slabs per pixel.
+fn slopes(depth_dx: f32, depth_dy: f32, slab_distance: f64) -> [f64; 2] {
+    [
         f64::from(depth_dx) / slab_distance,
         f64::from(depth_dy) / slab_distance,
-    ];
+    ]
+}
+
+/// The bound of the module documentation for gradient `g` (slabs per pixel), with `a` given by
+/// `side` from `g·m`: the largest over lights, at most [`MAX_SURFACE_HOLD`].
+fn hold_slabs(
+    moments: &[KernelMoments],
+    penumbra: Penumbra,
+    compensation: bool,
+    g: [f64; 2],
+    side: impl Fn(f64) -> f64,
+) -> u32 {
     // A tap's whole-pixel carry and its bilinear corner each read one pixel further.
     let reach = 2.0 * (g[0].abs() + g[1].abs());
     if reach.is_nan() || reach < MIN_RISE {
@@ -73,8 +124,7 @@ pub fn surface_hold(
     let k2 = HOLD_SIGMAS * HOLD_SIGMAS;
     let mut hold = 0.0f64;
     for m in moments {
-        // The gather reads against the impulse response's motion.
-        let a = 1.0 - (g[0] * m.mean[0] + g[1] * m.mean[1]);
+        let a = side(g[0] * m.mean[0] + g[1] * m.mean[1]);
         if a <= 0.0 {
             continue;
         }
@@ -104,6 +154,27 @@ mod tests {
             mean,
             cov: [[var, 0.0], [0.0, var]],
         }
+    }
+
+    #[test]
+    fn a_face_lit_from_outside_is_held_before_its_exit_and_not_after_its_entry() {
+        // Drift 0.3 px per slab along x, variance 2 px²; depth rising 5 slabs per pixel along x:
+        // g·m = 1.5, so the light reaches the face from the side the column reaches after it.
+        let l = [light([0.3, 0.0], 2.0)];
+        assert_eq!(
+            surface_hold(&l, Penumbra::Iterated, true, 0.05, 0.0, 0.01),
+            0
+        );
+        // a = g·m − 1 = ½: u = 4²·(25·2)/(4·½) = 400, plus the reach 2·5: 410 slabs.
+        assert_eq!(
+            exit_hold(&l, Penumbra::Iterated, true, 0.05, 0.0, 0.01),
+            410
+        );
+        // The face turned the other way is an entry lit from the front: held after, not before.
+        assert!(surface_hold(&l, Penumbra::Iterated, true, -0.05, 0.0, 0.01) > 0);
+        assert_eq!(exit_hold(&l, Penumbra::Iterated, true, -0.05, 0.0, 0.01), 0);
+        assert_eq!(pack_holds(3, 410) >> EXIT_HOLD_SHIFT, 410);
+        assert_eq!(pack_holds(3, 410) & ((1 << EXIT_HOLD_SHIFT) - 1), 3);
     }
 
     #[test]

@@ -27,6 +27,7 @@
 
 use convshadow_common::pixel::levels::{depth_coord, pixel_level};
 use convshadow_common::plan::TfEntry;
+use convshadow_common::plan::surface_hold::EXIT_HOLD_SHIFT;
 
 use super::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowContext, RowState, SlabContext, level_plane, light_block,
@@ -179,7 +180,10 @@ pub(crate) fn exact_light(
 
 /// Step 2's surface hold at pixel x of row y, whose cursor crossed fragment `crossed` in this
 /// slab ([`NO_CROSSING`]: none): [`hold_step`] with the crossed triangle's hold, ending a pending
-/// one where the pixel has fragments left behind the crossing.
+/// one where the pixel has fragments left behind the crossing; else the **exit hold**
+/// ([`exit_hold`](convshadow_common::plan::surface_hold::exit_hold)): a pixel inside the mesh
+/// of its next fragment passes its light while that fragment lies fewer than its triangle's
+/// exit hold slabs beyond the slab's back face.
 #[inline(always)]
 pub(crate) fn hold(
     ctx: &SlabContext<'_>,
@@ -187,20 +191,34 @@ pub(crate) fn hold(
     (x, y): (usize, usize),
     crossed: u32,
 ) -> Held {
-    let plan = ctx.plan;
+    let (plan, ldi) = (ctx.plan, ctx.ldi);
     if !plan.has_surface_hold() {
         return Held::Free;
     }
+    let (next, end) = (
+        state.next[x],
+        ldi.offsets[y * plan.grid_width as usize + x + 1],
+    );
     let (crossed_hold, ends_hold) = if crossed == NO_CROSSING {
         (0, false)
     } else {
-        let end = ctx.ldi.offsets[y * plan.grid_width as usize + x + 1];
-        (
-            plan.surface_hold[ctx.ldi.triangle[crossed as usize] as usize],
-            state.next[x] < end,
-        )
+        let entry = plan.surface_hold[ldi.triangle[crossed as usize] as usize];
+        (entry & ((1 << EXIT_HOLD_SHIFT) - 1), next < end)
     };
-    hold_step(&mut state.hold[x], ctx.slab, crossed_hold, ends_hold)
+    let held = hold_step(&mut state.hold[x], ctx.slab, crossed_hold, ends_hold);
+    if held != Held::Free || next >= end {
+        return held;
+    }
+    let next = next as usize;
+    let exit = plan.surface_hold[ldi.triangle[next] as usize] >> EXIT_HOLD_SHIFT;
+    let in_its_mesh = state.inside[x] & (1 << ldi.mesh[next]) != 0;
+    if exit != 0
+        && in_its_mesh
+        && (ldi.depth[next] - ctx.back) * plan.inv_slab_distance < exit as f32
+    {
+        return Held::Pass;
+    }
+    Held::Free
 }
 
 /// Step 1: every light's planes gathered at pixel x through its kernel's tap row for this slab

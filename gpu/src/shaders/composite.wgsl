@@ -103,6 +103,7 @@ const HELD_FREE: u32 = 0u;    // the slab's own attenuation
 const HELD_PASS: u32 = 1u;    // attenuation 1
 const HELD_RELEASE: u32 = 2u; // attenuation 0, removed light recorded at `removed_at`
 const HOLD_SHIFT: u32 = 20u;
+const EXIT_HOLD_SHIFT: u32 = 16u; // a triangle's `surface_hold` word: entry hold below, exit hold above
 
 struct HoldStep {
     state: u32,

@@ -309,9 +309,12 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     let mut held = [Held::Free; MAX_LANES];
     let mut released = false;
     let crossing = hits.crossed[..L::LANES].iter().any(|&c| c != NO_CROSSING);
-    // Most chunks hold nothing and cross nothing: one look at their hold words.
+    // Most chunks hold nothing, cross nothing and lie in no mesh (whose exit could be near):
+    // one look at their hold words and inside masks.
     if plan.has_surface_hold()
-        && (crossing || state.hold[x0..x0 + L::LANES].iter().any(|&h| h != 0))
+        && (crossing
+            || state.hold[x0..x0 + L::LANES].iter().any(|&h| h != 0)
+            || state.inside[x0..x0 + L::LANES].iter().any(|&m| m != 0))
     {
         for (i, h) in held.iter_mut().enumerate().take(L::LANES) {
             *h = hold(ctx, state, (x0 + i, y), hits.crossed[i]);
