@@ -195,21 +195,19 @@ pub(crate) fn hold(
     if !plan.has_surface_hold() {
         return Held::Free;
     }
-    let (next, end) = (
-        state.next[x],
-        ldi.offsets[y * plan.grid_width as usize + x + 1],
-    );
+    let end = ldi.offsets[y * plan.grid_width as usize + x + 1];
     let (crossed_hold, ends_hold) = if crossed == NO_CROSSING {
         (0, false)
     } else {
         let entry = plan.surface_hold[ldi.triangle[crossed as usize] as usize];
-        (entry & ((1 << EXIT_HOLD_SHIFT) - 1), next < end)
+        (entry & ((1 << EXIT_HOLD_SHIFT) - 1), state.next[x] < end)
     };
     let held = hold_step(&mut state.hold[x], ctx.slab, crossed_hold, ends_hold);
-    if held != Held::Free || next >= end {
+    // Outside every mesh (most pixels, and every pixel of an open mesh) no exit is near.
+    if held != Held::Free || state.inside[x] == 0 || state.next[x] >= end {
         return held;
     }
-    let next = next as usize;
+    let next = state.next[x] as usize;
     let exit = plan.surface_hold[ldi.triangle[next] as usize] >> EXIT_HOLD_SHIFT;
     let in_its_mesh = state.inside[x] & (1 << ldi.mesh[next]) != 0;
     if exit != 0
