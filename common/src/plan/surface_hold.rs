@@ -161,18 +161,14 @@ mod tests {
         // Drift 0.3 px per slab along x, variance 2 px²; depth rising 5 slabs per pixel along x:
         // g·m = 1.5, so the light reaches the face from the side the column reaches after it.
         let l = [light([0.3, 0.0], 2.0)];
-        assert_eq!(
-            surface_hold(&l, Penumbra::Iterated, true, 0.05, 0.0, 0.01),
-            0
-        );
+        type Hold = fn(&[KernelMoments], Penumbra, bool, f32, f32, f64) -> u32;
+        let at = |f: Hold, dx: f32| f(&l, Penumbra::Iterated, true, dx, 0.0, 0.01);
+        assert_eq!(at(surface_hold, 0.05), 0);
         // a = g·m − 1 = ½: u = 4²·(25·2)/(4·½) = 400, plus the reach 2·5: 410 slabs.
-        assert_eq!(
-            exit_hold(&l, Penumbra::Iterated, true, 0.05, 0.0, 0.01),
-            410
-        );
+        assert_eq!(at(exit_hold, 0.05), 410);
         // The face turned the other way is an entry lit from the front: held after, not before.
-        assert!(surface_hold(&l, Penumbra::Iterated, true, -0.05, 0.0, 0.01) > 0);
-        assert_eq!(exit_hold(&l, Penumbra::Iterated, true, -0.05, 0.0, 0.01), 0);
+        assert!(at(surface_hold, -0.05) > 0);
+        assert_eq!(at(exit_hold, -0.05), 0);
         assert_eq!(pack_holds(3, 410) >> EXIT_HOLD_SHIFT, 410);
         assert_eq!(pack_holds(3, 410) & ((1 << EXIT_HOLD_SHIFT) - 1), 3);
     }
