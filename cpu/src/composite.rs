@@ -5,7 +5,7 @@
 //! instance, the SIMD path's chunks the 8-lane one.
 
 use convshadow_common::pixel::lane::Lane;
-use convshadow_common::plan::{FLUSH_BELOW, MaterialPlan, RenderPlan};
+use convshadow_common::plan::{FLUSH_BELOW, MaterialPlan, RenderPlan, surface_hold};
 
 use crate::shading::{LightTerms, Surface, TfLanes, shade_with};
 
@@ -164,9 +164,27 @@ pub fn owned_depth<L: Lane>(at: L, occluded: L) -> L {
 }
 
 /// A pixel's surface hold (`RenderPlan::surface_hold`), packed in one `u32`: 0 when it holds
-/// nothing, else the slab that releases it (the low [`HOLD_SHIFT`] bits) and how many slabs it
-/// holds (the bits above).
-pub const HOLD_SHIFT: u32 = 20;
+/// nothing, else the slab its surface was crossed in (the low [`HOLD_SHIFT`] bits: slabs are
+/// fewer than 2¹⁶), how many slabs it passes the light (10 bits) and how many slabs of barrier
+/// follow its release (the bits from [`HOLD_BARRIER_SHIFT`]).
+pub const HOLD_SHIFT: u32 = 16;
+
+/// Where a pixel's hold state keeps its barrier ([`HOLD_SHIFT`]).
+pub const HOLD_BARRIER_SHIFT: u32 = 26;
+
+/// A pixel's hold state of crossing slab `crossed`, hold `hold` and barrier `barrier`.
+#[inline(always)]
+pub const fn hold_state(crossed: u32, hold: u32, barrier: u32) -> u32 {
+    crossed | (hold << HOLD_SHIFT) | (barrier << HOLD_BARRIER_SHIFT)
+}
+
+/// The slab in which a pixel's hold state `state` (non-zero) releases its light: from there on
+/// it removes it, through its barrier.
+#[inline(always)]
+pub const fn release_slab(state: u32) -> u32 {
+    (state & ((1 << HOLD_SHIFT) - 1))
+        + ((state >> HOLD_SHIFT) & ((1 << (HOLD_BARRIER_SHIFT - HOLD_SHIFT)) - 1))
+}
 
 /// What step 5 does with a pixel's light, given its surface hold ([`hold_step`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -184,31 +202,55 @@ pub enum Held {
     },
 }
 
-/// Advances a pixel's packed surface hold `hold` through slab `slab`, in which its cursor
-/// crossed a surface whose hold is `crossed_hold` slabs (0: no crossing, or one that does not
-/// hold): a pending hold passes the light until its release slab and is cleared there, or
-/// earlier where `ends_hold` — the pixel crossed a fragment in this slab and has more ahead: its
-/// column leaves the held mesh (or meets another surface) with something behind, which light
-/// held on would reach through the mesh (a thin plate steep to a soft point light lost its whole
-/// shadow on a sheet behind it to a 1023-slab hold); else a crossing with a hold starts one.
-/// Every lane path runs it in every slab where a pixel crosses a fragment or is released, so
-/// its state never goes stale.
+/// Advances a pixel's packed surface hold `hold` ([`HOLD_SHIFT`]) through slab `slab`, in
+/// which its cursor crossed a triangle whose packed hold word
+/// (`convshadow_common::plan::surface_hold::pack_holds`) is `crossed` (0: no crossing, or one
+/// that neither holds nor bars). A pending hold passes the light until its release slab, or
+/// until `ends_hold` — the pixel crossed a fragment in this slab and has more ahead: its column
+/// leaves the held mesh (or meets another surface) with something behind, which light held on
+/// would reach through the mesh (a thin plate steep to a soft point light lost its whole shadow
+/// on a sheet behind it to a 1023-slab hold), and the light is removed in that slab only. A
+/// release at the hold's end removes it in that slab and then, outside every closed mesh
+/// (`inside`: the pixel is in one, whose slabs remove it; a crossing there starts a hold as
+/// anywhere), through a thin shell's **barrier** (`surface_hold::barrier`); a shell's crossing
+/// that holds nothing starts its barrier in the slab after it (its own attenuation removes the
+/// light in its slab). Else a crossing with a hold starts one. Every lane path runs it in every
+/// slab from a hold's release to its barrier's end and where a pixel crosses a fragment, so its
+/// state never goes stale.
 #[inline(always)]
-pub fn hold_step(hold: &mut u32, slab: u32, crossed_hold: u32, ends_hold: bool) -> Held {
+pub fn hold_step(hold: &mut u32, slab: u32, crossed: u32, ends_hold: bool, inside: bool) -> Held {
+    let entry = surface_hold::entry_of(crossed);
+    let barrier = surface_hold::barrier_of(crossed);
     let packed = *hold;
     if packed != 0 {
-        let release = packed & ((1 << HOLD_SHIFT) - 1);
-        if slab < release && !ends_hold {
-            return Held::Pass;
+        let start = packed & ((1 << HOLD_SHIFT) - 1);
+        let (mut release, mut bar) = (release_slab(packed), packed >> HOLD_BARRIER_SHIFT);
+        if slab < release {
+            if !ends_hold {
+                return Held::Pass;
+            }
+            (release, bar) = (slab, 0);
+        }
+        if slab <= release + bar {
+            if slab == release + bar {
+                *hold = 0;
+            }
+            if slab == release || !inside {
+                return Held::Release { removed_at: start };
+            }
+            // Inside a closed mesh: its slabs remove the light; a crossing may hold anew.
+            if entry == 0 {
+                return Held::Free;
+            }
         }
         *hold = 0;
-        return Held::Release {
-            removed_at: release - (packed >> HOLD_SHIFT),
-        };
     }
-    if crossed_hold != 0 {
-        *hold = (slab + crossed_hold) | (crossed_hold << HOLD_SHIFT);
+    if entry != 0 {
+        *hold = hold_state(slab, entry, barrier);
         return Held::Pass;
+    }
+    if barrier != 0 && !inside {
+        *hold = hold_state(slab, 0, barrier);
     }
     Held::Free
 }
@@ -230,20 +272,78 @@ mod tests {
     fn a_hold_passes_until_its_release_or_a_crossing_with_something_behind() {
         // Crossed in slab 10 with a hold of 5: passes through slab 14, released in 15.
         let mut hold = 0;
-        assert_eq!(hold_step(&mut hold, 10, 5, false), Held::Pass);
+        let step =
+            |hold: &mut u32, slab, crossed, ends| hold_step(hold, slab, crossed, ends, false);
+        assert_eq!(step(&mut hold, 10, 5, false), Held::Pass);
         for slab in 11..15 {
-            assert_eq!(hold_step(&mut hold, slab, 0, false), Held::Pass, "{slab}");
+            assert_eq!(step(&mut hold, slab, 0, false), Held::Pass, "{slab}");
         }
         let released = Held::Release { removed_at: 10 };
-        assert_eq!(hold_step(&mut hold, 15, 0, false), released);
-        assert_eq!((hold, hold_step(&mut hold, 16, 0, false)), (0, Held::Free));
+        assert_eq!(step(&mut hold, 15, 0, false), released);
+        assert_eq!((hold, step(&mut hold, 16, 0, false)), (0, Held::Free));
         // The mesh's far face with nothing behind it (a floor) does not end the hold.
-        assert_eq!(hold_step(&mut hold, 10, 5, false), Held::Pass);
-        assert_eq!(hold_step(&mut hold, 12, 0, false), Held::Pass);
+        assert_eq!(step(&mut hold, 10, 5, false), Held::Pass);
+        assert_eq!(step(&mut hold, 12, 0, false), Held::Pass);
         // A crossing with fragments behind it ends it there, at the first crossing's depth,
         // and starts no new hold (the light is gone).
-        assert_eq!(hold_step(&mut hold, 13, 7, true), released);
-        assert_eq!((hold, hold_step(&mut hold, 14, 0, false)), (0, Held::Free));
+        assert_eq!(step(&mut hold, 13, 7, true), released);
+        assert_eq!((hold, step(&mut hold, 14, 0, false)), (0, Held::Free));
+    }
+
+    #[test]
+    fn a_released_light_stays_out_through_the_barrier_outside_closed_meshes() {
+        use surface_hold::pack_holds;
+        // A shell held 5 with barrier 3: passes 10..=14, removed 15..=18 (at its depth), free.
+        let mut hold = 0;
+        let shell = pack_holds(5, 0, 3);
+        assert_eq!(hold_step(&mut hold, 10, shell, false, false), Held::Pass);
+        for slab in 11..15 {
+            assert_eq!(hold_step(&mut hold, slab, 0, false, false), Held::Pass);
+        }
+        let released = Held::Release { removed_at: 10 };
+        for slab in 15..19 {
+            assert_eq!(
+                hold_step(&mut hold, slab, 0, false, false),
+                released,
+                "{slab}"
+            );
+        }
+        assert_eq!(
+            (hold, hold_step(&mut hold, 19, 0, false, false)),
+            (0, Held::Free)
+        );
+        // Inside a closed mesh the barrier leaves the light to the mesh's slabs (the release
+        // slab itself removes it), and a crossing there holds anew.
+        hold_step(&mut hold, 10, shell, false, false);
+        assert_eq!(hold_step(&mut hold, 15, 0, false, true), released);
+        assert_eq!(hold_step(&mut hold, 16, 0, false, true), Held::Free);
+        assert_eq!(hold_step(&mut hold, 17, 0, false, false), released);
+        assert_eq!(hold_step(&mut hold, 18, 4, false, true), Held::Pass);
+        assert_eq!(release_slab(hold), 22);
+        // A crossing that cuts a hold short removes the light in its slab only.
+        let mut hold = 0;
+        hold_step(&mut hold, 10, pack_holds(50, 0, 4), false, false);
+        assert_eq!(
+            hold_step(&mut hold, 20, pack_holds(0, 0, 2), true, false),
+            released
+        );
+        assert_eq!(
+            (hold, hold_step(&mut hold, 21, 0, false, false)),
+            (0, Held::Free)
+        );
+        // A shell's crossing that holds nothing bars the slabs after its own, outside closed
+        // meshes only.
+        let bars = pack_holds(0, 0, 2);
+        assert_eq!(hold_step(&mut hold, 30, bars, false, false), Held::Free);
+        let released = Held::Release { removed_at: 30 };
+        assert_eq!(hold_step(&mut hold, 31, 0, false, false), released);
+        assert_eq!(hold_step(&mut hold, 32, 0, false, false), released);
+        assert_eq!(
+            (hold, hold_step(&mut hold, 33, 0, false, false)),
+            (0, Held::Free)
+        );
+        assert_eq!(hold_step(&mut hold, 30, bars, false, true), Held::Free);
+        assert_eq!(hold, 0);
     }
 
     #[test]

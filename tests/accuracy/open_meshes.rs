@@ -109,6 +109,18 @@ fn expected(alpha: f64) -> Vec<Option<f64>> {
     e
 }
 
+/// `scene` by the shadow-ray reference at `samples` directions per pixel.
+fn reference_image(scene: &Scene, samples: u32) -> Vec<f32> {
+    let g = convshadow_io::build_geometry(scene).unwrap_or_else(|e| panic!("{e}"));
+    let ldi = Ldi::build(&g.raster, 1 << 30).unwrap_or_else(|e| panic!("{e}"));
+    let plan = convshadow_io::build_plan(scene, &g).unwrap_or_else(|e| panic!("{e}"));
+    let options = ReferenceOptions {
+        samples,
+        ..ReferenceOptions::default()
+    };
+    Reference::new(scene, &g, &plan, 0.0).render(&ldi, &options)
+}
+
 /// RMSE and largest error of the red channel against `expected`, over the pixels it names.
 fn errors(image: &[f32], expected: &[Option<f64>]) -> (f64, f64, usize) {
     let (mut sq, mut worst, mut n) = (0.0, 0.0f64, 0);
@@ -174,17 +186,86 @@ fn an_open_square_is_a_shell_that_casts_the_closed_form_shadow() {
             assert_eq!(plate.image_hash, r.image_hash, "shell vs closed plate");
         }
 
-        let ldi = Ldi::build(&g.raster, 1 << 30).unwrap_or_else(|e| panic!("{e}"));
-        let plan = convshadow_io::build_plan(&scene, &g).unwrap_or_else(|e| panic!("{e}"));
-        let options = ReferenceOptions {
-            samples: 1024,
-            ..ReferenceOptions::default()
-        };
-        let image = Reference::new(&scene, &g, &plan, 0.0).render(&ldi, &options);
+        let image = reference_image(&scene, 1024);
         let (rmse, worst, _) = errors(&image, &expected);
         eprintln!(
             "opacity {opacity}, {slabs} slabs, reference (M = 1024): RMSE {rmse:.2e}, max {worst:.2e}"
         );
         assert!(rmse <= 2e-3, "reference: RMSE {rmse:e}, max {worst:e}");
+    }
+}
+
+/// The light reaching receiver point (x, y) past the opaque square turned `turn` degrees about
+/// the y axis (`rotate_deg = [0, turn, 0]`), whose point (s, r, 0) lies at (s·cos θ, r, s·sin θ)
+/// in camera coordinates (z away from the eye), D nearer than the receiver. A shadow ray
+/// (x + t·u, y + t·v, −t) meets its plane where t = D − s·sin θ, s = (x + D·u) / (cos θ +
+/// u·sin θ); the square is crossed iff |s| < HALF and |y + t·v| < HALF. Integrated over u
+/// numerically (the Gaussian's ±8σ in steps of σ/100), over v in closed form. (The shadow-ray
+/// reference agrees: RMSE ≤ 2e-3 at M = 256, asserted below.)
+fn turned_square_light(x: f64, y: f64, turn: f64) -> f64 {
+    let (sin, cos) = turn.to_radians().sin_cos();
+    let (mu, s) = (TILT.to_radians().tan(), VAR.sqrt());
+    let steps = 1600;
+    let mut blocked = 0.0;
+    for k in 0..=steps {
+        let z = -8.0 + 16.0 * k as f64 / steps as f64;
+        let u = mu + s * z;
+        let weight = if k == 0 || k == steps { 0.5 } else { 1.0 } * 16.0 / steps as f64;
+        let density = (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
+        let along = (x + D * u) / (cos + u * sin);
+        if along.abs() >= HALF {
+            continue;
+        }
+        let t = D - along * sin;
+        let across = phi(((HALF - y) / t) / s) - phi(((-HALF - y) / t) / s);
+        blocked += weight * density * across;
+    }
+    1.0 - blocked
+}
+
+#[test]
+fn a_turned_opaque_shell_casts_its_whole_shadow() {
+    // A shell is one slab thick in its column. Turned so that a gather reads columns the shell
+    // crosses later (here +30° and +60°), it read light from in front of the shell into the
+    // column behind it: measured before the barrier (surface_hold::barrier) 0.021 and 0.056
+    // RMSE, the 60° square's shadow grey (the teapot's on its wall). Turned the other way
+    // nothing leaks that way: −30° measured 0.0063 before, 0.0086 with the barrier (it also
+    // darkens a little light that passed beside the shell), and −60° 0.059–0.062 before,
+    // 0.061–0.067 with it — a shadow missing on the light's side of the square that is another
+    // defect (docs/accuracy.md §2f), held here to its measured value +25 %.
+    let dir = support::temp_dir("turned-square");
+    let px = VIEW / SIZE as f64;
+    for (turn, slabs, bound) in [
+        (30.0, 256, 0.013),
+        (60.0, 256, 0.022),
+        (60.0, 64, 0.030),
+        (-30.0, 256, 0.011),
+        (-60.0, 256, 0.077),
+        (-60.0, 64, 0.083),
+    ] {
+        let mut scene = square_scene(&dir, 1.0, false, slabs);
+        scene.meshes[0].rotate_deg = [0.0, turn, 0.0];
+        let r = render(&scene, &RenderRequest::default()).unwrap_or_else(|e| panic!("{e}"));
+        let cos = f64::to_radians(turn).cos();
+        let expected: Vec<Option<f64>> = (0..SIZE * SIZE)
+            .map(|p| {
+                let x = ((p % SIZE) as f64 + 0.5 - 0.5 * SIZE as f64) * px;
+                let y = ((p / SIZE) as f64 + 0.5 - 0.5 * SIZE as f64) * px;
+                let covered = x.abs() < HALF * cos + px && y.abs() < HALF + px;
+                (!covered).then(|| turned_square_light(x, y, turn))
+            })
+            .collect();
+        let (rmse, worst, n) = errors(&r.image.data, &expected);
+        eprintln!("turned {turn}°, {slabs} slabs: RMSE {rmse:.2e}, max {worst:.2e} over {n} px");
+        assert!(n > 3000, "{n} pixels compared");
+        assert!(
+            rmse <= bound,
+            "turned {turn}°, {slabs} slabs: RMSE {rmse:e}"
+        );
+        if slabs == 256 {
+            let (rmse, worst, _) = errors(&reference_image(&scene, 256), &expected);
+            eprintln!("   reference (M = 256): RMSE {rmse:.2e}, max {worst:.2e}");
+            assert!(rmse <= 3e-3, "reference: RMSE {rmse:e}");
+        }
     }
 }

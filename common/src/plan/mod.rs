@@ -199,8 +199,9 @@ pub struct RenderPlan {
     /// Per rasterized triangle (`RasterSetup::triangles`' order), packed
     /// ([`surface_hold::pack_holds`]): how many slabs an opaque crossing of it keeps passing its
     /// pixel's light before removing it ([`surface_hold::surface_hold`]; 0: removed at the
-    /// crossing), and how many slabs before a pixel leaves a light-blocking mesh through it the
-    /// pixel passes its light ([`surface_hold::exit_hold`]).
+    /// crossing), how many slabs before a pixel leaves a light-blocking mesh through it the
+    /// pixel passes its light ([`surface_hold::exit_hold`]), and how many more slabs than one
+    /// the pixel keeps removing its light once it removes it ([`surface_hold::barrier`]).
     pub surface_hold: Vec<u32>,
     /// `sweep.subpixel_shadows`: per mesh, whether a crossing of its
     /// surface (its material blocks light: [`MaterialPlan::blocks_light`]) is shaded with the
@@ -512,10 +513,16 @@ impl RenderPlan {
                 let hold = |f: fn(&[KernelMoments], Penumbra, bool, f32, f32, f64) -> u32| {
                     f(&moments, self.penumbra, compensation, dx, dy, e)
                 };
-                surface_hold::pack_holds(
-                    hold(surface_hold::surface_hold),
-                    hold(surface_hold::exit_hold),
-                )
+                let entry = hold(surface_hold::surface_hold);
+                // Only a shell is one slab thick wherever it is crossed (see `barrier`).
+                let shell = geometry.raster.parity_meshes & (1u32 << t.mesh) == 0;
+                let barrier = if shell {
+                    let gradient = (dx, dy);
+                    surface_hold::barrier(&moments, self.penumbra, compensation, gradient, e, entry)
+                } else {
+                    0
+                };
+                surface_hold::pack_holds(entry, hold(surface_hold::exit_hold), barrier)
             })
             .collect();
         // No per-pixel hold state where no surface holds (camera-facing receivers).

@@ -88,15 +88,94 @@ pub fn exit_hold(
     hold_slabs(moments, penumbra, compensation, g, |gm| gm - 1.0)
 }
 
+/// The longest barrier (slabs, [`barrier`]): it fits the 6 bits a pixel's hold state keeps.
+pub const MAX_BARRIER: u32 = 63;
+
+/// The **barrier** of a thin shell's triangle (an open mesh, [`crate::plan::RenderPlan`]'s
+/// triangles outside the parity test): how many slabs after the slab that removes its light (a
+/// hold's release, or the crossing itself where it holds nothing) the pixel keeps removing the
+/// light it gathers. A shell is one slab thick in its column, and a gather reading a column
+/// upstream of the light, which the shell crosses `g·d` slabs later, reads light from in front
+/// of the shell into the column behind it: a tilted opaque shell let up to half the light
+/// through (a grey shadow; the teapot's on its wall). The pixel keeps its light out until every
+/// column it reads has removed its own, so that the columns' dark stretches join in a wall the
+/// light cannot step over: the largest `g·d` over the reads — `−g·m` for the mean read (the
+/// gather reads against the impulse response's motion `m`), [`HOLD_SIGMAS`] of its spread and
+/// a bilinear corner's pixel on each axis. With the distance penumbra a released column
+/// gathers through the level of its distance, `h = B + 1 + X` slabs from the surface (`B`: the
+/// hold before, `entry`), whose spread is `(2h − 1)` single levels'. 0 (one slab, as a surface
+/// facing the camera needs) where that needs no more or the surface rises less than
+/// [`MIN_RISE`]; at most [`MAX_BARRIER`]. A closed mesh needs none: its inside removes the
+/// light behind every entry.
+pub fn barrier(
+    moments: &[KernelMoments],
+    penumbra: Penumbra,
+    compensation: bool,
+    (depth_dx, depth_dy): (f32, f32),
+    slab_distance: f64,
+    entry: u32,
+) -> u32 {
+    let g = slopes(depth_dx, depth_dy, slab_distance);
+    let corners = g[0].abs() + g[1].abs();
+    if corners.is_nan() || 2.0 * corners < MIN_RISE {
+        return 0;
+    }
+    let k2 = HOLD_SIGMAS * HOLD_SIGMAS;
+    let mut most = 0.0f64;
+    for m in moments {
+        let spread = spread(m, compensation, g);
+        let gm = g[0] * m.mean[0] + g[1] * m.mean[1];
+        // a = 1 − g·m ≤ 0: this light reaches the shell's far side, the side the column
+        // enters: the light behind the crossing is its own.
+        if 1.0 - gm <= 0.0 {
+            continue;
+        }
+        let ahead = corners - gm;
+        let x = match penumbra {
+            Penumbra::Iterated => ahead + (k2 * spread).sqrt(),
+            // X = A + k·√((2(B + X) + 1)·s), solved for X (the larger root).
+            Penumbra::Distance => {
+                let s = k2 * spread;
+                let c = (2.0 * (f64::from(entry) + ahead) + 1.0).max(0.0);
+                ahead + s + (s * s + s * c).sqrt()
+            }
+        };
+        most = most.max(x);
+    }
+    if most.is_nan() {
+        return MAX_BARRIER;
+    }
+    (most.ceil().clamp(0.0, f64::from(MAX_BARRIER))) as u32
+}
+
 /// Where the exit hold starts in a packed per-triangle hold word ([`pack_holds`]); the entry
 /// hold lies below it.
-pub const EXIT_HOLD_SHIFT: u32 = 16;
+pub const EXIT_HOLD_SHIFT: u32 = 10;
+
+/// Where the barrier starts in a packed per-triangle hold word ([`pack_holds`]).
+pub const BARRIER_SHIFT: u32 = 20;
+
+/// The entry hold of a packed per-triangle hold word ([`pack_holds`]).
+pub const fn entry_of(word: u32) -> u32 {
+    word & ((1 << EXIT_HOLD_SHIFT) - 1)
+}
+
+/// The exit hold of a packed per-triangle hold word ([`pack_holds`]).
+pub const fn exit_of(word: u32) -> u32 {
+    (word >> EXIT_HOLD_SHIFT) & ((1 << (BARRIER_SHIFT - EXIT_HOLD_SHIFT)) - 1)
+}
+
+/// The barrier of a packed per-triangle hold word ([`pack_holds`]).
+pub const fn barrier_of(word: u32) -> u32 {
+    (word >> BARRIER_SHIFT) & MAX_BARRIER
+}
 
 /// One triangle's holds in one word, as the sweep and `sweep.wgsl` read them: the entry hold
-/// ([`surface_hold`]) in the low [`EXIT_HOLD_SHIFT`] bits, the exit hold ([`exit_hold`]) above;
-/// both are at most [`MAX_SURFACE_HOLD`].
-pub fn pack_holds(entry: u32, exit: u32) -> u32 {
-    entry | (exit << EXIT_HOLD_SHIFT)
+/// ([`surface_hold`]) in the low [`EXIT_HOLD_SHIFT`] bits, the exit hold ([`exit_hold`]) above
+/// (both at most [`MAX_SURFACE_HOLD`]), and a thin shell's barrier ([`barrier`]) above
+/// [`BARRIER_SHIFT`].
+pub fn pack_holds(entry: u32, exit: u32, barrier: u32) -> u32 {
+    entry | (exit << EXIT_HOLD_SHIFT) | (barrier << BARRIER_SHIFT)
 }
 
 /// The depth gradient in slabs per pixel.
@@ -128,9 +207,7 @@ fn hold_slabs(
         if a <= 0.0 {
             continue;
         }
-        let extra = if compensation { 0.0 } else { 0.25 };
-        let (sxx, sxy, syy) = (m.cov[0][0] + extra, m.cov[0][1], m.cov[1][1] + extra);
-        let spread = g[0] * g[0] * sxx + 2.0 * g[0] * g[1] * sxy + g[1] * g[1] * syy;
+        let spread = spread(m, compensation, g);
         let u = k2 * spread / (4.0 * a);
         let b = match penumbra {
             Penumbra::Iterated => u + reach,
@@ -143,6 +220,14 @@ fn hold_slabs(
         return MAX_SURFACE_HOLD;
     }
     (hold.ceil().min(f64::from(MAX_SURFACE_HOLD))) as u32
+}
+
+/// `gᵀΣg` (slabs²): the variance of the crossing slab over one slab's reads of `m`, with the
+/// bilinear reads' ¼ px² per axis where the kernels do not include it.
+fn spread(m: &KernelMoments, compensation: bool, g: [f64; 2]) -> f64 {
+    let extra = if compensation { 0.0 } else { 0.25 };
+    let (sxx, sxy, syy) = (m.cov[0][0] + extra, m.cov[0][1], m.cov[1][1] + extra);
+    g[0] * g[0] * sxx + 2.0 * g[0] * g[1] * sxy + g[1] * g[1] * syy
 }
 
 #[cfg(test)]
@@ -169,8 +254,30 @@ mod tests {
         // The face turned the other way is an entry lit from the front: held after, not before.
         assert!(at(surface_hold, -0.05) > 0);
         assert_eq!(at(exit_hold, -0.05), 0);
-        assert_eq!(pack_holds(3, 410) >> EXIT_HOLD_SHIFT, 410);
-        assert_eq!(pack_holds(3, 410) & ((1 << EXIT_HOLD_SHIFT) - 1), 3);
+        let word = pack_holds(3, 410, 63);
+        assert_eq!(
+            (entry_of(word), exit_of(word), barrier_of(word)),
+            (3, 410, 63)
+        );
+    }
+
+    #[test]
+    fn the_barrier_follows_its_bound_in_closed_form() {
+        // g = (2, 0) slabs per pixel; the impulse response moves −0.5 px in x per slab (the
+        // gather reads columns crossed 1 slab later), Σ = ¼ px²: gᵀΣg = 1.
+        let l = [light([-0.5, 0.0], 0.25)];
+        let bar = |l: &[KernelMoments], p, entry| barrier(l, p, true, (0.02, 0.0), 0.01, entry);
+        // Iterated: X = ⌈2 (corners) + 1 (mean) + 4·1⌉ = 7.
+        assert_eq!(bar(&l, Penumbra::Iterated, 0), 7);
+        // Distance after a hold of 5: X = 3 + 16 + √(16² + 16·(2·(5 + 3) + 1)) = 41.98 → 42.
+        assert_eq!(bar(&l, Penumbra::Distance, 5), 42);
+        // A light reaching the far side (a = 1 − g·m = −1) and a shell facing the camera: none.
+        assert_eq!(bar(&[light([1.0, 0.0], 0.25)], Penumbra::Iterated, 0), 0);
+        let flat = barrier(&l, Penumbra::Iterated, true, (0.0, 0.0), 0.01, 0);
+        assert_eq!(flat, 0);
+        // A grazing shell is capped.
+        let steep = barrier(&l, Penumbra::Iterated, true, (5.0, 0.0), 0.01, 0);
+        assert_eq!(steep, MAX_BARRIER);
     }
 
     #[test]

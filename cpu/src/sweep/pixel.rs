@@ -27,7 +27,7 @@
 
 use convshadow_common::pixel::levels::{depth_coord, pixel_level};
 use convshadow_common::plan::TfEntry;
-use convshadow_common::plan::surface_hold::EXIT_HOLD_SHIFT;
+use convshadow_common::plan::surface_hold::exit_of;
 
 use super::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowContext, RowState, SlabContext, level_plane, light_block,
@@ -179,8 +179,9 @@ pub(crate) fn exact_light(
 }
 
 /// Step 2's surface hold at pixel x of row y, whose cursor crossed fragment `crossed` in this
-/// slab ([`NO_CROSSING`]: none): [`hold_step`] with the crossed triangle's hold, ending a pending
-/// one where the pixel has fragments left behind the crossing; else the **exit hold**
+/// slab ([`NO_CROSSING`]: none): [`hold_step`] with the crossed triangle's hold word, ending a
+/// pending hold where the pixel has fragments left behind the crossing, its barrier outside
+/// every closed mesh; else the **exit hold**
 /// ([`exit_hold`](convshadow_common::plan::surface_hold::exit_hold)): a pixel inside the mesh
 /// of its next fragment passes its light while that fragment lies fewer than its triangle's
 /// exit hold slabs beyond the slab's back face.
@@ -196,19 +197,26 @@ pub(crate) fn hold(
         return Held::Free;
     }
     let end = ldi.offsets[y * plan.grid_width as usize + x + 1];
-    let (crossed_hold, ends_hold) = if crossed == NO_CROSSING {
+    let (crossed_word, ends_hold) = if crossed == NO_CROSSING {
         (0, false)
     } else {
-        let entry = plan.surface_hold[ldi.triangle[crossed as usize] as usize];
-        (entry & ((1 << EXIT_HOLD_SHIFT) - 1), state.next[x] < end)
+        let word = plan.surface_hold[ldi.triangle[crossed as usize] as usize];
+        (word, state.next[x] < end)
     };
-    let held = hold_step(&mut state.hold[x], ctx.slab, crossed_hold, ends_hold);
+    let inside = state.inside[x] != 0;
+    let held = hold_step(
+        &mut state.hold[x],
+        ctx.slab,
+        crossed_word,
+        ends_hold,
+        inside,
+    );
     // Outside every mesh (most pixels, and every pixel of an open mesh) no exit is near.
-    if held != Held::Free || state.inside[x] == 0 || state.next[x] >= end {
+    if held != Held::Free || !inside || state.next[x] >= end {
         return held;
     }
     let next = state.next[x] as usize;
-    let exit = plan.surface_hold[ldi.triangle[next] as usize] >> EXIT_HOLD_SHIFT;
+    let exit = exit_of(plan.surface_hold[ldi.triangle[next] as usize]);
     let in_its_mesh = state.inside[x] & (1 << ldi.mesh[next]) != 0;
     if exit != 0
         && in_its_mesh

@@ -102,8 +102,11 @@ fn owned_depth(at: f32, occluded: f32) -> f32 {
 const HELD_FREE: u32 = 0u;    // the slab's own attenuation
 const HELD_PASS: u32 = 1u;    // attenuation 1
 const HELD_RELEASE: u32 = 2u; // attenuation 0, removed light recorded at `removed_at`
-const HOLD_SHIFT: u32 = 20u;
-const EXIT_HOLD_SHIFT: u32 = 16u; // a triangle's `surface_hold` word: entry hold below, exit hold above
+const HOLD_SHIFT: u32 = 16u;         // a pixel's hold state: crossing slab below, hold above
+const HOLD_BARRIER_SHIFT: u32 = 26u; // a pixel's hold state: its barrier above
+const EXIT_HOLD_SHIFT: u32 = 10u; // a triangle's `surface_hold` word: entry hold below, exit hold above
+const BARRIER_SHIFT: u32 = 20u;   // a triangle's `surface_hold` word: a shell's barrier above
+const MAX_BARRIER: u32 = 63u;
 
 struct HoldStep {
     state: u32,
@@ -111,22 +114,52 @@ struct HoldStep {
     removed_at: u32,
 }
 
-// `hold_step`: a pixel's packed hold `state` through slab `slab`, where it crossed a surface that
-// holds `crossed_hold` slabs (0: none): a pending hold passes until its release slab and is
-// cleared there, or earlier where `ends_hold` (a crossing with fragments left behind it), else
-// such a crossing starts one.
-fn hold_step(state: u32, slab: u32, crossed_hold: u32, ends_hold: bool) -> HoldStep {
+// `hold_state`: crossing slab, hold and barrier in one word.
+fn hold_state(crossed: u32, hold: u32, barrier: u32) -> u32 {
+    return crossed | (hold << HOLD_SHIFT) | (barrier << HOLD_BARRIER_SHIFT);
+}
+
+// `hold_step`: a pixel's packed hold `state` through slab `slab`, where it crossed a triangle of
+// hold word `crossed` (0: none): a pending hold passes until its release slab, or until
+// `ends_hold` (a crossing with fragments left behind it), then removes the light in the release
+// slab and, outside every closed mesh, through its barrier (inside one a crossing may hold
+// anew); a shell's crossing without a hold bars the slabs after it; else a crossing with a hold
+// starts one.
+fn hold_step(state: u32, slab: u32, crossed: u32, ends_hold: bool, inside: bool) -> HoldStep {
+    let entry = crossed & ((1u << EXIT_HOLD_SHIFT) - 1u);
+    let barrier = (crossed >> BARRIER_SHIFT) & MAX_BARRIER;
+    var next = state;
     if state != 0u {
-        let release = state & ((1u << HOLD_SHIFT) - 1u);
-        if slab < release && !ends_hold {
-            return HoldStep(state, HELD_PASS, slab);
+        let start = state & ((1u << HOLD_SHIFT) - 1u);
+        var release = start + ((state >> HOLD_SHIFT) & ((1u << (HOLD_BARRIER_SHIFT - HOLD_SHIFT)) - 1u));
+        var bar = state >> HOLD_BARRIER_SHIFT;
+        if slab < release {
+            if !ends_hold {
+                return HoldStep(state, HELD_PASS, slab);
+            }
+            release = slab;
+            bar = 0u;
         }
-        return HoldStep(0u, HELD_RELEASE, release - (state >> HOLD_SHIFT));
+        if slab <= release + bar {
+            if slab == release + bar {
+                next = 0u;
+            }
+            if slab == release || !inside {
+                return HoldStep(next, HELD_RELEASE, start);
+            }
+            if entry == 0u {
+                return HoldStep(next, HELD_FREE, slab);
+            }
+        }
+        next = 0u;
     }
-    if crossed_hold != 0u {
-        return HoldStep((slab + crossed_hold) | (crossed_hold << HOLD_SHIFT), HELD_PASS, slab);
+    if entry != 0u {
+        return HoldStep(hold_state(slab, entry, barrier), HELD_PASS, slab);
     }
-    return HoldStep(0u, HELD_FREE, slab);
+    if barrier != 0u && !inside {
+        next = hold_state(slab, 0u, barrier);
+    }
+    return HoldStep(next, HELD_FREE, slab);
 }
 
 // `finish`: C += (1 − A)·background.

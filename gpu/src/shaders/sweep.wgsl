@@ -82,19 +82,19 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     var held = HELD_FREE;
     var removed_at = f32(slab);
     if globals.surface_holds != 0u {
-        var crossed_hold = 0u;
+        var crossed_word = 0u;
         if crossed {
-            crossed_hold = surface_hold[frag_meta[adv.first] >> MESH_BITS] & ((1u << EXIT_HOLD_SHIFT) - 1u);
+            crossed_word = surface_hold[frag_meta[adv.first] >> MESH_BITS];
         }
         let ahead = adv.next < offsets[p + 1u];
-        let step = hold_step(hold[p], slab, crossed_hold, crossed && ahead);
+        let step = hold_step(hold[p], slab, crossed_word, crossed && ahead, adv.inside != 0u);
         hold[p] = step.state;
         held = step.held;
         removed_at = f32(step.removed_at);
         // The exit hold: inside the mesh of its next fragment, within that triangle's exit hold.
         if held == HELD_FREE && ahead {
             let next_meta = frag_meta[adv.next];
-            let exit = surface_hold[next_meta >> MESH_BITS] >> EXIT_HOLD_SHIFT;
+            let exit = (surface_hold[next_meta >> MESH_BITS] >> EXIT_HOLD_SHIFT) & ((1u << (BARRIER_SHIFT - EXIT_HOLD_SHIFT)) - 1u);
             let in_its_mesh = (adv.inside & (1u << (next_meta & MESH_MASK))) != 0u;
             if exit != 0u && in_its_mesh && (frag_depth[adv.next] - back) * globals.inv_slab_distance < f32(exit) {
                 held = HELD_PASS;

@@ -25,7 +25,7 @@ use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::RenderPlan;
 use wide::f32x8;
 
-use crate::composite::HOLD_SHIFT;
+use crate::composite::release_slab;
 use crate::ldi::Ldi;
 use crate::sweep::kit::{Reach, RowState, SlabContext};
 
@@ -231,7 +231,8 @@ pub(crate) struct ChunkState {
     /// Every lane's alpha is exactly 1.
     pub opaque: bool,
     /// The first slab in which a lane's surface hold releases (`u32::MAX`: none holds): the
-    /// chunk is not skipped as unoccluded there, where a lane's light drops to 0.
+    /// chunk is not skipped as unoccluded from there while the hold lasts (its barrier), where a
+    /// lane's light drops to 0.
     pub release: u32,
 }
 
@@ -277,7 +278,7 @@ impl ChunkState {
         if hold.len() == w {
             for &h in &hold[x0..x0 + lanes] {
                 if h != 0 {
-                    s.release = s.release.min(h & ((1 << HOLD_SHIFT) - 1));
+                    s.release = s.release.min(release_slab(h));
                 }
             }
         }
@@ -540,18 +541,20 @@ impl QuietRow<'_> {
         let w = ctx.plan.grid_width as usize;
         let h = ctx.plan.grid_height as usize;
         let all_ones = self.setup.ones_exact && !hits.not_one(c);
-        let releases = state.release == ctx.slab;
+        // From a lane's release through its barrier (its state then ends) the light drops to 0.
+        let releases = state.release <= ctx.slab;
         if all_ones && state.inside_any == 0 && state.crosses_nothing(ctx.back) && !releases {
             return ChunkWork::Unoccluded;
         }
         let interior = reach.interior(c * LANES, lanes, y, w, h);
         let all_zeros = !all_ones && interior && !hits.not_zero(c);
-        if all_zeros && state.opaque {
+        // A released lane owns its depth plane (`owned_depth`), which the dark paths leave out.
+        if all_zeros && state.opaque && !releases {
             return ChunkWork::Dark;
         }
         let dark_light =
             self.setup.depth_planes && !all_ones && interior && !hits.light_not_zero(c);
-        if dark_light && state.opaque {
+        if dark_light && state.opaque && !releases {
             return ChunkWork::DarkDepth;
         }
         // A mesh is here: shade it, but the gather's result may still be known.

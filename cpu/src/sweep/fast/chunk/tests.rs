@@ -198,16 +198,18 @@ fn compare_lanes(
                         _ => value(&mut rng),
                     })
                     .collect(),
-                // Surface holds: none one time in two, else releasing in this slab or up to
-                // three later, held 1 to 4 slabs (released at or after the slab held).
+                // Surface holds: none one time in two, else releasing from two slabs before
+                // this one to three after it, held 1 to 4 slabs (released at or after the slab
+                // held), with a barrier of 0 to 2 slabs (this slab in it, or past it, or not
+                // yet released).
                 hold: (0..w)
                     .map(|_| match rng.below(2) {
                         0 => 0,
-                        _ => match slab + rng.below(4) {
+                        _ => match (slab + rng.below(6)).saturating_sub(2) {
                             0 => 0,
                             release => {
                                 let held = 1 + rng.below(release.min(4));
-                                release | (held << crate::composite::HOLD_SHIFT)
+                                crate::composite::hold_state(release - held, held, rng.below(3))
                             }
                         },
                     })
