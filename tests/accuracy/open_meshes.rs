@@ -231,8 +231,9 @@ fn a_turned_opaque_shell_casts_its_whole_shadow() {
     // RMSE, the 60° square's shadow grey (the teapot's on its wall). Turned the other way
     // nothing leaks that way: −30° measured 0.0063 before, 0.0086 with the barrier (it also
     // darkens a little light that passed beside the shell), and −60° 0.059–0.062 before,
-    // 0.061–0.067 with it — a shadow missing on the light's side of the square that is another
-    // defect (docs/accuracy.md §2f), held here to its measured value +25 %.
+    // 0.061–0.067 with it — the shadow beyond the square's far edge is missing, the surface
+    // hold's passed light leaving past that edge (docs/accuracy.md §2g), held here to its
+    // measured value +25 %.
     let dir = support::temp_dir("turned-square");
     let px = VIEW / SIZE as f64;
     for (turn, slabs, bound) in [
