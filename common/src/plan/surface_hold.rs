@@ -103,9 +103,10 @@ pub const MAX_BARRIER: u32 = 63;
 /// gather reads against the impulse response's motion `m`), [`HOLD_SIGMAS`] of its spread and
 /// a bilinear corner's pixel on each axis. With the distance penumbra a released column
 /// gathers through the level of its distance, `h = B + 1 + X` slabs from the surface (`B`: the
-/// hold before, `entry`), whose spread is `(2h − 1)` single levels'. 0 (one slab, as a surface
-/// facing the camera needs) where that needs no more or the surface rises less than
-/// [`MIN_RISE`]; at most [`MAX_BARRIER`]. A closed mesh needs none: its inside removes the
+/// hold before, `entry`), whose spread is `(2h − 1)` single levels'. The largest over lights,
+/// those reaching the shell's far side included; 0 (one slab, as a surface facing the camera
+/// needs) where that needs no more or the surface rises less than [`MIN_RISE`]; at most
+/// [`MAX_BARRIER`]. A closed mesh needs none: its inside removes the
 /// light behind every entry.
 pub fn barrier(
     moments: &[KernelMoments],
@@ -124,13 +125,9 @@ pub fn barrier(
     let mut most = 0.0f64;
     for m in moments {
         let spread = spread(m, compensation, g);
-        let gm = g[0] * m.mean[0] + g[1] * m.mean[1];
-        // a = 1 − g·m ≤ 0: this light reaches the shell's far side, the side the column
-        // enters: the light behind the crossing is its own.
-        if 1.0 - gm <= 0.0 {
-            continue;
-        }
-        let ahead = corners - gm;
+        // Every light counts, one reaching the shell's far side too (a = 1 − g·m ≤ 0): skipping
+        // those let a quad turned 75° under a light at 55° leak (0.073 against 0.025).
+        let ahead = corners - (g[0] * m.mean[0] + g[1] * m.mean[1]);
         let x = match penumbra {
             Penumbra::Iterated => ahead + (k2 * spread).sqrt(),
             // X = A + k·√((2(B + X) + 1)·s), solved for X (the larger root).
@@ -271,8 +268,9 @@ mod tests {
         assert_eq!(bar(&l, Penumbra::Iterated, 0), 7);
         // Distance after a hold of 5: X = 3 + 16 + √(16² + 16·(2·(5 + 3) + 1)) = 41.98 → 42.
         assert_eq!(bar(&l, Penumbra::Distance, 5), 42);
-        // A light reaching the far side (a = 1 − g·m = −1) and a shell facing the camera: none.
-        assert_eq!(bar(&[light([1.0, 0.0], 0.25)], Penumbra::Iterated, 0), 0);
+        // A light reaching the far side (a = 1 − g·m = −1): X = ⌈2 − 2 + 4⌉ = 4; none for a
+        // shell facing the camera.
+        assert_eq!(bar(&[light([1.0, 0.0], 0.25)], Penumbra::Iterated, 0), 4);
         let flat = barrier(&l, Penumbra::Iterated, true, (0.0, 0.0), 0.01, 0);
         assert_eq!(flat, 0);
         // A grazing shell is capped.
