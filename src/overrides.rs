@@ -188,6 +188,8 @@ pub struct SweepOverrides {
     pub media: Option<Media>,
     /// `sweep.subpixel_shadows`.
     pub subpixel_shadows: Option<bool>,
+    /// `sweep.held_lit_side`.
+    pub held_lit_side: Option<bool>,
     /// `sweep.light_resolution`.
     pub light_resolution: Option<f64>,
 }
@@ -237,6 +239,9 @@ impl SweepOverrides {
         }
         if let Some(v) = self.subpixel_shadows {
             scene.sweep.subpixel_shadows = v;
+        }
+        if let Some(v) = self.held_lit_side {
+            scene.sweep.held_lit_side = v;
         }
         if let Some(v) = self.light_resolution {
             scene.sweep.light_resolution = v;

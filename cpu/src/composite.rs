@@ -4,6 +4,8 @@
 //! Written once over [`Lane`]: the per-pixel stage (`crate::sweep::pixel`) calls the 1-lane
 //! instance, the SIMD path's chunks the 8-lane one.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use convshadow_common::pixel::lane::Lane;
 use convshadow_common::plan::{FLUSH_BELOW, MaterialPlan, RenderPlan, surface_hold};
 
@@ -172,6 +174,12 @@ pub const HOLD_SHIFT: u32 = 16;
 /// Where a pixel's hold state keeps its barrier ([`HOLD_SHIFT`]).
 pub const HOLD_BARRIER_SHIFT: u32 = 26;
 
+/// A pixel's hold state's crossing slab bits.
+pub const HOLD_SLAB_MASK: u32 = (1 << HOLD_SHIFT) - 1;
+
+/// A pixel's hold state's hold length bits, below [`HOLD_SHIFT`] once shifted.
+pub const HOLD_LENGTH_MASK: u32 = (1 << (HOLD_BARRIER_SHIFT - HOLD_SHIFT)) - 1;
+
 /// A pixel's hold state of crossing slab `crossed`, hold `hold` and barrier `barrier`.
 #[inline(always)]
 pub const fn hold_state(crossed: u32, hold: u32, barrier: u32) -> u32 {
@@ -255,6 +263,232 @@ pub fn hold_step(hold: &mut u32, slab: u32, crossed: u32, ends_hold: bool, insid
     Held::Free
 }
 
+pub use convshadow_common::plan::surface_hold::{
+    HELD_PART_MAX, HELD_SLOT_WORDS, HELD_WORDS, NO_HELD_SLAB,
+};
+
+/// One recorded hold of a pixel ([`HeldPlanes`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeldSlot {
+    /// The slab the hold started in (the surface's crossing).
+    pub from: u32,
+    /// The first slab it no longer passes the light in (its release, or the crossing that cut it).
+    pub until: u32,
+    /// The crossing's depth in slabs (slab `from` plus the fragment's place in it, below 0.99).
+    pub z0: f32,
+    /// The crossed triangle (`RenderPlan::hold_slopes` gives its plane's slopes).
+    pub triangle: u32,
+}
+
+impl HeldSlot {
+    /// Whether the pixel passed its light under this hold in slab `slab − 1`.
+    #[inline(always)]
+    pub fn held_before(&self, slab: u32) -> bool {
+        self.from < slab && slab - 1 < self.until
+    }
+}
+
+/// Every pixel's last two entry holds (`surface_hold`, "Who reads the held light"), which the
+/// gathers of its neighbours read: two slots of [`HELD_SLOT_WORDS`] per pixel. A pixel writes only
+/// its own record, in the slab its hold starts (into the slot of the older hold) or is cut (its
+/// `until`), while its neighbours read it in the same slab from other threads; a reader in slab k
+/// takes the slot with the latest start before k, which no write of slab k touches, and asks
+/// whether it held in slab k − 1, which a cut in slab k does not change — so every read gives the
+/// record as it stood after slab k − 1, whatever the order (composite.wgsl reads its `hold`
+/// buffer's records the same way).
+#[derive(Clone, Copy)]
+pub struct HeldPlanes<'a> {
+    /// `HELD_WORDS` per grid pixel, row after row (empty where no surface holds).
+    pub words: &'a [AtomicU32],
+    /// Per cell of [`HELD_CELL`] pixels of a grid row (`cells_per_row` per row), the latest
+    /// `until` of a hold started in it: a gather whose cells all lie before slab k reads no held
+    /// pixel and needs no test (a hint only: it decides no bit).
+    pub cells: &'a [AtomicU32],
+    /// Cells per grid row.
+    pub cells_per_row: usize,
+}
+
+/// Pixels per cell of [`HeldPlanes::cells`].
+pub const HELD_CELL: usize = 8;
+
+/// The storage of [`HeldPlanes`], for one sweep.
+pub struct HeldRecords {
+    words: Vec<AtomicU32>,
+    cells: Vec<AtomicU32>,
+    cells_per_row: usize,
+}
+
+impl HeldRecords {
+    /// Empty records for every pixel of `plan`'s grid where a surface holds and
+    /// `RenderPlan::held_lit_side` asks for them, else none (every read then as without them).
+    pub fn new(plan: &RenderPlan) -> HeldRecords {
+        let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
+        let cells_per_row = w.div_ceil(HELD_CELL);
+        let (pixels, cells) = if plan.has_surface_hold() && plan.held_lit_side {
+            (w * h, cells_per_row * h)
+        } else {
+            (0, 0)
+        };
+        HeldRecords {
+            words: (0..pixels * HELD_WORDS)
+                .map(|_| AtomicU32::new(NO_HELD_SLAB))
+                .collect(),
+            cells: (0..cells).map(|_| AtomicU32::new(0)).collect(),
+            cells_per_row,
+        }
+    }
+
+    /// The records as the sweep reads and writes them.
+    pub fn view(&self) -> HeldPlanes<'_> {
+        HeldPlanes {
+            words: &self.words,
+            cells: &self.cells,
+            cells_per_row: self.cells_per_row,
+        }
+    }
+}
+
+impl HeldPlanes<'_> {
+    /// Whether a hold of some pixel in columns `xs` of rows `ys` (grid coordinates, clamped to
+    /// the grid) may have passed light in slab `slab − 1`.
+    #[inline(always)]
+    pub fn any_in(&self, xs: (i32, i32), ys: (i32, i32), slab: u32) -> bool {
+        if self.cells.is_empty() || slab == 0 {
+            return false;
+        }
+        let rows = (self.cells.len() / self.cells_per_row) as i32;
+        let last_x = (self.cells_per_row * HELD_CELL) as i32 - 1;
+        let (x0, x1) = (xs.0.max(0), xs.1.min(last_x));
+        let (y0, y1) = (ys.0.max(0), ys.1.min(rows - 1));
+        if x0 > x1 || y0 > y1 {
+            return false;
+        }
+        let (c0, c1) = (x0 as usize / HELD_CELL, x1 as usize / HELD_CELL);
+        (y0..=y1).any(|y| {
+            let row = &self.cells[y as usize * self.cells_per_row..][c0..=c1];
+            row.iter().any(|c| c.load(Ordering::Relaxed) >= slab)
+        })
+    }
+
+    #[inline(always)]
+    fn word(&self, p: usize, slot: usize, k: usize) -> u32 {
+        self.words[p * HELD_WORDS + slot * HELD_SLOT_WORDS + k].load(Ordering::Relaxed)
+    }
+
+    #[inline(always)]
+    fn set(&self, p: usize, slot: usize, k: usize, v: u32) {
+        self.words[p * HELD_WORDS + slot * HELD_SLOT_WORDS + k].store(v, Ordering::Relaxed);
+    }
+
+    /// Pixel `p`'s hold with the latest start before slab `slab`, if it has one.
+    #[inline(always)]
+    pub fn latest_before(&self, p: usize, slab: u32) -> Option<HeldSlot> {
+        let (a, b) = (self.word(p, 0, 0), self.word(p, 1, 0));
+        let a_ok = a != NO_HELD_SLAB && a < slab;
+        let b_ok = b != NO_HELD_SLAB && b < slab;
+        let slot = match (a_ok, b_ok) {
+            (false, false) => return None,
+            (true, false) => 0,
+            (false, true) => 1,
+            (true, true) => usize::from(b > a),
+        };
+        Some(HeldSlot {
+            from: self.word(p, slot, 0),
+            until: self.word(p, slot, 1),
+            z0: f32::from_bits(self.word(p, slot, 2)),
+            triangle: self.word(p, slot, 3),
+        })
+    }
+
+    /// Whether pixel `p` passed its light under an entry hold in slab `slab − 1`.
+    #[inline(always)]
+    pub fn held_before(&self, p: usize, slab: u32) -> bool {
+        self.latest_before(p, slab)
+            .is_some_and(|s| s.held_before(slab))
+    }
+
+    /// Records a hold of pixel `p` starting in slab `held.from`, in its empty slot or the slot
+    /// of its older hold.
+    #[inline(always)]
+    pub fn start(&self, p: usize, (x, y): (usize, usize), held: HeldSlot) {
+        let cell = y * self.cells_per_row + x / HELD_CELL;
+        self.cells[cell].fetch_max(held.until, Ordering::Relaxed);
+        let (a, b) = (self.word(p, 0, 0), self.word(p, 1, 0));
+        let slot = if a == NO_HELD_SLAB {
+            0
+        } else if b == NO_HELD_SLAB {
+            1
+        } else {
+            usize::from(b < a)
+        };
+        self.set(p, slot, 1, held.until);
+        self.set(p, slot, 2, held.z0.to_bits());
+        self.set(p, slot, 3, held.triangle);
+        self.set(p, slot, 0, held.from);
+    }
+
+    /// Pixel `p`'s latest hold stops passing in slab `slab` (a crossing cut it).
+    #[inline(always)]
+    pub fn cut(&self, p: usize, slab: u32) {
+        let (a, b) = (self.word(p, 0, 0), self.word(p, 1, 0));
+        let slot = match (a == NO_HELD_SLAB, b == NO_HELD_SLAB) {
+            (true, true) => return,
+            (false, true) => 0,
+            (true, false) => 1,
+            (false, false) => usize::from(b > a),
+        };
+        self.set(p, slot, 1, slab);
+    }
+
+    /// Whether a gather at pixel `q` in slab `slab` reads no light from pixel `p`
+    /// (`surface_hold`, "Who reads the held light"): `p` held in slab `slab − 1`, `q` lies more
+    /// than `HELD_BEHIND_MARGIN` slabs behind its surface's plane, and the column the light
+    /// reaching `p` came from (along the light's `drift` per slab) crossed that surface.
+    /// Returns the hold's crossing slab then. The caller has checked that `q` is not held.
+    #[inline(always)]
+    pub fn hides(
+        &self,
+        plan: &RenderPlan,
+        drift: [f32; 2],
+        q: (i32, i32),
+        p: (i32, i32),
+        slab: u32,
+    ) -> Option<u32> {
+        let (w, h) = (plan.grid_width as i32, plan.grid_height as i32);
+        if p.0 < 0 || p.1 < 0 || p.0 >= w || p.1 >= h {
+            return None;
+        }
+        let at = (p.1 * w + p.0) as usize;
+        let held = self
+            .latest_before(at, slab)
+            .filter(|s| s.held_before(slab))?;
+        let [gx, gy] = plan.hold_slopes[held.triangle as usize];
+        let k = slab as f32;
+        let (dx, dy) = ((q.0 - p.0) as f32, (q.1 - p.1) as f32);
+        let at_reader = held.z0 + gx * dx + gy * dy;
+        // Every value here is finite (`MAX_HOLD_SLOPE`).
+        if at_reader >= k - surface_hold::HELD_BEHIND_MARGIN {
+            return None;
+        }
+        // Where the light reaching p left the plane: t slabs back, against the drift.
+        let a = 1.0 - (gx * drift[0] + gy * drift[1]);
+        let t = ((k - 1.0) - held.z0 + 0.5) / a.max(1.0e-6);
+        let ux = (p.0 as f32 - t * drift[0] + 0.5).floor();
+        let uy = (p.1 as f32 - t * drift[1] + 0.5).floor();
+        if ux < 0.0 || uy < 0.0 || ux >= w as f32 || uy >= h as f32 {
+            return None;
+        }
+        let u = uy as usize * w as usize + ux as usize;
+        let there = self.latest_before(u, slab)?;
+        let plane = held.z0 + gx * (ux - p.0 as f32) + gy * (uy - p.1 as f32);
+        if (there.z0 - plane).abs() < surface_hold::SAME_SURFACE_SLABS {
+            Some(held.from)
+        } else {
+            None
+        }
+    }
+}
+
 /// The final `C += (1 − A)·background`.
 #[inline(always)]
 pub fn finish(color: &mut [f32; 3], alpha: f32, background: [f32; 3]) {
@@ -267,6 +501,53 @@ pub fn finish(color: &mut [f32; 3], alpha: f32, background: [f32; 3]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn held_records_read_as_they_stood_after_the_previous_slab_whatever_the_write_order() {
+        let words: Vec<AtomicU32> = (0..HELD_WORDS)
+            .map(|_| AtomicU32::new(NO_HELD_SLAB))
+            .collect();
+        let cells = [AtomicU32::new(0)];
+        let held = HeldPlanes {
+            words: &words,
+            cells: &cells,
+            cells_per_row: 1,
+        };
+        let slot = |from: u32, until| HeldSlot {
+            from,
+            until,
+            z0: from as f32 + 0.25,
+            triangle: from * 10,
+        };
+        // No record: nothing held, nothing near.
+        assert_eq!(held.latest_before(0, 5), None);
+        assert!(!held.any_in((0, 7), (0, 0), 5));
+        // A hold crossed in slab 10, released in 15: held in slabs 10–14, so read as held by
+        // the gathers of slabs 11–15; the hint of its cell lasts as long.
+        held.start(0, (0, 0), slot(10, 15));
+        assert!(!held.held_before(0, 10), "slab 10's readers see slab 9");
+        assert!((11..=15).all(|k| held.held_before(0, k)));
+        assert!(!held.held_before(0, 16));
+        assert!(held.any_in((-3, 3), (-1, 1), 15) && !held.any_in((0, 7), (0, 0), 16));
+        // Cut by a crossing in slab 13: slab 13's readers see it held in slab 12 before the cut
+        // is written and after, slab 14's no longer.
+        assert!(held.held_before(0, 13));
+        held.cut(0, 13);
+        assert!(held.held_before(0, 13) && !held.held_before(0, 14));
+        // A second hold crossed in slab 20 until 30 takes the empty slot; a third, crossed in
+        // slab 30 where the second is released, takes the older slot — and slab 30's readers
+        // see the second held in slab 29 before and after it is written.
+        held.start(0, (0, 0), slot(20, 30));
+        assert_eq!(held.latest_before(0, 25), Some(slot(20, 30)));
+        assert!(held.held_before(0, 30));
+        held.start(0, (0, 0), slot(30, 40));
+        assert_eq!(held.latest_before(0, 30), Some(slot(20, 30)));
+        assert!(held.held_before(0, 30));
+        assert_eq!(held.latest_before(0, 31), Some(slot(30, 40)));
+        assert!(held.held_before(0, 31));
+        // The first hold's slot was the one overwritten.
+        assert!(held.latest_before(0, 20).is_none());
+    }
 
     #[test]
     fn a_hold_passes_until_its_release_or_a_crossing_with_something_behind() {

@@ -181,6 +181,64 @@ fn gather_c<const C: usize>(planes: &LightPlanes<'_>, taps: &[Tap], at: TapOrigi
     acc
 }
 
+/// [`gather`] where some corners may be held pixels behind whose surface the reader lies
+/// (`convshadow_common::plan::surface_hold`, "Who reads the held light"): `hides(x, y)` gives
+/// the crossing slab of such a corner, read as no light and, in a depth plane, as its light
+/// removed at that slab (`slab · channels`). Every other corner is read as [`gather`] reads it,
+/// in the same order: where `hides` gives nothing, the same bits (kernels.wgsl's `gather_held`).
+#[inline(always)]
+pub fn gather_held(
+    planes: &LightPlanes<'_>,
+    taps: &[Tap],
+    at: TapOrigin,
+    hides: impl Fn(i32, i32) -> Option<u32>,
+) -> [f32; 4] {
+    match planes.channels {
+        1 => gather_held_c::<1>(planes, taps, at, hides),
+        2 => gather_held_c::<2>(planes, taps, at, hides),
+        3 => gather_held_c::<3>(planes, taps, at, hides),
+        4 => gather_held_c::<4>(planes, taps, at, hides),
+        n => panic!("a light has 1 or 3 channels and at most one depth plane, not {n} planes"),
+    }
+}
+
+/// [`gather_held`] of `C` planes.
+#[inline(always)]
+fn gather_held_c<const C: usize>(
+    planes: &LightPlanes<'_>,
+    taps: &[Tap],
+    at: TapOrigin,
+    hides: impl Fn(i32, i32) -> Option<u32>,
+) -> [f32; 4] {
+    let mut acc = [0.0f32; 4];
+    let channels = planes.light_channels;
+    for t in taps {
+        let (sx, sy) = at.corner(t);
+        let mut v = planes.corners::<C>(sx, sy, at.inside);
+        for (i, (cx, cy)) in [(sx, sy), (sx + 1, sy), (sx, sy + 1), (sx + 1, sy + 1)]
+            .into_iter()
+            .enumerate()
+        {
+            if let Some(from) = hides(cx, cy) {
+                for (c, value) in v[i].iter_mut().enumerate() {
+                    *value = if c < channels {
+                        0.0
+                    } else {
+                        from as f32 * channels as f32
+                    };
+                }
+            }
+        }
+        for (c, a) in acc.iter_mut().enumerate().take(C) {
+            *a += t.w[0] * v[0][c];
+            *a += t.w[1] * v[1][c];
+            *a += t.w[2] * v[2][c];
+            *a += t.w[3] * v[3][c];
+        }
+    }
+    acc
+}
+
 /// Distance penumbra: the tap row light `taps` (of `table`) gathers through at one pixel
 /// (kernels.wgsl's `distance_row`). The pixel's own level (level 0's when it has none) gives a
 /// row; the smallest level among its own and those at the four corners of every tap of that row

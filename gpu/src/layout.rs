@@ -232,8 +232,11 @@ pub struct Globals {
     pub psi_at: u32,
     /// `DepthScale::psi.len() − 2`: the last slab coordinate whose step is ψ's own.
     pub psi_last: u32,
-    /// Uniform structs are a multiple of 16 bytes.
-    pub _pad6: u32,
+    /// 1 with `sweep.held_lit_side` where some surface is held (`RenderPlan::held_lit_side`):
+    /// `hold` then holds `1 + HELD_WORDS` words per grid pixel (the hold state, then its
+    /// held-plane record), `surface_hold` three per triangle (its word, then its depth slopes'
+    /// f32 bits, `RenderPlan::hold_slopes`).
+    pub held_lit_side: u32,
 }
 
 /// One slab's faces and jitter hash.

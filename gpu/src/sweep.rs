@@ -17,6 +17,7 @@ use convshadow_common::pixel::noise::PERLIN4_SCALE;
 use convshadow_common::pixel::volume::Volume;
 use convshadow_common::plan::kernel::PhaseMode;
 use convshadow_common::plan::levels::initial_levels;
+use convshadow_common::plan::surface_hold::{HELD_WORDS, NO_HELD_SLAB};
 use convshadow_common::plan::{
     FLUSH_BELOW, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE, TfEntry,
 };
@@ -283,6 +284,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             occlusion_eps: OCCLUSION_EPS,
             preintegration: u32::from(plan.preintegration),
             surface_holds: u32::from(plan.has_surface_hold()),
+            held_lit_side: u32::from(plan.has_surface_hold() && plan.held_lit_side),
             parity_meshes: raster.parity_meshes,
             inv_slab_distance: plan.inv_slab_distance,
             second_order_media: u32::from(plan.second_order_media),
@@ -496,15 +498,26 @@ fn upload_buffers(
         &vec![PRE_NONE; pre_words as usize],
         false,
     )?;
-    // Surface holds: one word per grid pixel (none held yet) and per triangle, else one each.
-    let hold_words = if plan.has_surface_hold() { pixels } else { 1 };
-    let hold = upload(ctx, "surface hold", &vec![0u32; hold_words as usize], false)?;
-    let per_triangle: &[u32] = if plan.has_surface_hold() {
-        &plan.surface_hold
-    } else {
-        &[0]
+    // Surface holds: one word per grid pixel (none held yet) and per triangle, else one each;
+    // with `held_lit_side` each pixel's held-plane record after its word (every slot empty) and
+    // each triangle's depth slopes after its word.
+    let lit_side = plan.has_surface_hold() && plan.held_lit_side;
+    let hold_words: Vec<u32> = match (plan.has_surface_hold(), lit_side) {
+        (false, _) => vec![0],
+        (true, false) => vec![0; pixels as usize],
+        (true, true) => (0..pixels as usize)
+            .flat_map(|_| std::iter::once(0).chain([NO_HELD_SLAB; HELD_WORDS]))
+            .collect(),
     };
-    let surface_hold = upload(ctx, "triangle surface hold", per_triangle, false)?;
+    let hold = upload(ctx, "surface hold", &hold_words, false)?;
+    let per_triangle: Vec<u32> = match (plan.has_surface_hold(), lit_side) {
+        (false, _) => vec![0],
+        (true, false) => plan.surface_hold.clone(),
+        (true, true) => (plan.surface_hold.iter().zip(&plan.hold_slopes))
+            .flat_map(|(&word, g)| [word, g[0].to_bits(), g[1].to_bits()])
+            .collect(),
+    };
+    let surface_hold = upload(ctx, "triangle surface hold", &per_triangle, false)?;
     // RGBA per image pixel: the RGB image and the composited alpha (`SweepOutput::alpha`).
     let image_words = u64::from(plan.width) * u64::from(plan.height) * 4;
     let image = zeroed(ctx, "image", image_words)?;

@@ -240,7 +240,8 @@ fn detached<T: Send>(
 /// newline or `=`), TOML text, or a dict of the TOML's tables. The keyword arguments mean what
 /// the command line's flags of the same name mean: `width`, `height`, `slabs` (int or "auto"),
 /// `kernel`, `penumbra`, `surface`, `guard_band` ("auto" or int), `seed`,
-/// `variance_compensation`, `preintegration`, `media`, `subpixel_shadows`, `light_resolution`,
+/// `variance_compensation`, `preintegration`, `media`, `subpixel_shadows`, `held_lit_side`,
+/// `light_resolution`,
 /// `threads` (0: one per core), `backend` ("cpu",
 /// "gpu", "auto", "reference"), `path` ("simd", "scalar"), `reference_samples`, `max_memory`
 /// (MiB), `allow_open`. `progress=True` shows the CLI's progress bar on a terminal's stderr.
@@ -251,7 +252,8 @@ fn detached<T: Send>(
 #[pyo3(signature = (
     scene = None, *, width = None, height = None, slabs = None, kernel = None, penumbra = None,
     surface = None, guard_band = None, seed = None, variance_compensation = None,
-    preintegration = None, media = None, subpixel_shadows = None, light_resolution = None,
+    preintegration = None, media = None, subpixel_shadows = None, held_lit_side = None,
+    light_resolution = None,
     threads = 0, backend = "cpu", path = "simd", reference_samples = None,
     max_memory = None, allow_open = false, progress = false
 ))]
@@ -271,6 +273,7 @@ fn render<'py>(
     preintegration: Option<bool>,
     media: Option<String>,
     subpixel_shadows: Option<bool>,
+    held_lit_side: Option<bool>,
     light_resolution: Option<f64>,
     threads: usize,
     backend: &str,
@@ -316,6 +319,7 @@ fn render<'py>(
                 .map(|m| m.parse::<Media>().map_err(|e| bad("media", e)))
                 .transpose()?,
             subpixel_shadows,
+            held_lit_side,
             light_resolution,
         },
         threads: overrides::parse_threads(&threads.to_string()).map_err(|e| bad("threads", e))?,

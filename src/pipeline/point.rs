@@ -210,16 +210,17 @@ pub(super) fn on_point_grid(plan: &mut RenderPlan, grid: &Scene, geometry: &Scen
     plan.projective = Some(projective(geometry));
     plan.subpixel_meshes = Vec::new();
     let soft = grid.lights[0].point.is_some_and(|p| p.radius > 0.0);
-    plan.surface_hold = if soft {
+    if soft {
         plan.depth_scale = Some(DepthScale::new(
             geometry.z_origin,
             geometry.slab_distance,
             geometry.slabs,
         ));
-        plan.surface_holds(grid, geometry, perspective_gradient)
+        plan.set_surface_holds(grid, geometry, perspective_gradient);
     } else {
-        Vec::new()
-    };
+        plan.surface_hold = Vec::new();
+        plan.hold_slopes = Vec::new();
+    }
 }
 
 /// The cells of a point light's grid `geometry` as its slab-grid coordinates

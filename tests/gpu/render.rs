@@ -246,6 +246,43 @@ color = [0.8, 0.8, 0.75]
 }
 
 #[test]
+fn gpu_image_equals_cpu_with_held_light_on_its_lit_side() {
+    // `sweep.held_lit_side`: thin closed plates turned towards and away from the light (held,
+    // their held light read only from the lit side: composite.wgsl `hides`, kernels.wgsl
+    // `gather_held`), with the distance and the iterated penumbra; each image differs from the
+    // one without it, so the held reads are exercised.
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-held-lit-side");
+    for (turn, penumbra) in [
+        (-60.0, "distance"),
+        (-30.0, "distance"),
+        (-60.0, "iterated"),
+    ] {
+        let text = format!(
+            "[image]\nwidth = 48\nheight = 36\n[camera]\nview_width = 8.0\n[sweep]\nslabs = 96\n\
+             penumbra = \"{penumbra}\"\noptimal_distance = 2.0\nheld_lit_side = true\n[[light]]\ntilt_deg = [-30.0, 10.0]\n\
+             variance = [0.004, 0.004]\n[[mesh]]\nshape = \"box\"\nsize = [2.0, 2.0, 0.05]\n\
+             rotate_deg = [0.0, {turn}, 0.0]\ntranslate = [-0.5, 0.0, 0.0]\nmaterial = \"clay\"\n\
+             [[mesh]]\nshape = \"box\"\nsize = [12.0, 10.0, 0.2]\ntranslate = [0.0, 0.0, 2.6]\n\
+             material = \"wall\"\n[material.clay]\ncolor = [0.85, 0.5, 0.32]\n\
+             [material.wall]\ncolor = [0.85, 0.85, 0.8]\n"
+        );
+        let scene = support::scene(&text, &dir);
+        let what = format!("plate turned {turn}°, {penumbra}");
+        let with = check(&ctx, &scene, &what);
+        let mut without = scene.clone();
+        without.sweep.held_lit_side = false;
+        let plain = run(&without, Backend::Cpu);
+        assert_ne!(
+            with.image_hash, plain.image_hash,
+            "{what}: no held read was hidden"
+        );
+    }
+}
+
+#[test]
 fn gpu_image_equals_cpu_on_every_shader_path() {
     let Some(ctx) = gpu_common::gpu() else {
         return;

@@ -172,6 +172,7 @@ struct RawSweep {
     preintegration: Option<bool>,
     media: Option<String>,
     subpixel_shadows: Option<bool>,
+    held_lit_side: Option<bool>,
     light_resolution: Option<f64>,
 }
 

@@ -448,6 +448,11 @@ pub struct SweepSpec {
     /// sub-pixel shift from its mean occluder, not the whole pixels the sweep carries the light's
     /// drift in (`sweep.subpixel_shadows`, default on; docs/how-it-works.md).
     pub subpixel_shadows: bool,
+    /// A held surface's light is read only from its lit side (`sweep.held_lit_side`, default
+    /// off: the images of before, bit for bit): a gather reads no light from a pixel held behind
+    /// a surface when it lies behind that surface itself (docs/how-it-works.md, "Who reads the
+    /// held light").
+    pub held_lit_side: bool,
     /// The light grid's cells per image pixel (a perspective camera's: per pixel at the
     /// `look_at` distance; `sweep.light_resolution`, 1/16–16, default 1). At 1 an orthographic
     /// camera sweeps its light on its image's pixels; at any other value it gets a grid of its

@@ -203,6 +203,15 @@ pub struct RenderPlan {
     /// pixel passes its light ([`surface_hold::exit_hold`]), and how many more slabs than one
     /// the pixel keeps removing its light once it removes it ([`surface_hold::barrier`]).
     pub surface_hold: Vec<u32>,
+    /// Per rasterized triangle where [`RenderPlan::surface_hold`] is not empty, its depth
+    /// gradient in slabs per grid pixel (x, y): a held pixel's surface plane, against which a
+    /// neighbour's gather decides whether it reads the held light
+    /// ([`surface_hold::HELD_BEHIND_MARGIN`]).
+    pub hold_slopes: Vec<[f32; 2]>,
+    /// `sweep.held_lit_side`: a gather reads no light from a held pixel behind whose surface it
+    /// lies (`surface_hold`, "Who reads the held light"); the sweep then keeps every pixel's
+    /// held-plane record.
+    pub held_lit_side: bool,
     /// `sweep.subpixel_shadows`: per mesh, whether a crossing of its
     /// surface (its material blocks light: [`MaterialPlan::blocks_light`]) is shaded with the
     /// light read at its exact sub-pixel shift from its mean occluder (`cpu::kernels::
@@ -426,6 +435,8 @@ impl RenderPlan {
             depth_scale: None,
             preintegration: scene.sweep.preintegration,
             surface_hold: Vec::new(),
+            hold_slopes: Vec::new(),
+            held_lit_side: scene.sweep.held_lit_side,
             subpixel_meshes: Vec::new(),
         }
         .with_surface_hold(scene, geometry)
@@ -478,14 +489,47 @@ impl RenderPlan {
     /// Sets every triangle's surface hold ([`RenderPlan::surface_hold`]) from its depth slopes
     /// and the lights' kernels.
     fn with_surface_hold(mut self, scene: &Scene, geometry: &SceneGeometry) -> RenderPlan {
-        self.surface_hold = self.surface_holds(scene, geometry, |t| (t.depth_dx, t.depth_dy));
+        self.set_surface_holds(scene, geometry, |t| (t.depth_dx, t.depth_dy));
         self
     }
 
+    /// Sets every rasterized triangle's surface hold ([`RenderPlan::surface_hold`]) and depth
+    /// slopes ([`RenderPlan::hold_slopes`]); both empty where none holds. Its depth gradient
+    /// (world units per grid pixel, x and y) is given by `gradient`: the raster plane's for a
+    /// slab grid, the true depth's for a point light's perspective grid.
+    pub fn set_surface_holds(
+        &mut self,
+        scene: &Scene,
+        geometry: &SceneGeometry,
+        gradient: impl Fn(&crate::prepare::raster::TriangleSetup) -> (f32, f32),
+    ) {
+        self.surface_hold = self.surface_holds(scene, geometry, &gradient);
+        let e = geometry.slab_distance;
+        self.hold_slopes = if self.has_surface_hold() {
+            let per_slab = |d: f32| {
+                let g = f64::from(d) / e;
+                let max = surface_hold::MAX_HOLD_SLOPE;
+                if g.is_nan() {
+                    0.0
+                } else {
+                    g.clamp(-max, max) as f32
+                }
+            };
+            let triangles = geometry.raster.triangles.iter();
+            triangles
+                .map(|t| {
+                    let (dx, dy) = gradient(t);
+                    [per_slab(dx), per_slab(dy)]
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+    }
+
     /// Every rasterized triangle's surface hold ([`RenderPlan::surface_hold`]; empty where none
-    /// holds), its depth gradient (world units per grid pixel, x and y) given by `gradient`: the
-    /// raster plane's for a slab grid, the true depth's for a point light's perspective grid.
-    pub fn surface_holds(
+    /// holds), its depth gradient given by `gradient` ([`RenderPlan::set_surface_holds`]).
+    fn surface_holds(
         &self,
         scene: &Scene,
         geometry: &SceneGeometry,

@@ -32,9 +32,53 @@
 //! `B = ⌈(u + r) / (1 − 2u)⌉` while `u < ½`. The largest over lights, at most
 //! [`MAX_SURFACE_HOLD`]; 0 (no hold: today's bits) where the surface rises less than
 //! [`MIN_RISE`] slabs across the reach, as a surface facing the camera does.
+//!
+//! **Who reads the held light.** The light a held pixel passes is the light *in front of* its
+//! surface, right for a neighbour on the surface's lit side and wrong for one behind it: light
+//! stepped from held pixels sideways into columns behind a thin plate turned towards the light
+//! (its whole umbra half lit), and past a surface's far edge into columns that never cross it.
+//! So a gather reading a pixel held in the previous slab (by an entry hold) reads no light
+//! there (and the depth plane the crossing's depth, as if the light had been removed) when the
+//! reader, not held itself, lies more than [`HELD_BEHIND_MARGIN`] slabs behind the held pixel's
+//! surface plane at its own column and the light reaching the held pixel crossed that plane
+//! where the surface is: the column the light came from, `t = (k − 1 − z₀ + ½)/(1 − g·m)` slabs
+//! back along the drift `m`, crossed a surface within [`SAME_SURFACE_SLABS`] of the plane there
+//! (else the light passed beside the surface: a light grazing it). Each pixel records the plane
+//! of its last two holds (`cpu::composite::HeldPlanes`, composite.wgsl); the slopes per triangle
+//! are [`RenderPlan::hold_slopes`](crate::plan::RenderPlan::hold_slopes), clamped to
+//! ±[`MAX_HOLD_SLOPE`] slabs per pixel.
 
 use crate::model::scene::Penumbra;
 use crate::plan::kernel::KernelMoments;
+
+/// Slabs a reader must lie behind a held neighbour's surface plane before it reads no light from
+/// it (see the module documentation): a convex surface lies behind its neighbouring triangles'
+/// planes by its curvature, and a reader on it must still read its neighbours' held light
+/// (measured on the `floor` scene's torus: 1 slab left dark speckles on it, 3 none).
+pub const HELD_BEHIND_MARGIN: f32 = 3.0;
+
+/// How far (slabs) the surface a column crossed may lie from a held neighbour's plane extended
+/// to that column and still count as the neighbour's surface.
+pub const SAME_SURFACE_SLABS: f32 = 1.5;
+
+/// The largest depth slope (slabs per pixel) kept in `RenderPlan::hold_slopes`: a triangle seen
+/// edge on has an unbounded one, and every product in the read test must stay finite.
+pub const MAX_HOLD_SLOPE: f64 = 65536.0;
+
+/// Words per slot of a pixel's held-plane record (`cpu::composite::HeldPlanes`, composite.wgsl): the slab its hold started
+/// (its crossing), the slab it stopped passing, the crossing's depth in slabs (f32 bits) and
+/// the crossed triangle.
+pub const HELD_SLOT_WORDS: usize = 4;
+
+/// Words per pixel of the held-plane records: two slots.
+pub const HELD_WORDS: usize = 2 * HELD_SLOT_WORDS;
+
+/// A slot's `from` while it records nothing (every word starts at this value).
+pub const NO_HELD_SLAB: u32 = u32::MAX;
+
+/// The largest part of its slab a held crossing's recorded depth adds to its slab
+/// (`HeldSlot::z0`): below 1, so that the slab stays the depth's whole part.
+pub const HELD_PART_MAX: f32 = 0.99;
 
 /// Standard deviations of the gather's footprint the hold keeps clear of the surface's own zeros.
 pub const HOLD_SIGMAS: f64 = 4.0;

@@ -7,6 +7,7 @@ use convshadow_common::pixel::levels::LevelAt;
 use convshadow_common::plan::RenderPlan;
 use convshadow_common::prepare::raster::RasterSetup;
 
+use crate::composite::HeldPlanes;
 use crate::kernels::{LevelPlane, LightPlanes, LightTaps, light_row_hash};
 use crate::ldi::Ldi;
 
@@ -30,6 +31,8 @@ pub(crate) struct SlabContext<'a> {
     /// Where the distance penumbra's level search stands for the next slab (`level_at`, once
     /// per slab).
     pub next_level_at: LevelAt,
+    /// Every pixel's held-plane records (empty where no surface holds).
+    pub held: HeldPlanes<'a>,
 }
 
 /// What the previous slab left that a pixel's gather reads beyond its own row: the light

@@ -36,7 +36,7 @@ use convshadow_common::plan::RenderPlan;
 use convshadow_common::prepare::raster::RasterSetup;
 use rayon::prelude::*;
 
-use crate::composite::finish;
+use crate::composite::{HeldRecords, finish};
 use crate::kernels::LightTaps;
 use crate::ldi::Ldi;
 use convshadow_common::plan::levels::initial_levels;
@@ -528,6 +528,7 @@ fn drive(
         .map(|l| LightTaps::new(&l.table))
         .collect();
     let mut opaque = OpaqueImage::new(plan);
+    let held = HeldRecords::new(plan);
     let mut slabs_swept = plan.slabs;
     for slab in 0..plan.slabs {
         if options.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
@@ -543,6 +544,7 @@ fn drive(
             back: plan.slab_back[slab as usize],
             front: plan.slab_front[slab as usize],
             next_level_at: level_at(plan, slab + 1),
+            held: held.view(),
         };
         if before_slab(slab, &state) {
             slabs_swept = slab;

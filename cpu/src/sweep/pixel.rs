@@ -33,8 +33,11 @@ use super::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowContext, RowState, SlabContext, level_plane, light_block,
     light_planes,
 };
-use crate::composite::{Held, attenuate, deepen, hold_step, owned_depth, shade_sample};
-use crate::kernels::{LightPlanes, TapOrigin, distance_row, gather, phase_at};
+use crate::composite::{
+    HELD_PART_MAX, HOLD_LENGTH_MASK, HOLD_SHIFT, HOLD_SLAB_MASK, Held, HeldSlot, attenuate, deepen,
+    hold_step, owned_depth, release_slab, shade_sample,
+};
+use crate::kernels::{LightPlanes, TapOrigin, distance_row, gather, gather_held, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
 use crate::shading::{TfLanes, detail_at, material_at, pre_transfer, shading_depth};
 use crate::subpixel::{exact_shift, removal_depth, shifted_gather};
@@ -45,7 +48,7 @@ pub(crate) struct LightIn {
     /// Light l's channel c at `l · channels + c`.
     pub(crate) iin: [f32; MAX_LIGHT_CHANNELS],
     /// Light l's gathered depth plane.
-    depth: [f32; MAX_LIGHTS],
+    pub(crate) depth: [f32; MAX_LIGHTS],
 }
 
 impl LightIn {
@@ -204,6 +207,7 @@ pub(crate) fn hold(
         (word, state.next[x] < end)
     };
     let inside = state.inside[x] != 0;
+    let before = state.hold[x];
     let held = hold_step(
         &mut state.hold[x],
         ctx.slab,
@@ -211,6 +215,7 @@ pub(crate) fn hold(
         ends_hold,
         inside,
     );
+    record_held(ctx, (x, y), (before, state.hold[x]), held, crossed);
     // Outside every mesh (most pixels, and every pixel of an open mesh) no exit is near.
     if held != Held::Free || !inside || state.next[x] >= end {
         return held;
@@ -227,6 +232,46 @@ pub(crate) fn hold(
     Held::Free
 }
 
+/// Keeps pixel (x, y)'s held-plane record ([`HeldPlanes`](crate::composite::HeldPlanes)) with its hold, which went from state
+/// `before` to `after` in this slab: an entry hold that starts records its crossing's plane, one
+/// that a crossing cut short records its end.
+#[inline(always)]
+fn record_held(
+    ctx: &SlabContext<'_>,
+    (x, y): (usize, usize),
+    (before, after): (u32, u32),
+    held: Held,
+    crossed: u32,
+) {
+    if ctx.held.words.is_empty() {
+        return;
+    }
+    let slab = ctx.slab;
+    let p = y * ctx.plan.grid_width as usize + x;
+    let entry_hold = |state: u32| state != 0 && (state >> HOLD_SHIFT) & HOLD_LENGTH_MASK != 0;
+    let started = before != after && after & HOLD_SLAB_MASK == slab;
+    if held == Held::Pass && crossed != NO_CROSSING && entry_hold(after) && started {
+        let ldi = ctx.ldi;
+        let depth = ldi.depth[crossed as usize];
+        let part = ((depth - ctx.front) * ctx.plan.inv_slab_distance).clamp(0.0, HELD_PART_MAX);
+        ctx.held.start(
+            p,
+            (x, y),
+            HeldSlot {
+                from: slab,
+                until: release_slab(after),
+                z0: slab as f32 + part,
+                triangle: ldi.triangle[crossed as usize],
+            },
+        );
+    } else if matches!(held, Held::Release { .. })
+        && entry_hold(before)
+        && slab < release_slab(before)
+    {
+        ctx.held.cut(p, slab);
+    }
+}
+
 /// Step 1: every light's planes gathered at pixel x through its kernel's tap row for this slab
 /// and pixel (distance penumbra: the row of the nearest occluder's level in reach), into `light`.
 /// (Filled in place: a returned copy of it cost 5 % of the scalar sweep in store-forwarding
@@ -235,6 +280,9 @@ pub(crate) fn hold(
 pub(crate) fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
     let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
+    if reads_held(row, x) {
+        return convolve_held(row, x, inside, light);
+    }
     for l in 0..plan.lights.len() {
         let taps = &ctx.taps[l];
         let at = TapOrigin {
@@ -247,6 +295,54 @@ pub(crate) fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut
         // The light's channels, then its depth plane if any (0 without one).
         let planes = light_planes(plan, row.prev.light, l);
         let sums = gather(&planes, taps.weighted(tap_row), at);
+        copy_planes(&mut light.iin[l * ch..(l + 1) * ch], &sums);
+        light.depth[l] = sums[ch];
+    }
+}
+
+/// Whether pixel x's gathers may read a held pixel behind whose surface it lies
+/// ([`HeldPlanes::hides`](crate::composite::HeldPlanes::hides)): some hold near the pixels
+/// they read passed light in the previous slab ([`held_near`]), and the pixel itself did not (a
+/// held pixel reads the light in front of its surface).
+#[inline(always)]
+pub(crate) fn reads_held(row: &RowContext<'_>, x: usize) -> bool {
+    held_near(row, x, 1)
+        && !row
+            .ctx
+            .held
+            .held_before(row.y * row.ctx.plan.grid_width as usize + x, row.ctx.slab)
+}
+
+/// Whether a hold of a pixel near what the gathers of pixels `x0 .. x0 + lanes` read may have
+/// passed light in the previous slab (`HeldPlanes::any_in`): a hint that decides no bit.
+#[inline(always)]
+pub(crate) fn held_near(row: &RowContext<'_>, x0: usize, lanes: usize) -> bool {
+    let (ctx, reach) = (row.ctx, &row.ctx.reach);
+    let (x0, y) = (x0 as i32, row.y as i32);
+    let xs = (x0 + reach.x0, x0 + lanes as i32 - 1 + reach.x1);
+    ctx.held.any_in(xs, (y + reach.y0, y + reach.y1), ctx.slab)
+}
+
+/// [`convolve`] through [`gather_held`]: the gathers read no light from held pixels behind whose
+/// surface pixel x lies. Where none is read, [`convolve`]'s bits.
+#[inline(never)]
+pub(crate) fn convolve_held(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
+    let (ctx, plan) = (row.ctx, row.ctx.plan);
+    let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
+    let q = (x as i32, row.y as i32);
+    for l in 0..plan.lights.len() {
+        let taps = &ctx.taps[l];
+        let at = TapOrigin {
+            x: x as i32,
+            y: row.y as i32,
+            shift: plan.lights[l].table.slab_shift[slab],
+            inside,
+        };
+        let tap_row = tap_row(row, l, at, false);
+        let planes = light_planes(plan, row.prev.light, l);
+        let drift = plan.lights[l].drift;
+        let hides = |px, py| ctx.held.hides(plan, drift, q, (px, py), ctx.slab);
+        let sums = gather_held(&planes, taps.weighted(tap_row), at, hides);
         copy_planes(&mut light.iin[l * ch..(l + 1) * ch], &sums);
         light.depth[l] = sums[ch];
     }

@@ -76,7 +76,7 @@ fn rust_layouts() -> Vec<Layout> {
             depth_scaled,
             psi_at,
             psi_last,
-            _pad6,
+            held_lit_side,
         }),
         layout!(Slab {
             front,

@@ -1,6 +1,7 @@
 // Stages 4 and 5: mirrors cpu/src/composite.rs (front-to-back compositing, attenuation with the
 // explicit flush, the final background).
 
+#import shared/constants
 #import shared/bindings
 #import shading
 
@@ -160,6 +161,131 @@ fn hold_step(state: u32, slab: u32, crossed: u32, ends_hold: bool, inside: bool)
         next = hold_state(slab, 0u, barrier);
     }
     return HoldStep(next, HELD_FREE, slab);
+}
+
+// Held light read only from its lit side (`sweep.held_lit_side`, `surface_hold`'s "Who reads the
+// held light"; cpu/src/composite.rs `HeldPlanes`): with it, `hold` keeps per grid pixel its hold
+// state and then its held-plane record, two slots of [from, until, z0 bits, triangle] (the
+// hold's crossing slab, its release or cut, the crossing's depth in slabs, the triangle);
+// `surface_hold` keeps per triangle its word and then its depth slopes' f32 bits.
+// (HELD_WORDS, NO_HELD_SLAB, HELD_PART_MAX, HELD_BEHIND_MARGIN and SAME_SURFACE_SLABS come from
+// `shared/constants`.)
+const HOLD_SLAB_MASK: u32 = 0xffffu;   // a hold state's crossing slab
+const HOLD_LENGTH_MASK: u32 = 1023u;   // a hold state's hold length, once shifted
+
+// The index of grid pixel `p`'s hold state in `hold` (its record follows it).
+fn hold_index(p: u32) -> u32 {
+    return p * (1u + HELD_WORDS * globals.held_lit_side);
+}
+
+// The index of triangle `t`'s word in `surface_hold` (its slopes follow it).
+fn surface_hold_index(t: u32) -> u32 {
+    return t * (1u + 2u * globals.held_lit_side);
+}
+
+// `HeldSlot`, or none (`ok` false).
+struct HeldSlot {
+    ok: bool,
+    start: u32, // `HeldSlot::from`
+    until: u32,
+    z0: f32,
+    triangle: u32,
+}
+
+fn held_word(p: u32, slot: u32, k: u32) -> u32 {
+    return hold[hold_index(p) + 1u + slot * 4u + k];
+}
+
+// `HeldPlanes::latest_before`: pixel p's hold with the latest start before slab `slab`.
+fn latest_before(p: u32, slab: u32) -> HeldSlot {
+    let a = held_word(p, 0u, 0u);
+    let b = held_word(p, 1u, 0u);
+    let a_ok = a != NO_HELD_SLAB && a < slab;
+    let b_ok = b != NO_HELD_SLAB && b < slab;
+    if !a_ok && !b_ok {
+        return HeldSlot(false, 0u, 0u, 0.0, 0u);
+    }
+    var slot = 0u;
+    if !a_ok || (b_ok && b > a) {
+        slot = 1u;
+    }
+    return HeldSlot(true, held_word(p, slot, 0u), held_word(p, slot, 1u), bitcast<f32>(held_word(p, slot, 2u)), held_word(p, slot, 3u));
+}
+
+// `HeldSlot::held_before`: it passed its light in slab `slab − 1`.
+fn slot_held_before(s: HeldSlot, slab: u32) -> bool {
+    return s.ok && s.start < slab && slab - 1u < s.until;
+}
+
+// `HeldPlanes::start`: into the empty slot or the older hold's.
+fn held_start(p: u32, s: HeldSlot) {
+    let a = held_word(p, 0u, 0u);
+    let b = held_word(p, 1u, 0u);
+    var slot = 0u;
+    if a != NO_HELD_SLAB && (b == NO_HELD_SLAB || b < a) {
+        slot = 1u;
+    }
+    let at = hold_index(p) + 1u + slot * 4u;
+    hold[at + 1u] = s.until;
+    hold[at + 2u] = bitcast<u32>(s.z0);
+    hold[at + 3u] = s.triangle;
+    hold[at] = s.start;
+}
+
+// `HeldPlanes::cut`: the latest hold stops passing in slab `slab`.
+fn held_cut(p: u32, slab: u32) {
+    let a = held_word(p, 0u, 0u);
+    let b = held_word(p, 1u, 0u);
+    if a == NO_HELD_SLAB && b == NO_HELD_SLAB {
+        return;
+    }
+    var slot = 0u;
+    if a == NO_HELD_SLAB || (b != NO_HELD_SLAB && b > a) {
+        slot = 1u;
+    }
+    hold[hold_index(p) + 1u + slot * 4u + 1u] = slab;
+}
+
+// `HeldPlanes::hides`: the crossing slab of pixel `c`'s hold when a gather at pixel `q` in slab
+// `slab` reads no light from it (held in slab − 1, q more than HELD_BEHIND_MARGIN slabs behind
+// its surface's plane, and the column the light reaching it came from crossed that surface),
+// else NO_HELD_SLAB. The caller has checked that q is not held.
+fn hides(q: vec2<i32>, c: vec2<i32>, slab: u32, drift: array<f32, 2>) -> u32 {
+    let w = i32(globals.grid_w);
+    let h = i32(globals.grid_h);
+    if c.x < 0 || c.y < 0 || c.x >= w || c.y >= h {
+        return NO_HELD_SLAB;
+    }
+    let held = latest_before(u32(c.y * w + c.x), slab);
+    if !slot_held_before(held, slab) {
+        return NO_HELD_SLAB;
+    }
+    let t_at = surface_hold_index(held.triangle);
+    let gx = bitcast<f32>(surface_hold[t_at + 1u]);
+    let gy = bitcast<f32>(surface_hold[t_at + 2u]);
+    let k = f32(slab);
+    let dx = f32(q.x - c.x);
+    let dy = f32(q.y - c.y);
+    let at_reader = held.z0 + gx * dx + gy * dy;
+    if at_reader >= k - HELD_BEHIND_MARGIN {
+        return NO_HELD_SLAB;
+    }
+    let a = 1.0 - (gx * drift[0] + gy * drift[1]);
+    let t = ((k - 1.0) - held.z0 + 0.5) / max(a, 1.0e-6);
+    let ux = floor(f32(c.x) - t * drift[0] + 0.5);
+    let uy = floor(f32(c.y) - t * drift[1] + 0.5);
+    if ux < 0.0 || uy < 0.0 || ux >= f32(w) || uy >= f32(h) {
+        return NO_HELD_SLAB;
+    }
+    let there = latest_before(u32(uy) * u32(w) + u32(ux), slab);
+    if !there.ok {
+        return NO_HELD_SLAB;
+    }
+    let plane = held.z0 + gx * (ux - f32(c.x)) + gy * (uy - f32(c.y));
+    if abs(there.z0 - plane) < SAME_SURFACE_SLABS {
+        return held.start;
+    }
+    return NO_HELD_SLAB;
 }
 
 // `finish`: C += (1 − A)·background.

@@ -6,6 +6,7 @@
 #import shared/constants
 #import shared/bindings
 #import hash
+#import composite
 
 const OUTSIDE: f32 = 1.0;
 const OUTSIDE_DEPTH: f32 = 0.0;
@@ -45,6 +46,34 @@ fn gather(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, o
         acc = acc + t.w[3] * fetch(base, sx + 1, sy + 1, outside);
     }
     return acc;
+}
+
+// `gather_held` (cpu/src/kernels.rs) for one plane: `gather`, with every corner that `hides` names
+// read as no light, or in a depth plane (`depth`) as light removed at its crossing's slab.
+fn gather_held(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, outside: f32, depth: bool, slab: u32, drift: array<f32, 2>) -> f32 {
+    var acc = 0.0;
+    for (var k = 0u; k < count; k++) {
+        let t = taps[first + k];
+        let sx = x + t.dx + shift.x;
+        let sy = y + t.dy + shift.y;
+        acc = acc + t.w[0] * held_fetch(base, sx, sy, outside, depth, x, y, slab, drift);
+        acc = acc + t.w[1] * held_fetch(base, sx + 1, sy, outside, depth, x, y, slab, drift);
+        acc = acc + t.w[2] * held_fetch(base, sx, sy + 1, outside, depth, x, y, slab, drift);
+        acc = acc + t.w[3] * held_fetch(base, sx + 1, sy + 1, outside, depth, x, y, slab, drift);
+    }
+    return acc;
+}
+
+// One corner of `gather_held`.
+fn held_fetch(base: u32, sx: i32, sy: i32, outside: f32, depth: bool, x: i32, y: i32, slab: u32, drift: array<f32, 2>) -> f32 {
+    let crossing = hides(vec2<i32>(x, y), vec2<i32>(sx, sy), slab, drift);
+    if crossing == NO_HELD_SLAB {
+        return fetch(base, sx, sy, outside);
+    }
+    if depth {
+        return f32(crossing) * f32(globals.channels);
+    }
+    return 0.0;
 }
 
 // `LevelAt`: where the level search stands: the slab's coordinate in the depth plane's units

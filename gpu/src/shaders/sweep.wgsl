@@ -42,9 +42,13 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     let hx = x - globals.guard_left;
     let hy = y - globals.guard_top;
 
-    // 1. Convolution of every light buffer (and, distance penumbra, its depth plane).
+    // 1. Convolution of every light buffer (and, distance penumbra, its depth plane); with
+    // `held_lit_side`, a pixel not held itself reads no light from held pixels behind whose
+    // surface it lies (`gather_held`: the same bits where it reads none).
     let planes = globals.planes;
     let distance = globals.depth_planes != 0u;
+    let p = y * w + x;
+    let held_reads = globals.held_lit_side != 0u && !slot_held_before(latest_before(p, slab), slab);
     for (var l = 0u; l < globals.lights; l++) {
         let light = lights[l];
         let ls = light_slabs[l * globals.slabs + slab];
@@ -59,15 +63,22 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         let first_tap = light.taps + per_phase * phase;
         tap_rows[l] = phase;
         for (var c = 0u; c < ch; c++) {
-            iin[l * ch + c] = gather(base + c * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE);
+            if held_reads {
+                iin[l * ch + c] = gather_held(base + c * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE, false, slab, light.drift);
+            } else {
+                iin[l * ch + c] = gather(base + c * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE);
+            }
         }
         if distance {
-            depth_in[l] = gather(base + ch * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE_DEPTH);
+            if held_reads {
+                depth_in[l] = gather_held(base + ch * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE_DEPTH, true, slab, light.drift);
+            } else {
+                depth_in[l] = gather(base + ch * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE_DEPTH);
+            }
         }
     }
 
     // 2. Intersection: advance the layer cursor to the slab's back face.
-    let p = y * w + x;
     let state = cursors[p];
     let adv = advance(state.next, offsets[p + 1u], state.inside, back);
     let last = adv.next - 1u; // the last fragment crossed, where one was
@@ -84,17 +95,21 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     if globals.surface_holds != 0u {
         var crossed_word = 0u;
         if crossed {
-            crossed_word = surface_hold[frag_meta[adv.first] >> MESH_BITS];
+            crossed_word = surface_hold[surface_hold_index(frag_meta[adv.first] >> MESH_BITS)];
         }
         let ahead = adv.next < offsets[p + 1u];
-        let step = hold_step(hold[p], slab, crossed_word, crossed && ahead, adv.inside != 0u);
-        hold[p] = step.state;
+        let before = hold[hold_index(p)];
+        let step = hold_step(before, slab, crossed_word, crossed && ahead, adv.inside != 0u);
+        hold[hold_index(p)] = step.state;
+        if globals.held_lit_side != 0u {
+            record_held(p, before, step, crossed, adv.first, slab, front);
+        }
         held = step.held;
         removed_at = f32(step.removed_at);
         // The exit hold: inside the mesh of its next fragment, within that triangle's exit hold.
         if held == HELD_FREE && ahead {
             let next_meta = frag_meta[adv.next];
-            let exit = (surface_hold[next_meta >> MESH_BITS] >> EXIT_HOLD_SHIFT) & ((1u << (BARRIER_SHIFT - EXIT_HOLD_SHIFT)) - 1u);
+            let exit = (surface_hold[surface_hold_index(next_meta >> MESH_BITS)] >> EXIT_HOLD_SHIFT) & ((1u << (BARRIER_SHIFT - EXIT_HOLD_SHIFT)) - 1u);
             let in_its_mesh = (adv.inside & (1u << (next_meta & MESH_MASK))) != 0u;
             if exit != 0u && in_its_mesh && (frag_depth[adv.next] - back) * globals.inv_slab_distance < f32(exit) {
                 held = HELD_PASS;
@@ -182,6 +197,21 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             // The level this pixel starts the next slab with.
             level_cur[(y * globals.lights + l) * w + x] = pixel_level(lights[l], occluded, depth_out, level_at(slab + 1u));
         }
+    }
+}
+
+// `record_held` (cpu/src/sweep/pixel.rs): an entry hold that starts records its crossing's plane,
+// one that a crossing cut short its end.
+fn record_held(p: u32, before: u32, step: HoldStep, crossed: bool, first: u32, slab: u32, front: f32) {
+    let entry_after = step.state != 0u && ((step.state >> HOLD_SHIFT) & HOLD_LENGTH_MASK) != 0u;
+    let entry_before = before != 0u && ((before >> HOLD_SHIFT) & HOLD_LENGTH_MASK) != 0u;
+    let started = before != step.state && (step.state & HOLD_SLAB_MASK) == slab;
+    if step.held == HELD_PASS && crossed && entry_after && started {
+        let part = clamp((frag_depth[first] - front) * globals.inv_slab_distance, 0.0, HELD_PART_MAX);
+        let until = (step.state & HOLD_SLAB_MASK) + ((step.state >> HOLD_SHIFT) & HOLD_LENGTH_MASK);
+        held_start(p, HeldSlot(true, slab, until, f32(slab) + part, frag_meta[first] >> MESH_BITS));
+    } else if step.held == HELD_RELEASE && entry_before && slab < (before & HOLD_SLAB_MASK) + ((before >> HOLD_SHIFT) & HOLD_LENGTH_MASK) {
+        held_cut(p, slab);
     }
 }
 

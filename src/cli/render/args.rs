@@ -129,6 +129,11 @@ pub struct RenderArgs {
     /// at the whole pixels the sweep carries it in.
     #[arg(long, value_name = "BOOL")]
     pub subpixel_shadows: Option<bool>,
+    /// Override `sweep.held_lit_side`: `true` reads a held surface's light only from its lit
+    /// side (thin plates and surfaces turned towards the light cast their whole shadow; slower
+    /// near held surfaces), `false` (the default) from everywhere.
+    #[arg(long, value_name = "BOOL")]
+    pub held_lit_side: Option<bool>,
     /// Override `sweep.light_resolution`: the light grid's cells per image pixel (perspective:
     /// at `look_at`), 1/16 to 16 (default 1); below 1 faster, above 1 sharper edges; not 1, an
     /// orthographic camera's light gets a grid of its own.

@@ -354,6 +354,7 @@ impl Validator<'_> {
             preintegration: raw.preintegration.unwrap_or(false),
             media,
             subpixel_shadows: raw.subpixel_shadows.unwrap_or(true),
+            held_lit_side: raw.held_lit_side.unwrap_or(false),
             light_resolution: raw.light_resolution.unwrap_or(1.0),
         })
     }

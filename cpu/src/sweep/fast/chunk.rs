@@ -18,6 +18,7 @@ use convshadow_common::plan::kernel::PhaseMode;
 
 use super::SimdSlab;
 use super::gather::{gather_inside, gather_lanes, store_pixels};
+use super::held::held_lanes;
 use super::levels::{distance_rows, level_rows, phases};
 use super::per_lane::{LaneRows, gather_per_lane};
 use super::quiet::{ChunkState, Values};
@@ -58,6 +59,8 @@ pub(crate) struct Chunk<'a> {
     /// Its cursor summary, current: its lanes' cursors are not visited when it shows that none
     /// crosses a fragment in this slab.
     pub summary: Option<ChunkState>,
+    /// A pixel held in the previous slab lies near its reads (`pixel::held_near`, `super::held`).
+    pub held: bool,
 }
 
 /// What step 2 found in every lane: the first fragment its cursor crossed in this slab
@@ -243,6 +246,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         known_light,
         gathered,
         summary,
+        held: near_held,
     } = chunk;
     let plan = ctx.plan;
     let ldi = ctx.ldi;
@@ -382,6 +386,10 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
                 }
             }
         }
+    }
+
+    if near_held {
+        held_lanes::<L>(row, x0, &mut iin[..n], &mut depth_in);
     }
 
     // Sub-pixel shadows: the lanes that crossed an opaque surface shade with their light read at

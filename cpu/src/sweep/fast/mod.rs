@@ -16,11 +16,14 @@
 //!   row (tap tables by column, AVX2 gathers, two lanes' pixels to a value); `levels`: the level
 //!   search for 8 lanes. Tests: `gather/tests.rs`, against the reference gather
 //!   (`crate::kernels::gather`) and one another.
+//! - `held`: the lanes that may read a held pixel from behind its surface, gathered through the
+//!   per-pixel stage (`sweep.held_lit_side`).
 //!
 //! Imports go one way: `row` → `chunk` → `quiet`, the gathers → the per-pixel stage and its kit.
 
 mod chunk;
 mod gather;
+mod held;
 mod levels;
 mod per_lane;
 mod quiet;

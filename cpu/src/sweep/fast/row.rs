@@ -64,7 +64,11 @@ pub(crate) fn sweep_row_simd(
                 ctx.slab
             );
         }
+        // Near a held pixel a lane's gather may read it from behind its surface
+        // (`pixel::convolve_held`): no quiet shortcut, which would assume the values it reads.
+        let held = pixel::held_near(row, x0, lanes);
         let work = match (&quiet, &hits) {
+            _ if held => ChunkWork::Full(None),
             (Some(q), Some(hits)) => q.classify(ctx, y, c, lanes, hits),
             _ => ChunkWork::Full(None),
         };
@@ -139,6 +143,7 @@ pub(crate) fn sweep_row_simd(
                     interior,
                     known_light,
                     gathered,
+                    held,
                     // The chunk's cursor summary, current: refreshed whenever its cursors move.
                     summary: quiet.as_ref().map(|q| q.chunks[c]),
                 };

@@ -89,7 +89,7 @@ struct Globals {
     depth_scaled: u32,  // 1: a soft point light's grid (RenderPlan::depth_scale): depths in ψ
     psi_at: u32,        // level_table index of ψ at slab coordinate 0 (f32 bits)
     psi_last: u32,      // DepthScale::psi.len() − 2
-    _pad6: u32,
+    held_lit_side: u32, // 1: held light read only from its lit side (`hold`: 9 words per pixel, `surface_hold`: 3 per triangle)
 }
 
 struct Slab {

@@ -154,6 +154,7 @@ fn compare_lanes(
         .iter()
         .map(|l| LightTaps::new(&l.table))
         .collect();
+    let held = crate::composite::HeldRecords::new(&plan);
     for slab in 0..plan.slabs {
         let ctx = SlabContext {
             plan: &plan,
@@ -165,6 +166,7 @@ fn compare_lanes(
             back: plan.slab_back[slab as usize],
             front: plan.slab_front[slab as usize],
             next_level_at: convshadow_common::pixel::levels::level_at(&plan, slab + 1),
+            held: held.view(),
         };
         let simd = SimdSlab::new(&plan, &columns, slab);
         for y in [0, 1, h / 2, h - 1, rng.below(h as u32) as usize] {
@@ -236,6 +238,7 @@ fn compare_lanes(
                     known_light: None,
                     gathered: None,
                     summary,
+                    held: crate::sweep::pixel::held_near(&row_ctx, x0, 8),
                 };
                 eight(&simd, &row_ctx, &mut a.state(), chunk);
                 // The reference: the per-pixel stage, pixel by pixel.
