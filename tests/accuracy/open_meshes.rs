@@ -223,6 +223,21 @@ fn turned_square_light(x: f64, y: f64, turn: f64) -> f64 {
     1.0 - blocked
 }
 
+/// The receiver's light at every pixel centre outside the square turned by `turn`° (its outline
+/// as seen, grown by `margin` across it and one pixel along it), from `turned_square_light`.
+fn turned_square_expected(turn: f64, margin: f64) -> Vec<Option<f64>> {
+    let px = VIEW / SIZE as f64;
+    let cos = f64::to_radians(turn).cos();
+    (0..SIZE * SIZE)
+        .map(|p| {
+            let x = ((p % SIZE) as f64 + 0.5 - 0.5 * SIZE as f64) * px;
+            let y = ((p / SIZE) as f64 + 0.5 - 0.5 * SIZE as f64) * px;
+            let covered = x.abs() < HALF * cos + margin && y.abs() < HALF + px;
+            (!covered).then(|| turned_square_light(x, y, turn))
+        })
+        .collect()
+}
+
 #[test]
 fn a_turned_opaque_shell_casts_its_whole_shadow() {
     // A shell is one slab thick in its column. Turned so that a gather reads columns the shell
@@ -247,15 +262,7 @@ fn a_turned_opaque_shell_casts_its_whole_shadow() {
         let mut scene = square_scene(&dir, 1.0, false, slabs);
         scene.meshes[0].rotate_deg = [0.0, turn, 0.0];
         let r = render(&scene, &RenderRequest::default()).unwrap_or_else(|e| panic!("{e}"));
-        let cos = f64::to_radians(turn).cos();
-        let expected: Vec<Option<f64>> = (0..SIZE * SIZE)
-            .map(|p| {
-                let x = ((p % SIZE) as f64 + 0.5 - 0.5 * SIZE as f64) * px;
-                let y = ((p / SIZE) as f64 + 0.5 - 0.5 * SIZE as f64) * px;
-                let covered = x.abs() < HALF * cos + px && y.abs() < HALF + px;
-                (!covered).then(|| turned_square_light(x, y, turn))
-            })
-            .collect();
+        let expected = turned_square_expected(turn, px);
         let (rmse, worst, n) = errors(&r.image.data, &expected);
         eprintln!("turned {turn}°, {slabs} slabs: RMSE {rmse:.2e}, max {worst:.2e} over {n} px");
         assert!(n > 3000, "{n} pixels compared");
@@ -294,15 +301,8 @@ fn a_thin_plate_turned_towards_the_light_casts_its_whole_shadow_with_held_light_
             scene.meshes[0].rotate_deg = [0.0, turn, 0.0];
             scene.sweep.held_lit_side = lit_side;
             let r = render(&scene, &RenderRequest::default()).unwrap_or_else(|e| panic!("{e}"));
-            let cos = f64::to_radians(turn).cos();
-            let expected: Vec<Option<f64>> = (0..SIZE * SIZE)
-                .map(|p| {
-                    let x = ((p % SIZE) as f64 + 0.5 - 0.5 * SIZE as f64) * px;
-                    let y = ((p / SIZE) as f64 + 0.5 - 0.5 * SIZE as f64) * px;
-                    let covered = x.abs() < HALF * cos + 2.0 * px && y.abs() < HALF + px;
-                    (!covered).then(|| turned_square_light(x, y, turn))
-                })
-                .collect();
+            // The plate's thickness seen turned: one more pixel of margin.
+            let expected = turned_square_expected(turn, 2.0 * px);
             let scalar = RenderRequest {
                 path: CpuPath::Scalar,
                 ..RenderRequest::default()

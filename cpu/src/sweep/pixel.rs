@@ -27,6 +27,7 @@
 
 use convshadow_common::pixel::levels::{depth_coord, pixel_level};
 use convshadow_common::plan::TfEntry;
+use convshadow_common::plan::kernel::Tap;
 use convshadow_common::plan::surface_hold::exit_of;
 
 use super::kit::{
@@ -278,13 +279,26 @@ fn record_held(
 /// stalls.)
 #[inline(always)]
 pub(crate) fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
-    let (ctx, plan) = (row.ctx, row.ctx.plan);
-    let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
     if reads_held(row, x) {
         return convolve_held(row, x, inside, light);
     }
+    convolve_through(row, x, inside, light, |_, planes, taps, at| {
+        gather(planes, taps, at)
+    });
+}
+
+/// Step 1 with `gather(l, planes, taps, at)` as light l's gather.
+#[inline(always)]
+fn convolve_through(
+    row: &RowContext<'_>,
+    x: usize,
+    inside: bool,
+    light: &mut LightIn,
+    gather: impl Fn(usize, &LightPlanes<'_>, &[Tap], TapOrigin) -> [f32; 4],
+) {
+    let (ctx, plan) = (row.ctx, row.ctx.plan);
+    let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
     for l in 0..plan.lights.len() {
-        let taps = &ctx.taps[l];
         let at = TapOrigin {
             x: x as i32,
             y: row.y as i32,
@@ -294,7 +308,7 @@ pub(crate) fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut
         let tap_row = tap_row(row, l, at, false);
         // The light's channels, then its depth plane if any (0 without one).
         let planes = light_planes(plan, row.prev.light, l);
-        let sums = gather(&planes, taps.weighted(tap_row), at);
+        let sums = gather(l, &planes, ctx.taps[l].weighted(tap_row), at);
         copy_planes(&mut light.iin[l * ch..(l + 1) * ch], &sums);
         light.depth[l] = sums[ch];
     }
@@ -328,24 +342,12 @@ pub(crate) fn held_near(row: &RowContext<'_>, x0: usize, lanes: usize) -> bool {
 #[inline(never)]
 pub(crate) fn convolve_held(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
-    let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
     let q = (x as i32, row.y as i32);
-    for l in 0..plan.lights.len() {
-        let taps = &ctx.taps[l];
-        let at = TapOrigin {
-            x: x as i32,
-            y: row.y as i32,
-            shift: plan.lights[l].table.slab_shift[slab],
-            inside,
-        };
-        let tap_row = tap_row(row, l, at, false);
-        let planes = light_planes(plan, row.prev.light, l);
+    convolve_through(row, x, inside, light, |l, planes, taps, at| {
         let drift = plan.lights[l].drift;
         let hides = |px, py| ctx.held.hides(plan, drift, q, (px, py), ctx.slab);
-        let sums = gather_held(&planes, taps.weighted(tap_row), at, hides);
-        copy_planes(&mut light.iin[l * ch..(l + 1) * ch], &sums);
-        light.depth[l] = sums[ch];
-    }
+        gather_held(planes, taps, at, hides)
+    });
 }
 
 /// Light l's tap row at the pixel of `at` in this slab: its phase's, or (distance penumbra) the
