@@ -190,8 +190,7 @@ pub const fn hold_state(crossed: u32, hold: u32, barrier: u32) -> u32 {
 /// it removes it, through its barrier.
 #[inline(always)]
 pub const fn release_slab(state: u32) -> u32 {
-    (state & ((1 << HOLD_SHIFT) - 1))
-        + ((state >> HOLD_SHIFT) & ((1 << (HOLD_BARRIER_SHIFT - HOLD_SHIFT)) - 1))
+    (state & HOLD_SLAB_MASK) + ((state >> HOLD_SHIFT) & HOLD_LENGTH_MASK)
 }
 
 /// What step 5 does with a pixel's light, given its surface hold ([`hold_step`]).
@@ -380,18 +379,23 @@ impl HeldPlanes<'_> {
         self.words[p * HELD_WORDS + slot * HELD_SLOT_WORDS + k].store(v, Ordering::Relaxed);
     }
 
+    /// Pixel `p`'s slot whose hold started last before slab `slab` (`NO_HELD_SLAB`: any).
+    #[inline(always)]
+    fn newest_slot(&self, p: usize, slab: u32) -> Option<usize> {
+        let (a, b) = (self.word(p, 0, 0), self.word(p, 1, 0));
+        // An empty slot's `from` is NO_HELD_SLAB, never below `slab`.
+        match (a < slab, b < slab) {
+            (false, false) => None,
+            (true, false) => Some(0),
+            (false, true) => Some(1),
+            (true, true) => Some(usize::from(b > a)),
+        }
+    }
+
     /// Pixel `p`'s hold with the latest start before slab `slab`, if it has one.
     #[inline(always)]
     pub fn latest_before(&self, p: usize, slab: u32) -> Option<HeldSlot> {
-        let (a, b) = (self.word(p, 0, 0), self.word(p, 1, 0));
-        let a_ok = a != NO_HELD_SLAB && a < slab;
-        let b_ok = b != NO_HELD_SLAB && b < slab;
-        let slot = match (a_ok, b_ok) {
-            (false, false) => return None,
-            (true, false) => 0,
-            (false, true) => 1,
-            (true, true) => usize::from(b > a),
-        };
+        let slot = self.newest_slot(p, slab)?;
         Some(HeldSlot {
             from: self.word(p, slot, 0),
             until: self.word(p, slot, 1),
@@ -430,14 +434,9 @@ impl HeldPlanes<'_> {
     /// Pixel `p`'s latest hold stops passing in slab `slab` (a crossing cut it).
     #[inline(always)]
     pub fn cut(&self, p: usize, slab: u32) {
-        let (a, b) = (self.word(p, 0, 0), self.word(p, 1, 0));
-        let slot = match (a == NO_HELD_SLAB, b == NO_HELD_SLAB) {
-            (true, true) => return,
-            (false, true) => 0,
-            (true, false) => 1,
-            (false, false) => usize::from(b > a),
-        };
-        self.set(p, slot, 1, slab);
+        if let Some(slot) = self.newest_slot(p, NO_HELD_SLAB) {
+            self.set(p, slot, 1, slab);
+        }
     }
 
     /// Whether a gather at pixel `q` in slab `slab` reads no light from pixel `p`

@@ -115,6 +115,11 @@ struct HoldStep {
     removed_at: u32,
 }
 
+// `release_slab`: the slab in which a (non-zero) hold state releases its light.
+fn release_slab(state: u32) -> u32 {
+    return (state & HOLD_SLAB_MASK) + ((state >> HOLD_SHIFT) & HOLD_LENGTH_MASK);
+}
+
 // `hold_state`: crossing slab, hold and barrier in one word.
 fn hold_state(crossed: u32, hold: u32, barrier: u32) -> u32 {
     return crossed | (hold << HOLD_SHIFT) | (barrier << HOLD_BARRIER_SHIFT);
@@ -132,7 +137,7 @@ fn hold_step(state: u32, slab: u32, crossed: u32, ends_hold: bool, inside: bool)
     var next = state;
     if state != 0u {
         let start = state & ((1u << HOLD_SHIFT) - 1u);
-        var release = start + ((state >> HOLD_SHIFT) & ((1u << (HOLD_BARRIER_SHIFT - HOLD_SHIFT)) - 1u));
+        var release = release_slab(state);
         var bar = state >> HOLD_BARRIER_SHIFT;
         if slab < release {
             if !ends_hold {
@@ -196,18 +201,25 @@ fn held_word(p: u32, slot: u32, k: u32) -> u32 {
     return hold[hold_index(p) + 1u + slot * 4u + k];
 }
 
-// `HeldPlanes::latest_before`: pixel p's hold with the latest start before slab `slab`.
-fn latest_before(p: u32, slab: u32) -> HeldSlot {
+// `HeldPlanes::newest_slot`: pixel p's slot whose hold started last before slab `slab`
+// (NO_HELD_SLAB: any), or 2 when none did (an empty slot's start is NO_HELD_SLAB).
+fn newest_slot(p: u32, slab: u32) -> u32 {
     let a = held_word(p, 0u, 0u);
     let b = held_word(p, 1u, 0u);
-    let a_ok = a != NO_HELD_SLAB && a < slab;
-    let b_ok = b != NO_HELD_SLAB && b < slab;
-    if !a_ok && !b_ok {
-        return HeldSlot(false, 0u, 0u, 0.0, 0u);
+    if a >= slab && b >= slab {
+        return 2u;
     }
-    var slot = 0u;
-    if !a_ok || (b_ok && b > a) {
-        slot = 1u;
+    if a >= slab || (b < slab && b > a) {
+        return 1u;
+    }
+    return 0u;
+}
+
+// `HeldPlanes::latest_before`: pixel p's hold with the latest start before slab `slab`.
+fn latest_before(p: u32, slab: u32) -> HeldSlot {
+    let slot = newest_slot(p, slab);
+    if slot == 2u {
+        return HeldSlot(false, 0u, 0u, 0.0, 0u);
     }
     return HeldSlot(true, held_word(p, slot, 0u), held_word(p, slot, 1u), bitcast<f32>(held_word(p, slot, 2u)), held_word(p, slot, 3u));
 }
@@ -234,16 +246,10 @@ fn held_start(p: u32, s: HeldSlot) {
 
 // `HeldPlanes::cut`: the latest hold stops passing in slab `slab`.
 fn held_cut(p: u32, slab: u32) {
-    let a = held_word(p, 0u, 0u);
-    let b = held_word(p, 1u, 0u);
-    if a == NO_HELD_SLAB && b == NO_HELD_SLAB {
-        return;
+    let slot = newest_slot(p, NO_HELD_SLAB);
+    if slot != 2u {
+        hold[hold_index(p) + 1u + slot * 4u + 1u] = slab;
     }
-    var slot = 0u;
-    if a == NO_HELD_SLAB || (b != NO_HELD_SLAB && b > a) {
-        slot = 1u;
-    }
-    hold[hold_index(p) + 1u + slot * 4u + 1u] = slab;
 }
 
 // `HeldPlanes::hides`: the crossing slab of pixel `c`'s hold when a gather at pixel `q` in slab

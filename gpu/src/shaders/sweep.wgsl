@@ -208,9 +208,8 @@ fn record_held(p: u32, before: u32, step: HoldStep, crossed: bool, first: u32, s
     let started = before != step.state && (step.state & HOLD_SLAB_MASK) == slab;
     if step.held == HELD_PASS && crossed && entry_after && started {
         let part = clamp((frag_depth[first] - front) * globals.inv_slab_distance, 0.0, HELD_PART_MAX);
-        let until = (step.state & HOLD_SLAB_MASK) + ((step.state >> HOLD_SHIFT) & HOLD_LENGTH_MASK);
-        held_start(p, HeldSlot(true, slab, until, f32(slab) + part, frag_meta[first] >> MESH_BITS));
-    } else if step.held == HELD_RELEASE && entry_before && slab < (before & HOLD_SLAB_MASK) + ((before >> HOLD_SHIFT) & HOLD_LENGTH_MASK) {
+        held_start(p, HeldSlot(true, slab, release_slab(step.state), f32(slab) + part, frag_meta[first] >> MESH_BITS));
+    } else if step.held == HELD_RELEASE && entry_before && slab < release_slab(before) {
         held_cut(p, slab);
     }
 }
