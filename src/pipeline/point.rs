@@ -20,9 +20,19 @@ use convshadow_common::plan::depth_scale::DepthScale;
 use convshadow_common::plan::{ProjectiveGrid, RenderPlan};
 use convshadow_common::prepare::camera::Camera;
 use convshadow_common::prepare::geometry::SceneGeometry;
+use convshadow_common::prepare::guard::AUTO_GUARD_SIGMAS;
 use convshadow_common::prepare::raster::{FIXED_ONE, TriangleSetup};
 
 use super::RenderError;
+
+/// The margin (cells) a soft light's grid may take past what the eye sees on each side, whatever
+/// the eye's extent: enough for a short image's penumbrae (a 128 × 8 wall needs 14 at light
+/// resolution 1), where the unoccluded light read beyond the grid brightened the shadows.
+const MIN_MARGIN: f64 = 16.0;
+/// Beyond [`MIN_MARGIN`], the largest margin as a share of what the eye sees from the axis: a
+/// wide view's penumbrae near its edges are a small part of it, and a grazing light's reach is
+/// thousands of cells (the margin's cost: 1.0 → 2.3 s at 135°, 17 → 30 s at 80°, 128 × 8 px).
+const MAX_MARGIN_SHARE: f64 = 0.25;
 
 /// A point light's grid ([`point_grid`]) and where it lies in the eye's own slab-grid frame.
 pub(super) struct PointGrid {
@@ -132,7 +142,41 @@ pub(super) fn point_grid(
             seen[1] = seen[1].max(c.y.abs() / c.z);
         }
     }
-    let (tan_x, tan_y) = (tan_x.min(seen[0]), tan_y.min(seen[1]));
+    // The light's depth extent blurs its penumbra along the ray's slope m = (x, y)/z too, by
+    // r·|m| per unit φ·focal: a covariance `spread²·(I + m·mᵀ)` that changes across the grid.
+    // The grid's light takes it at one slope (a spot's axis, else the middle of what the light
+    // sees): exact there, off by √((1 + m²)/(1 + m̄²)) in the width elsewhere
+    // (docs/how-it-works.md).
+    let middle = 0.5 * (lo + hi);
+    let axis = light
+        .spot
+        .map(|s| to_light_frame(cam.to_camera(cam.center + DVec3::from(s.direction))))
+        .filter(|d| d.z > 0.1 * d.length())
+        .unwrap_or(middle);
+    let slope = [axis.x / axis.z, axis.y / axis.z];
+    let along = 1.0 + slope[0] * slope[0] + slope[1] * slope[1];
+    // A read beyond the grid is unoccluded light, so a soft light's grid reaches past what the
+    // eye sees by its penumbra's reach where the meshes do: an occluder at φ₀ blurs a receiver at
+    // φ₁ by `focal·radius·(φ₁ − φ₀)` cells (std), at most from the nearest vertex to the
+    // farthest (wider along the slope above); [`AUTO_GUARD_SIGMAS`] of it and the bilinear
+    // read's cell, as the eye's automatic guard band, capped for its cost ([`MIN_MARGIN`]).
+    let penumbra = light.radius * focal * (1.0 / near - 1.0 / hi.z.max(near)).max(0.0);
+    // Per axis of the grid's light covariance `penumbra²·R·diag(along, 1)·Rᵀ`, R the slope's
+    // direction.
+    let m2 = along - 1.0;
+    let share = |m: f64| if m2 > 0.0 { m * m / m2 } else { 0.0 };
+    let margin = |m: f64, seen: f64| {
+        if light.radius == 0.0 {
+            return 0.0; // a hard light's gather reads no neighbour
+        }
+        let var = penumbra * penumbra * (1.0 + m2 * share(m));
+        let reach = (AUTO_GUARD_SIGMAS * var.sqrt() + 1.0) / focal;
+        reach.min((MAX_MARGIN_SHARE * seen).max(MIN_MARGIN / focal))
+    };
+    let (tan_x, tan_y) = (
+        tan_x.min(seen[0] + margin(slope[0], seen[0])),
+        tan_y.min(seen[1] + margin(slope[1], seen[1])),
+    );
     let cell = frame.pixel_size;
     // Two cells beyond the outermost vertex: every ray that meets a mesh is in the grid.
     let side = |tan: f64| 2.0 * (tan * focal + 2.0).ceil();
@@ -163,18 +207,6 @@ pub(super) fn point_grid(
     };
     let first = 1.0 / origin - 1.0 / (origin + e);
     let spread = light.radius * first * focal * cell / e;
-    // The light's depth extent blurs too, along the ray's slope m = (x, y)/z: by r·|m| per unit
-    // φ·focal, a covariance `spread²·(I + m·mᵀ)` that changes across the grid. The grid's light
-    // takes it at one slope (a spot's axis, else the middle of what the light sees): exact
-    // there, off by √((1 + m²)/(1 + m̄²)) in the width elsewhere (docs/how-it-works.md).
-    let middle = 0.5 * (lo + hi);
-    let axis = light
-        .spot
-        .map(|s| to_light_frame(cam.to_camera(cam.center + DVec3::from(s.direction))))
-        .filter(|d| d.z > 0.1 * d.length())
-        .unwrap_or(middle);
-    let slope = [axis.x / axis.z, axis.y / axis.z];
-    let along = 1.0 + slope[0] * slope[0] + slope[1] * slope[1];
     grid.lights[l].variance = [spread * spread * along, spread * spread];
     grid.lights[l].rotation_deg = slope[1].atan2(slope[0]).to_degrees();
     grid.camera = CameraSpec {

@@ -190,18 +190,19 @@ fn each_lights_layer_is_its_own_render_when_the_lights_need_two_passes() {
 
 /// Per angle of `POINT_SETUPS`: the largest RMSE allowed for the soft point light, today's
 /// numbers plus 25 % (a guard, far from the 5e-3; docs/accuracy.md §2e): at 0° and 180°
-/// the plate's edge on the light's grid (0.033–0.034); at 45° and 135° the plate's shadow, which
-/// its surface hold let through until a hold ended at a crossing with something behind it
-/// (0.64 then, 0.038 and 0.080 now). `None`: not rendered here (80° and 100°, 5 s each on the
-/// light's grid of 13596 × 69 cells, still at 0.42 and 0.32; the report's `direction` family
-/// has them).
+/// the plate's edge on the light's grid, half a cell at light resolution 1 (0.024 and 0.022;
+/// 0.034 and 0.033 while the grid ended at the eye's 8 rows, its penumbra reading unoccluded
+/// light beyond them); at 45° and 135° the plate's shadow, which its surface hold let through
+/// until a hold ended at a crossing with something behind it (0.64 then, 0.039 and 0.080 now).
+/// `None`: not rendered here (80° and 100°, 12–30 s each on the light's grid of about
+/// 13596 × 100 cells, still at 0.39 and 0.32; the report's `direction` family has them).
 const POINT_BOUNDS: [Option<f64>; 6] = [
-    Some(0.042),
+    Some(0.030),
     Some(0.048),
     None,
     None,
     Some(0.10),
-    Some(0.041),
+    Some(0.027),
 ];
 
 #[test]

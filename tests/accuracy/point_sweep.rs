@@ -144,6 +144,35 @@ fn a_soft_point_lights_penumbra_on_a_wall_matches_the_integrated_visibility_on_t
     }
 }
 
+/// The same soft light's penumbra in an image only 8 rows high: the light's grid spans what the
+/// eye sees and a read beyond it is the unoccluded light, so until the grid reached past the
+/// eye's rows by the penumbra's reach (2026-12-07) the penumbra gathered light from beyond the
+/// grid's top and bottom rows — there is none, the plate runs on — and the shadow came out
+/// brighter: RMSE 7.0e-3 at `light_resolution` 4 (4.6e-3 at 16 rows; 0.067 with the light level
+/// with the middle rows, y = 0), now 4.3e-3. The bar at 4, as for the taller image above.
+#[test]
+fn a_soft_point_lights_penumbra_in_an_image_a_few_rows_high_is_as_right_as_in_a_tall_one() {
+    let (w, h) = (128usize, 8usize);
+    let (p, r) = (DVec3::new(0.2, 0.1, -2.0), 0.1);
+    let light = format!(
+        "kind = \"point\"\nposition = [{}, {}, {}]\nradius = {r}",
+        p.x, p.y, p.z
+    );
+    let mut scene = plate_and_wall(
+        (w, h),
+        "direction = [0.0, 0.0, 1.0]\nview_width = 2.0",
+        &light,
+    );
+    scene.sweep.light_resolution = 4.0;
+    let image = render(&scene, &RenderRequest::default())
+        .unwrap()
+        .image
+        .data;
+    let (rmse, n) = point_edge::wall_rmse(&image, (w, h), View::Orthographic(2.0), p, r);
+    eprintln!("128 × 8, light_resolution 4: RMSE {rmse:.3e} over {n} wall pixels");
+    assert!(rmse <= 5e-3, "RMSE {rmse:.3e}");
+}
+
 /// A translucent box (a Henyey–Greenstein medium) on a white wall in a 64 × 48 view by
 /// `camera`, lit by `lights` (`[[light]]` tables).
 fn medium_scene(camera: &str, lights: &str) -> Scene {
