@@ -43,6 +43,20 @@ pub fn advance(ldi: &Ldi, next: &mut u32, end: u32, inside: &mut u32, back_face:
     first
 }
 
+/// Whether a pixel's first crossing in a slab, fragment `first` ([`advance`]'s answer, not
+/// [`NO_CROSSING`]), left a closed mesh it was inside: its cursor's mask after the slab `after`
+/// with the slab's crossings (`first` up to `next`) undone is the mask before the first, which
+/// holds the first fragment's mesh only on the way out (a thin shell's bit is never set).
+/// sweep.wgsl asks the same of the cursor's mask before the slab.
+#[inline(always)]
+pub fn leaves_its_mesh(ldi: &Ldi, first: u32, next: u32, after: u32) -> bool {
+    let mut before = after;
+    for i in first..next {
+        before ^= (1 << ldi.mesh[i as usize]) & ldi.parity_meshes;
+    }
+    before & (1 << ldi.mesh[first as usize]) != 0
+}
+
 /// Where in its slab `[front, back)` a pixel meets the medium of mesh `mesh`, which it shades
 /// there: `(inside, lit_from)`, in slab thicknesses (`inv_e` = 1/e), clamped to 0…1.
 ///
@@ -138,6 +152,31 @@ mod tests {
         let shells = one_pixel(0b00);
         let shell = slab_part(&shells, (0, true), (0, 0), (0, 0), (0.75, 1.25), 1.0 / e);
         assert_eq!(shell, (1.0, 0.0));
+    }
+
+    #[test]
+    fn a_crossing_leaves_its_mesh_only_on_the_way_out_of_a_closed_one() {
+        // Mesh 0 closed from depth 1 to 3, mesh 1 at 2: closed (entered there), or a shell.
+        for mask in [0b11, 0b01] {
+            let ldi = one_pixel(mask);
+            let (mut next, mut inside) = (0u32, 0u32);
+            let mut step = |back: f32| {
+                let first = advance(&ldi, &mut next, 3, &mut inside, back);
+                leaves_its_mesh(&ldi, first, next, inside)
+            };
+            assert!(!step(1.5), "entering mesh 0");
+            assert!(!step(2.5), "entering mesh 1, or crossing the shell");
+            assert!(step(3.5), "leaving mesh 0");
+        }
+        // Entering mesh 0 and leaving it within one slab: the first crossing enters.
+        let ldi = one_pixel(0b01);
+        let (mut next, mut inside) = (0u32, 0u32);
+        let first = advance(&ldi, &mut next, 3, &mut inside, 9.0);
+        assert!(!leaves_its_mesh(&ldi, first, next, inside));
+        // Inside mesh 0 from the start, its exit the slab's first crossing.
+        let (mut next, mut inside) = (2u32, 0b01u32);
+        let first = advance(&ldi, &mut next, 3, &mut inside, 9.0);
+        assert!(leaves_its_mesh(&ldi, first, next, inside));
     }
 
     #[test]

@@ -20,8 +20,10 @@
 //!   "Where a hold ends early"), and again for backlit, rimlit and the full-size floor and
 //!   sunlit when lit exit faces got their exit hold (same day, "The exit hold"), and for the
 //!   teapot (the one scene with an open mesh) when thin shells got their barrier (same day,
-//!   "The barrier behind a thin shell"), rendered anew by the CLI at `--path scalar --threads
-//!   1`; no other row changed. Checked with `--penumbra iterated --surface flat --media first-order`.
+//!   "The barrier behind a thin shell"), and for backlit, floor, rimlit and sunlit when a
+//!   crossing that leaves a closed mesh stopped starting a hold (same day, "Leaving a mesh
+//!   starts no hold"), rendered anew by the CLI at `--path scalar --threads 1`; no other row
+//!   changed. Checked with `--penumbra iterated --surface flat --media first-order`.
 //! - `tests/data/golden_hashes.tsv`: the same cases with the defaults (automatic guard band,
 //!   distance penumbra), recorded when the distance penumbra became the default and re-recorded
 //!   when lambert surfaces did (2026-12-04, issue 40: opaque surfaces get max(0, n·l)) and when
@@ -31,7 +33,9 @@
 //!   issues 40/41: a thin plate's shadow was lost behind a 1023-slab hold) and when lit exit
 //!   faces got their exit hold (same day: a floor lit towards the viewer came out in black
 //!   rows at small image sizes), and for the teapot when thin shells got their barrier (same
-//!   day: a turned opaque shell let light through, the teapot's shadow grey). A change that is
+//!   day: a turned opaque shell let light through, the teapot's shadow grey), and for backlit,
+//!   cloud_vdb, floor, rimlit and sunlit when leaving a closed mesh stopped starting a hold
+//!   (same day: its release darkened a soft point light's penumbra far behind). A change that is
 //!   meant to change an image (a new default) re-records this table with
 //!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test contract golden_hashes::` and says
 //!   why in its commit.

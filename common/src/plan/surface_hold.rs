@@ -196,9 +196,12 @@ pub const EXIT_HOLD_SHIFT: u32 = 10;
 /// Where the barrier starts in a packed per-triangle hold word ([`pack_holds`]).
 pub const BARRIER_SHIFT: u32 = 20;
 
+/// The entry hold's bits of a packed per-triangle hold word ([`pack_holds`]).
+pub const ENTRY_HOLD_MASK: u32 = (1 << EXIT_HOLD_SHIFT) - 1;
+
 /// The entry hold of a packed per-triangle hold word ([`pack_holds`]).
 pub const fn entry_of(word: u32) -> u32 {
-    word & ((1 << EXIT_HOLD_SHIFT) - 1)
+    word & ENTRY_HOLD_MASK
 }
 
 /// The exit hold of a packed per-triangle hold word ([`pack_holds`]).

@@ -28,7 +28,7 @@
 use convshadow_common::pixel::levels::{depth_coord, pixel_level};
 use convshadow_common::plan::TfEntry;
 use convshadow_common::plan::kernel::Tap;
-use convshadow_common::plan::surface_hold::exit_of;
+use convshadow_common::plan::surface_hold::{ENTRY_HOLD_MASK, exit_of};
 
 use super::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, RowContext, RowState, SlabContext, level_plane, light_block,
@@ -39,7 +39,7 @@ use crate::composite::{
     hold_step, owned_depth, release_slab, shade_sample,
 };
 use crate::kernels::{LightPlanes, TapOrigin, distance_row, gather, gather_held, phase_at};
-use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
+use crate::parity::{NO_CROSSING, advance, first_mesh, leaves_its_mesh, slab_part};
 use crate::shading::{TfLanes, detail_at, material_at, pre_transfer, shading_depth};
 use crate::subpixel::{exact_shift, removal_depth, shifted_gather};
 
@@ -205,6 +205,14 @@ pub(crate) fn hold(
         (0, false)
     } else {
         let word = plan.surface_hold[ldi.triangle[crossed as usize] as usize];
+        // Leaving a closed mesh starts no hold: there is no attenuation to delay, and its
+        // release would take out, far behind the face, light the pixel has gathered since.
+        let leaving = leaves_its_mesh(ldi, crossed, state.next[x], state.inside[x]);
+        let word = if leaving {
+            word & !ENTRY_HOLD_MASK
+        } else {
+            word
+        };
         (word, state.next[x] < end)
     };
     let inside = state.inside[x] != 0;

@@ -96,6 +96,11 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         var crossed_word = 0u;
         if crossed {
             crossed_word = surface_hold[surface_hold_index(frag_meta[adv.first] >> MESH_BITS)];
+            // Leaving a closed mesh starts no hold (cpu/src/parity.rs `leaves_its_mesh`): the
+            // mask before the slab holds the first fragment's mesh only on the way out.
+            if (state.inside & (1u << (frag_meta[adv.first] & MESH_MASK))) != 0u {
+                crossed_word = crossed_word & ~((1u << EXIT_HOLD_SHIFT) - 1u);
+            }
         }
         let ahead = adv.next < offsets[p + 1u];
         let before = hold[hold_index(p)];
