@@ -44,16 +44,11 @@ pub fn advance(ldi: &Ldi, next: &mut u32, end: u32, inside: &mut u32, back_face:
 }
 
 /// Whether a pixel's first crossing in a slab, fragment `first` ([`advance`]'s answer, not
-/// [`NO_CROSSING`]), left a closed mesh it was inside: its cursor's mask after the slab `after`
-/// with the slab's crossings (`first` up to `next`) undone is the mask before the first, which
-/// holds the first fragment's mesh only on the way out (a thin shell's bit is never set).
-/// sweep.wgsl asks the same of the cursor's mask before the slab.
+/// [`NO_CROSSING`]), left a closed mesh it was inside: the cursor's mask before the slab,
+/// `before`, holds the first fragment's mesh only on the way out (a thin shell's bit is never
+/// set). sweep.wgsl asks the same.
 #[inline(always)]
-pub fn leaves_its_mesh(ldi: &Ldi, first: u32, next: u32, after: u32) -> bool {
-    let mut before = after;
-    for i in first..next {
-        before ^= (1 << ldi.mesh[i as usize]) & ldi.parity_meshes;
-    }
+pub fn leaves_its_mesh(ldi: &Ldi, first: u32, before: u32) -> bool {
     before & (1 << ldi.mesh[first as usize]) != 0
 }
 
@@ -161,8 +156,9 @@ mod tests {
             let ldi = one_pixel(mask);
             let (mut next, mut inside) = (0u32, 0u32);
             let mut step = |back: f32| {
+                let before = inside;
                 let first = advance(&ldi, &mut next, 3, &mut inside, back);
-                leaves_its_mesh(&ldi, first, next, inside)
+                leaves_its_mesh(&ldi, first, before)
             };
             assert!(!step(1.5), "entering mesh 0");
             assert!(!step(2.5), "entering mesh 1, or crossing the shell");
@@ -172,11 +168,11 @@ mod tests {
         let ldi = one_pixel(0b01);
         let (mut next, mut inside) = (0u32, 0u32);
         let first = advance(&ldi, &mut next, 3, &mut inside, 9.0);
-        assert!(!leaves_its_mesh(&ldi, first, next, inside));
+        assert!(!leaves_its_mesh(&ldi, first, 0));
         // Inside mesh 0 from the start, its exit the slab's first crossing.
         let (mut next, mut inside) = (2u32, 0b01u32);
         let first = advance(&ldi, &mut next, 3, &mut inside, 9.0);
-        assert!(leaves_its_mesh(&ldi, first, next, inside));
+        assert!(leaves_its_mesh(&ldi, first, 0b01));
     }
 
     #[test]

@@ -161,16 +161,13 @@ pub(super) fn point_grid(
     // farthest (wider along the slope above); [`AUTO_GUARD_SIGMAS`] of it and the bilinear
     // read's cell, as the eye's automatic guard band, capped for its cost ([`MIN_MARGIN`]).
     let penumbra = light.radius * focal * (1.0 / near - 1.0 / hi.z.max(near)).max(0.0);
-    // Per axis of the grid's light covariance `penumbra²·R·diag(along, 1)·Rᵀ`, R the slope's
-    // direction.
-    let m2 = along - 1.0;
-    let share = |m: f64| if m2 > 0.0 { m * m / m2 } else { 0.0 };
+    // Along an axis of slope m the covariance `penumbra²·(I + m·mᵀ)` has variance
+    // `penumbra²·(1 + m²)`; a hard light's gather reads no neighbour and needs no margin.
     let margin = |m: f64, seen: f64| {
         if light.radius == 0.0 {
-            return 0.0; // a hard light's gather reads no neighbour
+            return 0.0;
         }
-        let var = penumbra * penumbra * (1.0 + m2 * share(m));
-        let reach = (AUTO_GUARD_SIGMAS * var.sqrt() + 1.0) / focal;
+        let reach = (AUTO_GUARD_SIGMAS * penumbra * (1.0 + m * m).sqrt() + 1.0) / focal;
         reach.min((MAX_MARGIN_SHARE * seen).max(MIN_MARGIN / focal))
     };
     let (tan_x, tan_y) = (

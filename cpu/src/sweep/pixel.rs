@@ -90,7 +90,7 @@ pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usi
     convolve(row, x, inside, &mut light);
     // 2. Intersection: advance the layer cursor to the slab's back face.
     let hit = intersect(row.ctx, row.y, state, x);
-    let held = hold(row.ctx, state, (x, row.y), hit.crossed);
+    let held = hold(row.ctx, state, (x, row.y), (hit.crossed, hit.before));
     // Sub-pixel shadows: a crossed opaque surface's light read at its exact shift.
     let part = subpixel_part(row.ctx, &hit);
     let exact_in;
@@ -183,7 +183,7 @@ pub(crate) fn exact_light(
 }
 
 /// Step 2's surface hold at pixel x of row y, whose cursor crossed fragment `crossed` in this
-/// slab ([`NO_CROSSING`]: none): [`hold_step`] with the crossed triangle's hold word, ending a
+/// slab ([`NO_CROSSING`]: none) from the inside mask `inside_before`: [`hold_step`] with the crossed triangle's hold word, ending a
 /// pending hold where the pixel has fragments left behind the crossing, its barrier outside
 /// every closed mesh; else the **exit hold**
 /// ([`exit_hold`](convshadow_common::plan::surface_hold::exit_hold)): a pixel inside the mesh
@@ -194,7 +194,7 @@ pub(crate) fn hold(
     ctx: &SlabContext<'_>,
     state: &mut RowState<'_>,
     (x, y): (usize, usize),
-    crossed: u32,
+    (crossed, inside_before): (u32, u32),
 ) -> Held {
     let (plan, ldi) = (ctx.plan, ctx.ldi);
     if !plan.has_surface_hold() {
@@ -207,8 +207,7 @@ pub(crate) fn hold(
         let word = plan.surface_hold[ldi.triangle[crossed as usize] as usize];
         // Leaving a closed mesh starts no hold: there is no attenuation to delay, and its
         // release would take out, far behind the face, light the pixel has gathered since.
-        let leaving = leaves_its_mesh(ldi, crossed, state.next[x], state.inside[x]);
-        let word = if leaving {
+        let word = if leaves_its_mesh(ldi, crossed, inside_before) {
             word & !ENTRY_HOLD_MASK
         } else {
             word

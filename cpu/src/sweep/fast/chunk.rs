@@ -321,7 +321,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
             || state.inside[x0..x0 + L::LANES].iter().any(|&m| m != 0))
     {
         for (i, h) in held.iter_mut().enumerate().take(L::LANES) {
-            *h = hold(ctx, state, (x0 + i, y), hits.crossed[i]);
+            *h = hold(ctx, state, (x0 + i, y), (hits.crossed[i], hits.before[i]));
             released |= matches!(h, Held::Release { .. });
         }
     }

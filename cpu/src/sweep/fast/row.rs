@@ -266,6 +266,7 @@ fn advance_dark(row: &RowContext<'_>, state: &mut RowState<'_>, xs: Range<usize>
     let mut moved = false;
     for x in xs.clone() {
         let end = ctx.ldi.offsets[row.y * w + x + 1];
+        let before = state.inside[x];
         let first = advance(
             ctx.ldi,
             &mut state.next[x],
@@ -276,7 +277,7 @@ fn advance_dark(row: &RowContext<'_>, state: &mut RowState<'_>, xs: Range<usize>
         moved |= first != NO_CROSSING;
         // The surface hold moves as in the full stage (the light it passes or removes is 0).
         moved |= matches!(
-            pixel::hold(ctx, state, (x, row.y), first),
+            pixel::hold(ctx, state, (x, row.y), (first, before)),
             Held::Release { .. }
         );
     }
