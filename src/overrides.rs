@@ -190,6 +190,8 @@ pub struct SweepOverrides {
     pub subpixel_shadows: Option<bool>,
     /// `sweep.held_lit_side`.
     pub held_lit_side: Option<bool>,
+    /// `sweep.horizon`.
+    pub horizon: Option<bool>,
     /// `sweep.light_resolution`.
     pub light_resolution: Option<f64>,
 }
@@ -242,6 +244,9 @@ impl SweepOverrides {
         }
         if let Some(v) = self.held_lit_side {
             scene.sweep.held_lit_side = v;
+        }
+        if let Some(v) = self.horizon {
+            scene.sweep.horizon = v;
         }
         if let Some(v) = self.light_resolution {
             scene.sweep.light_resolution = v;

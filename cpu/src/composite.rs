@@ -67,7 +67,16 @@ pub fn shade_sample_with<L: Lane>(
     let light = part_of_slab(tf, inside, lit_from);
     let lights = material.light_color.len();
     let ch = plan.channels as usize;
-    let shaded = shade_with(ch, lights, terms, material, tf.color, iin, surface.as_ref());
+    let shaded = shade_with(
+        ch,
+        lights,
+        terms,
+        material,
+        tf.color,
+        iin,
+        surface.as_ref(),
+        &plan.horizon,
+    );
     let shaded = [0, 1, 2].map(|c| shaded[c] * light[c]);
     composite(color, alpha, shaded, tf.alpha, lanes, plan.turned_round);
 }

@@ -1,5 +1,5 @@
 //! Stage 3, shading: material lookup at one point per slab, detail function, transfer function,
-//! light sum, Lambert cosine at opaque crossings and specular highlight (step 3 of the per-pixel sweep, paper §4.2). Mirrors
+//! light sum, horizon and Lambert cosine at opaque crossings and specular highlight (step 3 of the per-pixel sweep, paper §4.2). Mirrors
 //! `gpu/src/shaders/shading.wgsl`.
 //!
 //! Written once over [`Lane`]: the per-pixel stage (`crate::sweep::pixel`) calls the 1-lane
@@ -9,6 +9,7 @@
 use convshadow_common::model::scene::SpecularModel;
 use convshadow_common::pixel::hash::{pixel_hash, unit_float};
 use convshadow_common::pixel::lane::{Lane, MAX_LANES};
+use convshadow_common::plan::horizon::{HORIZON_PER_UNIT, HORIZON_REACH, HORIZON_STEPS};
 pub use convshadow_common::plan::point_light::LightTerms;
 use convshadow_common::plan::{MaterialPlan, PI_SIZE, RenderPlan, SpecularPlan, TF_SIZE, TfEntry};
 
@@ -261,6 +262,45 @@ pub fn lambert<L: Lane>(f: [L; 3], to_light: [f32; 3]) -> L {
     positive(dot(f, to_light))
 }
 
+/// Whether a crossing of `material`'s surface needs its triangle's normal: for a highlight, the
+/// Lambert cosine or the horizon.
+#[inline(always)]
+pub fn uses_normals(plan: &RenderPlan, material: &MaterialPlan) -> bool {
+    material.specular.is_some() || material.lambert || !plan.horizon.is_empty()
+}
+
+/// The horizon: the part of a light above the tangent plane of facing normal `f`, Φ(μ/σ) with
+/// μ = f·`to_light` and σ² = ((a·fx² + b·fx·fy) + c·fy²) + iso from the light's `spread`
+/// ([`convshadow_common::plan::horizon`]), Φ read from `table` by linear interpolation: 1 where
+/// μ/σ ≥ its reach, 0 where ≤ −reach; without spread (σ = 0) 1 where μ > 0, else 0. Mirrors
+/// `shading.wgsl` `horizon` operation for operation.
+#[inline(always)]
+pub fn horizon<L: Lane>(table: &[f32], f: [L; 3], to_light: [f32; 3], spread: [f32; 4]) -> L {
+    let (zero, one) = (L::splat(0.0), L::splat(1.0));
+    let mu = dot(f, to_light);
+    let var = ((L::splat(spread[0]) * (f[0] * f[0]) + L::splat(spread[1]) * (f[0] * f[1]))
+        + L::splat(spread[2]) * (f[1] * f[1]))
+        + L::splat(spread[3]);
+    let sharp = L::select(mu.gt(zero), one, zero);
+    let soft = var.gt(zero);
+    let t = mu / L::select(soft, var, one).sqrt();
+    let steps = HORIZON_STEPS as f32;
+    let u = (t + L::splat(HORIZON_REACH)) * L::splat(HORIZON_PER_UNIT);
+    let below_top = u.lt(L::splat(steps));
+    let above_bottom = u.gt(zero);
+    let clamped = L::select(below_top, u, L::splat(steps - 1.0));
+    let clamped = L::select(above_bottom, clamped, zero);
+    let knot = clamped.floor();
+    let w = clamped - knot;
+    let i = knot.trunc_u32();
+    let a = L::gather(table, i);
+    let b = L::gather(table, L::u_add(i, L::u_splat(1)));
+    let phi = a + (b - a) * w;
+    let phi = L::select(below_top, phi, one);
+    let phi = L::select(above_bottom, phi, zero);
+    L::select(soft, phi, sharp)
+}
+
 /// The Ashikmin–Shirley weight of one light (isotropic lobe, Schlick Fresnel) at a facing normal
 /// `f`, the cosine included: `a · (f·h)^e · (f·l) / max(f·l, f·v)` with v = (0, 0, −1), so
 /// f·v = −f_z, and `a = scale · (b + f0·c)` the light's Fresnel-over-(h·k) constants
@@ -306,6 +346,10 @@ pub struct Surface<L: Lane> {
 /// (so a flat material, a volume sample or a translucent crossing keeps the bits it had
 /// without the factor: `x·1 = x`).
 ///
+/// With a `horizon` table (`sweep.horizon`), the light at an opaque crossing is first limited to
+/// the part above the surface's tangent plane ([`horizon`]): the smaller of the two for a plain
+/// light (its buffer holds the visible part), their product for a pattern's.
+///
 /// `iin` holds `lights × channels` values; with one channel the light is grey.
 #[inline(always)]
 pub fn shade<L: Lane>(
@@ -325,11 +369,14 @@ pub fn shade<L: Lane>(
         color,
         iin,
         surface,
+        &plan.horizon,
     )
 }
 
-/// [`shade`] with each light's terms given by `terms` (`lights` of them, `ch` channels).
+/// [`shade`] with each light's terms given by `terms` (`lights` of them, `ch` channels) and the
+/// horizon's table `horizon` (empty: none).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub fn shade_with<L: Lane>(
     ch: usize,
     lights: usize,
@@ -338,9 +385,17 @@ pub fn shade_with<L: Lane>(
     color: [L; 3],
     iin: &[L],
     surface: Option<&Surface<L>>,
+    horizon_table: &[f32],
 ) -> [L; 3] {
     let one = L::splat(1.0);
     let f = surface.map(|sf| facing(sf.normal));
+    // The lanes whose light the horizon limits: crossed, opaque, with a table.
+    let opaque = match (surface, f) {
+        (Some(sf), Some(f)) if !horizon_table.is_empty() => {
+            Some((L::select(sf.lanes, sf.alpha, L::splat(0.0)), f))
+        }
+        _ => None,
+    };
     // The lanes whose Lambert cosine applies: crossed, and opaque (alpha < 1 keeps 1).
     let diffuse = match (surface, f, material.lambert) {
         (Some(sf), Some(f), true) => Some((sf, f, sf.alpha.lt(one))),
@@ -354,8 +409,24 @@ pub fn shade_with<L: Lane>(
             let d = lambert(f, light.to_light);
             L::select(sf.lanes, L::select(translucent, one, d), one)
         });
+        // Only where the crossing is opaque (alpha exactly 1; not crossed: alpha 0).
+        let visible = opaque.map(|(alpha, f)| {
+            let h = horizon(horizon_table, f, light.to_light, light.spread);
+            (alpha.lt(one), h, light.plain)
+        });
         for (c, s) in sum.iter_mut().enumerate() {
             let i = iin[l * ch + if ch == 1 { 0 } else { c }];
+            let i = match visible {
+                Some((translucent, h, plain)) => {
+                    let limited = if plain {
+                        L::select(i.lt(h), i, h)
+                    } else {
+                        i * h
+                    };
+                    L::select(translucent, i, limited)
+                }
+                None => i,
+            };
             let t = i * L::splat(lc[c]);
             *s = *s + cos.map_or(t, |k| t * k);
         }
@@ -380,4 +451,89 @@ pub fn shade_with<L: Lane>(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use convshadow_common::plan::horizon::horizon_table;
+    use wide::f32x8;
+
+    /// Φ(t) by Simpson's rule on the standard normal density from −12 (independent of the
+    /// table's erfc).
+    fn phi_by_quadrature(t: f64) -> f64 {
+        let (a, n) = (-12.0, 20_000);
+        let h = (t - a) / f64::from(n);
+        let density = |x: f64| (-0.5 * x * x).exp() / (2.0 * std::f64::consts::PI).sqrt();
+        let inner: f64 = (1..n)
+            .map(|i| density(a + f64::from(i) * h) * if i % 2 == 1 { 4.0 } else { 2.0 })
+            .sum();
+        (density(a) + inner + density(t)) * h / 3.0
+    }
+
+    #[test]
+    fn the_horizon_is_the_part_of_a_gaussian_light_above_the_tangent_plane() {
+        let table = horizon_table();
+        // A light tilted (20°, −10°) with σ² = (0.03, 0.015) turned 25°: the variance of f·d
+        // for d = (s, −1)/‖(s̄, −1)‖ is fᵀΣf/‖(s̄, −1)‖², written out here in f64.
+        let (tilt, var, rot) = ([20.0f64, -10.0], [0.03, 0.015], 25.0f64);
+        let s = [tilt[0].to_radians().tan(), tilt[1].to_radians().tan()];
+        let norm = (s[0] * s[0] + s[1] * s[1] + 1.0).sqrt();
+        let to_light = [s[0] / norm, s[1] / norm, -1.0 / norm];
+        let spread = convshadow_common::plan::horizon::directional_spread(tilt, var, rot);
+        let (sn, cs) = rot.to_radians().sin_cos();
+        let cov = [
+            [
+                cs * cs * var[0] + sn * sn * var[1],
+                cs * sn * (var[0] - var[1]),
+            ],
+            [
+                cs * sn * (var[0] - var[1]),
+                sn * sn * var[0] + cs * cs * var[1],
+            ],
+        ];
+        let mut worst = 0.0f64;
+        for k in 0..400 {
+            // Facing normals (z ≤ 0) all round the terminator.
+            let (a, b) = (f64::from(k) * 0.157, 0.05 + f64::from(k % 20) * 0.078);
+            let n = [b.sin() * a.cos(), b.sin() * a.sin(), -b.cos()];
+            let mu = (n[0] * to_light[0] + n[1] * to_light[1]) + n[2] * to_light[2];
+            let v =
+                (n[0] * n[0] * cov[0][0] + 2.0 * n[0] * n[1] * cov[0][1] + n[1] * n[1] * cov[1][1])
+                    / (norm * norm);
+            let expected = phi_by_quadrature(mu / v.sqrt());
+            let f = n.map(|c| c as f32);
+            let got = horizon::<f32>(&table, f, to_light.map(|c| c as f32), spread);
+            worst = worst.max((f64::from(got) - expected).abs());
+            // The SIMD lanes give the same bits.
+            let lanes = horizon::<f32x8>(
+                &table,
+                f.map(f32x8::splat),
+                to_light.map(|c| c as f32),
+                spread,
+            );
+            assert_eq!(lanes.lane(3).to_bits(), got.to_bits());
+        }
+        assert!(worst < 2e-5, "largest difference from Φ: {worst}");
+    }
+
+    #[test]
+    fn without_spread_the_horizon_is_the_side_of_the_tangent_plane() {
+        let table = horizon_table();
+        let to_light = [0.0, 0.6, -0.8];
+        let hard = [0.0; 4];
+        let facing_light = horizon::<f32>(&table, [0.0, 0.0, -1.0], to_light, hard);
+        let away = horizon::<f32>(&table, [0.0, -1.0, -0.01], to_light, hard);
+        assert_eq!((facing_light, away), (1.0, 0.0));
+        // Far beyond the table's reach either way: exactly 1 and 0.
+        let wide = [0.0, 0.0, 0.0, 1e-6];
+        assert_eq!(
+            horizon::<f32>(&table, [0.0, 0.0, -1.0], to_light, wide),
+            1.0
+        );
+        assert_eq!(
+            horizon::<f32>(&table, [0.0, -1.0, 0.0], to_light, wide),
+            0.0
+        );
+    }
 }

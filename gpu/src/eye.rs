@@ -89,7 +89,7 @@ fn point_params(p: &EyePoint<'_>) -> PointParams {
     let mut params = PointParams {
         on: 1,
         pixel_size: s.pixel_size,
-        center: four(s.center),
+        center: [s.center[0], s.center[1], s.center[2], s.radius2],
         color: four(s.color),
         offset: p.offset,
         depth: p.depth,
@@ -146,6 +146,8 @@ fn eye_slab_dispatch(
                 (slot::VOXELS, &g.voxels),
                 (slot::MESHES, &g.meshes),
                 (slot::LIGHT_COLORS, &g.light_colors),
+                // The horizon's Φ table (`Globals::horizon_at`).
+                (slot::LEVEL_TABLE, &g.level_table),
                 (slot::GRID_CURSORS, &g.cursors),
                 (slot::GRID_OFFSETS, &g.offsets),
                 (slot::GRID_FRAG_META, &g.frag_meta),

@@ -116,7 +116,7 @@ pub struct PointParams {
     pub pattern: u32,
     /// `PointShading::pixel_size`.
     pub pixel_size: f32,
-    /// `PointShading::center` (x, y, z, 0).
+    /// `PointShading::center` (x, y, z) and `PointShading::radius2`.
     pub center: [f32; 4],
     /// `PointShading::color` (r, g, b, 0).
     pub color: [f32; 4],
@@ -237,7 +237,15 @@ pub struct Globals {
     /// held-plane record), `surface_hold` three per triangle (its word, then its depth slopes'
     /// f32 bits, `RenderPlan::hold_slopes`).
     pub held_lit_side: u32,
+    /// `sweep.horizon`: `level_table` index of the horizon's Φ table (`RenderPlan::horizon`,
+    /// f32 bits), or [`HORIZON_NONE`].
+    pub horizon_at: u32,
+    /// Pads the struct to WGSL's size (a multiple of its 8-byte alignment).
+    pub _pad0: u32,
 }
+
+/// `Globals::horizon_at` without a horizon (`sweep.horizon = false`).
+pub const HORIZON_NONE: u32 = u32::MAX;
 
 /// One slab's faces and jitter hash.
 #[repr(C)]
@@ -284,6 +292,10 @@ pub struct LightHeader {
     pub fresnel: [f32; 2],
     /// The light's drift per slab in pixels (`LightPlan::drift`).
     pub drift: [f32; 2],
+    /// The light's spread for the horizon (`LightPlan::spread`).
+    pub spread: [f32; 4],
+    /// 1 when the light buffer holds the visible part of the light (`LightPlan::plain`).
+    pub plain: u32,
 }
 
 /// One light's per-slab values (`light · slabs + slab` in the light-slab buffer).

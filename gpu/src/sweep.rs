@@ -27,9 +27,9 @@ use crate::buffers::{bind, check_size, dispatch_once, read_back, uniform, upload
 use crate::device::{GpuContext, GpuError};
 use crate::layout::{
     Cursor, DETAIL_FBM, DETAIL_NONE, DETAIL_PERLIN, DETAIL_RIDGED, DETAIL_TURBULENCE, Globals,
-    LightHeader, LightSlab, MESH_BITS, MaterialHeader, MeshHeader, NO_PRE, Octave, PHASE_PER_PIXEL,
-    PHASE_PER_SLAB, PHASE_SCHEDULE, PRE_NONE, SPEC_ASHIKMIN_SHIRLEY, SPEC_BLINN_PHONG, Slab,
-    SlabParams, TEXTURE_BRICKED, TEXTURE_DENSE, Tap, TransferEntry, slot,
+    HORIZON_NONE, LightHeader, LightSlab, MESH_BITS, MaterialHeader, MeshHeader, NO_PRE, Octave,
+    PHASE_PER_PIXEL, PHASE_PER_SLAB, PHASE_SCHEDULE, PRE_NONE, SPEC_ASHIKMIN_SHIRLEY,
+    SPEC_BLINN_PHONG, Slab, SlabParams, TEXTURE_BRICKED, TEXTURE_DENSE, Tap, TransferEntry, slot,
 };
 use crate::shader::Program;
 
@@ -159,6 +159,8 @@ fn light_tables(light: &LightPlan, slabs: usize, distance: bool, t: &mut Tables)
         to_light: light.to_light,
         fresnel: light.fresnel,
         drift: light.drift,
+        spread: light.spread,
+        plain: u32::from(light.plain),
     };
     t.taps.extend(table.taps.iter().map(|tap| Tap {
         dx: tap.dx,
@@ -290,6 +292,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             second_order_media: u32::from(plan.second_order_media),
             subpixel_shadows: u32::from(!plan.subpixel_meshes.is_empty()),
             back_to_front: u32::from(plan.turned_round),
+            horizon_at: HORIZON_NONE,
             ..Globals::default()
         },
         slabs: (0..slabs)
@@ -334,6 +337,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
         t.lights.push(header);
     }
     point_grid_tables(plan, &mut t);
+    horizon_tables(plan, &mut t);
     for (i, m) in plan.materials.iter().enumerate() {
         // A material sharing an earlier one's texture (an open mesh's shell variant) reads the
         // voxels already uploaded.
@@ -352,6 +356,15 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
 
 /// A point light's grid (`src/pipeline/point.rs` `on_point_grid`): its projective material
 /// map into the globals and a soft light's ψ per slab coordinate after the level tables.
+/// The horizon's Φ table in `level_table` (f32 bits), where the plan has one.
+fn horizon_tables(plan: &RenderPlan, t: &mut Tables) {
+    if !plan.horizon.is_empty() {
+        t.globals.horizon_at = t.level_table.len() as u32;
+        t.level_table
+            .extend(plan.horizon.iter().map(|v| v.to_bits()));
+    }
+}
+
 fn point_grid_tables(plan: &RenderPlan, t: &mut Tables) {
     if let Some(p) = &plan.projective {
         let g = &mut t.globals;
@@ -410,7 +423,7 @@ pub(crate) struct SweepBuffers {
     pub(crate) lights: wgpu::Buffer,
     light_slabs: wgpu::Buffer,
     taps: wgpu::Buffer,
-    level_table: wgpu::Buffer,
+    pub(crate) level_table: wgpu::Buffer,
     pub(crate) materials: wgpu::Buffer,
     pub(crate) tf_entries: wgpu::Buffer,
     pub(crate) octaves: wgpu::Buffer,

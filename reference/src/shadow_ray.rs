@@ -731,6 +731,9 @@ impl<'a> Reference<'a> {
                             tf.color,
                             iin,
                             surface.as_ref(),
+                            // No horizon: the shadow rays find the body below the tangent
+                            // plane themselves.
+                            &[],
                         );
                         composite(
                             &mut color,

@@ -11,7 +11,8 @@
 //!   `armadillo`, `spot` and `mri` for the gallery (a smaller key light, the wall closer), their
 //!   rows here and in the next table were rendered anew with the table's flags. Checked with
 //!   `--surface flat` since lambert surfaces became the default (2026-12-04), like the next, and
-//!   `--media first-order` since second-order media did (2026-12-05, issue 46).
+//!   `--media first-order` since second-order media did (2026-12-05, issue 46), and
+//!   `--horizon false` since the horizon did (2026-12-07, issue 46).
 //! - `tests/data/golden_hashes_iterated.tsv`: the same cases with the automatic guard band and the
 //!   iterated penumbra, recorded when the guard band became the default (new scenes added with
 //!   their rows). Never re-recorded either — but for the rows of the scenes with held surfaces,
@@ -23,7 +24,8 @@
 //!   "The barrier behind a thin shell"), and for backlit, floor, rimlit and sunlit when a
 //!   crossing that leaves a closed mesh stopped starting a hold (same day, "Leaving a mesh
 //!   starts no hold"), rendered anew by the CLI at `--path scalar --threads 1`; no other row
-//!   changed. Checked with `--penumbra iterated --surface flat --media first-order`.
+//!   changed. Checked with `--penumbra iterated --surface flat --media first-order
+//!   --subpixel-shadows false --horizon false`.
 //! - `tests/data/golden_hashes.tsv`: the same cases with the defaults (automatic guard band,
 //!   distance penumbra), recorded when the distance penumbra became the default and re-recorded
 //!   when lambert surfaces did (2026-12-04, issue 40: opaque surfaces get max(0, n·l)) and when
@@ -35,7 +37,10 @@
 //!   rows at small image sizes), and for the teapot when thin shells got their barrier (same
 //!   day: a turned opaque shell let light through, the teapot's shadow grey), and for backlit,
 //!   cloud_vdb, floor, rimlit and sunlit when leaving a closed mesh stopped starting a hold
-//!   (same day: its release darkened a soft point light's penumbra far behind). A change that is
+//!   (same day: its release darkened a soft point light's penumbra far behind), and when the
+//!   horizon became the default (same day, issue 46: at an opaque crossing the light below the
+//!   tangent plane is blocked; every scene with an opaque surface oblique to the view changed).
+//!   A change that is
 //!   meant to change an image (a new default) re-records this table with
 //!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test contract golden_hashes::` and says
 //!   why in its commit.
@@ -52,9 +57,10 @@ const GOLDEN_BAND0: &str = "tests/data/golden_hashes_band0.tsv";
 /// The iterated penumbra's bits with the automatic guard band, checked with `--penumbra iterated`.
 const GOLDEN_ITERATED: &str = "tests/data/golden_hashes_iterated.tsv";
 /// The model the two earlier tables were recorded with: the iterated penumbra, flat surfaces, the
-/// paper's first-order media and shadows carried in whole pixels (sub-pixel shadows, which the
-/// iterated penumbra has had since 2026-12-05, change the all-opaque scenes).
-const EARLIER_MODEL: [&str; 8] = [
+/// paper's first-order media, shadows carried in whole pixels (sub-pixel shadows, which the
+/// iterated penumbra has had since 2026-12-05, change the all-opaque scenes) and no horizon
+/// (since 2026-12-07).
+const EARLIER_MODEL: [&str; 10] = [
     "--penumbra",
     "iterated",
     "--surface",
@@ -62,6 +68,8 @@ const EARLIER_MODEL: [&str; 8] = [
     "--media",
     "first-order",
     "--subpixel-shadows",
+    "false",
+    "--horizon",
     "false",
 ];
 

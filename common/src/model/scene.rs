@@ -453,6 +453,10 @@ pub struct SweepSpec {
     /// a surface when it lies behind that surface itself (docs/how-it-works.md, "Who reads the
     /// held light").
     pub held_lit_side: bool,
+    /// At an opaque crossing, the part of each light below the surface's tangent plane is
+    /// blocked (`sweep.horizon`, default on; off: the images of before 2026-12-07, bit for bit;
+    /// docs/how-it-works.md, "The horizon").
+    pub horizon: bool,
     /// The light grid's cells per image pixel (a perspective camera's: per pixel at the
     /// `look_at` distance; `sweep.light_resolution`, 1/16–16, default 1). At 1 an orthographic
     /// camera sweeps its light on its image's pixels; at any other value it gets a grid of its

@@ -40,6 +40,9 @@ pub trait Lane:
     type M: Copy;
     /// Broadcasts a float.
     fn splat(v: f32) -> Self;
+    /// The correctly rounded square root per lane (IEEE 754, as WGSL's `sqrt` on the reference
+    /// driver).
+    fn sqrt(self) -> Self;
     /// Rounds towards −∞.
     fn floor(self) -> Self;
     /// Clears the sign bit.
@@ -136,6 +139,10 @@ impl Lane for f32 {
     #[inline(always)]
     fn splat(v: f32) -> Self {
         v
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
     }
     #[inline(always)]
     fn floor(self) -> Self {
@@ -288,6 +295,10 @@ impl Lane for f32x8 {
     #[inline(always)]
     fn splat(v: f32) -> Self {
         f32x8::splat(v)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32x8::sqrt(self)
     }
     #[inline(always)]
     fn floor(self) -> Self {

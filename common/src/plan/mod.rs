@@ -6,6 +6,7 @@
 //! all here.
 
 pub mod depth_scale;
+pub mod horizon;
 pub mod kernel;
 pub mod levels;
 pub mod material;
@@ -82,6 +83,12 @@ pub struct LightPlan {
     /// The light's drift per slab (pixels): `moments.mean` in f32, the exact shift the sweep's
     /// gathers move its light by, on average, from one slab to the next.
     pub drift: [f32; 2],
+    /// The light's spread as the horizon reads it ([`horizon::directional_spread`]): the
+    /// variance of f·`to_light` over its samples is `a·fx² + b·fx·fy + c·fy² + iso`.
+    pub spread: [f32; 4],
+    /// The light buffer starts at 1 (no pattern), so its value is the visible part of the light
+    /// and the horizon takes the smaller of the two; a pattern's light is multiplied by it.
+    pub plain: bool,
     /// Per slab k: how far the sweep has moved the light after slab k's gather beyond its exact
     /// drift, `round((k + 1)·drift) − (k + 1)·drift` per axis where the mean is carried in whole
     /// pixels ([`KernelTable::slab_shift`]), else 0 (pixels). Empty unless
@@ -212,6 +219,9 @@ pub struct RenderPlan {
     /// lies (`surface_hold`, "Who reads the held light"); the sweep then keeps every pixel's
     /// held-plane record.
     pub held_lit_side: bool,
+    /// `sweep.horizon`: Φ at [`horizon::HORIZON_STEPS`] + 1 knots ([`horizon::horizon_table`]),
+    /// read at every opaque crossing; empty when off.
+    pub horizon: Vec<f32>,
     /// `sweep.subpixel_shadows`: per mesh, whether a crossing of its
     /// surface (its material blocks light: [`MaterialPlan::blocks_light`]) is shaded with the
     /// light read at its exact sub-pixel shift from its mean occluder (`cpu::kernels::
@@ -324,6 +334,12 @@ impl RenderPlan {
                     to_light: [shade_l.x as f32, shade_l.y as f32, shade_l.z as f32],
                     fresnel: fresnel_terms(h, to_light),
                     drift: moments.mean.map(|m| m as f32),
+                    spread: horizon::directional_spread(
+                        spec.tilt_deg,
+                        spec.variance,
+                        spec.rotation_deg,
+                    ),
+                    plain: spec.pattern.is_none(),
                     carry_residual: Vec::new(),
                 })
             })
@@ -437,6 +453,11 @@ impl RenderPlan {
             surface_hold: Vec::new(),
             hold_slopes: Vec::new(),
             held_lit_side: scene.sweep.held_lit_side,
+            horizon: if scene.sweep.horizon {
+                horizon::horizon_table()
+            } else {
+                Vec::new()
+            },
             subpixel_meshes: Vec::new(),
         }
         .with_surface_hold(scene, geometry)

@@ -30,6 +30,12 @@ pub struct LightTerms {
     pub half_vector: [f32; 3],
     /// Ashikmin–Shirley's Fresnel constants, as `LightPlan::fresnel`.
     pub fresnel: [f32; 2],
+    /// The light's spread as the horizon reads it, as `LightPlan::spread` (a point light:
+    /// `[0, 0, 0, radius²/|X − P|²]`).
+    pub spread: [f32; 4],
+    /// The light's buffer holds the visible part of it, as `LightPlan::plain` (every point
+    /// light's: its cone and pattern are in its colour).
+    pub plain: bool,
 }
 
 impl LightTerms {
@@ -43,6 +49,8 @@ impl LightTerms {
             to_light: light.to_light,
             half_vector: light.half_vector,
             fresnel: light.fresnel,
+            spread: light.spread,
+            plain: light.plain,
         }
     }
 }
@@ -186,12 +194,20 @@ impl PointSource {
         } else {
             color.map(|c| (f64::from(c) * phase) as f32)
         };
+        let d2 = d.length_squared();
+        let iso = if d2 > 0.0 {
+            self.sigma[2] * self.sigma[2] / d2
+        } else {
+            0.0
+        };
         LightTerms {
             light_color,
             color,
             to_light: f32x3(to_light),
             half_vector: f32x3(h),
             fresnel: fresnel_terms(h, to_light),
+            spread: [0.0, 0.0, 0.0, iso as f32],
+            plain: true,
         }
     }
 }
@@ -217,6 +233,8 @@ pub struct PointShading {
     /// viewer towards its +z, and the shading's direction to the light and half vector are
     /// negated as a turned pass's `LightPlan` has them (the shading faces normals towards −z).
     pub turned: bool,
+    /// The light's radius squared (world units²): its spread for the horizon, over |X − P|².
+    pub radius2: f32,
 }
 
 /// A spot's cone in f32 ([`SpotCone::factor`]'s smoothstep in the cosine).
@@ -277,6 +295,7 @@ impl PointShading {
                 image: Arc::clone(&p.image),
             }),
             turned,
+            radius2: (source.sigma[2] * source.sigma[2]) as f32,
         }
     }
 
@@ -294,6 +313,8 @@ impl PointShading {
         let d2 = (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
         // The direction to the viewer is (0, 0, view_z).
         let view_z = if self.turned { 1.0 } else { -1.0 };
+        // The horizon's spread: the light's variance over the squared distance, towards it.
+        let iso = if d2 > 0.0 { self.radius2 / d2 } else { 0.0 };
         let (to_light, falloff) = if d2 > 0.0 {
             let len = d2.sqrt();
             let t = [d[0] / len, d[1] / len, d[2] / len];
@@ -336,6 +357,8 @@ impl PointShading {
             to_light: if self.turned { t.map(|v| -v) } else { t },
             half_vector: if self.turned { h.map(|v| -v) } else { h },
             fresnel: [fresnel_p / hk, (1.0 - fresnel_p) / hk],
+            spread: [0.0, 0.0, 0.0, iso],
+            plain: true,
         }
     }
 }

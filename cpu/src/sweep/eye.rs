@@ -32,7 +32,9 @@ use super::kit::{MAX_LIGHT_CHANNELS, light_block};
 use crate::composite::{shade_sample, shade_sample_with};
 use crate::ldi::Ldi;
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
-use crate::shading::{LightTerms, TfLanes, detail_at, material_at, pre_transfer, shading_depth};
+use crate::shading::{
+    LightTerms, TfLanes, detail_at, material_at, pre_transfer, shading_depth, uses_normals,
+};
 use convshadow_common::pixel::lane::MAX_LANES;
 
 /// The eye's per-pixel state: layer cursor, inside mask, composited colour and alpha.
@@ -566,7 +568,7 @@ fn eye_sample(
     if faces.is_some() {
         lit_from = 0.0;
     }
-    let shades_surface = material.specular.is_some() || material.lambert;
+    let shades_surface = uses_normals(plan, material);
     Some(EyeSample {
         x: p.x,
         mesh,

@@ -40,7 +40,7 @@ use crate::composite::{
 };
 use crate::kernels::{LightPlanes, TapOrigin, distance_row, gather, gather_held, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh, leaves_its_mesh, slab_part};
-use crate::shading::{TfLanes, detail_at, material_at, pre_transfer, shading_depth};
+use crate::shading::{TfLanes, detail_at, material_at, pre_transfer, shading_depth, uses_normals};
 use crate::subpixel::{exact_shift, removal_depth, shifted_gather};
 
 /// The light a pixel gathered in step 1: every light's channels and (distance penumbra) its
@@ -454,12 +454,11 @@ pub(crate) fn shade_and_composite(
         }
     };
     // A crossed surface (its triangle's normal) gets the highlight and, where opaque, the
-    // Lambert cosine.
-    let surface = (crossed != NO_CROSSING && (material.specular.is_some() || material.lambert))
-        .then(|| {
-            let triangle = ctx.ldi.triangle[crossed as usize] as usize;
-            (ctx.raster.triangles[triangle].normal, true)
-        });
+    // Lambert cosine and the horizon.
+    let surface = (crossed != NO_CROSSING && uses_normals(plan, material)).then(|| {
+        let triangle = ctx.ldi.triangle[crossed as usize] as usize;
+        (ctx.raster.triangles[triangle].normal, true)
+    });
     let w = plan.grid_width as usize;
     let mut color = [state.color[x], state.color[w + x], state.color[2 * w + x]];
     shade_sample(

@@ -77,6 +77,8 @@ fn rust_layouts() -> Vec<Layout> {
             psi_at,
             psi_last,
             held_lit_side,
+            horizon_at,
+            _pad0,
         }),
         layout!(Slab {
             front,
@@ -96,7 +98,9 @@ fn rust_layouts() -> Vec<Layout> {
             half_vector,
             to_light,
             fresnel,
-            drift
+            drift,
+            spread,
+            plain
         }),
         layout!(LightSlab {
             hash,

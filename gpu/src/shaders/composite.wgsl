@@ -32,7 +32,7 @@ struct Sample {
 }
 
 fn shade_sample(acc: vec4<f32>, mi: u32, m: MaterialHeader, e0: TfEntry, part: vec2<f32>, crossed: bool, first: u32) -> Sample {
-    let surface = crossed && (m.has_specular != SPEC_NONE || m.lambert != 0u);
+    let surface = crossed && (m.has_specular != SPEC_NONE || m.lambert != 0u || globals.horizon_at != HORIZON_NONE);
     var n = vec3<f32>(0.0, 0.0, 0.0);
     if surface {
         let o = normals[frag_meta[first] >> MESH_BITS];

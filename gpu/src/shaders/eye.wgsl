@@ -173,6 +173,11 @@ fn point_terms(p: vec3<f32>, phase: vec4<f32>) -> LightTerms {
     if point_params.turned != 0u {
         view_z = 1.0;
     }
+    // The horizon's spread: the light's variance over the squared distance, towards it.
+    var iso = 0.0;
+    if d2 > 0.0 {
+        iso = point_params.center.w / d2;
+    }
     var t = vec3<f32>(0.0, 0.0, view_z);
     var falloff = vec3<f32>(0.0, 0.0, 0.0);
     if d2 > 0.0 {
@@ -225,6 +230,8 @@ fn point_terms(p: vec3<f32>, phase: vec4<f32>) -> LightTerms {
         array<f32, 3>(tl.x, tl.y, tl.z),
         array<f32, 3>(hh.x, hh.y, hh.z),
         array<f32, 2>(fresnel_p / hk, (1.0 - fresnel_p) / hk),
+        array<f32, 4>(0.0, 0.0, 0.0, iso),
+        true,
     );
 }
 

@@ -1,5 +1,5 @@
 // Stage 3, shading: mirrors cpu/src/shading.rs (detail value, transfer function, light sum with
-// the Lambert cosine at opaque crossings, specular by repeated squaring).
+// the horizon and the Lambert cosine at opaque crossings, specular by repeated squaring).
 
 #import shared/constants
 #import shared/bindings
@@ -214,6 +214,8 @@ struct LightTerms {
     to_light: array<f32, 3>,
     half_vector: array<f32, 3>,
     fresnel: array<f32, 2>,
+    spread: array<f32, 4>, // the horizon's spread (`LightPlan::spread`)
+    plain: bool,           // the light buffer holds the visible part (`LightPlan::plain`)
 }
 
 var<private> terms_on: bool = false;
@@ -231,6 +233,47 @@ fn to_light_of(l: u32) -> array<f32, 3> {
         return terms.to_light;
     }
     return lights[l].to_light;
+}
+
+fn spread_of(l: u32) -> array<f32, 4> {
+    if terms_on {
+        return terms.spread;
+    }
+    return lights[l].spread;
+}
+
+fn plain_of(l: u32) -> bool {
+    if terms_on {
+        return terms.plain;
+    }
+    return lights[l].plain != 0u;
+}
+
+// `horizon`: the part of light `l` above the tangent plane of facing normal f, Φ(μ/σ) with
+// μ = f·l and σ² = ((a·fx² + b·fx·fy) + c·fy²) + iso, Φ interpolated in the table at
+// `globals.horizon_at`; 1 / 0 beyond its reach; without spread 1 where μ > 0, else 0.
+fn horizon(f: vec3<f32>, l: u32) -> f32 {
+    let mu = dot_fixed(f, to_light_of(l));
+    let s = spread_of(l);
+    let v = ((s[0] * (f.x * f.x) + s[1] * (f.x * f.y)) + s[2] * (f.y * f.y)) + s[3];
+    let sharp = select(0.0, 1.0, mu > 0.0);
+    let soft = v > 0.0;
+    let t = mu / sqrt(select(1.0, v, soft));
+    let steps = f32(HORIZON_STEPS);
+    let u = (t + HORIZON_REACH) * HORIZON_PER_UNIT;
+    let below_top = u < steps;
+    let above_bottom = u > 0.0;
+    var clamped = select(steps - 1.0, u, below_top);
+    clamped = select(0.0, clamped, above_bottom);
+    let knot = floor(clamped);
+    let w = clamped - knot;
+    let i = globals.horizon_at + u32(knot);
+    let a = bitcast<f32>(level_table[i]);
+    let b = bitcast<f32>(level_table[i + 1u]);
+    var phi = a + (b - a) * w;
+    phi = select(1.0, phi, below_top);
+    phi = select(0.0, phi, above_bottom);
+    return select(sharp, phi, soft);
 }
 
 fn fresnel_of(l: u32) -> array<f32, 2> {
@@ -281,7 +324,9 @@ fn phase_light_color(material: u32, l: u32) -> vec3<f32> {
     return vec3<f32>(c[0], c[1], c[2]);
 }
 
-// `shade`: c ⊙ Σ_l (Iin_l ⊙ colour_l · cos_l) with the material's phase-weighted light colours,
+// `shade`: c ⊙ Σ_l (Iin_l ⊙ colour_l · cos_l) with the material's phase-weighted light colours
+// (Iin_l limited by the horizon at an opaque crossing: the smaller for a plain light, else the
+// product),
 // then the specular terms light by light with the bare light colours. `surface`: the pixel
 // crossed a surface of normal `n` in this slab (and the material uses it); cos_l is the Lambert
 // cosine where the material is `lambert` and the crossing opaque (alpha exactly 1), else 1.
@@ -289,6 +334,8 @@ fn shade(material: u32, color: vec3<f32>, alpha: f32, surface: bool, n: vec3<f32
     let m = materials[material];
     let f = facing(n);
     let diffuse = surface && m.lambert != 0u && !(alpha < 1.0);
+    // The horizon limits the light at an opaque crossing (`sweep.horizon`).
+    let limited = surface && globals.horizon_at != HORIZON_NONE && !(alpha < 1.0);
     var sum = vec3<f32>(0.0, 0.0, 0.0);
     for (var l = 0u; l < globals.lights; l++) {
         let lc = phase_light_color(material, l);
@@ -296,8 +343,21 @@ fn shade(material: u32, color: vec3<f32>, alpha: f32, surface: bool, n: vec3<f32
         if diffuse {
             k = positive(dot_fixed(f, to_light_of(l)));
         }
+        var h = 1.0;
+        if limited {
+            h = horizon(f, l);
+        }
+        let plain = plain_of(l);
         for (var c = 0u; c < 3u; c++) {
-            sum[c] = sum[c] + (iin_at(l, c) * lc[c]) * k;
+            var i = iin_at(l, c);
+            if limited {
+                if plain {
+                    i = select(h, i, i < h);
+                } else {
+                    i = i * h;
+                }
+            }
+            sum[c] = sum[c] + (i * lc[c]) * k;
         }
     }
     var out = vec3<f32>(color.x * sum.x, color.y * sum.y, color.z * sum.z);

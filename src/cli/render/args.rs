@@ -134,6 +134,11 @@ pub struct RenderArgs {
     /// near held surfaces), `false` (the default) from everywhere.
     #[arg(long, value_name = "BOOL")]
     pub held_lit_side: Option<bool>,
+    /// Override `sweep.horizon`: `true` (the default) limits the light at a crossed opaque
+    /// surface to the part above its tangent plane, `false` does not (the images of before
+    /// 2026-12-07).
+    #[arg(long, value_name = "BOOL")]
+    pub horizon: Option<bool>,
     /// Override `sweep.light_resolution`: the light grid's cells per image pixel (perspective:
     /// at `look_at`), 1/16 to 16 (default 1); below 1 faster, above 1 sharper edges; not 1, an
     /// orthographic camera's light gets a grid of its own.

@@ -105,6 +105,7 @@ pub(super) fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Res
         media: args.media,
         subpixel_shadows: args.subpixel_shadows,
         held_lit_side: args.held_lit_side,
+        horizon: args.horizon,
         light_resolution: args.light_resolution,
     };
     overrides.apply(scene).map_err(|e| match e {

@@ -25,7 +25,7 @@ use super::quiet::{ChunkState, Values};
 use crate::composite::{Held, attenuate, deepen, owned_depth, shade_sample};
 use crate::kernels::{LightPlanes, TapOrigin, phase_at};
 use crate::parity::{NO_CROSSING, advance, first_mesh, slab_part};
-use crate::shading::{TfLanes, detail_at, material_at, pre_transfer, shading_depth};
+use crate::shading::{TfLanes, detail_at, material_at, pre_transfer, shading_depth, uses_normals};
 use crate::subpixel::removal_depth;
 use crate::sweep::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, level_plane,
@@ -795,9 +795,9 @@ fn shade_chunk<L: Layout>(
             material_at(plan, m, xv, yv, z)
         }
     };
-    // Lanes that crossed a surface get the highlight and, where opaque, the Lambert cosine,
-    // with their triangles' normals.
-    let surface = if any_crossed && (material.specular.is_some() || material.lambert) {
+    // Lanes that crossed a surface get the highlight and, where opaque, the Lambert cosine and
+    // the horizon, with their triangles' normals.
+    let surface = if any_crossed && uses_normals(plan, material) {
         let mut normal = [[0.0f32; MAX_LANES]; 3];
         for i in 0..L::LANES {
             let nv = if is_crossed[i] {

@@ -90,6 +90,8 @@ struct Globals {
     psi_at: u32,        // level_table index of ψ at slab coordinate 0 (f32 bits)
     psi_last: u32,      // DepthScale::psi.len() − 2
     held_lit_side: u32, // 1: held light read only from its lit side (`hold`: 9 words per pixel, `surface_hold`: 3 per triangle)
+    horizon_at: u32,    // level_table index of the horizon's Φ table (f32 bits), HORIZON_NONE without
+    _pad0: u32,
 }
 
 struct Slab {
@@ -114,6 +116,8 @@ struct LightHeader {
     to_light: array<f32, 3>, // unit direction towards the light (Lambert, Ashikmin–Shirley)
     fresnel: array<f32, 2>,  // Ashikmin–Shirley: [p/(h·k), (1 − p)/(h·k)], p = (1 − h·k)^5
     drift: array<f32, 2>,    // the light's drift per slab (pixels), for sub-pixel shadows
+    spread: array<f32, 4>,   // the horizon's spread: σ² = ((a·fx² + b·fx·fy) + c·fy²) + iso
+    plain: u32,              // 1: the light buffer holds the visible part (no pattern)
 }
 
 // A light's values in one slab, at `light · slabs + slab`.
@@ -252,7 +256,7 @@ struct PointParams {
     spot: u32,           // 1: a spot (axis, inner, outer)
     pattern: u32,        // 1: a spot with a pattern (texels in `spot_pattern`)
     pixel_size: f32,     // world units per grid pixel of the eye's frame
-    center: vec4<f32>,   // the light's centre, the eye's slab-grid frame (x, y, z)
+    center: vec4<f32>,   // the light's centre, the eye's slab-grid frame (x, y, z); w: its radius² (the horizon's spread)
     color: vec4<f32>,
     axis: vec4<f32>,     // a spot's unit axis, camera space
     right: vec4<f32>,    // a pattern's right axis, camera space
