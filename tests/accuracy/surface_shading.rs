@@ -328,7 +328,9 @@ fn ashikmin_shirley_matches_the_published_formula_at_several_normals() {
 #[test]
 fn lambert_is_the_cosine_at_opaque_crossings_only() {
     let lambert = shading_scene(0.8, "lambert", "");
-    let flat = shading_scene(0.8, "flat", "");
+    let mut flat = shading_scene(0.8, "flat", "");
+    // Without the horizon (its own test below) a flat crossing is colour × light.
+    flat.sweep.horizon = false;
     let light_sum: f64 = LIGHTS.iter().map(|l| l.1).sum();
     for n in normals() {
         let f = facing(n);
@@ -349,6 +351,37 @@ fn lambert_is_the_cosine_at_opaque_crossings_only() {
         );
         assert_eq!(shade_at(&flat, n, 1.0), translucent);
     }
+}
+
+#[test]
+fn the_horizon_blocks_the_lights_below_an_opaque_surfaces_tangent_plane() {
+    // The scene's lights are hard (no variance): each reaches an opaque crossing only from
+    // above its tangent plane, f·l > 0, whatever the surface model; a translucent crossing keeps
+    // colour × light.
+    let flat = shading_scene(0.8, "flat", "");
+    assert!(flat.sweep.horizon, "on by default");
+    let light_sum: f64 = LIGHTS.iter().map(|l| l.1).sum();
+    let mut blocked = 0;
+    for n in normals() {
+        let f = facing(n);
+        let above = |tilt: [f64; 2]| dot(f, to_light(tilt)) > 0.0;
+        let expected: f64 = LIGHTS
+            .iter()
+            .map(|&(tilt, grey)| if above(tilt) { 0.8 * grey } else { 0.0 })
+            .sum();
+        blocked += LIGHTS.iter().filter(|l| !above(l.0)).count();
+        let got = shade_at(&flat, n, 1.0);
+        assert!(
+            (got - expected).abs() <= 1e-6,
+            "n {n:?}: {got} against {expected}"
+        );
+        let translucent = shade_at(&flat, n, 0.999);
+        assert!(
+            (translucent - 0.8 * light_sum).abs() <= 1e-6,
+            "{translucent}"
+        );
+    }
+    assert!(blocked > 0, "some normal faces away from a light");
 }
 
 #[test]
