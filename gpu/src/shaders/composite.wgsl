@@ -105,9 +105,9 @@ const HELD_PASS: u32 = 1u;    // attenuation 1
 const HELD_RELEASE: u32 = 2u; // attenuation 0, removed light recorded at `removed_at`
 const HOLD_SHIFT: u32 = 16u;         // a pixel's hold state: crossing slab below, hold above
 const HOLD_BARRIER_SHIFT: u32 = 26u; // a pixel's hold state: its barrier above
-const EXIT_HOLD_SHIFT: u32 = 10u; // a triangle's `surface_hold` word: entry hold below, exit hold above
-const BARRIER_SHIFT: u32 = 20u;   // a triangle's `surface_hold` word: a shell's barrier above
-const MAX_BARRIER: u32 = 63u;
+// A triangle's `surface_hold` word (`surface_hold::pack_holds`): the entry hold in
+// ENTRY_HOLD_MASK, the exit hold from EXIT_HOLD_SHIFT, a shell's barrier from BARRIER_SHIFT (at
+// most MAX_BARRIER); shared/constants has them from the Rust constants.
 
 struct HoldStep {
     state: u32,
@@ -132,7 +132,7 @@ fn hold_state(crossed: u32, hold: u32, barrier: u32) -> u32 {
 // anew); a shell's crossing without a hold bars the slabs after it; else a crossing with a hold
 // starts one.
 fn hold_step(state: u32, slab: u32, crossed: u32, ends_hold: bool, inside: bool) -> HoldStep {
-    let entry = crossed & ((1u << EXIT_HOLD_SHIFT) - 1u);
+    let entry = crossed & ENTRY_HOLD_MASK;
     let barrier = (crossed >> BARRIER_SHIFT) & MAX_BARRIER;
     var next = state;
     if state != 0u {

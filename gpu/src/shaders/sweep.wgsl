@@ -99,7 +99,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
             // Leaving a closed mesh starts no hold (cpu/src/parity.rs `leaves_its_mesh`): the
             // mask before the slab holds the first fragment's mesh only on the way out.
             if (state.inside & (1u << (frag_meta[adv.first] & MESH_MASK))) != 0u {
-                crossed_word = crossed_word & ~((1u << EXIT_HOLD_SHIFT) - 1u);
+                crossed_word = crossed_word & ~ENTRY_HOLD_MASK;
             }
         }
         let ahead = adv.next < offsets[p + 1u];
