@@ -389,10 +389,11 @@ pub fn shade_with<L: Lane>(
 ) -> [L; 3] {
     let one = L::splat(1.0);
     let f = surface.map(|sf| facing(sf.normal));
-    // The lanes whose light the horizon limits: crossed, opaque, with a table.
-    let opaque = match (surface, f) {
+    // The horizon limits the light in lanes that crossed an opaque surface (alpha exactly 1), with
+    // a table; `kept`: the others (not crossed: alpha taken as 0).
+    let horizon_lanes = match (surface, f) {
         (Some(sf), Some(f)) if !horizon_table.is_empty() => {
-            Some((L::select(sf.lanes, sf.alpha, L::splat(0.0)), f))
+            Some((L::select(sf.lanes, sf.alpha, L::splat(0.0)).lt(one), f))
         }
         _ => None,
     };
@@ -409,21 +410,22 @@ pub fn shade_with<L: Lane>(
             let d = lambert(f, light.to_light);
             L::select(sf.lanes, L::select(translucent, one, d), one)
         });
-        // Only where the crossing is opaque (alpha exactly 1; not crossed: alpha 0).
-        let visible = opaque.map(|(alpha, f)| {
-            let h = horizon(horizon_table, f, light.to_light, light.spread);
-            (alpha.lt(one), h, light.plain)
+        let visible = horizon_lanes.map(|(kept, f)| {
+            (
+                kept,
+                horizon(horizon_table, f, light.to_light, light.spread),
+            )
         });
         for (c, s) in sum.iter_mut().enumerate() {
             let i = iin[l * ch + if ch == 1 { 0 } else { c }];
             let i = match visible {
-                Some((translucent, h, plain)) => {
-                    let limited = if plain {
+                Some((kept, h)) => {
+                    let limited = if light.plain {
                         L::select(i.lt(h), i, h)
                     } else {
                         i * h
                     };
-                    L::select(translucent, i, limited)
+                    L::select(kept, i, limited)
                 }
                 None => i,
             };

@@ -338,19 +338,23 @@ fn lambert_is_the_cosine_at_opaque_crossings_only() {
             .iter()
             .map(|&(tilt, grey)| 0.8 * grey * dot(f, to_light(tilt)).max(0.0))
             .sum();
-        let got = shade_at(&lambert, n, 1.0);
-        assert!(
-            (got - expected).abs() <= 1e-6,
-            "n {n:?}: {got} against {expected}"
-        );
         // A translucent crossing, and any flat crossing, keep colour × light.
-        let translucent = shade_at(&lambert, n, 0.999);
-        assert!(
-            (translucent - 0.8 * light_sum).abs() <= 1e-6,
-            "{translucent}"
-        );
+        let translucent = assert_opaque_and_translucent(&lambert, n, expected, 0.8 * light_sum);
         assert_eq!(shade_at(&flat, n, 1.0), translucent);
     }
+}
+
+/// Asserts `scene`'s shading at normal `n` within 1e-6 of `opaque` at an opaque crossing and of
+/// `translucent` at a translucent one (slab opacity 0.999); returns the translucent value.
+fn assert_opaque_and_translucent(scene: &Scene, n: [f64; 3], opaque: f64, translucent: f64) -> f64 {
+    let got = shade_at(scene, n, 1.0);
+    assert!(
+        (got - opaque).abs() <= 1e-6,
+        "n {n:?}: {got} against {opaque}"
+    );
+    let got = shade_at(scene, n, 0.999);
+    assert!((got - translucent).abs() <= 1e-6, "{got}");
+    got
 }
 
 #[test]
@@ -370,16 +374,7 @@ fn the_horizon_blocks_the_lights_below_an_opaque_surfaces_tangent_plane() {
             .map(|&(tilt, grey)| if above(tilt) { 0.8 * grey } else { 0.0 })
             .sum();
         blocked += LIGHTS.iter().filter(|l| !above(l.0)).count();
-        let got = shade_at(&flat, n, 1.0);
-        assert!(
-            (got - expected).abs() <= 1e-6,
-            "n {n:?}: {got} against {expected}"
-        );
-        let translucent = shade_at(&flat, n, 0.999);
-        assert!(
-            (translucent - 0.8 * light_sum).abs() <= 1e-6,
-            "{translucent}"
-        );
+        assert_opaque_and_translucent(&flat, n, expected, 0.8 * light_sum);
     }
     assert!(blocked > 0, "some normal faces away from a light");
 }

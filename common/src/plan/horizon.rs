@@ -12,6 +12,8 @@
 
 use glam::DVec3;
 
+use crate::plan::kernel::rotated_covariance;
+
 /// |μ/σ| at and beyond which the visible part is taken as exactly 1 (μ > 0) or 0: Φ(8) is
 /// 1 − 6·10⁻¹⁶, 1 in f32.
 pub const HORIZON_REACH: f32 = 8.0;
@@ -43,11 +45,7 @@ pub fn horizon_table() -> Vec<f32> {
 pub fn directional_spread(tilt_deg: [f64; 2], variance: [f64; 2], rotation_deg: f64) -> [f32; 4] {
     let mu = tilt_deg.map(|t| t.to_radians().tan());
     let norm2 = DVec3::new(mu[0], mu[1], -1.0).length_squared();
-    let (s, c) = rotation_deg.to_radians().sin_cos();
-    let (vx, vy) = (variance[0], variance[1]);
-    let xx = c * c * vx + s * s * vy;
-    let xy = c * s * (vx - vy);
-    let yy = s * s * vx + c * c * vy;
+    let [[xx, xy], [_, yy]] = rotated_covariance(variance, rotation_deg);
     [xx / norm2, 2.0 * xy / norm2, yy / norm2, 0.0].map(|v| v as f32)
 }
 

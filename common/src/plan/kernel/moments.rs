@@ -37,7 +37,6 @@ impl KernelMoments {
             -slab_distance * mu_l[1] / pixel_size,
         ];
         let mean = mean.map(|m| m.clamp(-MAX_KERNEL_PX, MAX_KERNEL_PX));
-        let (s, c) = rotation_deg.to_radians().sin_cos();
         let k = optimal_distance * slab_distance / (pixel_size * pixel_size);
         let (mut vx, mut vy) = (variance[0] * k, variance[1] * k);
         let widest = vx.max(vy);
@@ -45,12 +44,20 @@ impl KernelMoments {
             let shrink = MAX_KERNEL_PX * MAX_KERNEL_PX / widest;
             (vx, vy) = (vx * shrink, vy * shrink);
         }
-        let cov = [
-            [c * c * vx + s * s * vy, c * s * (vx - vy)],
-            [c * s * (vx - vy), s * s * vx + c * c * vy],
-        ];
+        let cov = rotated_covariance([vx, vy], rotation_deg);
         KernelMoments { mean, cov }
     }
+}
+
+/// R(α)·diag(vx, vy)·R(α)ᵀ: the covariance of principal variances `v` whose axes are turned by
+/// `rotation_deg` (α) from x towards y (symmetric 2×2, row-major).
+pub fn rotated_covariance(v: [f64; 2], rotation_deg: f64) -> [[f64; 2]; 2] {
+    let (s, c) = rotation_deg.to_radians().sin_cos();
+    let (vx, vy) = (v[0], v[1]);
+    [
+        [c * c * vx + s * s * vy, c * s * (vx - vy)],
+        [c * s * (vx - vy), s * s * vx + c * c * vy],
+    ]
 }
 
 /// Eigen-decomposition of a symmetric 2×2 matrix: (λ1 ≥ λ2, unit eigenvector of λ1).
