@@ -97,6 +97,43 @@ pub fn add_pass(total: &mut Rendered, pass: Rendered) {
     for (f, b) in total.image.data.iter_mut().zip(&pass.image.data) {
         *f += *b;
     }
+    add_counts(total, &pass);
+}
+
+/// Composites `behind` (an image of the meshes behind those of `total`, both on black) behind
+/// `total`, as the eye sees it through `total`'s meshes: colour and each light layer
+/// `C + (1 − A)·C_behind`, opacity `A + (1 − A)·A_behind`, the depth layer the nearer first hit;
+/// and adds `behind`'s counts. The light layers pair by position (the same lights); the image
+/// hash is the caller's.
+pub fn composite_over(total: &mut Rendered, behind: Rendered) {
+    let over = |near: &mut [f32], far: &[f32], alpha: &[f32], channels: usize| {
+        for ((n, f), a) in near
+            .chunks_exact_mut(channels)
+            .zip(far.chunks_exact(channels))
+            .zip(alpha)
+        {
+            for (n, f) in n.iter_mut().zip(f) {
+                *n += (1.0 - a) * f;
+            }
+        }
+    };
+    over(&mut total.image.data, &behind.image.data, &total.alpha, 3);
+    for ((_, near), (_, far)) in total.light_layers.iter_mut().zip(&behind.light_layers) {
+        over(near, far, &total.alpha, 3);
+    }
+    if let (Some(near), Some(far)) = (&mut total.depth, &behind.depth) {
+        for (n, f) in near.iter_mut().zip(far) {
+            *n = n.min(*f);
+        }
+    }
+    // Last: the layers above are seen through the near opacity.
+    let near_alpha = total.alpha.clone();
+    over(&mut total.alpha, &behind.alpha, &near_alpha, 1);
+    add_counts(total, &behind);
+}
+
+/// Adds `pass`'s counts (slabs, updates, seconds, chunks) to `total`'s.
+fn add_counts(total: &mut Rendered, pass: &Rendered) {
     total.slabs_swept += pass.slabs_swept;
     total.updates += pass.updates;
     total.seconds_ldi += pass.seconds_ldi;

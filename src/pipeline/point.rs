@@ -5,16 +5,16 @@
 //! `super::perspective::render_perspective_pass`). `super::point_passes` renders each such light
 //! in a pass of its own.
 //!
-//! Built so far: lights before every mesh along the view, and behind every mesh (a turned-round
-//! pass: the grid looks back along the view from the light, the eye composites back to front);
-//! a soft one (`radius` > 0) with the distance penumbra in φ.
+//! A light before every mesh along the view is one pass, one behind every mesh a turned-round
+//! pass (the grid looks back along the view from the light, the eye composites back to front),
+//! and one amid the meshes both, each over the meshes on its side ([`placement`]); a soft one
+//! (`radius` > 0) with the distance penumbra in φ.
 
 use glam::DVec3;
 
 use convshadow_common::contract::ldi::Ldi;
 use convshadow_common::model::scene::{
-    CameraSpec, GuardBandSpec, LightSpec, MAX_IMAGE_SIDE, Penumbra, Projection, Scene, SceneError,
-    SlabSpec,
+    CameraSpec, GuardBandSpec, MAX_IMAGE_SIDE, Penumbra, Projection, Scene, SceneError, SlabSpec,
 };
 use convshadow_common::plan::depth_scale::DepthScale;
 use convshadow_common::plan::{ProjectiveGrid, RenderPlan};
@@ -123,10 +123,9 @@ pub(super) fn point_grid(
         return Err(refuse(
             "position",
             format!(
-                "the convolution sweep renders a point or spot light only before or behind \
-                 every mesh along the view so far: this light is at view depth {:.6}, amid the \
-                 meshes' vertices (move it towards the camera or beyond the farthest mesh, or \
-                 render with `--backend reference`)",
+                "this pass's point or spot light is at view depth {:.6}, amid its meshes' \
+                 vertices: a pass lights only meshes wholly behind the light's centre (its \
+                 turned-round pass, wholly in front); please report this",
                 at.z,
             ),
         ));
@@ -285,18 +284,70 @@ fn perspective_gradient(t: &TriangleSetup) -> (f32, f32) {
     )
 }
 
-/// Whether point light `light` lies behind every mesh along the view of `eye` (every vertex
-/// nearer the camera than its centre): its pass is turned round ([`point_grid`]).
-pub(super) fn behind_every_mesh(eye: &SceneGeometry, light: &LightSpec) -> bool {
-    let Some(point) = &light.point else {
-        return false;
-    };
+/// Where a point or spot light's centre lies among the meshes along the view
+/// ([`placement`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(super) enum Placement {
+    /// Before every mesh (every vertex farther from the camera than the centre): one pass.
+    Before,
+    /// Behind every mesh (every vertex nearer): one turned-round pass ([`point_grid`]).
+    Behind,
+    /// Amid them: the meshes `front` (scene indices) wholly nearer the camera than the centre,
+    /// `back` wholly farther. No ray from the centre to a point of one set crosses the other
+    /// (it stays between the two depths), so each set is lit on its own — `front` by a
+    /// turned-round pass, `back` by an ordinary one — and the eye sees `back` through `front`.
+    Amid {
+        /// Meshes nearer the camera than the light's centre.
+        front: Vec<usize>,
+        /// Meshes farther than it.
+        back: Vec<usize>,
+    },
+}
+
+/// Where point light `l` of `scene` lies among the meshes of `eye` (its geometry, meshes in
+/// scene order) along the view: [`Placement`]. A mesh whose vertices lie on both sides of the
+/// light's view depth (or on it) cannot be split and is refused, naming the light and the mesh.
+pub(super) fn placement(
+    scene: &Scene,
+    eye: &SceneGeometry,
+    l: usize,
+) -> Result<Placement, RenderError> {
+    let point = scene.lights[l]
+        .point
+        .as_ref()
+        .expect("a point pass's light is a point light");
     let cam = &eye.camera;
     let at = cam.to_camera(DVec3::from(point.position)).z;
-    eye.meshes
-        .iter()
-        .flat_map(|m| &m.mesh.positions)
-        .all(|v| cam.to_camera(*v).z < at)
+    let (mut front, mut back) = (Vec::new(), Vec::new());
+    for (i, m) in eye.meshes.iter().enumerate() {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for v in &m.mesh.positions {
+            let z = cam.to_camera(*v).z;
+            (lo, hi) = (lo.min(z), hi.max(z));
+        }
+        if hi < at {
+            front.push(i);
+        } else if lo > at {
+            back.push(i);
+        } else if lo <= hi {
+            return Err(RenderError::Scene(SceneError {
+                file: scene.source.clone(),
+                key: format!("light[{l}].position"),
+                message: format!(
+                    "the light's centre lies at view depth {at:.6}, within mesh[{i}]'s depth \
+                     range [{lo:.6}, {hi:.6}]: the convolution sweep lights the meshes in front \
+                     of a point or spot light and those behind it in two passes, so every mesh \
+                     must lie wholly on one side (move the light, or render with `--backend \
+                     reference`)"
+                ),
+            }));
+        }
+    }
+    Ok(match (front.is_empty(), back.is_empty()) {
+        (_, true) => Placement::Behind,
+        (true, false) => Placement::Before,
+        (false, false) => Placement::Amid { front, back },
+    })
 }
 
 /// Where the eye's rays are among the meshes: each image pixel's ray at its first and last

@@ -3,9 +3,9 @@
 //! closed form (the line from the light through the edge, the light `cos / d²` on the lit side),
 //! for an orthographic and a perspective camera; a translucent medium under a spot light and a
 //! point light beside a directional light against the shadow-ray reference (an independent
-//! renderer: shadow rays, no light buffers), and lights behind every mesh (a turned-round pass)
-//! lighting a cloud from behind against it too; the same bits on both CPU paths at any thread
-//! count.
+//! renderer: shadow rays, no light buffers), lights behind every mesh (a turned-round pass)
+//! lighting a cloud from behind and lights amid the meshes (two passes, one per side) against it
+//! too; the same bits on both CPU paths at any thread count.
 
 use std::path::Path;
 
@@ -229,11 +229,12 @@ fn point_and_spot_lights_on_media_match_the_shadow_ray_reference() {
 #[test]
 fn point_lights_have_the_same_bits_on_both_paths_at_any_thread_count() {
     for camera in [ORTHOGRAPHIC, PERSPECTIVE] {
-        // Before the meshes, and behind them (a turned-round pass).
+        // Before the meshes, behind them (a turned-round pass) and amid them (both).
         let scenes = (LIGHTS
             .map(|lights| medium_scene(camera, lights))
             .into_iter())
-        .chain(BACK_LIGHTS.map(|lights| backlit_scene(camera, lights)));
+        .chain(BACK_LIGHTS.map(|lights| backlit_scene(camera, lights)))
+        .chain(AMID_LIGHTS.map(|lights| amid_scene(camera, lights)));
         for scene in scenes {
             let with = |path, threads| {
                 let req = RenderRequest {
@@ -363,6 +364,110 @@ fn point_and_spot_lights_behind_every_mesh_match_the_shadow_ray_reference() {
                 rmse[0], rmse[1]
             );
             assert!(rmse[1] <= 5e-3 && rmse[1] < rmse[0], "RMSE / peak {rmse:?}");
+        }
+    }
+}
+
+/// A translucent cloud in front of `lights` (Henyey–Greenstein g = 0.4: lit from behind, it
+/// glows towards the viewer) and behind them a small opaque plate over a wall: lights at view
+/// depth 0.75, amid the meshes.
+fn amid_scene(camera: &str, lights: &str) -> Scene {
+    let meshes = r#"
+[[mesh]]
+shape = "box"
+size = [1.4, 1.0, 0.6]
+material = "cloud"
+[[mesh]]
+shape = "box"
+size = [0.4, 0.4, 0.1]
+translate = [-0.1, 0.1, 1.15]
+material = "plate"
+[[mesh]]
+shape = "box"
+size = [8.0, 8.0, 0.02]
+translate = [0.0, 0.0, 1.8]
+material = "wall"
+[material.cloud]
+color = [1.0, 0.8, 0.6]
+opacity = 0.6
+phase = { g = 0.4 }
+[material.plate]
+color = [1.0, 1.0, 1.0]
+[material.wall]
+color = [1.0, 1.0, 1.0]"#;
+    small_scene(camera, lights, meshes, "point_amid")
+}
+
+/// Lights amid the meshes: a hard point light, a spot pointing away from the viewer with a soft
+/// cone edge, a soft point light.
+const AMID_LIGHTS: [&str; 3] = [
+    "[[light]]\nkind = \"point\"\nposition = [0.2, 0.1, 0.75]\ncolor = [3.0, 3.0, 3.0]",
+    "[[light]]\nkind = \"spot\"\nposition = [0.2, 0.1, 0.75]\ndirection = [-0.1, 0.0, 1.0]\n\
+     cone_deg = 25.0\nfalloff_deg = 8.0\ncolor = [3.0, 3.0, 3.0]",
+    "[[light]]\nkind = \"point\"\nposition = [0.2, 0.1, 0.75]\nradius = 0.05\n\
+     color = [3.0, 3.0, 3.0]",
+];
+
+#[test]
+fn point_and_spot_lights_amid_the_meshes_match_the_shadow_ray_reference() {
+    // The cloud in front of the light is lit by a turned-round pass, the plate and the wall
+    // behind it by an ordinary one, and the eye sees the second through the first. The
+    // reference traces shadow rays from every shading point (a soft light: 256 of its points);
+    // they differ along the plate's shadow edges (the light's grid) and by the slabs' sampling.
+    for camera in [ORTHOGRAPHIC, PERSPECTIVE] {
+        for lights in AMID_LIGHTS {
+            let scene = amid_scene(camera, lights);
+            let samples = if lights.contains("radius") { 256 } else { 1 };
+            let reference = render_reference(&scene, 0, samples, 1 << 30, false, &[], None);
+            let b = &reference.unwrap().image.data;
+            let sweep = render(&scene, &RenderRequest::default()).unwrap();
+            let a = &sweep.image.data;
+            let peak = b.iter().fold(0.0f32, |m, &v| m.max(v));
+            let rmse = root_mean_square(a, b) / f64::from(peak);
+            eprintln!("amid, {camera:?} / {lights:?}: RMSE / peak {rmse:.3e}");
+            assert!(peak > 1.0, "the scene is lit");
+            // Either side left out would be off by its whole image (the cloud's glow, the lit
+            // plate and wall).
+            assert!(rmse <= 5e-3, "RMSE / peak {rmse}");
+        }
+    }
+}
+
+#[test]
+fn a_light_amid_the_meshes_keeps_the_background_layers_and_depth_of_the_whole_scene() {
+    // The amid light's pass alone, on a grey background, with its light layer and the depth
+    // layer: the image is the layer plus the background where the composited opacity leaves
+    // it, and the depth layer (the nearer side's first hit where it has one, else the far
+    // side's) is a directional light's, whose eye sees every mesh at once.
+    for camera in [ORTHOGRAPHIC, PERSPECTIVE] {
+        let mut scene = amid_scene(camera, AMID_LIGHTS[2]);
+        scene.image.background = [0.1, 0.2, 0.3];
+        let req = RenderRequest {
+            aovs: vec![Aov::Light(0), Aov::Depth],
+            ..RenderRequest::default()
+        };
+        let r = render(&scene, &req).unwrap();
+        let layer = &r.light_layers[0].1;
+        let mut worst = 0.0f32;
+        for (k, v) in r.image.data.iter().enumerate() {
+            let background = (1.0 - r.alpha[k / 3]) * scene.image.background[k % 3];
+            worst = worst.max((v - (layer[k] + background)).abs());
+        }
+        assert!(worst < 1e-5, "{camera}: largest difference {worst}");
+        // Where the wall is seen, the composited opacity is 1: no background.
+        assert!(
+            r.alpha.iter().all(|&a| a > 0.999),
+            "{camera}: the wall covers the view"
+        );
+        let mut directional = amid_scene(camera, "[[light]]\ncolor = [1.0, 1.0, 1.0]");
+        directional.image.background = scene.image.background;
+        let whole = render(&directional, &req).unwrap();
+        let (depth, want) = (r.depth.unwrap(), whole.depth.unwrap());
+        for (d, w) in depth.iter().zip(&want) {
+            assert!(
+                (d - w).abs() <= 1e-5 * w.abs().max(1.0),
+                "{camera}: depth {d} vs {w}"
+            );
         }
     }
 }

@@ -527,10 +527,11 @@ fn bad_point_and_spot_lights_exit_3_without_an_output_file() {
         ("zero spot axis", "[[light]]\nkind = \"spot\"\nposition = [0.0, 0.0, -2.0]\ndirection = [0.0, 0.0, 0.0]\ncone_deg = 20.0".to_string(), "cpu", vec!["light[0].direction"]),
         ("tilt on a point light", point("tilt_deg = [10.0, 0.0]"), "reference", vec!["light[0].tilt_deg", "directional"]),
         (
-            "amid the meshes in the sweep",
+            // Beside the box, at a view depth within its depth range: it cannot be split there.
+            "within a mesh's depth range in the sweep",
             "[[light]]\nkind = \"point\"\nposition = [5.0, 0.0, 0.0]".to_string(),
             "cpu",
-            vec!["light[0].position", "before or behind every mesh", "--backend reference"],
+            vec!["light[0].position", "mesh[0]'s depth range", "--backend reference"],
         ),
         (
             "inside the box",

@@ -95,3 +95,37 @@ fn gpu_point_and_spot_lights_equal_cpu_for_both_cameras() {
         }
     }
 }
+
+#[test]
+fn gpu_lights_amid_the_meshes_equal_cpu_for_both_cameras() {
+    // Two passes per light (the meshes in front of it turned round, those behind it not), each
+    // on the GPU as on the CPU, composited on the host: the same bits.
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-amid-lights");
+    let meshes = "[[mesh]]\nshape = \"box\"\nsize = [1.4, 1.0, 0.6]\nmaterial = \"cloud\"\n\
+                  [[mesh]]\nshape = \"box\"\nsize = [0.4, 0.4, 0.1]\n\
+                  translate = [-0.1, 0.1, 1.15]\nmaterial = \"plate\"\n\
+                  [[mesh]]\nshape = \"box\"\nsize = [8.0, 8.0, 0.02]\n\
+                  translate = [0.0, 0.0, 1.8]\nmaterial = \"plate\"\n\
+                  [material.cloud]\ncolor = [1.0, 0.8, 0.6]\nopacity = 0.6\nphase = { g = 0.4 }\n\
+                  [material.plate]\ncolor = [1.0, 1.0, 1.0]\n";
+    for camera in [
+        "direction = [0.0, 0.0, 1.0]\nview_width = 3.0",
+        "projection = \"perspective\"\neye = [0.3, -0.2, -3.0]\nlook_at = [0.0, 0.0, 1.0]\n\
+         fov_deg = 50.0",
+    ] {
+        for radius in [0.0, 0.05] {
+            let text = format!(
+                "[image]\nwidth = 48\nheight = 32\n[camera]\n{camera}\n[sweep]\nslabs = 64\n\
+                 [[light]]\nkind = \"point\"\nposition = [0.2, 0.1, 0.75]\nradius = {radius}\n\
+                 color = [3.0, 3.0, 3.0]\n{meshes}"
+            );
+            let scene = support::scene(&text, &dir);
+            let what = format!("amid, radius {radius}, {camera}");
+            let cpu = check(&ctx, &scene, &what);
+            assert!(cpu.image.data.iter().any(|&v| v > 0.5), "{what}: lit");
+        }
+    }
+}
