@@ -310,24 +310,19 @@ fn a_point_light_whose_grid_would_be_too_large_is_refused_by_name() {
 /// A translucent cloud (Henyey–Greenstein g = 0.4, so a light behind it makes it glow) and a
 /// small opaque plate between it and `lights`, placed behind both: nothing else.
 fn backlit_scene(camera: &str, lights: &str) -> Scene {
-    let meshes = r#"
-[[mesh]]
-shape = "box"
-size = [1.4, 1.0, 0.6]
-material = "cloud"
-[[mesh]]
-shape = "box"
-size = [0.3, 0.3, 0.1]
-translate = [0.6, 0.05, 0.6]
-material = "plate"
-[material.cloud]
-color = [1.0, 0.8, 0.6]
-opacity = 0.6
-phase = { g = 0.4 }
-[material.plate]
-color = [1.0, 1.0, 1.0]"#;
-    small_scene(camera, lights, meshes, "point_backlit")
+    let plate = "[[mesh]]\nshape = \"box\"\nsize = [0.3, 0.3, 0.1]\ntranslate = [0.6, 0.05, 0.6]\n\
+                 material = \"plate\"";
+    let meshes = format!("{CLOUD}\n{plate}\n{CLOUD_AND_PLATE_MATERIALS}");
+    small_scene(camera, lights, &meshes, "point_backlit")
 }
+
+/// The backlit and amid scenes' translucent cloud, 1.4 × 1.0 × 0.6 at the origin.
+const CLOUD: &str = "[[mesh]]\nshape = \"box\"\nsize = [1.4, 1.0, 0.6]\nmaterial = \"cloud\"";
+/// Their materials: the cloud (Henyey–Greenstein g = 0.4, so a light behind it makes it glow)
+/// and a white plate.
+const CLOUD_AND_PLATE_MATERIALS: &str = "[material.cloud]\ncolor = [1.0, 0.8, 0.6]\n\
+                                         opacity = 0.6\nphase = { g = 0.4 }\n\
+                                         [material.plate]\ncolor = [1.0, 1.0, 1.0]";
 
 /// Lights behind every mesh: a hard point light, and a spot pointing back at the viewer with a
 /// soft cone edge.
@@ -372,30 +367,12 @@ fn point_and_spot_lights_behind_every_mesh_match_the_shadow_ray_reference() {
 /// glows towards the viewer) and behind them a small opaque plate over a wall: lights at view
 /// depth 0.75, amid the meshes.
 fn amid_scene(camera: &str, lights: &str) -> Scene {
-    let meshes = r#"
-[[mesh]]
-shape = "box"
-size = [1.4, 1.0, 0.6]
-material = "cloud"
-[[mesh]]
-shape = "box"
-size = [0.4, 0.4, 0.1]
-translate = [-0.1, 0.1, 1.15]
-material = "plate"
-[[mesh]]
-shape = "box"
-size = [8.0, 8.0, 0.02]
-translate = [0.0, 0.0, 1.8]
-material = "wall"
-[material.cloud]
-color = [1.0, 0.8, 0.6]
-opacity = 0.6
-phase = { g = 0.4 }
-[material.plate]
-color = [1.0, 1.0, 1.0]
-[material.wall]
-color = [1.0, 1.0, 1.0]"#;
-    small_scene(camera, lights, meshes, "point_amid")
+    let behind = "[[mesh]]\nshape = \"box\"\nsize = [0.4, 0.4, 0.1]\ntranslate = [-0.1, 0.1, 1.15]\n\
+                  material = \"plate\"\n\
+                  [[mesh]]\nshape = \"box\"\nsize = [8.0, 8.0, 0.02]\ntranslate = [0.0, 0.0, 1.8]\n\
+                  material = \"plate\"";
+    let meshes = format!("{CLOUD}\n{behind}\n{CLOUD_AND_PLATE_MATERIALS}");
+    small_scene(camera, lights, &meshes, "point_amid")
 }
 
 /// Lights amid the meshes: a hard point light, a spot pointing away from the viewer with a soft
