@@ -397,11 +397,11 @@ fn a_world_direction_light_renders_like_its_tilt_and_bad_ones_exit_3() {
             "direction = [0.0, 0.0, 1.0]\ntilt_deg = [5.0, 0.0]",
             "not both",
         ),
-        // A spot light is valid, but the sweep needs it before or behind every mesh: one
-        // between the box and the wall is refused naming the position.
+        // A spot light is valid, but the sweep needs every mesh wholly on one side of it: one
+        // beside the box, within its depth range, is refused naming the position and the box.
         (
-            "kind = \"spot\"\nposition = [2.0, 0.0, 0.8]\nradius = 0.1\ndirection = [0.0, 0.0, -1.0]\ncone_deg = 20.0",
-            "light[0].position",
+            "kind = \"spot\"\nposition = [2.0, 0.0, 0.1]\nradius = 0.1\ndirection = [0.0, 0.0, -1.0]\ncone_deg = 20.0",
+            "light[0].position`: the light's centre lies at view depth 0.100000, within mesh[0]",
         ),
         ("kind = \"spot\"", "light[0].position"),
     ] {
@@ -418,4 +418,14 @@ fn a_world_direction_light_renders_like_its_tilt_and_bad_ones_exit_3() {
             "{light}: an output was written"
         );
     }
+    // Between the box and the wall it is amid the meshes: two passes, rendered.
+    std::fs::write(
+        dir.join("amid.toml"),
+        scene("kind = \"spot\"\nposition = [2.0, 0.0, 0.8]\nradius = 0.1\ndirection = [-1.0, 0.0, -1.0]\ncone_deg = 40.0"),
+    )
+    .unwrap();
+    let (code, _, err) =
+        support::run_cli(&["render", "amid.toml", "-o", "amid.png", "--quiet"], &dir);
+    assert_eq!(code, 0, "amid: {err}");
+    assert!(dir.join("amid.png").exists());
 }
