@@ -314,6 +314,14 @@ pub struct HeldPlanes<'a> {
     pub cells: &'a [AtomicU32],
     /// Cells per grid row.
     pub cells_per_row: usize,
+    /// Per grid row, bit c of word c / 64: some row within the gathers' vertical reach of it
+    /// has cell c active in this slab ([`HeldRecords::prepare`]; empty where none is kept, as
+    /// in unit tests: [`HeldPlanes::near`] then scans [`HeldPlanes::cells`]).
+    pub window: &'a [u64],
+    /// Words of [`HeldPlanes::window`] per grid row.
+    pub words_per_row: usize,
+    /// The vertical reach (row offsets) [`HeldPlanes::window`] was prepared for.
+    pub window_rows: (i32, i32),
 }
 
 /// Pixels per cell of [`HeldPlanes::cells`].
@@ -324,6 +332,11 @@ pub struct HeldRecords {
     words: Vec<AtomicU32>,
     cells: Vec<AtomicU32>,
     cells_per_row: usize,
+    window: Vec<u64>,
+    words_per_row: usize,
+    window_rows: (i32, i32),
+    /// A row's active cells, the scratch of [`HeldRecords::prepare`].
+    active: Vec<u64>,
 }
 
 impl HeldRecords {
@@ -337,13 +350,54 @@ impl HeldRecords {
         } else {
             (0, 0)
         };
+        let words_per_row = cells_per_row.div_ceil(64);
+        let rows = if cells > 0 { h } else { 0 };
         HeldRecords {
             words: (0..pixels * HELD_WORDS)
                 .map(|_| AtomicU32::new(NO_HELD_SLAB))
                 .collect(),
             cells: (0..cells).map(|_| AtomicU32::new(0)).collect(),
             cells_per_row,
+            window: vec![0; rows * words_per_row],
+            words_per_row,
+            window_rows: (0, 0),
+            active: vec![0; rows * words_per_row],
         }
+    }
+
+    /// Before slab `slab`: for every row, which cells hold some pixel that may have passed light
+    /// in slab `slab − 1` (`cells ≥ slab`, as [`HeldPlanes::any_in`] asks), OR-ed over the rows
+    /// `y + rows.0 ..= y + rows.1` (the gathers' vertical reach), so that
+    /// [`HeldPlanes::near`] answers [`HeldPlanes::any_in`]'s question for a pixel's reach in a
+    /// few word operations. No write of slab `slab` is needed: a hold started in it is read
+    /// from slab `slab + 1` on.
+    pub fn prepare(&mut self, slab: u32, rows: (i32, i32)) {
+        if self.cells.is_empty() {
+            return;
+        }
+        let (wpr, cpr) = (self.words_per_row, self.cells_per_row);
+        let h = self.cells.len() / cpr;
+        self.active.fill(0);
+        if slab > 0 {
+            for (y, cells) in self.cells.chunks(cpr).enumerate() {
+                for (c, cell) in cells.iter().enumerate() {
+                    if cell.load(Ordering::Relaxed) >= slab {
+                        self.active[y * wpr + c / 64] |= 1u64 << (c % 64);
+                    }
+                }
+            }
+        }
+        for y in 0..h as i32 {
+            let (y0, y1) = ((y + rows.0).max(0), (y + rows.1).min(h as i32 - 1));
+            for k in 0..wpr {
+                let mut word = 0u64;
+                for r in y0..=y1 {
+                    word |= self.active[r as usize * wpr + k];
+                }
+                self.window[y as usize * wpr + k] = word;
+            }
+        }
+        self.window_rows = rows;
     }
 
     /// The records as the sweep reads and writes them.
@@ -352,6 +406,9 @@ impl HeldRecords {
             words: &self.words,
             cells: &self.cells,
             cells_per_row: self.cells_per_row,
+            window: &self.window,
+            words_per_row: self.words_per_row,
+            window_rows: self.window_rows,
         }
     }
 }
@@ -375,6 +432,31 @@ impl HeldPlanes<'_> {
         (y0..=y1).any(|y| {
             let row = &self.cells[y as usize * self.cells_per_row..][c0..=c1];
             row.iter().any(|c| c.load(Ordering::Relaxed) >= slab)
+        })
+    }
+
+    /// [`HeldPlanes::any_in`] for columns `xs` of the rows within the prepared vertical reach of
+    /// row `y` ([`HeldRecords::prepare`]), in slab `slab`: the same answer from the prepared
+    /// window (scanning the cells where none is prepared).
+    #[inline(always)]
+    pub fn near(&self, xs: (i32, i32), y: i32, slab: u32) -> bool {
+        if self.window.is_empty() {
+            let rows = self.window_rows;
+            return self.any_in(xs, (y + rows.0, y + rows.1), slab);
+        }
+        let rows = (self.window.len() / self.words_per_row) as i32;
+        let last_x = (self.cells_per_row * HELD_CELL) as i32 - 1;
+        let (x0, x1) = (xs.0.max(0), xs.1.min(last_x));
+        if x0 > x1 || y < 0 || y >= rows {
+            return false;
+        }
+        let (c0, c1) = (x0 as usize / HELD_CELL, x1 as usize / HELD_CELL);
+        let row = &self.window[y as usize * self.words_per_row..][..self.words_per_row];
+        (c0 / 64..=c1 / 64).any(|k| {
+            let lo = if k == c0 / 64 { c0 % 64 } else { 0 };
+            let hi = if k == c1 / 64 { c1 % 64 } else { 63 };
+            let mask = (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
+            row[k] & mask != 0
         })
     }
 
@@ -511,6 +593,55 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_prepared_window_answers_as_the_cells_scan_does() {
+        // 25 cells (200 pixels) a row over 30 rows, holds lasting until scattered slabs; the
+        // window prepared for a reach of rows −3 ..= 2 against `any_in` over those rows.
+        let (cells_per_row, rows) = (25usize, 30usize);
+        let mut state = 12345u32;
+        let mut next = |n: u32| {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state % n
+        };
+        let cells: Vec<AtomicU32> = (0..cells_per_row * rows)
+            .map(|_| AtomicU32::new(if next(4) == 0 { next(40) } else { 0 }))
+            .collect();
+        let words_per_row = cells_per_row.div_ceil(64);
+        let mut records = HeldRecords {
+            words: Vec::new(),
+            cells,
+            cells_per_row,
+            window: vec![0; rows * words_per_row],
+            words_per_row,
+            window_rows: (0, 0),
+            active: vec![0; rows * words_per_row],
+        };
+        let reach = (-3, 2);
+        let mut checked = [0usize; 2];
+        for slab in 0..42 {
+            records.prepare(slab, reach);
+            let held = records.view();
+            for _ in 0..300 {
+                let y = next(rows as u32) as i32;
+                let x0 = next(230) as i32 - 15;
+                let xs = (x0, x0 + next(30) as i32);
+                let want = held.any_in(xs, (y + reach.0, y + reach.1), slab);
+                assert_eq!(
+                    held.near(xs, y, slab),
+                    want,
+                    "slab {slab}, xs {xs:?}, y {y}"
+                );
+                checked[usize::from(want)] += 1;
+            }
+        }
+        assert!(
+            checked[0] > 100 && checked[1] > 100,
+            "both answers met: {checked:?}"
+        );
+    }
+
+    #[test]
     fn held_records_read_as_they_stood_after_the_previous_slab_whatever_the_write_order() {
         let words: Vec<AtomicU32> = (0..HELD_WORDS)
             .map(|_| AtomicU32::new(NO_HELD_SLAB))
@@ -520,6 +651,9 @@ mod tests {
             words: &words,
             cells: &cells,
             cells_per_row: 1,
+            window: &[],
+            words_per_row: 1,
+            window_rows: (-1, 1),
         };
         let slot = |from: u32, until| HeldSlot {
             from,

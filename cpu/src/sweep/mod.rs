@@ -528,12 +528,13 @@ fn drive(
         .map(|l| LightTaps::new(&l.table))
         .collect();
     let mut opaque = OpaqueImage::new(plan);
-    let held = HeldRecords::new(plan);
+    let mut held = HeldRecords::new(plan);
     let mut slabs_swept = plan.slabs;
     for slab in 0..plan.slabs {
         if options.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             return Err(SweepError::Interrupted);
         }
+        held.prepare(slab, (reach.y0, reach.y1));
         let ctx = SlabContext {
             plan,
             raster,

@@ -335,13 +335,15 @@ pub(crate) fn reads_held(row: &RowContext<'_>, x: usize) -> bool {
 }
 
 /// Whether a hold of a pixel near what the gathers of pixels `x0 .. x0 + lanes` read may have
-/// passed light in the previous slab (`HeldPlanes::any_in`): a hint that decides no bit.
+/// passed light in the previous slab (`HeldPlanes::near`, from the window prepared for the
+/// gathers' reach): a hint that decides no bit.
 #[inline(always)]
 pub(crate) fn held_near(row: &RowContext<'_>, x0: usize, lanes: usize) -> bool {
     let (ctx, reach) = (row.ctx, &row.ctx.reach);
     let (x0, y) = (x0 as i32, row.y as i32);
     let xs = (x0 + reach.x0, x0 + lanes as i32 - 1 + reach.x1);
-    ctx.held.any_in(xs, (y + reach.y0, y + reach.y1), ctx.slab)
+    debug_assert_eq!(ctx.held.window_rows, (reach.y0, reach.y1));
+    ctx.held.near(xs, y, ctx.slab)
 }
 
 /// [`convolve`] through [`gather_held`]: the gathers read no light from held pixels behind whose

@@ -7,9 +7,10 @@
 use convshadow_common::pixel::lane::{Layout, MAX_LANES};
 
 use crate::sweep::kit::RowContext;
-use crate::sweep::pixel::{LightIn, convolve_held};
+use crate::sweep::pixel::{LightIn, convolve_held, reads_held};
 
-/// The lanes of the chunk at `x0` not held in the previous slab, gathered again lane by lane
+/// The lanes of the chunk at `x0` not held in the previous slab and near a pixel that was
+/// ([`reads_held`]), gathered again lane by lane
 /// through `pixel::convolve_held` into their lanes of `iin` (every light's channels) and
 /// `depth_in` (every light's depth plane).
 #[cold]
@@ -20,10 +21,11 @@ pub(super) fn held_lanes<L: Layout>(
     depth_in: &mut [L],
 ) {
     let ctx = row.ctx;
-    let w = ctx.plan.grid_width as usize;
     let lights = ctx.plan.lights.len();
     for i in 0..L::LANES {
-        if ctx.held.held_before(row.y * w + x0 + i, ctx.slab) {
+        // A lane held itself, or whose own reach holds no pixel held in the previous slab,
+        // keeps the chunk's gather: the same bits (`pixel::reads_held`).
+        if !reads_held(row, x0 + i) {
             continue;
         }
         let mut light = LightIn::ZERO;

@@ -154,8 +154,9 @@ fn compare_lanes(
         .iter()
         .map(|l| LightTaps::new(&l.table))
         .collect();
-    let held = crate::composite::HeldRecords::new(&plan);
+    let mut held = crate::composite::HeldRecords::new(&plan);
     for slab in 0..plan.slabs {
+        held.prepare(slab, (reach.y0, reach.y1));
         let ctx = SlabContext {
             plan: &plan,
             raster: &g.raster,
