@@ -69,23 +69,17 @@ pub(super) fn point_grid(
         .point
         .as_ref()
         .expect("a point pass's light is a point light");
-    let refuse = |key: &str, message: String| {
-        RenderError::Scene(SceneError {
-            file: scene.source.clone(),
-            key: format!("light[{l}].{key}"),
-            message,
-        })
-    };
+    let refuse = |key: &str, message: String| refused(scene, format!("light[{l}].{key}"), message);
     if light.radius > 0.0 && scene.sweep.penumbra == Penumbra::Iterated {
-        return Err(RenderError::Scene(SceneError {
-            file: scene.source.clone(),
-            key: "sweep.penumbra".to_string(),
-            message: format!(
+        return Err(refused(
+            scene,
+            "sweep.penumbra".to_string(),
+            format!(
                 "light[{l}] is a point light with a radius: the convolution sweep gives its \
                  penumbra with the distance penumbra only (\"distance\", the default), whose \
                  depths it measures from the light; `--backend reference` renders it either way"
             ),
-        }));
+        ));
     }
     let cam = &eye.camera;
     let at = cam.to_camera(DVec3::from(light.position));
@@ -304,6 +298,15 @@ pub(super) enum Placement {
     },
 }
 
+/// A refusal of `scene` naming `key` (exit code 3).
+fn refused(scene: &Scene, key: String, message: String) -> RenderError {
+    RenderError::Scene(SceneError {
+        file: scene.source.clone(),
+        key,
+        message,
+    })
+}
+
 /// Where point light `l` of `scene` lies among the meshes of `eye` (its geometry, meshes in
 /// scene order) along the view: [`Placement`]. A mesh whose vertices lie on both sides of the
 /// light's view depth (or on it) cannot be split and is refused, naming the light and the mesh.
@@ -330,17 +333,17 @@ pub(super) fn placement(
         } else if lo > at {
             back.push(i);
         } else if lo <= hi {
-            return Err(RenderError::Scene(SceneError {
-                file: scene.source.clone(),
-                key: format!("light[{l}].position"),
-                message: format!(
+            return Err(refused(
+                scene,
+                format!("light[{l}].position"),
+                format!(
                     "the light's centre lies at view depth {at:.6}, within mesh[{i}]'s depth \
                      range [{lo:.6}, {hi:.6}]: the convolution sweep lights the meshes in front \
                      of a point or spot light and those behind it in two passes, so every mesh \
                      must lie wholly on one side (move the light, or render with `--backend \
                      reference`)"
                 ),
-            }));
+            ));
         }
     }
     Ok(match (front.is_empty(), back.is_empty()) {
