@@ -4,6 +4,8 @@
 
 use convshadow_common::model::scene::Scene;
 
+use convshadow_cpu::composite::finish;
+
 use super::{Aov, RenderError, Rendered, image_fingerprint};
 
 /// Whether the turned-round pass's image is mirrored back in x: an orthographic camera's is
@@ -106,20 +108,16 @@ pub fn add_pass(total: &mut Rendered, pass: Rendered) {
 /// and adds `behind`'s counts. The light layers pair by position (the same lights); the image
 /// hash is the caller's.
 pub fn composite_over(total: &mut Rendered, behind: Rendered) {
-    let over = |near: &mut [f32], far: &[f32], alpha: &[f32], channels: usize| {
-        for ((n, f), a) in near
-            .chunks_exact_mut(channels)
-            .zip(far.chunks_exact(channels))
-            .zip(alpha)
-        {
-            for (n, f) in n.iter_mut().zip(f) {
-                *n += (1.0 - a) * f;
-            }
+    // Per pixel the sweep's final `C += (1 − A)·background`, with the far image as background.
+    let over = |near: &mut [f32], far: &[f32], alpha: &[f32]| {
+        for ((n, f), &a) in near.chunks_exact_mut(3).zip(far.chunks_exact(3)).zip(alpha) {
+            let far: [f32; 3] = f.try_into().expect("three channels");
+            finish(n.try_into().expect("three channels"), a, far);
         }
     };
-    over(&mut total.image.data, &behind.image.data, &total.alpha, 3);
+    over(&mut total.image.data, &behind.image.data, &total.alpha);
     for ((_, near), (_, far)) in total.light_layers.iter_mut().zip(&behind.light_layers) {
-        over(near, far, &total.alpha, 3);
+        over(near, far, &total.alpha);
     }
     if let (Some(near), Some(far)) = (&mut total.depth, &behind.depth) {
         for (n, f) in near.iter_mut().zip(far) {
@@ -127,8 +125,9 @@ pub fn composite_over(total: &mut Rendered, behind: Rendered) {
         }
     }
     // Last: the layers above are seen through the near opacity.
-    let near_alpha = total.alpha.clone();
-    over(&mut total.alpha, &behind.alpha, &near_alpha, 1);
+    for (a, f) in total.alpha.iter_mut().zip(&behind.alpha) {
+        *a += (1.0 - *a) * f;
+    }
     add_counts(total, &behind);
 }
 

@@ -9,6 +9,7 @@ use super::point::{Placement, placement, visible_points};
 use super::{Aov, RenderError, RenderRequest, Rendered, image_fingerprint};
 use convshadow_common::model::scene::{Scene, SlabSpec};
 use convshadow_common::prepare::geometry::SceneGeometry;
+use convshadow_cpu::composite::finish;
 use convshadow_cpu::ldi::{BuildLdi, Ldi};
 
 /// [`super::render`] for a scene with point or spot lights: its directional lights rendered as
@@ -58,9 +59,14 @@ pub(super) fn render_with_point_lights(
         };
         passes.push((vec![l], pass));
     }
-    // Where the eye's rays meet the meshes, which bounds every point light's grid (the eye's
-    // LDI once more; each pass builds its own within its budget).
-    let visible = eye_rays_among_meshes(&eye, req)?;
+    // Where the eye's rays meet the meshes, which bounds the grid of every light before or
+    // behind every mesh (the eye's LDI once more; each pass builds its own within its budget;
+    // a light amid the meshes has one per side instead).
+    let visible = if passes.iter().any(|(_, p)| matches!(p, Pass::Point(_))) {
+        eye_rays_among_meshes(&eye, req)?
+    } else {
+        Vec::new()
+    };
     let mut total: Option<Rendered> = None;
     let mut layers = Vec::new();
     for (i, (lights, pass)) in passes.into_iter().enumerate() {
@@ -166,15 +172,13 @@ fn eye_rays_among_meshes(
 }
 
 /// The background `background` composited behind `pass`'s image (rendered on black), where its
-/// opacity leaves it visible: `C + (1 − A)·background`.
+/// opacity leaves it visible: the sweep's own `C + (1 − A)·background` (`finish`).
 fn add_background(pass: &mut Rendered, background: [f32; 3]) {
     if background == [0.0; 3] {
         return;
     }
-    for (pixel, a) in pass.image.data.chunks_exact_mut(3).zip(&pass.alpha) {
-        for (v, b) in pixel.iter_mut().zip(background) {
-            *v += (1.0 - a) * b;
-        }
+    for (pixel, &a) in pass.image.data.chunks_exact_mut(3).zip(&pass.alpha) {
+        finish(pixel.try_into().expect("three channels"), a, background);
     }
 }
 
