@@ -322,7 +322,25 @@ pub struct HeldPlanes<'a> {
     pub words_per_row: usize,
     /// The vertical reach (row offsets) [`HeldPlanes::window`] was prepared for.
     pub window_rows: (i32, i32),
+    /// Per light and grid pixel (light after light), [`HIDER_WORDS`] words: the pixel as a
+    /// hider for the slab it was last asked in ([`HeldPlanes::hider`]). Every reader of a slab
+    /// asks the same question of it, so the first to ask answers for all (a cache: it decides
+    /// no bit).
+    pub hiders: &'a [[AtomicU32; HIDER_WORDS]],
 }
+
+/// Words per light and pixel of [`HeldPlanes::hiders`]: the slab asked for with
+/// [`HIDER_ASKED`] and [`HIDER_FOUND`], then the hider's crossing slab, depth bits and triangle.
+pub const HIDER_WORDS: usize = 4;
+
+/// The bits of a hider's first word that hold the slab it answers for (slabs < 2¹⁶).
+const HIDER_SLAB_MASK: u32 = 0xffff;
+
+/// The flag of a hider's first word: the pixel hides in that slab.
+const HIDER_FOUND: u32 = 1 << 16;
+
+/// The flag of a hider's first word: it answers for a slab (not set before any is asked).
+const HIDER_ASKED: u32 = 1 << 17;
 
 /// Pixels per cell of [`HeldPlanes::cells`].
 pub const HELD_CELL: usize = 8;
@@ -337,6 +355,8 @@ pub struct HeldRecords {
     window_rows: (i32, i32),
     /// A row's active cells, the scratch of [`HeldRecords::prepare`].
     active: Vec<u64>,
+    /// Per light and grid pixel, [`HeldPlanes::hiders`].
+    hiders: Vec<[AtomicU32; HIDER_WORDS]>,
 }
 
 impl HeldRecords {
@@ -362,6 +382,9 @@ impl HeldRecords {
             words_per_row,
             window_rows: (0, 0),
             active: vec![0; rows * words_per_row],
+            hiders: (0..pixels * plan.lights.len())
+                .map(|_| std::array::from_fn(|_| AtomicU32::new(0)))
+                .collect(),
         }
     }
 
@@ -409,6 +432,7 @@ impl HeldRecords {
             window: &self.window,
             words_per_row: self.words_per_row,
             window_rows: self.window_rows,
+            hiders: &self.hiders,
         }
     }
 }
@@ -530,16 +554,16 @@ impl HeldPlanes<'_> {
         }
     }
 
-    /// Whether a gather at pixel `q` in slab `slab` reads no light from pixel `p`
-    /// (`surface_hold`, "Who reads the held light"): `p` held in slab `slab − 1`, `q` lies more
-    /// than `HELD_BEHIND_MARGIN` slabs behind its surface's plane, and the column the light
-    /// reaching `p` came from (along the light's `drift` per slab) crossed that surface.
-    /// Returns the hold's crossing slab then. The caller has checked that `q` is not held.
+    /// Whether a gather at pixel `q` in slab `slab` reads no light of light `light` from pixel
+    /// `p` (`surface_hold`, "Who reads the held light"): `p` held in slab `slab − 1` and the
+    /// column the light reaching it came from crossed that surface ([`HeldPlanes::hider`]),
+    /// and `q` lies more than `HELD_BEHIND_MARGIN` slabs behind its surface's plane. Returns
+    /// the hold's crossing slab then. The caller has checked that `q` is not held.
     #[inline(always)]
     pub fn hides(
         &self,
         plan: &RenderPlan,
-        drift: [f32; 2],
+        light: usize,
         q: (i32, i32),
         p: (i32, i32),
         slab: u32,
@@ -548,18 +572,69 @@ impl HeldPlanes<'_> {
         if p.0 < 0 || p.1 < 0 || p.0 >= w || p.1 >= h {
             return None;
         }
-        let at = (p.1 * w + p.0) as usize;
+        let at = light * (w * h) as usize + (p.1 * w + p.0) as usize;
+        let words = &self.hiders[at];
+        let meta = words[0].load(Ordering::Acquire);
+        let hider = if meta & (HIDER_SLAB_MASK | HIDER_ASKED) == slab | HIDER_ASKED {
+            (meta & HIDER_FOUND != 0).then(|| {
+                let word = |k: usize| words[k].load(Ordering::Relaxed);
+                (word(1), f32::from_bits(word(2)), word(3))
+            })
+        } else {
+            self.ask_hider(plan, light, p, slab, words)
+        };
+        let (from, z0, triangle) = hider?;
+        let [gx, gy] = plan.hold_slopes[triangle as usize];
+        let (dx, dy) = ((q.0 - p.0) as f32, (q.1 - p.1) as f32);
+        let at_reader = z0 + gx * dx + gy * dy;
+        // Every value here is finite (`MAX_HOLD_SLOPE`).
+        (at_reader < slab as f32 - surface_hold::HELD_BEHIND_MARGIN).then_some(from)
+    }
+
+    /// [`HeldPlanes::hider`], written into pixel `p`'s `words` of light `light` for the other
+    /// readers of slab `slab` (the first reader's path, kept out of the gathers' loop).
+    #[cold]
+    #[inline(never)]
+    fn ask_hider(
+        &self,
+        plan: &RenderPlan,
+        light: usize,
+        p: (i32, i32),
+        slab: u32,
+        words: &[AtomicU32; HIDER_WORDS],
+    ) -> Option<(u32, f32, u32)> {
+        let hider = self.hider(plan, light, p, slab);
+        if let Some((from, z0, triangle)) = hider {
+            words[1].store(from, Ordering::Relaxed);
+            words[2].store(z0.to_bits(), Ordering::Relaxed);
+            words[3].store(triangle, Ordering::Relaxed);
+        }
+        let found = if hider.is_some() { HIDER_FOUND } else { 0 };
+        // Release: a reader that sees this slab's stamp sees the words above.
+        words[0].store(slab | HIDER_ASKED | found, Ordering::Release);
+        hider
+    }
+
+    /// Pixel `p` as a hider of light `light` in slab `slab` (its hold's crossing slab, depth
+    /// and triangle): held in slab `slab − 1`, and the column the light reaching it came from,
+    /// `t` slabs back along the light's drift, crossed a surface within `SAME_SURFACE_SLABS` of
+    /// the held surface's plane there. Depends only on the records as slab `slab − 1` left
+    /// them (no write of slab `slab` changes what `latest_before` gives it), so every reader
+    /// of the slab gets one answer.
+    fn hider(
+        &self,
+        plan: &RenderPlan,
+        light: usize,
+        p: (i32, i32),
+        slab: u32,
+    ) -> Option<(u32, f32, u32)> {
+        let (w, h) = (plan.grid_width as i32, plan.grid_height as i32);
         let held = self
-            .latest_before(at, slab)
+            .latest_before((p.1 * w + p.0) as usize, slab)
             .filter(|s| s.held_before(slab))?;
+        let drift = plan.lights[light].drift;
         let [gx, gy] = plan.hold_slopes[held.triangle as usize];
         let k = slab as f32;
-        let (dx, dy) = ((q.0 - p.0) as f32, (q.1 - p.1) as f32);
-        let at_reader = held.z0 + gx * dx + gy * dy;
-        // Every value here is finite (`MAX_HOLD_SLOPE`).
-        if at_reader >= k - surface_hold::HELD_BEHIND_MARGIN {
-            return None;
-        }
         // Where the light reaching p left the plane: t slabs back, against the drift.
         let a = 1.0 - (gx * drift[0] + gy * drift[1]);
         let t = ((k - 1.0) - held.z0 + 0.5) / a.max(1.0e-6);
@@ -571,11 +646,11 @@ impl HeldPlanes<'_> {
         let u = uy as usize * w as usize + ux as usize;
         let there = self.latest_before(u, slab)?;
         let plane = held.z0 + gx * (ux - p.0 as f32) + gy * (uy - p.1 as f32);
-        if (there.z0 - plane).abs() < surface_hold::SAME_SURFACE_SLABS {
-            Some(held.from)
-        } else {
-            None
-        }
+        ((there.z0 - plane).abs() < surface_hold::SAME_SURFACE_SLABS).then_some((
+            held.from,
+            held.z0,
+            held.triangle,
+        ))
     }
 }
 
@@ -616,6 +691,7 @@ mod tests {
             words_per_row,
             window_rows: (0, 0),
             active: vec![0; rows * words_per_row],
+            hiders: Vec::new(),
         };
         let reach = (-3, 2);
         let mut checked = [0usize; 2];
@@ -654,6 +730,7 @@ mod tests {
             window: &[],
             words_per_row: 1,
             window_rows: (-1, 1),
+            hiders: &[],
         };
         let slot = |from: u32, until| HeldSlot {
             from,

@@ -353,8 +353,7 @@ pub(crate) fn convolve_held(row: &RowContext<'_>, x: usize, inside: bool, light:
     let (ctx, plan) = (row.ctx, row.ctx.plan);
     let q = (x as i32, row.y as i32);
     convolve_through(row, x, inside, light, |l, planes, taps, at| {
-        let drift = plan.lights[l].drift;
-        let hides = |px, py| ctx.held.hides(plan, drift, q, (px, py), ctx.slab);
+        let hides = |px, py| ctx.held.hides(plan, l, q, (px, py), ctx.slab);
         gather_held(planes, taps, at, hides)
     });
 }
