@@ -303,6 +303,19 @@ fn convolve_through(
     light: &mut LightIn,
     gather: impl Fn(usize, &LightPlanes<'_>, &[Tap], TapOrigin) -> [f32; 4],
 ) {
+    convolve_rows_through(row, x, inside, light, None, gather);
+}
+
+/// [`convolve_through`], light l through tap row `rows[l]` where given, else [`tap_row`]'s.
+#[inline(always)]
+fn convolve_rows_through(
+    row: &RowContext<'_>,
+    x: usize,
+    inside: bool,
+    light: &mut LightIn,
+    rows: Option<&[u32]>,
+    gather: impl Fn(usize, &LightPlanes<'_>, &[Tap], TapOrigin) -> [f32; 4],
+) {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
     let (ch, slab) = (plan.channels as usize, ctx.slab as usize);
     for l in 0..plan.lights.len() {
@@ -312,7 +325,10 @@ fn convolve_through(
             shift: plan.lights[l].table.slab_shift[slab],
             inside,
         };
-        let tap_row = tap_row(row, l, at, false);
+        let tap_row = match rows {
+            Some(rows) => rows[l],
+            None => tap_row(row, l, at, false),
+        };
         // The light's channels, then its depth plane if any (0 without one).
         let planes = light_planes(plan, row.prev.light, l);
         let sums = gather(l, &planes, ctx.taps[l].weighted(tap_row), at);
@@ -350,12 +366,26 @@ pub(crate) fn held_near(row: &RowContext<'_>, x0: usize, lanes: usize) -> bool {
 /// surface pixel x lies. Where none is read, [`convolve`]'s bits.
 #[inline(never)]
 pub(crate) fn convolve_held(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
+    convolve_held_rows(row, x, inside, light, None);
+}
+
+/// [`convolve_held`], each light l through tap row `rows[l]` where given (the rows an 8-lane
+/// chunk's level search already found for this pixel: [`tap_row`]'s, so the same bits).
+#[inline(always)]
+pub(crate) fn convolve_held_rows(
+    row: &RowContext<'_>,
+    x: usize,
+    inside: bool,
+    light: &mut LightIn,
+    rows: Option<&[u32]>,
+) {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
     let q = (x as i32, row.y as i32);
-    convolve_through(row, x, inside, light, |l, planes, taps, at| {
+    let gather = |l, planes: &LightPlanes<'_>, taps: &[Tap], at| {
         let hides = |px, py| ctx.held.hides(plan, l, q, (px, py), ctx.slab);
         gather_held(planes, taps, at, hides)
-    });
+    };
+    convolve_rows_through(row, x, inside, light, rows, gather);
 }
 
 /// Light l's tap row at the pixel of `at` in this slab: its phase's, or (distance penumbra) the

@@ -259,16 +259,16 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     let slab = ctx.slab as usize;
     let n = plan.lights.len() * ch;
 
-    // The stages' independent parts run in the order that hides their latency best (measured):
-    // every light's level search (distance penumbra: chains of dependent gathers), then the
-    // cursors (scalar work while those loads arrive), then the convolution that needs both.
+    // Ordered to hide latency (measured): every light's level search (distance penumbra:
+    // dependent gathers), the cursors while those loads arrive, then the convolution.
     let distance = match SHAPE {
         ANY_SHAPE => plan.depth_planes() > 0,
         shape => shape == RGB_DISTANCE,
     };
     // Per light, sized N (lights ≤ lights · channels ≤ N): zeroing MAX_LIGHTS entries costs.
     let mut light_rows = [L::u_splat(0); N];
-    if distance && known_light.is_none() && gathered.is_none() {
+    let searched = distance && known_light.is_none() && gathered.is_none();
+    if searched {
         every_light_rows::<L>(simd, row, x0, interior, &mut light_rows);
     }
 
@@ -313,8 +313,7 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     let mut held = [Held::Free; MAX_LANES];
     let mut released = false;
     let crossing = hits.crossed[..L::LANES].iter().any(|&c| c != NO_CROSSING);
-    // Most chunks hold nothing, cross nothing and lie in no mesh (whose exit could be near):
-    // one look at their hold words and inside masks.
+    // Most chunks hold, cross and lie in nothing: one look at their hold words and inside masks.
     if plan.has_surface_hold()
         && (crossing
             || state.hold[x0..x0 + L::LANES].iter().any(|&h| h != 0)
@@ -389,7 +388,8 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     }
 
     if near_held {
-        held_lanes::<L>(row, x0, &mut iin[..n], &mut depth_in);
+        let rows = searched.then_some(&light_rows[..]);
+        held_lanes::<L>(row, x0, &mut iin[..n], &mut depth_in, rows);
     }
 
     // Sub-pixel shadows: the lanes that crossed an opaque surface shade with their light read at

@@ -80,14 +80,15 @@ fn mismatch(a: &Row, b: &Row) -> Option<String> {
 }
 
 /// The default scene, small, its wall turned 30° about x so that it is held (surface holds):
-/// two coloured lights (six light channels), noise and specular materials, three meshes, through `kernel` with `penumbra` ("iterated" or "distance") and
-/// `preintegration`.
+/// two coloured lights (six light channels), noise and specular materials, three meshes, through `kernel` with `penumbra` ("iterated" or "distance"),
+/// `preintegration` and `held_lit_side`.
 fn plan_of(
     kernel: &str,
     penumbra: &str,
-    preintegration: bool,
+    (preintegration, held_lit_side): (bool, bool),
 ) -> (Scene, SceneGeometry, Ldi, RenderPlan) {
-    let sweep = format!("[sweep]\npreintegration = {preintegration}");
+    let sweep =
+        format!("[sweep]\npreintegration = {preintegration}\nheld_lit_side = {held_lit_side}");
     let text = include_str!("../../../../../scenes/default.toml")
         .replace("[sweep]", &sweep)
         .replace("width = 512\nheight = 512", "width = 37\nheight = 19")
@@ -109,11 +110,12 @@ fn plan_of(
 fn compare_lanes(
     kernel: &str,
     penumbra: &str,
-    pre: bool,
+    (pre, held_lit_side): (bool, bool),
     seed: u32,
     eight: ChunkFn,
 ) -> Option<String> {
-    let (_scene, g, ldi, plan) = plan_of(kernel, penumbra, pre);
+    let (_scene, g, ldi, plan) = plan_of(kernel, penumbra, (pre, held_lit_side));
+    assert_eq!(plan.held_lit_side, held_lit_side);
     assert_eq!(plan.materials.iter().any(|m| m.pre.is_some()), pre);
     assert!(plan.has_surface_hold(), "the turned wall is held");
     let (w, h) = (plan.grid_width as usize, plan.grid_height as usize);
@@ -144,6 +146,8 @@ fn compare_lanes(
     let mut counts = [0u32; 9];
     // Chunks whose summary skipped their cursors, and chunks with a summary that did not.
     let mut summaries = [0u32; 2];
+    // Chunks near a pixel held in the previous slab (their lanes gathered again, `super::held`).
+    let mut near_held = 0u32;
     let columns: Vec<TapColumns> = plan
         .lights
         .iter()
@@ -241,6 +245,7 @@ fn compare_lanes(
                     summary,
                     held: crate::sweep::pixel::held_near(&row_ctx, x0, 8),
                 };
+                near_held += u32::from(chunk.held);
                 eight(&simd, &row_ctx, &mut a.state(), chunk);
                 // The reference: the per-pixel stage, pixel by pixel.
                 for x in x0..x0 + 8 {
@@ -267,18 +272,23 @@ fn compare_lanes(
         summaries[0] > 0 && summaries[1] > 0,
         "{kernel}: summaries (visit, skip) {summaries:?}"
     );
+    // With held light read from its lit side, chunks whose lanes are gathered again.
+    assert!(
+        !held_lit_side || near_held > 0,
+        "{kernel}: no chunk near a held pixel"
+    );
     None
 }
 
 /// [`compare_lanes`] for `kernels` (seeds from `seed`), both penumbra models, and for each
 /// both 8-lane instances: the one that reads the shape from the plan and the one that knows it.
-fn compare_every_instance(kernels: &[&str], pre: bool, seed: u32) {
+fn compare_every_instance(kernels: &[&str], options: (bool, bool), seed: u32) {
     for (k, kernel) in kernels.iter().enumerate() {
         for (penumbra, shape) in [("iterated", RGB_ITERATED), ("distance", RGB_DISTANCE)] {
             for shape in [ANY_SHAPE, shape] {
                 let eight = chunk_fn::<f32x8>(6, shape);
                 assert_eq!(
-                    compare_lanes(kernel, penumbra, pre, seed + k as u32, eight),
+                    compare_lanes(kernel, penumbra, options, seed + k as u32, eight),
                     None,
                     "shape {shape}"
                 );
@@ -291,12 +301,18 @@ fn compare_every_instance(kernels: &[&str], pre: bool, seed: u32) {
 fn every_chunk_instance_gives_the_bits_of_the_pixel_stage() {
     // Per-pixel, per-slab and scheduled phases.
     let kernels = ["ellipse2", "ellipse2:slab", "gaussian:7", "poisson8"];
-    compare_every_instance(&kernels, false, 17);
+    compare_every_instance(&kernels, (false, false), 17);
 }
 
 #[test]
 fn every_chunk_instance_gives_the_bits_of_the_pixel_stage_with_preintegration() {
-    compare_every_instance(&["ellipse2", "gaussian:7"], true, 41);
+    compare_every_instance(&["ellipse2", "gaussian:7"], (true, false), 41);
+}
+
+#[test]
+fn every_chunk_instance_gives_the_bits_of_the_pixel_stage_with_held_light_on_its_lit_side() {
+    // The lanes near held pixels gathered again through the rows the chunk's search found.
+    compare_every_instance(&["ellipse2", "poisson8"], (false, true), 59);
 }
 
 #[test]
@@ -309,7 +325,7 @@ fn a_lane_that_disagrees_fails_the_comparison() {
         state.light[at] = f32::from_bits(state.light[at].to_bits() ^ 1);
         r
     };
-    let d = compare_lanes("ellipse2", "distance", false, 3, wrong_lane)
+    let d = compare_lanes("ellipse2", "distance", (false, false), 3, wrong_lane)
         .expect("the flipped bit is found");
     assert!(d.contains("light["), "{d}");
 }
