@@ -1,8 +1,9 @@
 //! The lanes of an 8-lane chunk that may read a held pixel from behind its surface
 //! (`convshadow_common::plan::surface_hold`, "Who reads the held light"): gathered again one by
 //! one through the per-pixel stage's `convolve_held` (through the tap rows the chunk's level
-//! search found), whose bits are the plain gather's wherever no read is hidden. Tests: `chunk/tests.rs` (the chunk against the per-pixel stage) and the
-//! accuracy tests that render with `sweep.held_lit_side` on both paths.
+//! search found), whose bits are the plain gather's wherever no read is hidden. Tests:
+//! `chunk/tests.rs` (the chunk against the per-pixel stage, with and without
+//! `sweep.held_lit_side`) and the accuracy tests that render with it on both paths.
 
 use convshadow_common::pixel::lane::{Layout, MAX_LANES};
 
@@ -11,7 +12,7 @@ use crate::sweep::pixel::{LightIn, convolve_held_rows, reads_held};
 
 /// The lanes of the chunk at `x0` not held in the previous slab and near a pixel that was
 /// ([`reads_held`]), gathered again lane by lane
-/// through `pixel::convolve_held` into their lanes of `iin` (every light's channels) and
+/// through `pixel::convolve_held_rows` into their lanes of `iin` (every light's channels) and
 /// `depth_in` (every light's depth plane). `rows`: every light's tap rows by lane (light after
 /// light) where the chunk's level search found them (the per-pixel stage's rows: no second
 /// search).
