@@ -289,26 +289,15 @@ pub(crate) fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut
     if reads_held(row, x) {
         return convolve_held(row, x, inside, light);
     }
-    convolve_through(row, x, inside, light, |_, planes, taps, at| {
+    convolve_through(row, x, inside, light, None, |_, planes, taps, at| {
         gather(planes, taps, at)
     });
 }
 
-/// Step 1 with `gather(l, planes, taps, at)` as light l's gather.
+/// Step 1 with `gather(l, planes, taps, at)` as light l's gather, through tap row `rows[l]`
+/// where given (a chunk's own level search's), else [`tap_row`]'s.
 #[inline(always)]
 fn convolve_through(
-    row: &RowContext<'_>,
-    x: usize,
-    inside: bool,
-    light: &mut LightIn,
-    gather: impl Fn(usize, &LightPlanes<'_>, &[Tap], TapOrigin) -> [f32; 4],
-) {
-    convolve_rows_through(row, x, inside, light, None, gather);
-}
-
-/// [`convolve_through`], light l through tap row `rows[l]` where given, else [`tap_row`]'s.
-#[inline(always)]
-fn convolve_rows_through(
     row: &RowContext<'_>,
     x: usize,
     inside: bool,
@@ -385,7 +374,7 @@ pub(crate) fn convolve_held_rows(
         let hides = |px, py| ctx.held.hides(plan, l, q, (px, py), ctx.slab);
         gather_held(planes, taps, at, hides)
     };
-    convolve_rows_through(row, x, inside, light, rows, gather);
+    convolve_through(row, x, inside, light, rows, gather);
 }
 
 /// Light l's tap row at the pixel of `at` in this slab: its phase's, or (distance penumbra) the
