@@ -190,6 +190,8 @@ pub struct SweepOverrides {
     pub subpixel_shadows: Option<bool>,
     /// `sweep.held_lit_side`.
     pub held_lit_side: Option<bool>,
+    /// `sweep.served_releases`.
+    pub served_releases: Option<bool>,
     /// `sweep.horizon`.
     pub horizon: Option<bool>,
     /// `sweep.light_resolution`.
@@ -244,6 +246,9 @@ impl SweepOverrides {
         }
         if let Some(v) = self.held_lit_side {
             scene.sweep.held_lit_side = v;
+        }
+        if let Some(v) = self.served_releases {
+            scene.sweep.served_releases = v;
         }
         if let Some(v) = self.horizon {
             scene.sweep.horizon = v;

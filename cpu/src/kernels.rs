@@ -163,30 +163,31 @@ pub fn gather(planes: &LightPlanes<'_>, taps: &[Tap], at: TapOrigin) -> [f32; 4]
     }
 }
 
-/// [`gather`] of `C` planes: [`gather_held_c`] with no corner hidden (the optimiser drops the
-/// test).
+/// [`gather`] of `C` planes: [`gather_held_c`] with no corner read otherwise (the optimiser
+/// drops the call).
 #[inline(always)]
 fn gather_c<const C: usize>(planes: &LightPlanes<'_>, taps: &[Tap], at: TapOrigin) -> [f32; 4] {
-    gather_held_c::<C>(planes, taps, at, |_, _| None)
+    gather_held_c::<C>(planes, taps, at, |_, _, _| {})
 }
 
-/// [`gather`] where some corners may be held pixels behind whose surface the reader lies
-/// (`convshadow_common::plan::surface_hold`, "Who reads the held light"): `hides(x, y)` gives
-/// the crossing slab of such a corner, read as no light and, in a depth plane, as its light
-/// removed at that slab (`slab · channels`). Every other corner is read as [`gather`] reads it,
-/// in the same order: where `hides` gives nothing, the same bits (kernels.wgsl's `gather_held`).
+/// [`gather`] where some corners are read otherwise than from the light buffer
+/// (`convshadow_common::plan::surface_hold`): `fix(x, y, values)` may replace corner (x, y)'s
+/// values (the light's channels, then its depth plane if any) — a held pixel behind whose
+/// surface the reader lies, or a released pixel whose light is served on its surface. Every
+/// corner is summed as [`gather`] sums it, in the same order: where `fix` changes nothing, the
+/// same bits (kernels.wgsl's `gather_held`).
 #[inline(always)]
 pub fn gather_held(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     at: TapOrigin,
-    hides: impl Fn(i32, i32) -> Option<u32>,
+    fix: impl Fn(i32, i32, &mut [f32]),
 ) -> [f32; 4] {
     match planes.channels {
-        1 => gather_held_c::<1>(planes, taps, at, hides),
-        2 => gather_held_c::<2>(planes, taps, at, hides),
-        3 => gather_held_c::<3>(planes, taps, at, hides),
-        4 => gather_held_c::<4>(planes, taps, at, hides),
+        1 => gather_held_c::<1>(planes, taps, at, fix),
+        2 => gather_held_c::<2>(planes, taps, at, fix),
+        3 => gather_held_c::<3>(planes, taps, at, fix),
+        4 => gather_held_c::<4>(planes, taps, at, fix),
         n => panic!("a light has 1 or 3 channels and at most one depth plane, not {n} planes"),
     }
 }
@@ -197,10 +198,9 @@ fn gather_held_c<const C: usize>(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     at: TapOrigin,
-    hides: impl Fn(i32, i32) -> Option<u32>,
+    fix: impl Fn(i32, i32, &mut [f32]),
 ) -> [f32; 4] {
     let mut acc = [0.0f32; 4];
-    let channels = planes.light_channels;
     for t in taps {
         let (sx, sy) = at.corner(t);
         let mut v = planes.corners::<C>(sx, sy, at.inside);
@@ -208,15 +208,7 @@ fn gather_held_c<const C: usize>(
             .into_iter()
             .enumerate()
         {
-            if let Some(from) = hides(cx, cy) {
-                for (c, value) in v[i].iter_mut().enumerate() {
-                    *value = if c < channels {
-                        0.0
-                    } else {
-                        from as f32 * channels as f32
-                    };
-                }
-            }
+            fix(cx, cy, &mut v[i]);
         }
         for (c, a) in acc.iter_mut().enumerate().take(C) {
             // `a += p` is `a = a + p`: no fused multiply-add.

@@ -16,7 +16,7 @@
 use convshadow_common::pixel::levels::{LevelAt, pixel_level};
 use convshadow_common::plan::{LightPlan, OCCLUSION_EPS};
 
-use crate::kernels::{LightPlanes, TapOrigin, gather};
+use crate::kernels::{LightPlanes, TapOrigin};
 use convshadow_common::plan::kernel::Tap;
 
 /// The smallest part of its slab a crossing is recorded at: a crossing on the slab's front face
@@ -72,13 +72,15 @@ pub fn exact_shift(
 /// The light's channels gathered through `taps` at `at` moved by `shift` (pixels): the gathers
 /// at the four whole-pixel origins around it, blended bilinearly as `a + f·(b − a)` along x,
 /// then along y (a uniform light reads back exactly); an axis whose fraction is 0 gathers once.
-/// Every read is bounds-checked (the moved taps may leave the sweep's interior).
+/// Every read is bounds-checked (the moved taps may leave the sweep's interior). `gather` is
+/// [`gather`] or a gather that reads some corners otherwise (`kernels::gather_held`).
 #[inline(always)]
 pub fn shifted_gather(
     planes: &LightPlanes<'_>,
     taps: &[Tap],
     at: TapOrigin,
     shift: [f32; 2],
+    gather: impl Fn(&LightPlanes<'_>, &[Tap], TapOrigin) -> [f32; 4],
 ) -> [f32; 4] {
     let (ix, iy) = (shift[0].floor(), shift[1].floor());
     let (fx, fy) = (shift[0] - ix, shift[1] - iy);
@@ -112,6 +114,7 @@ fn lerp(a: [f32; 4], b: [f32; 4], f: f32) -> [f32; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernels::gather;
 
     #[test]
     fn a_crossing_on_the_front_face_keeps_its_level() {
@@ -158,13 +161,16 @@ mod tests {
         for s in [[0.0f32, 0.0], [0.25, -0.5], [-1.75, 0.125], [2.0, 1.5]] {
             let want = (6.0 + s[0]) + 16.0 * (3.0 + s[1]);
             assert_eq!(
-                shifted_gather(&planes, &taps, at, s)[0],
+                shifted_gather(&planes, &taps, at, s, gather)[0],
                 want,
                 "shift {s:?}"
             );
         }
         let beyond = TapOrigin { x: 40, ..at };
-        assert_eq!(shifted_gather(&planes, &taps, beyond, [0.5, 0.5])[0], 1.0);
+        assert_eq!(
+            shifted_gather(&planes, &taps, beyond, [0.5, 0.5], gather)[0],
+            1.0
+        );
     }
 
     #[test]

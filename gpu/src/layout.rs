@@ -233,15 +233,16 @@ pub struct Globals {
     /// `DepthScale::psi.len() − 2`: the last slab coordinate whose step is ψ's own.
     pub psi_last: u32,
     /// 1 with `sweep.held_lit_side` where some surface is held (`RenderPlan::held_lit_side`):
-    /// `hold` then holds `1 + HELD_WORDS` words per grid pixel (the hold state, then its
-    /// held-plane record), `surface_hold` three per triangle (its word, then its depth slopes'
-    /// f32 bits, `RenderPlan::hold_slopes`).
+    /// gathers read no light from held pixels behind whose surface they lie.
     pub held_lit_side: u32,
     /// `sweep.horizon`: `level_table` index of the horizon's Φ table (`RenderPlan::horizon`,
     /// f32 bits), or [`HORIZON_NONE`].
     pub horizon_at: u32,
-    /// Pads the struct to WGSL's size (a multiple of its 8-byte alignment).
-    pub _pad0: u32,
+    /// Words per grid pixel of `hold` where some surface is held: the hold state, its
+    /// held-plane record (`HELD_WORDS`) and its two served releases (`SERVED_HEAD_WORDS` and 4
+    /// values per light each); `surface_hold` then keeps three words per triangle (its word,
+    /// then its depth slopes' f32 bits, `RenderPlan::hold_slopes`).
+    pub hold_stride: u32,
 }
 
 /// `Globals::horizon_at` without a horizon (`sweep.horizon = false`).

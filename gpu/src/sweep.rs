@@ -17,7 +17,7 @@ use convshadow_common::pixel::noise::PERLIN4_SCALE;
 use convshadow_common::pixel::volume::Volume;
 use convshadow_common::plan::kernel::PhaseMode;
 use convshadow_common::plan::levels::initial_levels;
-use convshadow_common::plan::surface_hold::{HELD_WORDS, NO_HELD_SLAB};
+use convshadow_common::plan::surface_hold::{HELD_WORDS, NO_HELD_SLAB, SERVED_HEAD_WORDS};
 use convshadow_common::plan::{
     FLUSH_BELOW, LightPlan, MaterialPlan, OCCLUSION_EPS, RenderPlan, TF_SIZE, TfEntry,
 };
@@ -293,6 +293,7 @@ fn build_tables(plan: &RenderPlan, raster: &RasterSetup) -> Result<Tables, GpuEr
             subpixel_shadows: u32::from(!plan.subpixel_meshes.is_empty()),
             back_to_front: u32::from(plan.turned_round),
             horizon_at: HORIZON_NONE,
+            hold_stride: hold_stride(plan) as u32,
             ..Globals::default()
         },
         slabs: (0..slabs)
@@ -511,24 +512,28 @@ fn upload_buffers(
         &vec![PRE_NONE; pre_words as usize],
         false,
     )?;
-    // Surface holds: one word per grid pixel (none held yet) and per triangle, else one each;
-    // with `held_lit_side` each pixel's held-plane record after its word (every slot empty) and
-    // each triangle's depth slopes after its word.
-    let lit_side = plan.has_surface_hold() && plan.held_lit_side;
-    let hold_words: Vec<u32> = match (plan.has_surface_hold(), lit_side) {
-        (false, _) => vec![0],
-        (true, false) => vec![0; pixels as usize],
-        (true, true) => (0..pixels as usize)
-            .flat_map(|_| std::iter::once(0).chain([NO_HELD_SLAB; HELD_WORDS]))
-            .collect(),
+    // Surface holds: per grid pixel its hold state (none held yet), its held-plane record (every
+    // slot empty) and its two served releases (none yet: `NO_HELD_SLAB` heads), and per triangle
+    // its word and depth slopes; else one word each.
+    let hold_words: Vec<u32> = if plan.has_surface_hold() {
+        let served = hold_stride(plan) - 1 - HELD_WORDS;
+        let slot = (served / 2).max(1);
+        (0..pixels as usize)
+            .flat_map(|_| {
+                let words = std::iter::once(0).chain([NO_HELD_SLAB; HELD_WORDS]);
+                words.chain((0..served).map(move |i| if i % slot == 0 { NO_HELD_SLAB } else { 0 }))
+            })
+            .collect()
+    } else {
+        vec![0]
     };
     let hold = upload(ctx, "surface hold", &hold_words, false)?;
-    let per_triangle: Vec<u32> = match (plan.has_surface_hold(), lit_side) {
-        (false, _) => vec![0],
-        (true, false) => plan.surface_hold.clone(),
-        (true, true) => (plan.surface_hold.iter().zip(&plan.hold_slopes))
+    let per_triangle: Vec<u32> = if plan.has_surface_hold() {
+        (plan.surface_hold.iter().zip(&plan.hold_slopes))
             .flat_map(|(&word, g)| [word, g[0].to_bits(), g[1].to_bits()])
-            .collect(),
+            .collect()
+    } else {
+        vec![0]
     };
     let surface_hold = upload(ctx, "triangle surface hold", &per_triangle, false)?;
     // RGBA per image pixel: the RGB image and the composited alpha (`SweepOutput::alpha`).
@@ -833,6 +838,17 @@ impl GridSweep {
     ) -> Result<(), GpuError> {
         dispatch_slabs(ctx, plan, options, self, before_slab)
     }
+}
+
+/// Words per grid pixel of the `hold` buffer where some surface is held (`Globals::hold_stride`):
+/// the hold state, the held-plane record and two served releases.
+fn hold_stride(plan: &RenderPlan) -> usize {
+    let served = if plan.served_releases {
+        2 * (SERVED_HEAD_WORDS + 4 * plan.lights.len())
+    } else {
+        0
+    };
+    1 + HELD_WORDS + served
 }
 
 #[cfg(test)]

@@ -241,7 +241,7 @@ fn detached<T: Send>(
 /// the command line's flags of the same name mean: `width`, `height`, `slabs` (int or "auto"),
 /// `kernel`, `penumbra`, `surface`, `guard_band` ("auto" or int), `seed`,
 /// `variance_compensation`, `preintegration`, `media`, `subpixel_shadows`, `held_lit_side`,
-/// `horizon`, `light_resolution`,
+/// `served_releases`, `horizon`, `light_resolution`,
 /// `threads` (0: one per core), `backend` ("cpu",
 /// "gpu", "auto", "reference"), `path` ("simd", "scalar"), `reference_samples`, `max_memory`
 /// (MiB), `allow_open`. `progress=True` shows the CLI's progress bar on a terminal's stderr.
@@ -253,7 +253,7 @@ fn detached<T: Send>(
     scene = None, *, width = None, height = None, slabs = None, kernel = None, penumbra = None,
     surface = None, guard_band = None, seed = None, variance_compensation = None,
     preintegration = None, media = None, subpixel_shadows = None, held_lit_side = None,
-    horizon = None, light_resolution = None,
+    served_releases = None, horizon = None, light_resolution = None,
     threads = 0, backend = "cpu", path = "simd", reference_samples = None,
     max_memory = None, allow_open = false, progress = false
 ))]
@@ -274,6 +274,7 @@ fn render<'py>(
     media: Option<String>,
     subpixel_shadows: Option<bool>,
     held_lit_side: Option<bool>,
+    served_releases: Option<bool>,
     horizon: Option<bool>,
     light_resolution: Option<f64>,
     threads: usize,
@@ -321,6 +322,7 @@ fn render<'py>(
                 .transpose()?,
             subpixel_shadows,
             held_lit_side,
+            served_releases,
             horizon,
             light_resolution,
         },

@@ -12,7 +12,8 @@
 //!   rows here and in the next table were rendered anew with the table's flags. Checked with
 //!   `--surface flat` since lambert surfaces became the default (2026-12-04), like the next, and
 //!   `--media first-order` since second-order media did (2026-12-05, issue 46), and
-//!   `--horizon false` since the horizon did (2026-12-07, issue 46).
+//!   `--horizon false` since the horizon did (2026-12-07, issue 46), and `--served-releases false`
+//!   since served releases did (2026-12-08, issue 40).
 //! - `tests/data/golden_hashes_iterated.tsv`: the same cases with the automatic guard band and the
 //!   iterated penumbra, recorded when the guard band became the default (new scenes added with
 //!   their rows). Never re-recorded either — but for the rows of the scenes with held surfaces,
@@ -25,7 +26,7 @@
 //!   crossing that leaves a closed mesh stopped starting a hold (same day, "Leaving a mesh
 //!   starts no hold"), rendered anew by the CLI at `--path scalar --threads 1`; no other row
 //!   changed. Checked with `--penumbra iterated --surface flat --media first-order
-//!   --subpixel-shadows false --horizon false`.
+//!   --subpixel-shadows false --horizon false --served-releases false`.
 //! - `tests/data/golden_hashes.tsv`: the same cases with the defaults (automatic guard band,
 //!   distance penumbra), recorded when the distance penumbra became the default and re-recorded
 //!   when lambert surfaces did (2026-12-04, issue 40: opaque surfaces get max(0, n·l)) and when
@@ -39,7 +40,10 @@
 //!   cloud_vdb, floor, rimlit and sunlit when leaving a closed mesh stopped starting a hold
 //!   (same day: its release darkened a soft point light's penumbra far behind), and when the
 //!   horizon became the default (same day, issue 46: at an opaque crossing the light below the
-//!   tangent plane is blocked; every scene with an opaque surface oblique to the view changed).
+//!   tangent plane is blocked; every scene with an opaque surface oblique to the view changed),
+//!   and for backlit, floor, rimlit, sunlit and teapot when released light began to be served
+//!   on its own surface (2026-12-08, issue 40: a steep receiver's released pixels no longer
+//!   darken and deepen the penumbra of another occluder's shadow on it).
 //!   A change that is
 //!   meant to change an image (a new default) re-records this table with
 //!   `CONVSHADOW_RECORD_GOLDEN=1 cargo test --release --test contract golden_hashes::` and says
@@ -59,8 +63,8 @@ const GOLDEN_ITERATED: &str = "tests/data/golden_hashes_iterated.tsv";
 /// The model the two earlier tables were recorded with: the iterated penumbra, flat surfaces, the
 /// paper's first-order media, shadows carried in whole pixels (sub-pixel shadows, which the
 /// iterated penumbra has had since 2026-12-05, change the all-opaque scenes) and no horizon
-/// (since 2026-12-07).
-const EARLIER_MODEL: [&str; 10] = [
+/// (since 2026-12-07) and no served releases (since 2026-12-08).
+const EARLIER_MODEL: [&str; 12] = [
     "--penumbra",
     "iterated",
     "--surface",
@@ -70,6 +74,8 @@ const EARLIER_MODEL: [&str; 10] = [
     "--subpixel-shadows",
     "false",
     "--horizon",
+    "false",
+    "--served-releases",
     "false",
 ];
 

@@ -245,6 +245,21 @@ color = [0.8, 0.8, 0.75]
     check(&ctx, &scene, "thin shells");
 }
 
+/// [`check`]s `scene`, and asserts that the CPU image of the scene with `turn_off` applied
+/// differs (so what it turns off was exercised; else fails with `unchanged`).
+fn check_and_changed_by(
+    ctx: &GpuContext,
+    scene: &Scene,
+    what: &str,
+    (turn_off, unchanged): (fn(&mut Scene), &str),
+) {
+    let with = check(ctx, scene, what);
+    let mut without = scene.clone();
+    turn_off(&mut without);
+    let plain = run(&without, Backend::Cpu);
+    assert_ne!(with.image_hash, plain.image_hash, "{what}: {unchanged}");
+}
+
 #[test]
 fn gpu_image_equals_cpu_with_held_light_on_its_lit_side() {
     // `sweep.held_lit_side`: thin closed plates turned towards and away from the light (held,
@@ -271,14 +286,36 @@ fn gpu_image_equals_cpu_with_held_light_on_its_lit_side() {
         );
         let scene = support::scene(&text, &dir);
         let what = format!("plate turned {turn}°, {penumbra}");
-        let with = check(&ctx, &scene, &what);
-        let mut without = scene.clone();
-        without.sweep.held_lit_side = false;
-        let plain = run(&without, Backend::Cpu);
-        assert_ne!(
-            with.image_hash, plain.image_hash,
-            "{what}: no held read was hidden"
+        let off = |s: &mut Scene| s.sweep.held_lit_side = false;
+        check_and_changed_by(&ctx, &scene, &what, (off, "no held read was hidden"));
+    }
+}
+
+#[test]
+fn gpu_image_equals_cpu_with_released_light_served_on_its_surface() {
+    // `sweep.served_releases`: a plate turned 60° about x under an opaque half-plane, its
+    // released pixels serving their light to its other pixels in the edge's penumbra
+    // (composite.wgsl `keep_release` and `served`, kernels.wgsl `held_fetch`), with both
+    // penumbrae, with and without `held_lit_side`; each image differs from the one without
+    // served releases, so the served reads are exercised.
+    let Some(ctx) = gpu_common::gpu() else {
+        return;
+    };
+    let dir = support::temp_dir("gpu-served-releases");
+    for (penumbra, lit_side) in [("distance", false), ("iterated", false), ("distance", true)] {
+        let text = format!(
+            "[image]\nwidth = 48\nheight = 48\n[camera]\nview_width = 2.0\n[sweep]\nslabs = 128\n\
+             penumbra = \"{penumbra}\"\noptimal_distance = 1.0\nheld_lit_side = {lit_side}\n\
+             [[light]]\ntilt_deg = [-25.0, 15.0]\nvariance = [0.0025, 0.0025]\n\
+             [[mesh]]\nshape = \"box\"\nsize = [4.0, 6.0, 0.02]\ntranslate = [2.0, 0.0, -2.08]\n\
+             material = \"white\"\n[[mesh]]\nshape = \"box\"\nsize = [4.0, 6.0, 0.1]\n\
+             rotate_deg = [60.0, 0.0, 0.0]\nmaterial = \"white\"\n\
+             [material.white]\nopacity = 1.0\nsurface = \"flat\"\n"
         );
+        let scene = support::scene(&text, &dir);
+        let what = format!("60° receiver, {penumbra}, held_lit_side {lit_side}");
+        let off = |s: &mut Scene| s.sweep.served_releases = false;
+        check_and_changed_by(&ctx, &scene, &what, (off, "no release was served"));
     }
 }
 

@@ -173,6 +173,7 @@ struct RawSweep {
     media: Option<String>,
     subpixel_shadows: Option<bool>,
     held_lit_side: Option<bool>,
+    served_releases: Option<bool>,
     horizon: Option<bool>,
     light_resolution: Option<f64>,
 }

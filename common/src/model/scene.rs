@@ -453,6 +453,11 @@ pub struct SweepSpec {
     /// a surface when it lies behind that surface itself (docs/how-it-works.md, "Who reads the
     /// held light").
     pub held_lit_side: bool,
+    /// A released surface's pixels serve the light they gathered in their release slab to
+    /// gathers on the same surface for a few slabs (`sweep.served_releases`, default on; off:
+    /// the images of before 2026-12-08, bit for bit; docs/how-it-works.md, "Released light
+    /// served on its own surface").
+    pub served_releases: bool,
     /// At an opaque crossing, the part of each light below the surface's tangent plane is
     /// blocked (`sweep.horizon`, default on; off: the images of before 2026-12-07, bit for bit;
     /// docs/how-it-works.md, "The horizon").

@@ -219,6 +219,10 @@ pub struct RenderPlan {
     /// lies (`surface_hold`, "Who reads the held light"); the sweep then keeps every pixel's
     /// held-plane record.
     pub held_lit_side: bool,
+    /// `sweep.served_releases`: a released pixel serves the light it gathered in its release
+    /// slab to gathers on its surface (`surface_hold`, "Released light served on its own
+    /// surface"); the sweep then keeps it with the held-plane records.
+    pub served_releases: bool,
     /// `sweep.horizon`: Φ at [`horizon::HORIZON_STEPS`] + 1 knots ([`horizon::horizon_table`]),
     /// read at every opaque crossing; empty when off.
     pub horizon: Vec<f32>,
@@ -453,6 +457,7 @@ impl RenderPlan {
             surface_hold: Vec::new(),
             hold_slopes: Vec::new(),
             held_lit_side: scene.sweep.held_lit_side,
+            served_releases: scene.sweep.served_releases,
             horizon: if scene.sweep.horizon {
                 horizon::horizon_table()
             } else {

@@ -47,6 +47,20 @@
 //! of its last two holds (`cpu::composite::HeldPlanes`, composite.wgsl); the slopes per triangle
 //! are [`RenderPlan::hold_slopes`](crate::plan::RenderPlan::hold_slopes), clamped to
 //! ±[`MAX_HOLD_SLOPE`] slabs per pixel.
+//!
+//! **Released light served on its own surface.** Once a held pixel releases, it holds no light
+//! and (distance penumbra) its own crossing as the occluder of all of it; a neighbour on the
+//! same surface, held or not yet crossed, whose gather reaches it, read those zeros and that
+//! depth: in another occluder's penumbra on a 60° receiver the mean occluder depth of the
+//! receiver's pixels rose by up to 17 slabs and the half-shadow line moved up to 1 px
+//! (docs/accuracy.md §2b). So each released pixel keeps the light and depth plane it gathered in
+//! its release slab (the light in front of its surface then), and for [`SERVED_RELEASE_SLABS`]
+//! slabs a gather whose pixel lies on the same plane reads those instead: the reader's surface
+//! (its held crossing, else the next fragment its cursor will cross) lies within
+//! [`SAME_SURFACE_SLABS`] of the released pixel's plane extended to the reader, with slopes
+//! within [`SERVED_SLOPE_TOLERANCE`] of the plane's. A reader elsewhere — behind the surface,
+//! on another surface, on a curved surface turning away near its outline — reads the zeros as
+//! before: they are the surface's shadow.
 
 use crate::model::scene::Penumbra;
 use crate::plan::kernel::KernelMoments;
@@ -60,6 +74,21 @@ pub const HELD_BEHIND_MARGIN: f32 = 3.0;
 /// How far (slabs) the surface a column crossed may lie from a held neighbour's plane extended
 /// to that column and still count as the neighbour's surface.
 pub const SAME_SURFACE_SLABS: f32 = 1.5;
+
+/// Slabs after its release during which a released pixel's light is served to gathers on its
+/// surface (see "Released light served on its own surface" above): long enough for the
+/// neighbours a 60° receiver's gathers reach at 512 slabs (4 needed, measured), short enough
+/// that the served light has not drifted far.
+pub const SERVED_RELEASE_SLABS: u32 = 8;
+
+/// How much a reader's surface slopes may differ from a released neighbour's plane (sum of both
+/// axes, slabs per pixel) while still counting as one plane: this plus the same fraction of the
+/// plane's own slopes (a curved surface near its outline turns faster).
+pub const SERVED_SLOPE_TOLERANCE: f32 = 0.05;
+
+/// Words per slot of a pixel's served release (`cpu::composite::HeldPlanes`, composite.wgsl)
+/// before its light's values: the slab it released in.
+pub const SERVED_HEAD_WORDS: usize = 1;
 
 /// The largest depth slope (slabs per pixel) kept in `RenderPlan::hold_slopes`: a triangle seen
 /// edge on has an unbounded one, and every product in the read test must stay finite.

@@ -87,7 +87,8 @@ pub(crate) fn sweep_row(row: &RowContext<'_>, state: &mut RowState<'_>) {
 pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usize, inside: bool) {
     // 1. Convolution of every light buffer (and, distance penumbra, its depth plane).
     let mut light = LightIn::ZERO;
-    convolve(row, x, inside, &mut light);
+    let ahead = next_fragment(row.ctx, state, (x, row.y));
+    convolve(row, x, inside, &mut light, ahead);
     // 2. Intersection: advance the layer cursor to the slab's back face.
     let hit = intersect(row.ctx, row.y, state, x);
     let held = hold(row.ctx, state, (x, row.y), (hit.crossed, hit.before));
@@ -97,7 +98,7 @@ pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usi
     let mut shade_in = &light.iin;
     if let Some(part) = part {
         let mut read = light.iin;
-        exact_light(row, x, &light, part, &mut read);
+        exact_light(row, x, &light, (part, ahead), &mut read);
         exact_in = read;
         shade_in = &exact_in;
     }
@@ -120,6 +121,9 @@ pub(crate) fn sweep_pixel(row: &RowContext<'_>, state: &mut RowState<'_>, x: usi
         Held::Release { removed_at } => ([0.0; 3], removed_at as f32),
     };
     let released = matches!(held, Held::Release { .. });
+    if released {
+        keep_release(row, x, &light);
+    }
     attenuate_light(
         row.ctx,
         state,
@@ -144,14 +148,15 @@ pub(crate) fn subpixel_part(ctx: &SlabContext<'_>, hit: &Hit) -> Option<f32> {
         .then(|| (ctx.ldi.depth[hit.crossed as usize] - ctx.front) * ctx.plan.inv_slab_distance)
 }
 
-/// Sub-pixel shadows at pixel x, which crossed an opaque surface at `part` of the slab: every
-/// occluded light's channels in `shade_in` read again where the exact drift puts them
-/// ([`exact_shift`], [`shifted_gather`]), through the tap row step 1 used.
+/// Sub-pixel shadows at pixel x, which crossed an opaque surface at `part` of the slab (the
+/// fragment `ahead` of its cursor before the slab): every occluded light's channels in
+/// `shade_in` read again where the exact drift puts them ([`exact_shift`], [`shifted_gather`]),
+/// through the tap row step 1 used, reading corners as step 1 did ([`held_fix`]).
 pub(crate) fn exact_light(
     row: &RowContext<'_>,
     x: usize,
     light: &LightIn,
-    part: f32,
+    (part, ahead): (f32, Option<u32>),
     shade_in: &mut [f32; MAX_LIGHT_CHANNELS],
 ) {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
@@ -177,7 +182,21 @@ pub(crate) fn exact_light(
             channels: ch,
             ..light_planes(plan, row.prev.light, l)
         };
-        let sums = shifted_gather(&planes, ctx.taps[l].weighted(tap_row), at, shift);
+        let taps = ctx.taps[l].weighted(tap_row);
+        // The hint for the gathers at the moved origins (their reach moved by the shift).
+        let (ix, iy) = (shift[0].floor() as i32, shift[1].floor() as i32);
+        let (xs, ys) = ((at.x + ix, at.x + ix + 1), (at.y + iy, at.y + iy + 1));
+        let reach = &ctx.reach;
+        let xs = (xs.0 + reach.x0, xs.1 + reach.x1);
+        let ys = (ys.0 + reach.y0, ys.1 + reach.y1);
+        let sums = if ctx.held.any_in(xs, ys, ctx.slab) {
+            // Released corners as step 1 read them; held ones from everywhere.
+            let fix = held_fix(row, x, l, (ahead, false));
+            let fixed = |p: &LightPlanes<'_>, t: &[Tap], a| gather_held(p, t, a, &fix);
+            shifted_gather(&planes, taps, at, shift, fixed)
+        } else {
+            shifted_gather(&planes, taps, at, shift, gather)
+        };
         shade_in[l * ch..(l + 1) * ch].copy_from_slice(&sums[..ch]);
     }
 }
@@ -282,12 +301,18 @@ fn record_held(
 
 /// Step 1: every light's planes gathered at pixel x through its kernel's tap row for this slab
 /// and pixel (distance penumbra: the row of the nearest occluder's level in reach), into `light`.
-/// (Filled in place: a returned copy of it cost 5 % of the scalar sweep in store-forwarding
-/// stalls.)
+/// `ahead`: the fragment the pixel's cursor crosses next ([`next_fragment`]). (Filled in place: a
+/// returned copy of it cost 5 % of the scalar sweep in store-forwarding stalls.)
 #[inline(always)]
-pub(crate) fn convolve(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
-    if reads_held(row, x) {
-        return convolve_held(row, x, inside, light);
+pub(crate) fn convolve(
+    row: &RowContext<'_>,
+    x: usize,
+    inside: bool,
+    light: &mut LightIn,
+    ahead: Option<u32>,
+) {
+    if held_near(row, x, 1) && reads_otherwise(row, x, ahead) {
+        return convolve_held(row, x, inside, light, ahead);
     }
     convolve_through(row, x, inside, light, None, |_, planes, taps, at| {
         gather(planes, taps, at)
@@ -326,22 +351,10 @@ fn convolve_through(
     }
 }
 
-/// Whether pixel x's gathers may read a held pixel behind whose surface it lies
-/// ([`HeldPlanes::hides`](crate::composite::HeldPlanes::hides)): some hold near the pixels
-/// they read passed light in the previous slab ([`held_near`]), and the pixel itself did not (a
-/// held pixel reads the light in front of its surface).
-#[inline(always)]
-pub(crate) fn reads_held(row: &RowContext<'_>, x: usize) -> bool {
-    held_near(row, x, 1)
-        && !row
-            .ctx
-            .held
-            .held_before(row.y * row.ctx.plan.grid_width as usize + x, row.ctx.slab)
-}
-
-/// Whether a hold of a pixel near what the gathers of pixels `x0 .. x0 + lanes` read may have
-/// passed light in the previous slab (`HeldPlanes::near`, from the window prepared for the
-/// gathers' reach): a hint that decides no bit.
+/// Whether the gathers of pixels `x0 .. x0 + lanes` may read a pixel otherwise than from the
+/// light buffer ([`held_fix`]): some pixel near what they read held its light in the previous
+/// slab (`held_lit_side`) or released it recently (`HeldPlanes::near`, from the window prepared
+/// for the gathers' reach). A hint that decides no bit.
 #[inline(always)]
 pub(crate) fn held_near(row: &RowContext<'_>, x0: usize, lanes: usize) -> bool {
     let (ctx, reach) = (row.ctx, &row.ctx.reach);
@@ -351,11 +364,31 @@ pub(crate) fn held_near(row: &RowContext<'_>, x0: usize, lanes: usize) -> bool {
     ctx.held.near(xs, y, ctx.slab)
 }
 
-/// [`convolve`] through [`gather_held`]: the gathers read no light from held pixels behind whose
-/// surface pixel x lies. Where none is read, [`convolve`]'s bits.
+/// Whether [`held_fix`] may read some corner of pixel x's gathers otherwise at all: it reads
+/// held light from its lit side only (`held_lit_side`), or it lies on a surface (held, or with
+/// a fragment `ahead`) that released pixels may be served on.
+#[inline(always)]
+pub(crate) fn reads_otherwise(row: &RowContext<'_>, x: usize, ahead: Option<u32>) -> bool {
+    let ctx = row.ctx;
+    ctx.plan.held_lit_side
+        || (!ctx.held.served.is_empty()
+            && (ahead.is_some()
+                || ctx
+                    .held
+                    .held_before(row.y * ctx.plan.grid_width as usize + x, ctx.slab)))
+}
+
+/// [`convolve`] through [`gather_held`], reading corners as [`held_fix`] says. Where it changes
+/// no corner, [`convolve`]'s bits.
 #[inline(never)]
-pub(crate) fn convolve_held(row: &RowContext<'_>, x: usize, inside: bool, light: &mut LightIn) {
-    convolve_held_rows(row, x, inside, light, None);
+pub(crate) fn convolve_held(
+    row: &RowContext<'_>,
+    x: usize,
+    inside: bool,
+    light: &mut LightIn,
+    ahead: Option<u32>,
+) {
+    convolve_held_rows(row, x, inside, light, None, ahead);
 }
 
 /// [`convolve_held`], each light l through tap row `rows[l]` where given (the rows an 8-lane
@@ -367,14 +400,87 @@ pub(crate) fn convolve_held_rows(
     inside: bool,
     light: &mut LightIn,
     rows: Option<&[u32]>,
+    ahead: Option<u32>,
 ) {
-    let (ctx, plan) = (row.ctx, row.ctx.plan);
-    let q = (x as i32, row.y as i32);
     let gather = |l, planes: &LightPlanes<'_>, taps: &[Tap], at| {
-        let hides = |px, py| ctx.held.hides(plan, l, q, (px, py), ctx.slab);
-        gather_held(planes, taps, at, hides)
+        gather_held(planes, taps, at, held_fix(row, x, l, (ahead, true)))
     };
     convolve_through(row, x, inside, light, rows, gather);
+}
+
+/// How pixel x's gathers of light l read a corner otherwise than from the light buffer
+/// (`surface_hold`): with `held_lit_side` (and `lit_side`: step 1, not the sub-pixel read),
+/// a pixel not held itself reads a held corner behind
+/// whose surface it lies as no light, removed at the hold's crossing
+/// ([`HeldPlanes::hides`](crate::composite::HeldPlanes::hides)); a pixel on a surface (its held
+/// crossing, else the fragment `ahead` of its cursor) reads a corner released on that surface
+/// as the light and depth plane the corner gathered in its release slab
+/// ([`HeldPlanes::served`](crate::composite::HeldPlanes::served)).
+#[inline(always)]
+pub(crate) fn held_fix<'a>(
+    row: &'a RowContext<'a>,
+    x: usize,
+    l: usize,
+    (ahead, lit_side): (Option<u32>, bool),
+) -> impl Fn(i32, i32, &mut [f32]) + 'a {
+    let (ctx, plan) = (row.ctx, row.ctx.plan);
+    let (q, slab) = ((x as i32, row.y as i32), ctx.slab);
+    let own = ctx
+        .held
+        .latest_before(row.y * plan.grid_width as usize + x, slab)
+        .filter(|s| s.held_before(slab));
+    let hiding = lit_side && plan.held_lit_side && own.is_none();
+    let surface = match own {
+        Some(held) => Some((held.z0, held.triangle)),
+        None => ahead.map(|f| {
+            let z = slab as f32 + (ctx.ldi.depth[f as usize] - ctx.front) * plan.inv_slab_distance;
+            (z, ctx.ldi.triangle[f as usize])
+        }),
+    };
+    let ch = plan.channels as usize;
+    move |cx, cy, values: &mut [f32]| {
+        if hiding && let Some(from) = ctx.held.hides(plan, l, q, (cx, cy), slab) {
+            for (c, value) in values.iter_mut().enumerate() {
+                *value = if c < ch { 0.0 } else { from as f32 * ch as f32 };
+            }
+        } else if let Some(surface) = surface
+            && let Some(kept) = ctx.held.served(plan, l, (q, surface), (cx, cy), slab)
+        {
+            let n = values.len();
+            values.copy_from_slice(&kept[..n]);
+        }
+    }
+}
+
+/// The fragment pixel (x, y)'s cursor crosses next, before this slab's step 2 (`None`: it has
+/// crossed all of them).
+#[inline(always)]
+pub(crate) fn next_fragment(
+    ctx: &SlabContext<'_>,
+    state: &RowState<'_>,
+    (x, y): (usize, usize),
+) -> Option<u32> {
+    let end = ctx.ldi.offsets[y * ctx.plan.grid_width as usize + x + 1];
+    (state.next[x] < end).then_some(state.next[x])
+}
+
+/// A released pixel keeps the light it gathered in its release slab (every light's channels,
+/// then its depth plane) for the gathers of its surface ([`held_fix`]).
+#[inline(always)]
+pub(crate) fn keep_release(row: &RowContext<'_>, x: usize, light: &LightIn) {
+    let (ctx, plan) = (row.ctx, row.ctx.plan);
+    if ctx.held.served.is_empty() {
+        return;
+    }
+    let ch = plan.channels as usize;
+    let mut values = [[0.0f32; 4]; MAX_LIGHTS];
+    for (l, v) in values.iter_mut().enumerate().take(plan.lights.len()) {
+        v[..ch].copy_from_slice(&light.iin[l * ch..(l + 1) * ch]);
+        v[ch] = light.depth[l];
+    }
+    let p = row.y * plan.grid_width as usize + x;
+    let values = &values[..plan.lights.len()];
+    ctx.held.keep_release(p, (x, row.y), ctx.slab, values);
 }
 
 /// Light l's tap row at the pixel of `at` in this slab: its phase's, or (distance penumbra) the

@@ -78,7 +78,7 @@ fn rust_layouts() -> Vec<Layout> {
             psi_last,
             held_lit_side,
             horizon_at,
-            _pad0,
+            hold_stride,
         }),
         layout!(Slab {
             front,

@@ -168,24 +168,103 @@ fn hold_step(state: u32, slab: u32, crossed: u32, ends_hold: bool, inside: bool)
     return HoldStep(next, HELD_FREE, slab);
 }
 
-// Held light read only from its lit side (`sweep.held_lit_side`, `surface_hold`'s "Who reads the
-// held light"; cpu/src/composite.rs `HeldPlanes`): with it, `hold` keeps per grid pixel its hold
-// state and then its held-plane record, two slots of [from, until, z0 bits, triangle] (the
-// hold's crossing slab, its release or cut, the crossing's depth in slabs, the triangle);
+// Held-plane records (`surface_hold`'s "Who reads the held light" and "Released light served on
+// its own surface"; cpu/src/composite.rs `HeldPlanes`): where a surface holds, `hold` keeps per
+// grid pixel (`globals.hold_stride` words) its hold state, then its held-plane record, two slots
+// of [from, until, z0 bits, triangle] (the hold's crossing slab, its release or cut, the
+// crossing's depth in slabs, the triangle), then per slot its served release: the slab it
+// released in and 4 values per light (its channels and depth plane as gathered then);
 // `surface_hold` keeps per triangle its word and then its depth slopes' f32 bits.
-// (HELD_WORDS, NO_HELD_SLAB, HELD_PART_MAX, HELD_BEHIND_MARGIN and SAME_SURFACE_SLABS come from
-// `shared/constants`.)
+// (HELD_WORDS, NO_HELD_SLAB, HELD_PART_MAX, HELD_BEHIND_MARGIN, SAME_SURFACE_SLABS,
+// SERVED_HEAD_WORDS, SERVED_RELEASE_SLABS and SERVED_SLOPE_TOLERANCE come from `shared/constants`.)
 const HOLD_SLAB_MASK: u32 = 0xffffu;   // a hold state's crossing slab
 const HOLD_LENGTH_MASK: u32 = 1023u;   // a hold state's hold length, once shifted
 
 // The index of grid pixel `p`'s hold state in `hold` (its record follows it).
 fn hold_index(p: u32) -> u32 {
-    return p * (1u + HELD_WORDS * globals.held_lit_side);
+    return p * globals.hold_stride;
 }
 
 // The index of triangle `t`'s word in `surface_hold` (its slopes follow it).
 fn surface_hold_index(t: u32) -> u32 {
-    return t * (1u + 2u * globals.held_lit_side);
+    return t * 3u;
+}
+
+// `sweep.served_releases`: `hold` keeps the served releases after the records.
+fn serves_releases() -> bool {
+    return globals.hold_stride > 1u + HELD_WORDS;
+}
+
+// The index in `hold` of pixel p's served release in record slot `slot`.
+fn served_index(p: u32, slot: u32) -> u32 {
+    return hold_index(p) + 1u + HELD_WORDS + slot * (SERVED_HEAD_WORDS + 4u * globals.lights);
+}
+
+// `HeldPlanes::keep_release`: pixel p, released in slab `slab`, keeps light l's 4 values
+// (`values`) with the record of the hold it released, if that hold has one.
+fn keep_release(p: u32, slab: u32, l: u32, values: vec4<f32>) {
+    if !serves_releases() {
+        return;
+    }
+    let slot = newest_slot(p, slab + 1u);
+    if slot == 2u || held_word(p, slot, 1u) != slab {
+        return;
+    }
+    let at = served_index(p, slot);
+    for (var c = 0u; c < 4u; c++) {
+        hold[at + SERVED_HEAD_WORDS + 4u * l + c] = bitcast<u32>(values[c]);
+    }
+    hold[at] = slab;
+}
+
+// The surface a gathering pixel lies on (`pixel::held_fix`): its held crossing, else the
+// fragment ahead of its cursor; `ok` false where it has none.
+struct ReaderSurface {
+    ok: bool,
+    z: f32,
+    triangle: u32,
+}
+
+// `HeldPlanes::served`: plane `plane` of light l (a channel, or the depth plane at `channels`)
+// as pixel `c` gathered it in its release slab, where a gather at pixel `q` on `surface` in slab
+// `slab` reads it there (`ok`), else not.
+struct Served {
+    ok: bool,
+    value: f32,
+}
+
+fn served(q: vec2<i32>, surface: ReaderSurface, c: vec2<i32>, slab: u32, l: u32, plane: u32) -> Served {
+    let none = Served(false, 0.0);
+    let w = i32(globals.grid_w);
+    let h = i32(globals.grid_h);
+    if !serves_releases() || c.x < 0 || c.y < 0 || c.x >= w || c.y >= h {
+        return none;
+    }
+    let pc = u32(c.y * w + c.x);
+    let slot = newest_slot(pc, slab);
+    if slot == 2u {
+        return none;
+    }
+    let until = held_word(pc, slot, 1u);
+    let at = served_index(pc, slot);
+    if until >= slab || slab - until > SERVED_RELEASE_SLABS || hold[at] != until {
+        return none;
+    }
+    let z0 = bitcast<f32>(held_word(pc, slot, 2u));
+    let t_at = surface_hold_index(held_word(pc, slot, 3u));
+    let gx = bitcast<f32>(surface_hold[t_at + 1u]);
+    let gy = bitcast<f32>(surface_hold[t_at + 2u]);
+    let r_at = surface_hold_index(surface.triangle);
+    let hx = bitcast<f32>(surface_hold[r_at + 1u]);
+    let hy = bitcast<f32>(surface_hold[r_at + 2u]);
+    let dx = f32(q.x - c.x);
+    let dy = f32(q.y - c.y);
+    let at_reader = z0 + gx * dx + gy * dy;
+    let tolerance = SERVED_SLOPE_TOLERANCE + SERVED_SLOPE_TOLERANCE * (abs(gx) + abs(gy));
+    if !(abs(surface.z - at_reader) < SAME_SURFACE_SLABS) || !(abs(hx - gx) + abs(hy - gy) < tolerance) {
+        return none;
+    }
+    return Served(true, bitcast<f32>(hold[at + SERVED_HEAD_WORDS + 4u * l + plane]));
 }
 
 // `HeldSlot`, or none (`ok` false).

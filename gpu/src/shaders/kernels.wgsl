@@ -48,32 +48,50 @@ fn gather(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, o
     return acc;
 }
 
-// `gather_held` (cpu/src/kernels.rs) for one plane: `gather`, with every corner that `hides` names
-// read as no light, or in a depth plane (`depth`) as light removed at its crossing's slab.
-fn gather_held(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, outside: f32, depth: bool, slab: u32, drift: array<f32, 2>) -> f32 {
+// The gathering pixel, as `gather_held` reads corners for it (cpu/src/sweep/pixel.rs
+// `held_fix`): its position, whether it reads held corners behind their surfaces as no light
+// (`held_lit_side`, not held itself), and the surface it lies on.
+var<private> reader_q: vec2<i32>;
+var<private> reader_hiding: bool;
+var<private> reader_surface: ReaderSurface;
+
+// `gather_held` (cpu/src/kernels.rs) for plane `plane` of light l (a channel, or the depth plane
+// at `channels`): `gather`, each corner read as `held_fix` says (`held_fetch`).
+fn gather_held(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, outside: f32, plane: u32, slab: u32, l: u32) -> f32 {
     var acc = 0.0;
     for (var k = 0u; k < count; k++) {
         let t = taps[first + k];
         let sx = x + t.dx + shift.x;
         let sy = y + t.dy + shift.y;
-        acc = acc + t.w[0] * held_fetch(base, sx, sy, outside, depth, x, y, slab, drift);
-        acc = acc + t.w[1] * held_fetch(base, sx + 1, sy, outside, depth, x, y, slab, drift);
-        acc = acc + t.w[2] * held_fetch(base, sx, sy + 1, outside, depth, x, y, slab, drift);
-        acc = acc + t.w[3] * held_fetch(base, sx + 1, sy + 1, outside, depth, x, y, slab, drift);
+        acc = acc + t.w[0] * held_fetch(base, sx, sy, outside, plane, slab, l);
+        acc = acc + t.w[1] * held_fetch(base, sx + 1, sy, outside, plane, slab, l);
+        acc = acc + t.w[2] * held_fetch(base, sx, sy + 1, outside, plane, slab, l);
+        acc = acc + t.w[3] * held_fetch(base, sx + 1, sy + 1, outside, plane, slab, l);
     }
     return acc;
 }
 
-// One corner of `gather_held`.
-fn held_fetch(base: u32, sx: i32, sy: i32, outside: f32, depth: bool, x: i32, y: i32, slab: u32, drift: array<f32, 2>) -> f32 {
-    let crossing = hides(vec2<i32>(x, y), vec2<i32>(sx, sy), slab, drift);
-    if crossing == NO_HELD_SLAB {
-        return fetch(base, sx, sy, outside);
+// One corner of `gather_held`: a held corner the reader lies behind (`hides`) as no light, or in
+// the depth plane as light removed at its crossing's slab; else a corner released on the
+// reader's surface as it gathered the plane then (`served`); else the buffer's value.
+fn held_fetch(base: u32, sx: i32, sy: i32, outside: f32, plane: u32, slab: u32, l: u32) -> f32 {
+    let c = vec2<i32>(sx, sy);
+    if reader_hiding {
+        let crossing = hides(reader_q, c, slab, lights[l].drift);
+        if crossing != NO_HELD_SLAB {
+            if plane == globals.channels {
+                return f32(crossing) * f32(globals.channels);
+            }
+            return 0.0;
+        }
     }
-    if depth {
-        return f32(crossing) * f32(globals.channels);
+    if reader_surface.ok {
+        let s = served(reader_q, reader_surface, c, slab, l, plane);
+        if s.ok {
+            return s.value;
+        }
     }
-    return 0.0;
+    return fetch(base, sx, sy, outside);
 }
 
 // `LevelAt`: where the level search stands: the slab's coordinate in the depth plane's units

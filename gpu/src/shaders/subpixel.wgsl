@@ -44,25 +44,34 @@ fn exact_shift(l: u32, slab: u32, part: f32, lit: f32, depth: f32, row_level: u3
 // `shifted_gather` of one light plane (`base`) through `count` taps from `first`: the gathers at
 // the whole-pixel origins around (x, y) + s, blended as a + f·(b − a) along x, then along y; an
 // axis whose fraction is 0 gathers once.
-fn shifted_gather(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, s: vec2<f32>) -> f32 {
+fn shifted_gather(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, s: vec2<f32>, plane: u32, slab: u32, l: u32) -> f32 {
     let ix = floor(s.x);
     let iy = floor(s.y);
     let fx = s.x - ix;
     let fy = s.y - iy;
     let ox = x + i32(ix);
     let oy = y + i32(iy);
-    var top = gather(base, first, count, shift, ox, oy, OUTSIDE);
+    var top = shifted_read(base, first, count, shift, ox, oy, plane, slab, l);
     if fx != 0.0 {
-        let b = gather(base, first, count, shift, ox + 1, oy, OUTSIDE);
+        let b = shifted_read(base, first, count, shift, ox + 1, oy, plane, slab, l);
         top = top + fx * (b - top);
     }
     if fy == 0.0 {
         return top;
     }
-    var bottom = gather(base, first, count, shift, ox, oy + 1, OUTSIDE);
+    var bottom = shifted_read(base, first, count, shift, ox, oy + 1, plane, slab, l);
     if fx != 0.0 {
-        let b = gather(base, first, count, shift, ox + 1, oy + 1, OUTSIDE);
+        let b = shifted_read(base, first, count, shift, ox + 1, oy + 1, plane, slab, l);
         bottom = bottom + fx * (b - bottom);
     }
     return top + fy * (bottom - top);
+}
+
+// One whole-pixel gather of `shifted_gather`: through `gather_held` where a surface holds (the
+// CPU reads corners so near held or released pixels; elsewhere the same bits), else `gather`.
+fn shifted_read(base: u32, first: u32, count: u32, shift: vec2<i32>, x: i32, y: i32, plane: u32, slab: u32, l: u32) -> f32 {
+    if globals.surface_holds != 0u {
+        return gather_held(base, first, count, shift, x, y, OUTSIDE, plane, slab, l);
+    }
+    return gather(base, first, count, shift, x, y, OUTSIDE);
 }

@@ -42,13 +42,30 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
     let hx = x - globals.guard_left;
     let hy = y - globals.guard_top;
 
-    // 1. Convolution of every light buffer (and, distance penumbra, its depth plane); with
-    // `held_lit_side`, a pixel not held itself reads no light from held pixels behind whose
-    // surface it lies (`gather_held`: the same bits where it reads none).
+    // 1. Convolution of every light buffer (and, distance penumbra, its depth plane); where a
+    // surface holds, through `gather_held` (the same bits where it reads no corner otherwise):
+    // with `held_lit_side` a pixel not held itself reads no light from held pixels behind whose
+    // surface it lies, and a pixel on a surface (its held crossing, else the fragment ahead of
+    // its cursor) reads pixels released on that surface as they gathered in their release slab.
     let planes = globals.planes;
     let distance = globals.depth_planes != 0u;
     let p = y * w + x;
-    let held_reads = globals.held_lit_side != 0u && !slot_held_before(latest_before(p, slab), slab);
+    let records = globals.surface_holds != 0u;
+    reader_q = vec2<i32>(i32(x), i32(y));
+    reader_hiding = false;
+    reader_surface = ReaderSurface(false, 0.0, 0u);
+    if records {
+        let own = latest_before(p, slab);
+        let own_held = slot_held_before(own, slab);
+        reader_hiding = globals.held_lit_side != 0u && !own_held;
+        let ahead = cursors[p].next;
+        if own_held {
+            reader_surface = ReaderSurface(true, own.z0, own.triangle);
+        } else if ahead < offsets[p + 1u] {
+            let z = f32(slab) + (frag_depth[ahead] - front) * globals.inv_slab_distance;
+            reader_surface = ReaderSurface(true, z, frag_meta[ahead] >> MESH_BITS);
+        }
+    }
     for (var l = 0u; l < globals.lights; l++) {
         let light = lights[l];
         let ls = light_slabs[l * globals.slabs + slab];
@@ -63,15 +80,15 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         let first_tap = light.taps + per_phase * phase;
         tap_rows[l] = phase;
         for (var c = 0u; c < ch; c++) {
-            if held_reads {
-                iin[l * ch + c] = gather_held(base + c * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE, false, slab, light.drift);
+            if records {
+                iin[l * ch + c] = gather_held(base + c * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE, c, slab, l);
             } else {
                 iin[l * ch + c] = gather(base + c * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE);
             }
         }
         if distance {
-            if held_reads {
-                depth_in[l] = gather_held(base + ch * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE_DEPTH, true, slab, light.drift);
+            if records {
+                depth_in[l] = gather_held(base + ch * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE_DEPTH, ch, slab, l);
             } else {
                 depth_in[l] = gather(base + ch * w, first_tap, per_phase, ls.shift, i32(x), i32(y), OUTSIDE_DEPTH);
             }
@@ -106,9 +123,7 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         let before = hold[hold_index(p)];
         let step = hold_step(before, slab, crossed_word, crossed && ahead, adv.inside != 0u);
         hold[hold_index(p)] = step.state;
-        if globals.held_lit_side != 0u {
-            record_held(p, before, step, crossed, adv.first, slab, front);
-        }
+        record_held(p, before, step, crossed, adv.first, slab, front);
         held = step.held;
         removed_at = f32(step.removed_at);
         // The exit hold: inside the mesh of its next fragment, within that triangle's exit hold.
@@ -179,6 +194,15 @@ fn sweep_slab(@builtin(global_invocation_id) gid: vec3<u32>) {
         attenuation = vec3<f32>(1.0, 1.0, 1.0);
     } else if held == HELD_RELEASE {
         attenuation = vec3<f32>(0.0, 0.0, 0.0);
+        // The released pixel keeps the light it gathered, for the gathers of its surface.
+        for (var l = 0u; l < globals.lights; l++) {
+            var values = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+            for (var c = 0u; c < ch; c++) {
+                values[c] = iin[l * ch + c];
+            }
+            values[ch] = depth_in[l];
+            keep_release(p, slab, l, values);
+        }
     }
     let row_base = y * globals.row_len;
     for (var l = 0u; l < globals.lights; l++) {
@@ -225,6 +249,8 @@ fn record_held(p: u32, before: u32, step: HoldStep, crossed: bool, first: u32, s
 fn exact_light(x: u32, y: u32, slab: u32, part: f32) {
     let w = globals.grid_w;
     let ch = globals.channels;
+    // The exact read reads released corners as step 1 did, held ones from everywhere.
+    reader_hiding = false;
     for (var l = 0u; l < globals.lights; l++) {
         var lit = 0.0;
         for (var c = 0u; c < ch; c++) {
@@ -240,7 +266,7 @@ fn exact_light(x: u32, y: u32, slab: u32, part: f32) {
         let first_tap = light.taps + per_phase * tap_rows[l];
         let base = l * globals.planes * w;
         for (var c = 0u; c < ch; c++) {
-            iin[l * ch + c] = shifted_gather(base + c * w, first_tap, per_phase, shift, i32(x), i32(y), s.xy);
+            iin[l * ch + c] = shifted_gather(base + c * w, first_tap, per_phase, shift, i32(x), i32(y), s.xy, c, slab, l);
         }
     }
 }

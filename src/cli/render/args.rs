@@ -134,6 +134,12 @@ pub struct RenderArgs {
     /// near held surfaces), `false` (the default) from everywhere.
     #[arg(long, value_name = "BOOL")]
     pub held_lit_side: Option<bool>,
+    /// Override `sweep.served_releases`: `true` (the default) lets a released surface serve the
+    /// light it gathered at its release to gathers on the same surface (no self-shadowing on
+    /// steep receivers in another occluder's penumbra), `false` does not (the images of before
+    /// 2026-12-08).
+    #[arg(long, value_name = "BOOL")]
+    pub served_releases: Option<bool>,
     /// Override `sweep.horizon`: `true` (the default) limits the light at a crossed opaque
     /// surface to the part above its tangent plane, `false` does not (the images of before
     /// 2026-12-07).

@@ -105,6 +105,7 @@ pub(super) fn apply_sweep_overrides(scene: &mut Scene, args: &RenderArgs) -> Res
         media: args.media,
         subpixel_shadows: args.subpixel_shadows,
         held_lit_side: args.held_lit_side,
+        served_releases: args.served_releases,
         horizon: args.horizon,
         light_resolution: args.light_resolution,
     };

@@ -355,6 +355,7 @@ impl Validator<'_> {
             media,
             subpixel_shadows: raw.subpixel_shadows.unwrap_or(true),
             held_lit_side: raw.held_lit_side.unwrap_or(false),
+            served_releases: raw.served_releases.unwrap_or(true),
             horizon: raw.horizon.unwrap_or(true),
             light_resolution: raw.light_resolution.unwrap_or(1.0),
         })

@@ -18,7 +18,7 @@ use convshadow_common::plan::kernel::PhaseMode;
 
 use super::SimdSlab;
 use super::gather::{gather_inside, gather_lanes, store_pixels};
-use super::held::held_lanes;
+use super::held::{exact_lanes, held_lanes, keep_released_lanes, lane_aheads};
 use super::levels::{distance_rows, level_rows, phases};
 use super::per_lane::{LaneRows, gather_per_lane};
 use super::quiet::{ChunkState, Values};
@@ -31,11 +31,8 @@ use crate::sweep::kit::{
     MAX_LIGHT_CHANNELS, MAX_LIGHTS, Previous, RowContext, RowState, SlabContext, level_plane,
     light_block,
 };
-use crate::sweep::pixel::{
-    Hit, LightIn, convolve, exact_light, hold, shade_and_composite, subpixel_part,
-};
+use crate::sweep::pixel::{Hit, hold, shade_and_composite, subpixel_part};
 use convshadow_common::pixel::levels::{depth_coord, pixel_level};
-use convshadow_common::plan::OCCLUSION_EPS;
 use convshadow_common::plan::{RenderPlan, TfEntry};
 use wide::f32x8;
 
@@ -387,9 +384,16 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
         }
     }
 
-    if near_held {
+    let aheads = (near_held || !plan.subpixel_meshes.is_empty())
+        .then(|| lane_aheads::<L>(row, state, x0, &hits.crossed));
+    if let Some(aheads) = &aheads
+        && near_held
+    {
         let rows = searched.then_some(&light_rows[..]);
-        held_lanes::<L>(row, x0, &mut iin[..n], &mut depth_in, rows);
+        held_lanes::<L>(row, x0, (&mut iin[..n], &mut depth_in), rows, aheads);
+    }
+    if released {
+        keep_released_lanes::<L>(row, x0, &held, (&iin[..n], &depth_in));
     }
 
     // Sub-pixel shadows: the lanes that crossed an opaque surface shade with their light read at
@@ -397,9 +401,11 @@ pub(crate) fn sweep_chunk<L: Layout, const N: usize, const SHAPE: u8>(
     let mut parts = [None; MAX_LANES];
     let exact_in;
     let mut iin_shaded = &iin;
-    if any_crossing_subpixel(row, &hits, &mut parts) {
+    if let Some(aheads) = &aheads
+        && any_crossing_subpixel(row, &hits, &mut parts)
+    {
         let mut shade_in = iin;
-        exact_lanes::<L>(row, x0, &parts, &mut shade_in[..n]);
+        exact_lanes::<L>(row, x0, (&parts, aheads), &mut shade_in[..n]);
         exact_in = shade_in;
         iin_shaded = &exact_in;
     }
@@ -541,42 +547,6 @@ fn any_crossing_subpixel(
         any |= part.is_some();
     }
     any
-}
-
-/// Sub-pixel shadows for the lanes at pixels x0.. with a part in `parts`: each one's light
-/// gathered again by the per-pixel stage and read at its exact shift ([`exact_light`]), into
-/// its lane of `shade_in` (every light's channels).
-#[cold]
-fn exact_lanes<L: Layout>(
-    row: &RowContext<'_>,
-    x0: usize,
-    parts: &[Option<f32>; MAX_LANES],
-    shade_in: &mut [L],
-) {
-    let plan = row.ctx.plan;
-    let ch = plan.channels as usize;
-    for (i, part) in parts.iter().enumerate().take(L::LANES) {
-        let Some(part) = *part else { continue };
-        // A lane whose every light is unoccluded reads nothing again (`exact_shift`'s first
-        // test, on the chunk's own gathered values: the per-pixel stage's bits).
-        let occluded = (0..plan.lights.len()).any(|l| {
-            let lit = (0..ch).fold(0.0f32, |a, c| a + shade_in[l * ch + c].lane(i));
-            ch as f32 - lit > OCCLUSION_EPS
-        });
-        if !occluded {
-            continue;
-        }
-        let mut light = LightIn::ZERO;
-        convolve(row, x0 + i, false, &mut light);
-        let mut lane_in = light.iin;
-        exact_light(row, x0 + i, &light, part, &mut lane_in);
-        for (v, &value) in shade_in.iter_mut().zip(&lane_in) {
-            let mut lanes = [0.0f32; MAX_LANES];
-            v.store(&mut lanes, 0);
-            lanes[i] = value;
-            *v = L::load(&lanes, 0);
-        }
-    }
 }
 
 /// `dst = src` for a light's channels, as fixed-length copies for 1 and 3 channels (a run-time

@@ -89,9 +89,9 @@ struct Globals {
     depth_scaled: u32,  // 1: a soft point light's grid (RenderPlan::depth_scale): depths in ψ
     psi_at: u32,        // level_table index of ψ at slab coordinate 0 (f32 bits)
     psi_last: u32,      // DepthScale::psi.len() − 2
-    held_lit_side: u32, // 1: held light read only from its lit side (`hold`: 9 words per pixel, `surface_hold`: 3 per triangle)
+    held_lit_side: u32, // 1: held light read only from its lit side
     horizon_at: u32,    // level_table index of the horizon's Φ table (f32 bits), HORIZON_NONE without
-    _pad0: u32,
+    hold_stride: u32,   // words per grid pixel of `hold` (state, held-plane record, served releases)
 }
 
 struct Slab {
