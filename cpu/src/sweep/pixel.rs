@@ -425,18 +425,9 @@ pub(crate) fn held_fix<'a>(
 ) -> impl Fn(i32, i32, &mut [f32]) + 'a {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
     let (q, slab) = ((x as i32, row.y as i32), ctx.slab);
-    let own = ctx
-        .held
-        .latest_before(row.y * plan.grid_width as usize + x, slab)
-        .filter(|s| s.held_before(slab));
-    let hiding = lit_side && plan.held_lit_side && own.is_none();
-    let surface = match own {
-        Some(held) => Some((held.z0, held.triangle)),
-        None => ahead.map(|f| {
-            let z = slab as f32 + (ctx.ldi.depth[f as usize] - ctx.front) * plan.inv_slab_distance;
-            (z, ctx.ldi.triangle[f as usize])
-        }),
-    };
+    let p = row.y * plan.grid_width as usize + x;
+    let hiding = lit_side && plan.held_lit_side && !ctx.held.held_before(p, slab);
+    let surface = reader_surface(row, x, ahead);
     let ch = plan.channels as usize;
     move |cx, cy, values: &mut [f32]| {
         if hiding && let Some(from) = ctx.held.hides(plan, l, q, (cx, cy), slab) {
@@ -449,6 +440,44 @@ pub(crate) fn held_fix<'a>(
             let n = values.len();
             values.copy_from_slice(&kept[..n]);
         }
+    }
+}
+
+/// Whether some corner that pixel x's gathers through tap rows `rows` (every light's) read is
+/// served a released pixel's light ([`held_fix`]'s second test; the first, with
+/// `held_lit_side`, is not asked): where none is, the gathers read their light buffer.
+pub(crate) fn serves_any(row: &RowContext<'_>, x: usize, rows: &[u32], ahead: Option<u32>) -> bool {
+    let (ctx, plan) = (row.ctx, row.ctx.plan);
+    let Some(surface) = reader_surface(row, x, ahead) else {
+        return false;
+    };
+    let (q, slab) = ((x as i32, row.y as i32), ctx.slab);
+    rows.iter().enumerate().any(|(l, &r)| {
+        let shift = plan.lights[l].table.slab_shift[slab as usize];
+        ctx.taps[l].weighted(r).iter().any(|t| {
+            let (sx, sy) = (q.0 + t.dx + shift[0], q.1 + t.dy + shift[1]);
+            [(sx, sy), (sx + 1, sy), (sx, sy + 1), (sx + 1, sy + 1)]
+                .into_iter()
+                .any(|c| ctx.held.served(plan, l, (q, surface), c, slab).is_some())
+        })
+    })
+}
+
+/// The surface pixel x lies on for [`held_fix`]: its held crossing (depth in slabs, triangle),
+/// else the fragment `ahead` of its cursor, else none.
+#[inline(always)]
+fn reader_surface(row: &RowContext<'_>, x: usize, ahead: Option<u32>) -> Option<(f32, u32)> {
+    let (ctx, plan, slab) = (row.ctx, row.ctx.plan, row.ctx.slab);
+    let own = ctx
+        .held
+        .latest_before(row.y * plan.grid_width as usize + x, slab)
+        .filter(|s| s.held_before(slab));
+    match own {
+        Some(held) => Some((held.z0, held.triangle)),
+        None => ahead.map(|f| {
+            let z = slab as f32 + (ctx.ldi.depth[f as usize] - ctx.front) * plan.inv_slab_distance;
+            (z, ctx.ldi.triangle[f as usize])
+        }),
     }
 }
 

@@ -15,7 +15,7 @@ use crate::parity::NO_CROSSING;
 use crate::sweep::kit::{MAX_LIGHTS, RowContext, RowState};
 use crate::sweep::pixel::{
     LightIn, convolve, convolve_held_rows, exact_light, held_near, keep_release, next_fragment,
-    reads_otherwise,
+    reads_otherwise, serves_any,
 };
 
 /// Every lane's fragment ahead of its cursor before this slab (`pixel::next_fragment`), read
@@ -74,7 +74,16 @@ pub(super) fn held_lanes<L: Layout>(
         for (r, lanes) in lane_rows.iter_mut().zip(&by_lane).take(lights) {
             *r = lanes[i];
         }
-        let lane_rows = rows.is_some().then_some(&lane_rows[..lights]);
+        // Where the level search found the lane's rows and held light is read from everywhere:
+        // whether any corner they read is served at all.
+        let lane_rows = &lane_rows[..lights];
+        if rows.is_some()
+            && !ctx.plan.held_lit_side
+            && !serves_any(row, x0 + i, lane_rows, aheads[i])
+        {
+            continue;
+        }
+        let lane_rows = rows.is_some().then_some(lane_rows);
         convolve_held_rows(row, x0 + i, false, &mut light, lane_rows, aheads[i]);
         for (v, &value) in iin.iter_mut().zip(&light.iin) {
             set_lane(v, i, value);
