@@ -296,15 +296,21 @@ fn gpu_image_equals_cpu_with_released_light_served_on_its_surface() {
     // `sweep.served_releases`: a plate turned 60° about x under an opaque half-plane, its
     // released pixels serving their light to its other pixels in the edge's penumbra
     // (composite.wgsl `keep_release` and `served`, kernels.wgsl `held_fetch`), with both
-    // penumbrae, with and without `held_lit_side`; each image differs from the one without
-    // served releases, so the served reads are exercised.
+    // penumbrae, with and without `held_lit_side`, and at 1024 slabs (where the served age is
+    // 16 slabs, not 8: `surface_hold::served_release_slabs`); each image differs from the one
+    // without served releases, so the served reads are exercised.
     let Some(ctx) = gpu_common::gpu() else {
         return;
     };
     let dir = support::temp_dir("gpu-served-releases");
-    for (penumbra, lit_side) in [("distance", false), ("iterated", false), ("distance", true)] {
+    for (penumbra, lit_side, slabs) in [
+        ("distance", false, 128),
+        ("iterated", false, 128),
+        ("distance", true, 128),
+        ("distance", false, 1024),
+    ] {
         let text = format!(
-            "[image]\nwidth = 48\nheight = 48\n[camera]\nview_width = 2.0\n[sweep]\nslabs = 128\n\
+            "[image]\nwidth = 48\nheight = 48\n[camera]\nview_width = 2.0\n[sweep]\nslabs = {slabs}\n\
              penumbra = \"{penumbra}\"\noptimal_distance = 1.0\nheld_lit_side = {lit_side}\n\
              [[light]]\ntilt_deg = [-25.0, 15.0]\nvariance = [0.0025, 0.0025]\n\
              [[mesh]]\nshape = \"box\"\nsize = [4.0, 6.0, 0.02]\ntranslate = [2.0, 0.0, -2.08]\n\
@@ -313,7 +319,7 @@ fn gpu_image_equals_cpu_with_released_light_served_on_its_surface() {
              [material.white]\nopacity = 1.0\nsurface = \"flat\"\n"
         );
         let scene = support::scene(&text, &dir);
-        let what = format!("60° receiver, {penumbra}, held_lit_side {lit_side}");
+        let what = format!("60° receiver, {penumbra}, held_lit_side {lit_side}, {slabs} slabs");
         let off = |s: &mut Scene| s.sweep.served_releases = false;
         check_and_changed_by(&ctx, &scene, &what, (off, "no release was served"));
     }

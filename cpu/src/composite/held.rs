@@ -9,7 +9,7 @@ use convshadow_common::plan::{RenderPlan, surface_hold};
 
 pub use convshadow_common::plan::surface_hold::{
     HELD_PART_MAX, HELD_SLOT_WORDS, HELD_WORDS, NO_HELD_SLAB, SAME_SURFACE_SLABS,
-    SERVED_HEAD_WORDS, SERVED_RELEASE_SLABS, SERVED_SLOPE_TOLERANCE,
+    SERVED_HEAD_WORDS, SERVED_SLOPE_TOLERANCE,
 };
 
 /// One recorded hold of a pixel ([`HeldPlanes`]).
@@ -68,7 +68,7 @@ pub struct HeldPlanes<'a> {
     /// [`HeldPlanes::cells`] mark where gathers may need [`HeldPlanes::hides`].
     pub lit_side: bool,
     /// Per cell (as [`HeldPlanes::cells`]), the latest slab a pixel in it released in, plus 1
-    /// (0: none): a gather whose cells released nothing in the last [`SERVED_RELEASE_SLABS`]
+    /// (0: none): a gather whose cells released nothing in the last [`HeldPlanes::served_age`]
     /// slabs is served nothing (a hint only).
     pub released: &'a [AtomicU32],
     /// Per grid pixel, per record slot, [`SERVED_HEAD_WORDS`] (the slab the slot's hold
@@ -80,6 +80,9 @@ pub struct HeldPlanes<'a> {
     /// Per grid pixel where [`HeldPlanes::served`] is kept, the latest slab it kept a release
     /// in, plus 1 (0: none): most corners a gather reads are rejected on this one word.
     pub last_release: &'a [AtomicU32],
+    /// Slabs after its release during which a pixel's kept light is served
+    /// (`surface_hold::served_release_slabs` of the sweep's slab count).
+    pub served_age: u32,
 }
 
 /// Words per light and pixel of [`HeldPlanes::hiders`]: the slab asked for with
@@ -115,6 +118,7 @@ pub struct HeldRecords {
     served: Vec<AtomicU32>,
     served_stride: usize,
     last_release: Vec<AtomicU32>,
+    served_age: u32,
 }
 
 impl HeldRecords {
@@ -164,12 +168,13 @@ impl HeldRecords {
                 .collect(),
             served_stride,
             last_release: (0..served).map(|_| AtomicU32::new(0)).collect(),
+            served_age: surface_hold::served_release_slabs(plan.slabs),
         }
     }
 
     /// Before slab `slab`: for every row, which cells hold some pixel that may have passed light
     /// in slab `slab − 1` (`cells ≥ slab`, with `held_lit_side`) or released within the last
-    /// [`SERVED_RELEASE_SLABS`] slabs (as [`HeldPlanes::any_in`] asks), OR-ed over the rows
+    /// `served_age` slabs (as [`HeldPlanes::any_in`] asks), OR-ed over the rows
     /// `y + rows.0 ..= y + rows.1` (the gathers' vertical reach), so that
     /// [`HeldPlanes::near`] answers [`HeldPlanes::any_in`]'s question for a pixel's reach in a
     /// few word operations. No write of slab `slab` is needed: a hold started in it is read
@@ -185,7 +190,7 @@ impl HeldRecords {
             let rows = self.cells.chunks(cpr).zip(self.released.chunks(cpr));
             for (y, (cells, released)) in rows.enumerate() {
                 for (c, (cell, released)) in cells.iter().zip(released).enumerate() {
-                    if cell_active(self.lit_side, cell, released, slab) {
+                    if cell_active((self.lit_side, self.served_age), cell, released, slab) {
                         self.active[y * wpr + c / 64] |= 1u64 << (c % 64);
                     }
                 }
@@ -219,18 +224,24 @@ impl HeldRecords {
             served: &self.served,
             served_stride: self.served_stride,
             last_release: &self.last_release,
+            served_age: self.served_age,
         }
     }
 }
 
 /// Whether a cell may hold a pixel a gather in slab `slab` reads differently from its light
 /// buffer: with `lit_side`, a hold that may have passed light in slab `slab − 1`; or a release
-/// within the last [`SERVED_RELEASE_SLABS`] slabs.
+/// within the last `age` slabs.
 #[inline(always)]
-fn cell_active(lit_side: bool, until: &AtomicU32, released: &AtomicU32, slab: u32) -> bool {
+fn cell_active(
+    (lit_side, age): (bool, u32),
+    until: &AtomicU32,
+    released: &AtomicU32,
+    slab: u32,
+) -> bool {
     let released = released.load(Ordering::Relaxed);
     (lit_side && until.load(Ordering::Relaxed) >= slab)
-        || (released != 0 && released - 1 + SERVED_RELEASE_SLABS >= slab)
+        || (released != 0 && released - 1 + age >= slab)
 }
 
 impl HeldPlanes<'_> {
@@ -254,7 +265,7 @@ impl HeldPlanes<'_> {
             let (row, released) = (&self.cells[at..][c0..=c1], &self.released[at..][c0..=c1]);
             row.iter()
                 .zip(released)
-                .any(|(c, r)| cell_active(self.lit_side, c, r, slab))
+                .any(|(c, r)| cell_active((self.lit_side, self.served_age), c, r, slab))
         })
     }
 
@@ -372,7 +383,7 @@ impl HeldPlanes<'_> {
     /// of light `light` at pixel `p` in slab `slab` instead of its light buffer, if anything
     /// (`surface_hold`, "Released light served on its own surface"): the light and depth plane
     /// `p` gathered in its release slab, where `p` released within the last
-    /// [`SERVED_RELEASE_SLABS`] slabs and `q`'s surface lies on `p`'s plane. Reads the record
+    /// `served_age` slabs and `q`'s surface lies on `p`'s plane. Reads the record
     /// as slab `slab − 1` left it: a cut in slab `slab` leaves `until ≥ slab`, a start writes
     /// the older slot, and a release's values were kept in an earlier slab.
     #[inline(always)]
@@ -392,14 +403,14 @@ impl HeldPlanes<'_> {
         // No release kept within the age (a release of this slab, written meanwhile, passes on
         // to the record's own test, which rejects it): the record's test would reject it too.
         let last = self.last_release[at].load(Ordering::Relaxed);
-        if last == 0 || last - 1 + SERVED_RELEASE_SLABS < slab {
+        if last == 0 || last - 1 + self.served_age < slab {
             return None;
         }
         let slot = self.newest_slot(at, slab)?;
         let until = self.word(at, slot, 1);
         let kept = &self.served[(at * 2 + slot) * self.served_stride..][..self.served_stride];
         if until >= slab
-            || slab - until > SERVED_RELEASE_SLABS
+            || slab - until > self.served_age
             || kept[0].load(Ordering::Relaxed) != until
         {
             return None;
@@ -566,6 +577,7 @@ mod tests {
             served: Vec::new(),
             served_stride: 0,
             last_release: Vec::new(),
+            served_age: 8,
         };
         let reach = (-3, 2);
         let mut checked = [0usize; 2];
@@ -610,6 +622,7 @@ mod tests {
             served: &[],
             served_stride: 0,
             last_release: &[],
+            served_age: 8,
         };
         let slot = |from: u32, until| HeldSlot {
             from,

@@ -176,7 +176,8 @@ fn hold_step(state: u32, slab: u32, crossed: u32, ends_hold: bool, inside: bool)
 // released in and 4 values per light (its channels and depth plane as gathered then);
 // `surface_hold` keeps per triangle its word and then its depth slopes' f32 bits.
 // (HELD_WORDS, NO_HELD_SLAB, HELD_PART_MAX, HELD_BEHIND_MARGIN, SAME_SURFACE_SLABS,
-// SERVED_HEAD_WORDS, SERVED_RELEASE_SLABS and SERVED_SLOPE_TOLERANCE come from `shared/constants`.)
+// SERVED_HEAD_WORDS, SERVED_RELEASE_SLABS, SWEEP_SLABS_PER_SERVED_SLAB and SERVED_SLOPE_TOLERANCE come
+// from `shared/constants`.)
 const HOLD_SLAB_MASK: u32 = 0xffffu;   // a hold state's crossing slab
 const HOLD_LENGTH_MASK: u32 = 1023u;   // a hold state's hold length, once shifted
 
@@ -188,6 +189,12 @@ fn hold_index(p: u32) -> u32 {
 // The index of triangle `t`'s word in `surface_hold` (its slopes follow it).
 fn surface_hold_index(t: u32) -> u32 {
     return t * 3u;
+}
+
+// `surface_hold::served_release_slabs`: slabs after its release during which a pixel's kept
+// light is served.
+fn served_age() -> u32 {
+    return max(SERVED_RELEASE_SLABS, (globals.slabs + SWEEP_SLABS_PER_SERVED_SLAB - 1u) / SWEEP_SLABS_PER_SERVED_SLAB);
 }
 
 // `sweep.served_releases`: `hold` keeps the served releases after the records.
@@ -247,7 +254,7 @@ fn served(q: vec2<i32>, surface: ReaderSurface, c: vec2<i32>, slab: u32, l: u32,
     }
     let until = held_word(pc, slot, 1u);
     let at = served_index(pc, slot);
-    if until >= slab || slab - until > SERVED_RELEASE_SLABS || hold[at] != until {
+    if until >= slab || slab - until > served_age() || hold[at] != until {
         return none;
     }
     let z0 = bitcast<f32>(held_word(pc, slot, 2u));
