@@ -161,6 +161,7 @@ pub(crate) fn exact_light(
 ) {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
     let ch = plan.channels as usize;
+    let mut reader = None;
     for (l, light_plan) in plan.lights.iter().enumerate() {
         let channels = &light.iin[l * ch..(l + 1) * ch];
         let lit = channels.iter().fold(0.0f32, |a, &v| a + v);
@@ -191,7 +192,8 @@ pub(crate) fn exact_light(
         let ys = (ys.0 + reach.y0, ys.1 + reach.y1);
         let sums = if ctx.held.any_in(xs, ys, ctx.slab) {
             // Released corners as step 1 read them; held ones from everywhere.
-            let fix = held_fix(row, x, l, (ahead, false));
+            let reader = *reader.get_or_insert_with(|| Reader::of(row, x, ahead));
+            let fix = held_fix(row, reader, l, false);
             let fixed = |p: &LightPlanes<'_>, t: &[Tap], a| gather_held(p, t, a, &fix);
             shifted_gather(&planes, taps, at, shift, fixed)
         } else {
@@ -311,8 +313,11 @@ pub(crate) fn convolve(
     light: &mut LightIn,
     ahead: Option<u32>,
 ) {
-    if held_near(row, x, 1) && reads_otherwise(row, x, ahead) {
-        return convolve_held(row, x, inside, light, ahead);
+    if held_near(row, x, 1) {
+        let reader = Reader::of(row, x, ahead);
+        if reader.reads_otherwise(row.ctx) {
+            return convolve_held(row, x, inside, light, reader);
+        }
     }
     convolve_through(row, x, inside, light, None, |_, planes, taps, at| {
         gather(planes, taps, at)
@@ -364,18 +369,47 @@ pub(crate) fn held_near(row: &RowContext<'_>, x0: usize, lanes: usize) -> bool {
     ctx.held.near(xs, y, ctx.slab)
 }
 
-/// Whether [`held_fix`] may read some corner of pixel x's gathers otherwise at all: it reads
-/// held light from its lit side only (`held_lit_side`), or it lies on a surface (held, or with
-/// a fragment `ahead`) that released pixels may be served on.
-#[inline(always)]
-pub(crate) fn reads_otherwise(row: &RowContext<'_>, x: usize, ahead: Option<u32>) -> bool {
-    let ctx = row.ctx;
-    ctx.plan.held_lit_side
-        || (!ctx.held.served.is_empty()
-            && (ahead.is_some()
-                || ctx
-                    .held
-                    .held_before(row.y * ctx.plan.grid_width as usize + x, ctx.slab)))
+/// A gathering pixel as [`held_fix`] reads corners for it, found once per pixel and slab: its
+/// position, whether it held its light in the previous slab, and the surface it lies on (its
+/// held crossing's depth in slabs and triangle, else the fragment ahead of its cursor's).
+#[derive(Clone, Copy)]
+pub(crate) struct Reader {
+    q: (i32, i32),
+    held: bool,
+    surface: Option<(f32, u32)>,
+}
+
+impl Reader {
+    /// Pixel x of the row, whose cursor crosses fragment `ahead` next ([`next_fragment`]).
+    #[inline(always)]
+    pub(crate) fn of(row: &RowContext<'_>, x: usize, ahead: Option<u32>) -> Reader {
+        let (ctx, plan, slab) = (row.ctx, row.ctx.plan, row.ctx.slab);
+        let own = ctx
+            .held
+            .latest_before(row.y * plan.grid_width as usize + x, slab)
+            .filter(|s| s.held_before(slab));
+        let surface = match own {
+            Some(held) => Some((held.z0, held.triangle)),
+            None => ahead.map(|f| {
+                let depth = ctx.ldi.depth[f as usize];
+                let z = slab as f32 + (depth - ctx.front) * plan.inv_slab_distance;
+                (z, ctx.ldi.triangle[f as usize])
+            }),
+        };
+        Reader {
+            q: (x as i32, row.y as i32),
+            held: own.is_some(),
+            surface,
+        }
+    }
+
+    /// Whether [`held_fix`] may read some corner of its gathers otherwise at all: it reads held
+    /// light from its lit side only (`held_lit_side`), or it lies on a surface that released
+    /// pixels may be served on.
+    #[inline(always)]
+    pub(crate) fn reads_otherwise(&self, ctx: &SlabContext<'_>) -> bool {
+        ctx.plan.held_lit_side || (!ctx.held.served.is_empty() && self.surface.is_some())
+    }
 }
 
 /// [`convolve`] through [`gather_held`], reading corners as [`held_fix`] says. Where it changes
@@ -386,9 +420,9 @@ pub(crate) fn convolve_held(
     x: usize,
     inside: bool,
     light: &mut LightIn,
-    ahead: Option<u32>,
+    reader: Reader,
 ) {
-    convolve_held_rows(row, x, inside, light, None, ahead);
+    convolve_held_rows(row, x, inside, light, None, reader);
 }
 
 /// [`convolve_held`], each light l through tap row `rows[l]` where given (the rows an 8-lane
@@ -400,34 +434,32 @@ pub(crate) fn convolve_held_rows(
     inside: bool,
     light: &mut LightIn,
     rows: Option<&[u32]>,
-    ahead: Option<u32>,
+    reader: Reader,
 ) {
     let gather = |l, planes: &LightPlanes<'_>, taps: &[Tap], at| {
-        gather_held(planes, taps, at, held_fix(row, x, l, (ahead, true)))
+        gather_held(planes, taps, at, held_fix(row, reader, l, true))
     };
     convolve_through(row, x, inside, light, rows, gather);
 }
 
-/// How pixel x's gathers of light l read a corner otherwise than from the light buffer
+/// How `reader`'s gathers of light l read a corner otherwise than from the light buffer
 /// (`surface_hold`): with `held_lit_side` (and `lit_side`: step 1, not the sub-pixel read),
 /// a pixel not held itself reads a held corner behind
 /// whose surface it lies as no light, removed at the hold's crossing
 /// ([`HeldPlanes::hides`](crate::composite::HeldPlanes::hides)); a pixel on a surface (its held
-/// crossing, else the fragment `ahead` of its cursor) reads a corner released on that surface
+/// crossing, else the fragment ahead of its cursor) reads a corner released on that surface
 /// as the light and depth plane the corner gathered in its release slab
 /// ([`HeldPlanes::served`](crate::composite::HeldPlanes::served)).
 #[inline(always)]
 pub(crate) fn held_fix<'a>(
     row: &'a RowContext<'a>,
-    x: usize,
+    reader: Reader,
     l: usize,
-    (ahead, lit_side): (Option<u32>, bool),
+    lit_side: bool,
 ) -> impl Fn(i32, i32, &mut [f32]) + 'a {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
-    let (q, slab) = ((x as i32, row.y as i32), ctx.slab);
-    let p = row.y * plan.grid_width as usize + x;
-    let hiding = lit_side && plan.held_lit_side && !ctx.held.held_before(p, slab);
-    let surface = reader_surface(row, x, ahead);
+    let (q, slab, surface) = (reader.q, ctx.slab, reader.surface);
+    let hiding = lit_side && plan.held_lit_side && !reader.held;
     let ch = plan.channels as usize;
     move |cx, cy, values: &mut [f32]| {
         if hiding && let Some(from) = ctx.held.hides(plan, l, q, (cx, cy), slab) {
@@ -443,15 +475,15 @@ pub(crate) fn held_fix<'a>(
     }
 }
 
-/// Whether some corner that pixel x's gathers through tap rows `rows` (every light's) read is
+/// Whether some corner that `reader`'s gathers through tap rows `rows` (every light's) read is
 /// served a released pixel's light ([`held_fix`]'s second test; the first, with
 /// `held_lit_side`, is not asked): where none is, the gathers read their light buffer.
-pub(crate) fn serves_any(row: &RowContext<'_>, x: usize, rows: &[u32], ahead: Option<u32>) -> bool {
+pub(crate) fn serves_any(row: &RowContext<'_>, reader: Reader, rows: &[u32]) -> bool {
     let (ctx, plan) = (row.ctx, row.ctx.plan);
-    let Some(surface) = reader_surface(row, x, ahead) else {
+    let Some(surface) = reader.surface else {
         return false;
     };
-    let (q, slab) = ((x as i32, row.y as i32), ctx.slab);
+    let (q, slab) = (reader.q, ctx.slab);
     rows.iter().enumerate().any(|(l, &r)| {
         let shift = plan.lights[l].table.slab_shift[slab as usize];
         ctx.taps[l].weighted(r).iter().any(|t| {
@@ -461,24 +493,6 @@ pub(crate) fn serves_any(row: &RowContext<'_>, x: usize, rows: &[u32], ahead: Op
                 .any(|c| ctx.held.served(plan, l, (q, surface), c, slab).is_some())
         })
     })
-}
-
-/// The surface pixel x lies on for [`held_fix`]: its held crossing (depth in slabs, triangle),
-/// else the fragment `ahead` of its cursor, else none.
-#[inline(always)]
-fn reader_surface(row: &RowContext<'_>, x: usize, ahead: Option<u32>) -> Option<(f32, u32)> {
-    let (ctx, plan, slab) = (row.ctx, row.ctx.plan, row.ctx.slab);
-    let own = ctx
-        .held
-        .latest_before(row.y * plan.grid_width as usize + x, slab)
-        .filter(|s| s.held_before(slab));
-    match own {
-        Some(held) => Some((held.z0, held.triangle)),
-        None => ahead.map(|f| {
-            let z = slab as f32 + (ctx.ldi.depth[f as usize] - ctx.front) * plan.inv_slab_distance;
-            (z, ctx.ldi.triangle[f as usize])
-        }),
-    }
 }
 
 /// The fragment pixel (x, y)'s cursor crosses next, before this slab's step 2 (`None`: it has

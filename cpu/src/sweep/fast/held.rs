@@ -14,8 +14,8 @@ use crate::composite::Held;
 use crate::parity::NO_CROSSING;
 use crate::sweep::kit::{MAX_LIGHTS, RowContext, RowState};
 use crate::sweep::pixel::{
-    LightIn, convolve, convolve_held_rows, exact_light, held_near, keep_release, next_fragment,
-    reads_otherwise, serves_any,
+    LightIn, Reader, convolve, convolve_held_rows, exact_light, held_near, keep_release,
+    next_fragment, serves_any,
 };
 
 /// Every lane's fragment ahead of its cursor before this slab (`pixel::next_fragment`), read
@@ -66,7 +66,11 @@ pub(super) fn held_lanes<L: Layout>(
         // A lane whose own reach holds no such pixel, or that reads none otherwise (on no
         // surface, and not reading held light from its lit side only), keeps the chunk's
         // gather: the same bits.
-        if !held_near(row, x0 + i, 1) || !reads_otherwise(row, x0 + i, aheads[i]) {
+        if !held_near(row, x0 + i, 1) {
+            continue;
+        }
+        let reader = Reader::of(row, x0 + i, aheads[i]);
+        if !reader.reads_otherwise(ctx) {
             continue;
         }
         let mut light = LightIn::ZERO;
@@ -77,14 +81,11 @@ pub(super) fn held_lanes<L: Layout>(
         // Where the level search found the lane's rows and held light is read from everywhere:
         // whether any corner they read is served at all.
         let lane_rows = &lane_rows[..lights];
-        if rows.is_some()
-            && !ctx.plan.held_lit_side
-            && !serves_any(row, x0 + i, lane_rows, aheads[i])
-        {
+        if rows.is_some() && !ctx.plan.held_lit_side && !serves_any(row, reader, lane_rows) {
             continue;
         }
         let lane_rows = rows.is_some().then_some(lane_rows);
-        convolve_held_rows(row, x0 + i, false, &mut light, lane_rows, aheads[i]);
+        convolve_held_rows(row, x0 + i, false, &mut light, lane_rows, reader);
         for (v, &value) in iin.iter_mut().zip(&light.iin) {
             set_lane(v, i, value);
         }
